@@ -1,0 +1,339 @@
+#include "replay/load_history.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <initializer_list>
+#include <limits>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string_view>
+#include <system_error>
+#include <tuple>
+
+namespace peritwin::replay {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::string_view kSeriesHeader = "time_s,load_N";
+constexpr std::string_view kSeriesAngleHeader = "time_s,load_N,angle_rad";
+constexpr std::string_view kBlockHeader = "p_max_N,r,angle_rad,count";
+
+std::string_view trim(std::string_view s) {
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; };
+  while (!s.empty() && blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && blank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+// Concatenation by appending (avoids GCC 12's false -Wrestrict on "literal" + std::string).
+std::string cat(std::initializer_list<std::string_view> parts) {
+  std::string out;
+  for (std::string_view part : parts) out += part;
+  return out;
+}
+
+std::vector<std::string_view> split_fields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  while (true) {
+    const std::size_t comma = line.find(',');
+    fields.push_back(trim(line.substr(0, comma)));
+    if (comma == std::string_view::npos) break;
+    line.remove_prefix(comma + 1);
+  }
+  return fields;
+}
+
+std::string join(const std::vector<std::string_view>& fields) {
+  std::string out;
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    if (i > 0) out += ',';
+    out += fields[i];
+  }
+  return out;
+}
+
+// A finite double spanning the whole field, or the reason why not.
+std::variant<double, std::string> parse_number(std::string_view field, std::string_view name) {
+  if (field.empty()) return cat({"empty field '", name, "'"});
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (ec == std::errc::result_out_of_range) {
+    return cat({"value '", field, "' of '", name, "' is out of range"});
+  }
+  if (ec != std::errc() || end != field.data() + field.size()) {
+    return cat({"malformed number '", field, "' in '", name, "'"});
+  }
+  if (!std::isfinite(value)) {
+    return cat({"non-finite value '", field, "' in '", name, "'"});
+  }
+  return value;
+}
+
+// An integer >= 1 written with digits only, or the reason why not.
+std::variant<std::int64_t, std::string> parse_count(std::string_view field, std::string_view name) {
+  const std::string why = cat({"'", name, "' must be an integer >= 1, got '", field, "'"});
+  if (field.empty() || field.find_first_not_of("0123456789") != std::string_view::npos) return why;
+  std::int64_t value = 0;
+  const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (ec == std::errc::result_out_of_range) return cat({"'", name, "' is out of range"});
+  if (ec != std::errc() || end != field.data() + field.size() || value < 1) return why;
+  return value;
+}
+
+// "# repeat ..." (the word followed by a blank or the end of the line) -> the text after "repeat".
+std::optional<std::string_view> repeat_directive(std::string_view line) {
+  line = trim(line);
+  if (line.empty() || line.front() != '#') return std::nullopt;
+  line = trim(line.substr(1));
+  constexpr std::string_view kWord = "repeat";
+  if (line.substr(0, kWord.size()) != kWord) return std::nullopt;
+  const std::string_view rest = line.substr(kWord.size());
+  if (!rest.empty() && rest.front() != ' ' && rest.front() != '\t') return std::nullopt;
+  return trim(rest);
+}
+
+// Reads `file` line by line: comments, the optional repeat directive (only when `repeat` is not
+// null), the header (one of `headers`; its index goes to `header_index`), then on_row(line,
+// fields) for each data row, which returns an error reason or nothing.
+template <typename RowFn>
+std::optional<ParseError> scan_csv(const fs::path& file, std::span<const std::string_view> headers,
+                                   std::int64_t* repeat, std::size_t& header_index,
+                                   RowFn&& on_row) {
+  const std::string name = file.string();
+  auto fail = [&](std::size_t line, std::string reason) {
+    return std::optional<ParseError>(ParseError{name, line, std::move(reason)});
+  };
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return fail(0, "cannot open file");
+
+  std::string text;
+  std::size_t line_no = 0;
+  bool have_header = false;
+  std::size_t rows = 0;
+  while (std::getline(in, text)) {
+    ++line_no;
+    std::string_view line = trim(text);
+    if (line_no == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line = trim(line.substr(3));  // BOM
+    if (const auto directive = repeat_directive(line)) {
+      if (repeat == nullptr) return fail(line_no, "'# repeat' is only valid in a spectrum file");
+      if (line_no != 1) return fail(line_no, "'# repeat' must be the first line of the file");
+      auto n = parse_count(*directive, "repeat");
+      if (n.index() != 0) return fail(line_no, std::get<1>(std::move(n)));
+      *repeat = std::get<0>(n);
+      continue;
+    }
+    if (line.empty() || line.front() == '#') continue;
+    const std::vector<std::string_view> fields = split_fields(line);
+    if (!have_header) {
+      const std::string got = join(fields);
+      for (header_index = 0; header_index < headers.size(); ++header_index) {
+        if (got == headers[header_index]) break;
+      }
+      if (header_index == headers.size()) {
+        std::string expected;
+        for (std::size_t i = 0; i < headers.size(); ++i) {
+          expected += cat({i > 0 ? "' or '" : "", headers[i]});
+        }
+        return fail(line_no, cat({"expected header '", expected, "', got '", line, "'"}));
+      }
+      have_header = true;
+      continue;
+    }
+    const std::size_t expected = split_fields(headers[header_index]).size();
+    if (fields.size() != expected) {
+      return fail(line_no, "expected " + std::to_string(expected) + " fields, got " +
+                               std::to_string(fields.size()));
+    }
+    if (auto reason = on_row(line_no, fields)) return fail(line_no, std::move(*reason));
+    ++rows;
+  }
+  if (in.bad()) return fail(line_no, "read error");
+  if (!have_header) return fail(0, "no header line");
+  if (rows == 0) return fail(0, "no data rows");
+  return std::nullopt;
+}
+
+// The block rows of a cycles or spectrum file.
+std::optional<ParseError> scan_blocks(const fs::path& file, std::int64_t* repeat,
+                                      std::vector<LoadBlock>& blocks) {
+  constexpr std::string_view kNames[] = {"p_max_N", "r", "angle_rad", "count"};
+  const std::string_view headers[] = {kBlockHeader};
+  std::size_t header_index = 0;
+  return scan_csv(
+      file, headers, repeat, header_index,
+      [&](std::size_t, const std::vector<std::string_view>& f) -> std::optional<std::string> {
+        double v[3] = {};
+        for (std::size_t i = 0; i < 3; ++i) {
+          auto x = parse_number(f[i], kNames[i]);
+          if (x.index() != 0) return std::get<1>(std::move(x));
+          v[i] = std::get<0>(x);
+        }
+        auto count = parse_count(f[3], kNames[3]);
+        if (count.index() != 0) return std::get<1>(std::move(count));
+        if (!(v[0] > 0.0)) return cat({"p_max_N must be > 0, got '", f[0], "'"});
+        if (!(v[1] <= 1.0)) return cat({"r must be <= 1, got '", f[1], "'"});
+        blocks.push_back(LoadBlock{v[0], v[1], v[2], std::get<0>(count)});
+        return std::nullopt;
+      });
+}
+
+}  // namespace
+
+std::string ParseError::message() const {
+  if (line == 0) return file + ": " + reason;
+  return file + ":" + std::to_string(line) + ": " + reason;
+}
+
+BlockConversion cycles_to_blocks(const Reversals& reversals, std::span<const RainflowCycle> cycles,
+                                 std::span<const double> angle_by_sample) {
+  BlockConversion out;
+  out.stats.reversals = reversals.values.size();
+  std::set<std::tuple<double, double, double>> pending_half;  // keys with one unpaired half
+  for (const RainflowCycle& c : cycles) {
+    const bool half = c.count < 1.0;
+    (half ? out.stats.half_cycles : out.stats.full_cycles) += 1;
+    const double a = reversals.values.at(c.first);
+    const double b = reversals.values.at(c.last);
+    const std::size_t at_max = a >= b ? c.first : c.last;
+    const double p_max = a >= b ? a : b;
+    const double p_min = a >= b ? b : a;
+    if (p_max <= 0.0) {
+      out.stats.compressive_cycles += c.count;
+      continue;
+    }
+    double alpha = 0.0;
+    if (!angle_by_sample.empty()) {
+      const std::size_t sample = reversals.sample_index.at(at_max);
+      if (sample >= angle_by_sample.size()) {
+        throw std::invalid_argument(
+            "cycles_to_blocks: angle_by_sample is shorter than the history");
+      }
+      alpha = angle_by_sample[sample];
+    }
+    const LoadBlock block{p_max, p_min / p_max, alpha, 1};
+    if (half) {
+      const auto key = std::make_tuple(block.p_max, block.r, block.alpha);
+      if (pending_half.erase(key) == 1) continue;  // completes the whole cycle emitted earlier
+      pending_half.insert(key);
+    }
+    out.blocks.push_back(block);
+  }
+  out.stats.rounded_up_half_cycles = pending_half.size();
+  return out;
+}
+
+std::vector<LoadBlock> merge_consecutive(std::span<const LoadBlock> blocks) {
+  std::vector<LoadBlock> out;
+  for (const LoadBlock& b : blocks) {
+    if (!out.empty()) {
+      LoadBlock& last = out.back();
+      if (last.p_max == b.p_max && last.r == b.r && last.alpha == b.alpha &&
+          b.count <= std::numeric_limits<std::int64_t>::max() - last.count) {
+        last.count += b.count;
+        continue;
+      }
+    }
+    out.push_back(b);
+  }
+  return out;
+}
+
+BlockConversion series_to_blocks(const LoadSeries& series) {
+  const Reversals reversals = extract_reversals(series.load_n);
+  const std::vector<RainflowCycle> cycles = rainflow_count(reversals.values);
+  BlockConversion out = cycles_to_blocks(reversals, cycles, series.angle_rad);
+  out.blocks = merge_consecutive(out.blocks);
+  return out;
+}
+
+std::vector<LoadBlock> expand(const Spectrum& spectrum) {
+  const std::size_t n = spectrum.blocks.size();
+  const auto repeat = static_cast<std::size_t>(spectrum.repeat < 0 ? 0 : spectrum.repeat);
+  std::vector<LoadBlock> out;
+  if (n == 0 || repeat == 0) return out;
+  if (repeat > out.max_size() / n) throw std::length_error("expand: spectrum too large");
+  out.reserve(n * repeat);
+  for (std::size_t k = 0; k < repeat; ++k) {
+    out.insert(out.end(), spectrum.blocks.begin(), spectrum.blocks.end());
+  }
+  return out;
+}
+
+Result<LoadSeries> read_series_csv(const std::filesystem::path& file) {
+  const std::string_view headers[] = {kSeriesHeader, kSeriesAngleHeader};
+  constexpr std::string_view kNames[] = {"time_s", "load_N", "angle_rad"};
+  LoadSeries series;
+  std::size_t header_index = 0;
+  std::size_t previous_line = 0;
+  auto error = scan_csv(
+      file, headers, nullptr, header_index,
+      [&](std::size_t line, const std::vector<std::string_view>& f) -> std::optional<std::string> {
+        double v[3] = {};
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          auto x = parse_number(f[i], kNames[i]);
+          if (x.index() != 0) return std::get<1>(std::move(x));
+          v[i] = std::get<0>(x);
+        }
+        if (!series.time_s.empty() && !(v[0] > series.time_s.back())) {
+          return cat({"time_s must be strictly increasing (", f[0], " after line ",
+                      std::to_string(previous_line), ")"});
+        }
+        previous_line = line;
+        series.time_s.push_back(v[0]);
+        series.load_n.push_back(v[1]);
+        if (f.size() == 3) series.angle_rad.push_back(v[2]);
+        return std::nullopt;
+      });
+  if (error) return std::move(*error);
+  return series;
+}
+
+Result<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file) {
+  std::vector<LoadBlock> blocks;
+  if (auto error = scan_blocks(file, nullptr, blocks)) return std::move(*error);
+  return blocks;
+}
+
+Result<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
+  Spectrum spectrum;
+  if (auto error = scan_blocks(file, &spectrum.repeat, spectrum.blocks)) return std::move(*error);
+  return spectrum;
+}
+
+Result<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
+  switch (format) {
+    case HistoryFormat::series: {
+      auto series = read_series_csv(file);
+      if (!series) return series.error();
+      return series_to_blocks(series.value());
+    }
+    case HistoryFormat::cycles: {
+      auto blocks = read_cycles_csv(file);
+      if (!blocks) return blocks.error();
+      return BlockConversion{std::move(blocks).value(), {}};
+    }
+    case HistoryFormat::spectrum: {
+      auto spectrum = read_spectrum_csv(file);
+      if (!spectrum) return spectrum.error();
+      return BlockConversion{expand(spectrum.value()), {}};
+    }
+  }
+  return ParseError{file.string(), 0, "unknown history format"};
+}
+
+std::vector<std::span<const LoadBlock>> make_batches(std::span<const LoadBlock> blocks,
+                                                     std::size_t max_blocks) {
+  if (max_blocks == 0) throw std::invalid_argument("make_batches: max_blocks must be >= 1");
+  std::vector<std::span<const LoadBlock>> batches;
+  for (std::size_t i = 0; i < blocks.size(); i += max_blocks) {
+    batches.push_back(blocks.subspan(i, std::min(max_blocks, blocks.size() - i)));
+  }
+  return batches;
+}
+
+}  // namespace peritwin::replay

@@ -1,0 +1,147 @@
+// Load histories -> load blocks for the replay tool (no LCM here; see replay/rainflow.h for the
+// cycle counting). SI units: loads in N, angles in rad, time in s.
+//
+// Rainflow cycles -> blocks (cycles_to_blocks):
+//  * P_max = max of the cycle's two reversals (= mean + range/2), P_min = the other (= mean -
+//    range/2), R = P_min / P_max. Taking the reversal values directly keeps P_max bit-exact, so
+//    cycles between the same two load levels get identical (P_max, R).
+//  * COMPRESSIVE: a (half) cycle with P_max <= 0 has no tensile fatigue driving force; it becomes
+//  no
+//    block and is counted in ConversionStats::compressive_cycles (full = 1, half = 0.5).
+//  * ANGLE: alpha is the angle sample at the reversal where P_max occurs (the first sample of a
+//    plateau); without an angle column alpha = 0.
+//  * HALF CYCLES (the engine takes integer counts): half cycles are paired per identical key
+//    (P_max, R, alpha), compared exactly (==). A half cycle whose key has no pending half emits a
+//    whole cycle at its position in the sequence and leaves a pending half; the next half cycle of
+//    the same key consumes that pending half and emits nothing. So 2k halves of a key give k cycles
+//    and 2k+1 halves give k+1: no damage is ever lost, the surplus is at most half a cycle per
+//    distinct key (ConversionStats::rounded_up_half_cycles counts those), and damage is applied no
+//    later than in the history (conservative for sequence effects).
+//  * Blocks come out in the order the cycles are counted (ASTM order, residue last).
+//
+// File formats (CSV, ',' separated, fields may carry surrounding blanks, CRLF accepted). Blank
+// lines and lines whose first non-blank character is '#' are comments and may appear anywhere. The
+// first non-comment line is the header and must match exactly:
+//  * series:   time_s,load_N[,angle_rad]   one sample per row; time strictly increasing.
+//              -> reversals -> rainflow -> blocks; consecutive identical blocks merged (counts
+//              summed).
+//  * cycles:   p_max_N,r,angle_rad,count   one block per row, kept as given (not merged).
+//  * spectrum: p_max_N,r,angle_rad,count   a list of blocks; an optional directive "# repeat N" as
+//              the very first line (line 1) means the whole list is applied N times (N >= 1,
+//              default 1). "# repeat" anywhere else, or in a series/cycles file, is an error.
+// Row checks: every number finite; exactly as many fields as the header; cycles/spectrum rows also
+// p_max_N > 0, r <= 1 and count an integer >= 1 (digits only). A file without data rows is an
+// error. A UTF-8 byte-order mark is skipped. Every error names file:line and the reason.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <utility>
+#include <variant>
+#include <vector>
+
+#include "replay/rainflow.h"
+
+namespace peritwin::replay {
+
+/// `count` identical load cycles. SI: p_max in N, r = P_min / P_max, alpha (load angle) in rad.
+struct LoadBlock {
+  double p_max;
+  double r;
+  double alpha;
+  std::int64_t count;
+  friend bool operator==(const LoadBlock&, const LoadBlock&) = default;
+};
+
+/// A reader's failure: file, 1-based line (0 = the file as a whole), reason.
+struct ParseError {
+  std::string file;
+  std::size_t line = 0;
+  std::string reason;
+  /// "file:line: reason", or "file: reason" when line == 0.
+  [[nodiscard]] std::string message() const;
+};
+
+/// Either a value or a ParseError (a minimal std::expected stand-in).
+template <typename T>
+class Result {
+ public:
+  Result(T value) : data_(std::move(value)) {}           // NOLINT(google-explicit-constructor)
+  Result(ParseError error) : data_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
+  [[nodiscard]] bool ok() const { return data_.index() == 0; }
+  explicit operator bool() const { return ok(); }
+  /// Throws std::bad_variant_access when !ok().
+  [[nodiscard]] const T& value() const& { return std::get<0>(data_); }
+  [[nodiscard]] T& value() & { return std::get<0>(data_); }
+  [[nodiscard]] T&& value() && { return std::get<0>(std::move(data_)); }
+  /// Throws std::bad_variant_access when ok().
+  [[nodiscard]] const ParseError& error() const { return std::get<1>(data_); }
+
+ private:
+  std::variant<T, ParseError> data_;
+};
+
+struct ConversionStats {
+  std::size_t reversals = 0;
+  std::size_t full_cycles = 0;             ///< rainflow full cycles (incl. compressive ones)
+  std::size_t half_cycles = 0;             ///< rainflow half cycles (incl. compressive ones)
+  double compressive_cycles = 0.0;         ///< cycles with P_max <= 0, skipped (halves count 0.5)
+  std::size_t rounded_up_half_cycles = 0;  ///< unpaired half cycles emitted as whole cycles
+};
+
+struct BlockConversion {
+  std::vector<LoadBlock> blocks;
+  ConversionStats stats;
+};
+
+/// Rainflow cycles -> blocks with the rules in the header comment (count 1 each, not merged).
+/// `angle_by_sample` is indexed by Reversals::sample_index; empty means alpha = 0.
+/// Throws std::invalid_argument when a non-empty `angle_by_sample` is too short.
+[[nodiscard]] BlockConversion cycles_to_blocks(const Reversals& reversals,
+                                               std::span<const RainflowCycle> cycles,
+                                               std::span<const double> angle_by_sample = {});
+
+/// Merges runs of consecutive identical (p_max, r, alpha) blocks into one with the summed count.
+[[nodiscard]] std::vector<LoadBlock> merge_consecutive(std::span<const LoadBlock> blocks);
+
+/// A sampled load history (series CSV). angle_rad is empty when the file has no angle column.
+struct LoadSeries {
+  std::vector<double> time_s;
+  std::vector<double> load_n;
+  std::vector<double> angle_rad;
+};
+
+/// extract_reversals -> rainflow_count -> cycles_to_blocks -> merge_consecutive.
+[[nodiscard]] BlockConversion series_to_blocks(const LoadSeries& series);
+
+/// A block spectrum: `blocks` applied `repeat` times as a whole.
+struct Spectrum {
+  std::vector<LoadBlock> blocks;
+  std::int64_t repeat = 1;
+};
+
+/// The spectrum's blocks repeated `repeat` times (no merging across the seams).
+/// Throws std::length_error when the result would not fit in memory limits of std::vector.
+[[nodiscard]] std::vector<LoadBlock> expand(const Spectrum& spectrum);
+
+[[nodiscard]] Result<LoadSeries> read_series_csv(const std::filesystem::path& file);
+[[nodiscard]] Result<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file);
+[[nodiscard]] Result<Spectrum> read_spectrum_csv(const std::filesystem::path& file);
+
+enum class HistoryFormat { series, cycles, spectrum };
+
+/// Reads `file` in `format` and returns its blocks (series: converted; spectrum: expanded). The
+/// stats are those of series_to_blocks for a series and zero otherwise.
+[[nodiscard]] Result<BlockConversion> read_blocks(const std::filesystem::path& file,
+                                                  HistoryFormat format);
+
+/// Splits `blocks` into consecutive batches of at most `max_blocks` blocks (the last may be
+/// shorter; none is empty; empty input -> no batches). The spans view `blocks`' storage.
+/// Throws std::invalid_argument when max_blocks == 0.
+[[nodiscard]] std::vector<std::span<const LoadBlock>> make_batches(
+    std::span<const LoadBlock> blocks, std::size_t max_blocks);
+
+}  // namespace peritwin::replay

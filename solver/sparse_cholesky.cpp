@@ -1,0 +1,151 @@
+#include "solver/sparse_cholesky.h"
+
+#include <cholmod.h>
+
+#include <cstdlib>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+namespace peritwin {
+
+struct SparseCholesky::Impl {
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  Impl() {
+    cholmod_start(&common);
+    common.print = 0;
+    common.error_handler = nullptr;
+    common.quick_return_if_not_posdef = 1;
+    if (const char* o = std::getenv("PERITWIN_ORDERING")) {
+      common.nmethods = 1;
+      const std::string name = o;
+      common.method[0].ordering = name == "amd" ? CHOLMOD_AMD : name == "metis" ? CHOLMOD_METIS : CHOLMOD_NESDIS;
+    }
+  }
+  ~Impl() {
+    if (factor != nullptr) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+
+  /// A non-owning CHOLMOD view of an Eigen upper triangle.
+  static cholmod_sparse view(const SparseMatrix& upper) {
+    cholmod_sparse a{};
+    a.nrow = static_cast<size_t>(upper.rows());
+    a.ncol = static_cast<size_t>(upper.cols());
+    a.nzmax = static_cast<size_t>(upper.nonZeros());
+    a.p = const_cast<int*>(upper.outerIndexPtr());
+    a.i = const_cast<int*>(upper.innerIndexPtr());
+    a.x = const_cast<double*>(upper.valuePtr());
+    a.stype = 1;
+    a.itype = CHOLMOD_INT;
+    a.xtype = CHOLMOD_REAL;
+    a.dtype = CHOLMOD_DOUBLE;
+    a.sorted = 1;
+    a.packed = 1;
+    return a;
+  }
+};
+
+SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
+SparseCholesky::~SparseCholesky() = default;
+SparseCholesky::SparseCholesky(SparseCholesky&&) noexcept = default;
+SparseCholesky& SparseCholesky::operator=(SparseCholesky&&) noexcept = default;
+
+bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
+
+double SparseCholesky::factor_nonzeros() const {
+  if (impl_->factor == nullptr) return 0.0;
+  const cholmod_factor* l = impl_->factor;
+  if (l->is_super) return static_cast<double>(l->xsize);
+  return static_cast<double>(l->nzmax);
+}
+
+std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& upper) {
+  Impl impl;
+  impl.common.nmethods = 2;  // keep whichever of METIS and AMD fills less
+  impl.common.method[0].ordering = CHOLMOD_METIS;
+  impl.common.method[1].ordering = CHOLMOD_AMD;
+  impl.common.postorder = 1;
+  cholmod_sparse a = Impl::view(upper);
+  a.xtype = CHOLMOD_PATTERN;
+  a.x = nullptr;
+  cholmod_factor* l = cholmod_analyze(&a, &impl.common);
+  std::vector<int> perm;
+  if (l != nullptr) {
+    const int* p = static_cast<const int*>(l->Perm);
+    perm.assign(p, p + l->n);
+    cholmod_free_factor(&l, &impl.common);
+  }
+  return perm;
+}
+
+FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
+                                     const std::vector<int>* permutation) {
+  if (!upper.isCompressed()) return {FactorStatus::failed, "matrix is not compressed"};
+  if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
+  cholmod_sparse a = Impl::view(upper);
+  if (permutation != nullptr) {
+    const int saved_methods = impl_->common.nmethods;
+    const int saved_ordering = impl_->common.method[0].ordering;
+    impl_->common.nmethods = 1;
+    impl_->common.method[0].ordering = CHOLMOD_GIVEN;
+    impl_->factor = cholmod_analyze_p(&a, const_cast<int*>(permutation->data()), nullptr, 0,
+                                      &impl_->common);
+    impl_->common.nmethods = saved_methods;
+    impl_->common.method[0].ordering = saved_ordering;
+  } else {
+    impl_->factor = cholmod_analyze(&a, &impl_->common);
+  }
+  if (impl_->factor == nullptr || impl_->common.status < CHOLMOD_OK) {
+    return {FactorStatus::failed, "cholmod_analyze failed (status " +
+                                      std::to_string(impl_->common.status) + ")"};
+  }
+  return {};
+}
+
+FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
+  if (impl_->factor == nullptr) {
+    if (auto r = analyze(upper); !r.ok()) return r;
+  }
+  cholmod_sparse a = Impl::view(upper);
+  const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
+  if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
+    return {FactorStatus::not_positive_definite,
+            "stiffness is not positive definite (pivot " + std::to_string(impl_->factor->minor) +
+                "): a part of the model is unconstrained or has come loose"};
+  }
+  if (!ok || impl_->common.status < CHOLMOD_OK) {
+    return {FactorStatus::failed,
+            "cholmod_factorize failed (status " + std::to_string(impl_->common.status) + ")"};
+  }
+  if (std::getenv("PERITWIN_VERBOSE")) std::fprintf(stderr, "cholmod: fl %.3g lnz %.3g super %d\n", impl_->common.fl, impl_->common.lnz, impl_->factor->is_super);
+  const double rcond = cholmod_rcond(impl_->factor, &impl_->common);
+  if (!(rcond > 1e-14)) {
+    return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
+                                        std::to_string(rcond) +
+                                        "): a part of the model is unconstrained or has come loose"};
+  }
+  return {};
+}
+
+void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
+  if (impl_->factor == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
+  cholmod_dense b{};
+  b.nrow = static_cast<size_t>(rhs.rows());
+  b.ncol = static_cast<size_t>(rhs.cols());
+  b.nzmax = b.nrow * b.ncol;
+  b.d = b.nrow;
+  b.x = rhs.data();
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
+  auto& common = const_cast<cholmod_common&>(impl_->common);
+  cholmod_dense* x = cholmod_solve(CHOLMOD_A, impl_->factor, &b, &common);
+  if (x == nullptr) throw std::runtime_error("cholmod_solve failed");
+  std::memcpy(rhs.data(), x->x, sizeof(double) * b.nzmax);
+  cholmod_free_dense(&x, &common);
+}
+
+}  // namespace peritwin

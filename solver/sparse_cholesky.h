@@ -1,0 +1,52 @@
+// RAII wrapper over CHOLMOD for the symmetric positive definite peridynamic stiffness:
+// analyze once per sparsity pattern, factorize per stiffness state, solve many right-hand sides.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace peritwin {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+enum class FactorStatus { ok, not_positive_definite, singular, failed };
+
+struct FactorReport {
+  FactorStatus status = FactorStatus::ok;
+  std::string message;
+  [[nodiscard]] bool ok() const { return status == FactorStatus::ok; }
+};
+
+class SparseCholesky {
+ public:
+  SparseCholesky();
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+  SparseCholesky(SparseCholesky&&) noexcept;
+  SparseCholesky& operator=(SparseCholesky&&) noexcept;
+
+  /// Fill-reducing ordering and symbolic factorization of the upper triangle `upper`. With a
+  /// permutation (new position -> row), that ordering is used as given.
+  FactorReport analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
+  /// A fill-reducing ordering (METIS nested dissection, AMD when METIS does worse) of the
+  /// symmetric pattern whose upper triangle is `upper`; values are ignored.
+  static std::vector<int> fill_reducing_ordering(const SparseMatrix& upper);
+  /// Numeric factorization; the pattern must be the analyzed one. Reports a matrix that is not
+  /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
+  /// a piece of the model that came loose) as a typed failure.
+  FactorReport factorize(const SparseMatrix& upper);
+  /// Solves A·X = B in place for every column of B.
+  void solve(Eigen::MatrixXd& rhs) const;
+
+  [[nodiscard]] bool analyzed() const;
+  [[nodiscard]] double factor_nonzeros() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace peritwin

@@ -1,0 +1,39 @@
+#include "solver/specimens.h"
+
+#include <cmath>
+
+namespace peritwin {
+
+double compact_tension_spacing(const CompactTensionSpec& spec, double target_nodes) {
+  const double w = spec.width;
+  const double area = 1.25 * w * 1.2 * w;
+  const double height = 1.2 * w;
+  const double rows = 2.0 * std::round(height / std::sqrt(area / target_nodes) / 2.0);
+  return height / rows;
+}
+
+Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions& options,
+                              double dx, double horizon_ratio) {
+  const double w = spec.width;
+  Specimen s;
+  s.name = "B1-CT";
+  s.material = spec.material;
+  s.geometry.thickness = spec.thickness;
+  s.geometry.outline.push_back({0.0, -0.6 * w, 1.25 * w, 0.6 * w});
+  const Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
+  const Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
+  s.geometry.rigid_regions = {Region::of(upper_pin), Region::of(lower_pin)};
+  s.initial_crack_tip = {0.25 * w + spec.initial_crack, 0.0};
+  s.geometry.notches.push_back({{-dx, 0.0}, s.initial_crack_tip});
+  s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
+  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  for (const double side : {1.0, -1.0}) {
+    const NodeIndex k = s.disc.nearest_node({1.25 * w, side * 0.5 * dx});
+    s.supports.push_back({{k}, true, true});
+  }
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper_pin)), {0.0, 1.0}, {}, {}});
+  s.loads.push_back({s.disc.nodes_in(Region::of(lower_pin)), {0.0, -1.0}, {}, {}});
+  return s;
+}
+
+}  // namespace peritwin

@@ -1,0 +1,74 @@
+// Small analytical test problems shared by the solver tests.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "solver/discretization.h"
+#include "solver/pd_model.h"
+#include "solver/static_solver.h"
+
+namespace peritwin::testing {
+
+/// Rectangular plate [0,L]×[−H/2,H/2] under a uniform traction σ on its right edge layer, the
+/// left edge layer on rollers (u = 0) and one left node pinned in y: uniaxial stress σ.
+struct TensionPlate {
+  DetailGeometry geometry;
+  Discretization disc;
+  PdModel model;
+  std::vector<Support> supports;
+  std::vector<LoadTerm> loads;  // basis_constant: total force σ·H·h at P = 1
+};
+
+inline TensionPlate make_tension_plate(const Material& material, const ModelOptions& options,
+                                       double length, double height, double dx, double sigma) {
+  TensionPlate p;
+  p.geometry.thickness = 0.002;
+  p.geometry.outline = {{0.0, -0.5 * height, length, 0.5 * height}};
+  p.disc = discretize(p.geometry, dx, 3.015 * dx);
+  p.model = build_model(p.disc, material, options, p.geometry.rigid_factor);
+  const Region left = Region::of(Rectangle{0.0, -height, dx, height});
+  const Region right = Region::of(Rectangle{length - dx, -height, length, height});
+  p.supports.push_back({p.disc.nodes_in(left), true, false});
+  p.supports.push_back({{p.disc.nearest_node({0.0, 0.0})}, true, true});
+  p.loads.push_back({p.disc.nodes_in(right), {sigma * height * p.geometry.thickness, 0.0}, {}, {}});
+  return p;
+}
+
+/// Least-squares slope of values against coordinates.
+inline double slope(const std::vector<double>& x, const std::vector<double>& y) {
+  double mx = 0, my = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    mx += x[i];
+    my += y[i];
+  }
+  mx /= static_cast<double>(x.size());
+  my /= static_cast<double>(y.size());
+  double sxy = 0, sxx = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+  }
+  return sxy / sxx;
+}
+
+/// Interior strains ε_xx = ∂u/∂x and ε_yy = ∂v/∂y from nodes more than `margin` from every edge.
+inline std::pair<double, double> interior_strains(const Discretization& d,
+                                                  const std::vector<double>& u, double margin) {
+  const Rectangle& box = d.box;
+  std::vector<double> xs, us, ys, vs;
+  for (NodeIndex k = 0; k < d.num_nodes(); ++k) {
+    const Point p = d.position[k];
+    if (p.x < box.x_min + margin || p.x > box.x_max - margin || p.y < box.y_min + margin ||
+        p.y > box.y_max - margin) {
+      continue;
+    }
+    xs.push_back(p.x);
+    us.push_back(u[2 * static_cast<std::size_t>(k)]);
+    ys.push_back(p.y);
+    vs.push_back(u[2 * static_cast<std::size_t>(k) + 1]);
+  }
+  return {slope(xs, us), slope(ys, vs)};
+}
+
+}  // namespace peritwin::testing

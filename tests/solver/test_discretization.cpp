@@ -1,0 +1,80 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <utility>
+
+#include "solver/discretization.h"
+
+namespace peritwin {
+namespace {
+
+TEST(PartialVolume, MatchesBouaraquiaEq36) {
+  // 001 Eq. (36) with δ = 3, Δx = 1: full weight up to δ − Δx/2, linear to zero at δ + Δx/2.
+  EXPECT_DOUBLE_EQ(partial_volume_factor(2.5, 3.0, 1.0), 1.0);
+  EXPECT_DOUBLE_EQ(partial_volume_factor(3.0, 3.0, 1.0), 0.5);
+  EXPECT_DOUBLE_EQ(partial_volume_factor(3.25, 3.0, 1.0), 0.25);
+  EXPECT_DOUBLE_EQ(partial_volume_factor(3.5, 3.0, 1.0), 0.0);
+}
+
+TEST(Discretization, BondsEqualBruteForcePairSearch) {
+  // A plate with a hole: the cell-list families must equal an O(N²) search over all node pairs
+  // closer than δ + Δx/2 (the support of 001 Eq. 36).
+  DetailGeometry g;
+  g.outline = {{0.0, 0.0, 0.02, 0.01}, {0.02, 0.0, 0.03, 0.004}};
+  g.holes = {{{0.01, 0.005}, 0.002}};
+  const double dx = 0.0005;
+  const Discretization d = discretize(g, dx, 3.015 * dx);
+  std::set<std::pair<int, int>> expected;
+  for (int a = 0; a < d.num_nodes(); ++a) {
+    for (int b = a + 1; b < d.num_nodes(); ++b) {
+      const double r = std::hypot(d.position[b].x - d.position[a].x,
+                                  d.position[b].y - d.position[a].y);
+      if (partial_volume_factor(r, d.horizon, dx) > 0) expected.insert({a, b});
+    }
+  }
+  std::set<std::pair<int, int>> found;
+  for (int b = 0; b < d.num_bonds(); ++b) found.insert({d.bond_i[b], d.bond_j[b]});
+  EXPECT_EQ(found.size(), static_cast<std::size_t>(d.num_bonds()));  // no duplicates
+  EXPECT_EQ(found, expected);
+  // An interior node has the 36 lattice neighbours with i² + j² ≤ 12 (|ξ| < 3.515Δx).
+  const NodeIndex centre = d.nearest_node({0.004, 0.005});
+  EXPECT_EQ(d.family_offset[centre + 1] - d.family_offset[centre], 36);
+  // Unit vectors point from bond_i to bond_j.
+  for (int b = 0; b < d.num_bonds(); ++b) {
+    const auto pi = d.position[d.bond_i[b]];
+    const auto pj = d.position[d.bond_j[b]];
+    EXPECT_NEAR(pi.x + d.bond_length[b] * d.bond_cos[b], pj.x, 1e-12);
+    EXPECT_NEAR(pi.y + d.bond_length[b] * d.bond_sin[b], pj.y, 1e-12);
+  }
+}
+
+TEST(Discretization, PreCrackCutsExactlyTheCrossingBonds) {
+  // 4 × 4 nodes at (i+½, j+½) on [0,4]×[−2,2], Δx = 1, δ = 1.5: families hold the distance-1
+  // and distance-√2 neighbours. A crack along y = 0 from x = −1 to x = 2.2 cuts, counted by hand:
+  // the vertical bonds at x = 0.5 and 1.5 (2), and the diagonals between rows y = ±0.5 crossing
+  // y = 0 at x = 1.0 (two of them) and x = 2.0 (two of them): 6 bonds.
+  DetailGeometry g;
+  g.outline = {{0.0, -2.0, 4.0, 2.0}};
+  g.notches = {{{-1.0, 0.0}, {2.2, 0.0}}};
+  const Discretization d = discretize(g, 1.0, 1.5);
+  EXPECT_EQ(d.num_nodes(), 16);
+  int cut = 0;
+  for (int b = 0; b < d.num_bonds(); ++b) cut += d.bond_precut[b];
+  EXPECT_EQ(cut, 6);
+  // 16 nodes: 24 distance-1 bonds + 18 diagonal bonds.
+  EXPECT_EQ(d.num_bonds(), 42);
+}
+
+TEST(Geometry, ValidationNamesTheProblem) {
+  DetailGeometry g;
+  EXPECT_NE(g.validate().find("outline"), std::string::npos);
+  g.outline = {{0.0, 0.0, 1.0, 1.0}};
+  g.holes = {{{5.0, 5.0}, 0.1}};
+  EXPECT_NE(g.validate().find("outside"), std::string::npos);
+  g.holes = {{{0.5, 0.5}, 0.1}};
+  EXPECT_EQ(g.validate(), "");
+}
+
+}  // namespace
+}  // namespace peritwin
