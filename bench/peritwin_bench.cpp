@@ -37,9 +37,10 @@ int run_static(const std::string& model_name, double target_nodes) {
   }
   const auto& t = solver.timings();
   const auto& u = solver.basis_displacement(basis_constant);
-  // Load-line opening at 1 kN: the upper pin's first node minus the lower pin's.
-  const auto up = static_cast<std::size_t>(specimen.loads[0].nodes.front());
-  const auto low = static_cast<std::size_t>(specimen.loads[1].nodes.front());
+  // Load-line opening at 1 kN: the upper pin centre's displacement minus the lower one's.
+  const double w = spec.width;
+  const auto up = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, 0.275 * w}));
+  const auto low = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, -0.275 * w}));
   std::printf(
       "{\"bench\":\"static\",\"model\":\"%s\",\"nodes\":%d,\"bonds\":%d,\"dx_m\":%.6g,"
       "\"build_s\":%.3f,\"assemble_s\":%.3f,\"analyze_s\":%.3f,\"factor_s\":%.3f,"

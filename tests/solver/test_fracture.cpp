@@ -1,2 +1,127 @@
 #include <gtest/gtest.h>
-int dummy_fracture;
+
+#include <cmath>
+#include <numbers>
+
+#include "solver/discretization.h"
+#include "solver/pd_model.h"
+#include "solver/static_solver.h"
+
+namespace peritwin {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+/// Center-cracked plate of width W and height 2W, crack 2a along y = 0 (between two node rows),
+/// uniform tension σ on the top and bottom edge layers; bond-based plane stress (ν = 1/3).
+struct CenterCrack {
+  DetailGeometry geometry;
+  Discretization disc;
+  PdModel model;
+  std::vector<Support> supports;
+  std::vector<LoadTerm> loads;
+};
+
+CenterCrack make_center_crack(double width, double a, double dx, double horizon, Kernel kernel) {
+  CenterCrack p;
+  p.geometry.thickness = 0.001;
+  p.geometry.outline = {{-0.5 * width, -width, 0.5 * width, width}};
+  p.geometry.notches = {{{-a, 0.0}, {a, 0.0}}};
+  p.disc = discretize(p.geometry, dx, horizon);
+  ModelOptions o;
+  o.kind = ModelKind::bond_based;
+  o.kernel = kernel;
+  p.model = build_model(p.disc, Material{70e9, 1.0 / 3.0, 0.0}, o, 200.0);
+  const double force = 1.0 * width * p.geometry.thickness;  // σ = 1 Pa per unit P
+  p.loads.push_back(
+      {p.disc.nodes_in(Region::of(Rectangle{-width, width - dx, width, 2 * width})), {0, force}, {}, {}});
+  p.loads.push_back(
+      {p.disc.nodes_in(Region::of(Rectangle{-width, -2 * width, width, -width + dx})), {0, -force}, {}, {}});
+  // Minimal supports away from the crack: the left-edge node at y = +Δx/2 pinned, the right-edge
+  // node at y = +Δx/2 fixed in y (the loads are self-balanced).
+  p.supports.push_back({{p.disc.nearest_node({-0.5 * width, 0.5 * dx})}, true, true});
+  p.supports.push_back({{p.disc.nearest_node({0.5 * width, 0.5 * dx})}, false, true});
+  return p;
+}
+
+/// K_I by displacement extrapolation, 001 Eq. (62), from the upper crack face at two distances
+/// r1 < r2 behind the right tip; u2 is half the face opening (upper minus lower node over 2).
+double k_i_by_extrapolation(const CenterCrack& p, const std::vector<double>& u, double a, double r1,
+                            double r2) {
+  const double e = p.model.material.youngs_modulus;
+  const double nu = 1.0 / 3.0;
+  const double mu = e / (2 * (1 + nu));
+  const double kappa = (3 - nu) / (1 + nu);  // 001 Eq. (59), plane stress
+  const double dx = p.disc.dx;
+  auto half_opening = [&](double r) {
+    const auto up = static_cast<std::size_t>(p.disc.nearest_node({a - r, 0.5 * dx}));
+    const auto low = static_cast<std::size_t>(p.disc.nearest_node({a - r, -0.5 * dx}));
+    return 0.5 * (u[2 * up + 1] - u[2 * low + 1]);
+  };
+  const double xb = a - p.disc.position[p.disc.nearest_node({a - r1, 0.5 * dx})].x;
+  const double xd = a - p.disc.position[p.disc.nearest_node({a - r2, 0.5 * dx})].x;
+  return 2 * mu * std::sqrt(2 * pi) / (kappa + 1) *
+         (half_opening(r1) * xd / std::sqrt(xb) - half_opening(r2) * xb / std::sqrt(xd)) / (xd - xb);
+}
+
+TEST(CenterCrackedPlate, StressIntensityByExtrapolationMatchesFeddersen) {
+  // B4: K_I within 5 % of σ√(πa)·√(sec(πa/W)) at a/W = 0.2 (Feddersen's finite-width correction).
+  const double width = 0.03, a = 0.006, dx = 0.00025;
+  for (const Kernel kernel : {Kernel::constant, Kernel::gaussian}) {
+    const auto p = make_center_crack(width, a, dx, 3.015 * dx, kernel);
+    StaticSolver solver(p.disc, p.model, p.supports, p.loads);
+    ASSERT_TRUE(solver.solve().ok());
+    const double k = k_i_by_extrapolation(p, solver.basis_displacement(basis_constant), a,
+                                          3 * p.disc.horizon, 6 * p.disc.horizon);
+    const double expected = std::sqrt(pi * a) * std::sqrt(1 / std::cos(pi * a / width));
+    EXPECT_NEAR(k / expected, 1.0, 0.05) << (kernel == Kernel::constant ? "constant" : "gaussian");
+  }
+}
+
+/// Crack-mouth opening (at the crack centre) per unit σ of the center-cracked plate.
+double crack_centre_opening(double dx, double horizon) {
+  const double width = 0.024, a = 0.0048;
+  const auto p = make_center_crack(width, a, dx, horizon, Kernel::constant);
+  StaticSolver solver(p.disc, p.model, p.supports, p.loads);
+  EXPECT_TRUE(solver.solve().ok());
+  const auto& u = solver.basis_displacement(basis_constant);
+  const auto up = static_cast<std::size_t>(p.disc.nearest_node({0.5 * dx, 0.5 * dx}));
+  const auto low = static_cast<std::size_t>(p.disc.nearest_node({0.5 * dx, -0.5 * dx}));
+  return u[2 * up + 1] - u[2 * low + 1];
+}
+
+/// Elastic reference: opening at the centre of a crack 2a in a strip of width W = 2b,
+/// 2v = (4σa/E)·V1(a/b), V1 from Tada, Paris & Irwin (plane stress).
+double tada_centre_opening() {
+  const double e = 70e9, a = 0.0048, b = 0.012, t = a / b;
+  const double v1 = -0.071 - 0.535 * t + 0.169 * t * t + 0.020 * t * t * t -
+                    1.071 / t * std::log(1 - t);
+  return 4 * a / e * v1;
+}
+
+TEST(Convergence, HorizonRatioAtFixedHorizon) {
+  // m-convergence: δ fixed at 1.2 mm, Δx = δ/m for m = 2, 3, 4: the opening approaches the
+  // elastic solution and the last step changes it less than the first.
+  const double delta = 0.0012, ref = tada_centre_opening();
+  const double c2 = crack_centre_opening(delta / 2, delta);
+  const double c3 = crack_centre_opening(delta / 3, delta);
+  const double c4 = crack_centre_opening(delta / 4, delta);
+  EXPECT_LT(std::abs(c4 - c3), std::abs(c3 - c2));
+  EXPECT_LT(std::abs(c4 / ref - 1), std::abs(c2 / ref - 1));
+  EXPECT_NEAR(c4 / ref, 1.0, 0.05);
+}
+
+TEST(Convergence, HorizonAtFixedRatio) {
+  // δ-convergence: δ = 3.015Δx with Δx = 0.4, 0.3, 0.2 mm: the error against the elastic opening
+  // shrinks monotonically.
+  const double ref = tada_centre_opening();
+  const double e1 = std::abs(crack_centre_opening(0.0004, 3.015 * 0.0004) / ref - 1);
+  const double e2 = std::abs(crack_centre_opening(0.0003, 3.015 * 0.0003) / ref - 1);
+  const double e3 = std::abs(crack_centre_opening(0.0002, 3.015 * 0.0002) / ref - 1);
+  EXPECT_LT(e2, e1);
+  EXPECT_LT(e3, e2);
+  EXPECT_LT(e3, 0.05);
+}
+
+}  // namespace
+}  // namespace peritwin
