@@ -2,8 +2,10 @@
 #include "solver/fatigue_law.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 
@@ -19,11 +21,11 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // ---------------------------------------------------------------------------------------------
 // Exact emulation of repeated IEEE subtraction. A positive finite double x lies in a binade whose
 // representable numbers are the integers a times 2^q (a < 2^53; a >= 2^52 for normal x). While the
-// exact result of x - d stays in the same binade (and positive), fl(x - d) = (a - D) 2^q, where D is
-// d/2^q rounded to the nearest integer, with ties (d/2^q = f + 1/2) going to the even result: after
-// at most one step a is even and D is the even one of f, f + 1. So a run of such steps is one integer
-// subtraction. Steps that leave the binade are done in hardware. Adding (for negative x, whose
-// magnitude grows) is the mirror image.
+// exact result of x - d stays in the same binade (and positive), fl(x - d) = (a - D) 2^q, where D
+// is d/2^q rounded to the nearest integer, with ties (d/2^q = f + 1/2) going to the even result:
+// after at most one step a is even and D is the even one of f, f + 1. So a run of such steps is one
+// integer subtraction. Steps that leave the binade are done in hardware. Adding (for negative x,
+// whose magnitude grows) is the mirror image.
 
 struct Binade {
   int q = 0;             // x = a * 2^q exactly
@@ -31,23 +33,49 @@ struct Binade {
   std::int64_t low = 0;  // smallest a of the binade (2^52; 0 for subnormals)
 };
 
-Binade binade_of(double x) {  // x > 0, finite
-  const int e = std::ilogb(x);
-  const int q = std::max(e, -1022) - 52;
-  return {q, static_cast<std::int64_t>(std::ldexp(x, -q)), e >= -1022 ? kTwo52 : 0};
+Binade binade_of(double x) {  // x > 0, finite: read the IEEE fields directly (hot path)
+  const auto bits = std::bit_cast<std::uint64_t>(x);
+  const auto biased = static_cast<int>(bits >> 52);
+  const auto fraction = static_cast<std::int64_t>(bits & ((std::uint64_t{1} << 52) - 1));
+  if (biased == 0) return {-1074, fraction, 0};
+  return {biased - 1075, fraction | kTwo52, kTwo52};
 }
 
-// Rounded step D (in units of 2^q) for t = d/2^q, or -1 when t is a tie and a is odd (the next
-// step must be taken in hardware to reach an even a).
-std::int64_t rounded_step(double t, std::int64_t a) {
-  const double fl = std::floor(t);
-  const double frac = t - fl;  // exact
-  const auto f = static_cast<std::int64_t>(fl);
-  if (frac == 0.5) {
-    if (a % 2 != 0) return -1;
-    return f % 2 == 0 ? f : f + 1;
+// v * 2^k, exact for the values used here (v an integer < 2^54, or d scaled by the ulp).
+double scale(double v, int k) {
+  if (k >= -1022 && k <= 1023) {
+    return v * std::bit_cast<double>(static_cast<std::uint64_t>(k + 1023) << 52);
   }
-  return frac < 0.5 ? f : f + 1;
+  return std::ldexp(v, k);
+}
+
+// floor(num / den) for 0 <= num < 2^54, 0 < den < 2^54: a double division (much cheaper than an
+// int64 one) corrected by at most a step or two to the exact integer quotient.
+std::int64_t quotient(std::int64_t num, std::int64_t den) {
+  auto q = static_cast<std::int64_t>(static_cast<double>(num) / static_cast<double>(den));
+  while (q > 0 && q * den > num) --q;
+  while ((q + 1) * den <= num) ++q;
+  return q;
+}
+
+// Rounded step D (in units of 2^q) for t = d/2^q in [0, 2^53), or -1 when t is a tie and a is odd
+// (the next step must be taken in hardware to reach an even a). Also returns floor(t), ceil(t).
+struct Step {
+  std::int64_t step = 0;
+  std::int64_t floor = 0;
+  std::int64_t ceil = 0;
+};
+Step rounded_step(double t, std::int64_t a) {
+  Step s;
+  s.floor = static_cast<std::int64_t>(t);                // truncation == floor for t >= 0
+  const double frac = t - static_cast<double>(s.floor);  // exact
+  s.ceil = s.floor + (frac > 0.0 ? 1 : 0);
+  if (frac == 0.5) {
+    s.step = a % 2 != 0 ? -1 : (s.floor % 2 == 0 ? s.floor : s.floor + 1);
+  } else {
+    s.step = frac < 0.5 ? s.floor : s.floor + 1;
+  }
+  return s;
 }
 
 // Up to `budget` steps x <- fl(x - d) for x > d > 0 that stay in x's binade and positive, taken in
@@ -55,20 +83,17 @@ std::int64_t rounded_step(double t, std::int64_t a) {
 // `stalled` when a step would not change x (then x never changes again).
 std::int64_t bulk_subtract(double& x, double d, std::int64_t budget, bool& stalled) {
   const Binade b = binade_of(x);
-  const double t = std::ldexp(d, -b.q);  // exact and < 2^53 because d < x
-  const std::int64_t step = rounded_step(t, b.a);
-  if (step < 0) return 0;
+  const Step s = rounded_step(scale(d, -b.q), b.a);  // t exact and < 2^53 because d < x
+  if (s.step < 0) return 0;
   // The step from a_i is in-binade and positive iff a_i - t >= low and a_i - t > 0.
-  const std::int64_t need = std::max(b.low + static_cast<std::int64_t>(std::ceil(t)),
-                                     static_cast<std::int64_t>(std::floor(t)) + 1);
-  const std::int64_t room = b.a - need;
+  const std::int64_t room = b.a - std::max(b.low + s.ceil, s.floor + 1);
   if (room < 0) return 0;
-  if (step == 0) {
+  if (s.step == 0) {
     stalled = true;
     return 0;
   }
-  const std::int64_t taken = std::min(room / step + 1, budget);
-  x = std::ldexp(static_cast<double>(b.a - taken * step), b.q);
+  const std::int64_t taken = std::min(quotient(room, s.step) + 1, budget);
+  x = scale(static_cast<double>(b.a - taken * s.step), b.q);
   return taken;
 }
 
@@ -76,19 +101,19 @@ std::int64_t bulk_subtract(double& x, double d, std::int64_t budget, bool& stall
 std::int64_t bulk_add(double& y, double d, std::int64_t budget, bool& stalled) {
   if (!(y > 0.0) || !std::isfinite(y)) return 0;
   const Binade b = binade_of(y);
-  if (d >= std::ldexp(1.0, b.q + 53)) return 0;  // leaves the binade at once
-  const double t = std::ldexp(d, -b.q);
-  const std::int64_t step = rounded_step(t, b.a);
-  if (step < 0) return 0;
+  const double t = scale(d, -b.q);
+  if (!(t < static_cast<double>(kTwo53))) return 0;  // leaves the binade at once
+  const Step s = rounded_step(t, b.a);
+  if (s.step < 0) return 0;
   // The step from a_i keeps ulp 2^q iff a_i + t < 2^53, i.e. a_i <= 2^53 - 1 - floor(t).
-  const std::int64_t room = kTwo53 - 1 - static_cast<std::int64_t>(std::floor(t)) - b.a;
+  const std::int64_t room = kTwo53 - 1 - s.floor - b.a;
   if (room < 0) return 0;
-  if (step == 0) {
+  if (s.step == 0) {
     stalled = true;
     return 0;
   }
-  const std::int64_t taken = std::min(room / step + 1, budget);
-  y = std::ldexp(static_cast<double>(b.a + taken * step), b.q);
+  const std::int64_t taken = std::min(quotient(room, s.step) + 1, budget);
+  y = scale(static_cast<double>(b.a + taken * s.step), b.q);
   return taken;
 }
 
@@ -131,12 +156,13 @@ double advance_life(double lambda, double decrement, std::int64_t k) {
       lambda = -magnitude;
     }
     if (stalled) return lambda;
-    if (taken == 0) {
-      lambda = step_life(lambda, decrement);
-      taken = 1;
-      if (!std::isfinite(lambda)) return lambda;  // -inf stays -inf
-    }
     k -= taken;
+    if (k == 0) break;
+    // The step after a bulk run (or when none is possible) changes binade: do it in hardware.
+    const double next = step_life(lambda, decrement);
+    if (next == lambda || !std::isfinite(next)) return next;  // fixed point (e.g. 1 - 2^-54 == 1)
+    lambda = next;
+    --k;
   }
   return lambda;
 }
@@ -148,18 +174,41 @@ std::int64_t cycles_to_failure(double remaining_life, double decrement_per_cycle
   // Here x - d > 0. Without d > 0 the iterate never decreases; +inf stays +inf.
   if (!(d > 0.0) || !std::isfinite(x)) return kNeverFails;
   std::int64_t n = 0;  // steps taken; invariant x > d, so the next step keeps x > 0
-  for (;;) {
+  for (;;) {           // invariant: x > d
     bool stalled = false;
-    std::int64_t taken = bulk_subtract(x, d, kNeverFails, stalled);
+    const std::int64_t taken = bulk_subtract(x, d, kNeverFails, stalled);
     if (stalled) return kNeverFails;
-    if (taken == 0) {
-      x = step_life(x, d);
-      taken = 1;
-    }
-    if (n > kNeverFails - 2 - taken) return kNeverFails;
+    if (n > kNeverFails - 3 - taken) return kNeverFails;
     n += taken;
+    // A bulk run keeps x > 0 but may end with x <= d in the subnormal range.
+    if (step_life(x, d) <= 0.0) return n + 1;
+    // The next step changes binade: do it in hardware.
+    const double next = step_life(x, d);
+    if (next == x) return kNeverFails;  // fixed point at the bottom of a binade
+    x = next;
+    n += 1;
     if (step_life(x, d) <= 0.0) return n + 1;
   }
+}
+
+CycleBounds cycles_to_failure_bounds(double remaining_life, double decrement_per_cycle) {
+  const double x = remaining_life;
+  const double d = decrement_per_cycle;
+  if (step_life(x, d) <= 0.0) return {1, 1};
+  if (!(d > 0.0) || !std::isfinite(x)) return {kNeverFails, kNeverFails};
+  // Each step removes d + err, |err| <= u/2 with u the spacing of x's binade. Failing at step n
+  // needs (n − 1)(d + u/2) >= x − d and (n − 2)(d − u/2) < x − d. Margins of 1e-15 cover the
+  // rounding of the bound arithmetic itself.
+  const double half_ulp = 0.5 * scale(1.0, binade_of(x).q);
+  const double big = 9.0e18;  // below INT64_MAX
+  CycleBounds b;
+  const double lo = std::floor((x - d) / (d + half_ulp) * (1.0 - 1e-15)) + 1.0;
+  b.lo = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::min(lo, big)));
+  if (d > half_ulp) {
+    const double hi = std::ceil((x - d) / (d - half_ulp) * (1.0 + 1e-15)) + 2.0;
+    if (hi < big) b.hi = static_cast<std::int64_t>(hi);
+  }
+  return b;
 }
 
 // ============================ law 1: cyclic bond strain range ===================================
@@ -197,7 +246,7 @@ double strain_range_from_ratio(double s_max_load, double load_ratio) {
 }
 
 double strain_decrement_phase1(double eps, double A1, double m1, double eps_inf) {
-  if (!(eps > eps_inf)) return 0.0;  // 000 Eq. (17): no damage at or below the fatigue limit
+  if (!(eps > eps_inf)) return 0.0;         // 000 Eq. (17): no damage at or below the fatigue limit
   return A1 * std::pow(eps - eps_inf, m1);  // 000 Eq. (18)
 }
 
@@ -233,8 +282,7 @@ double a1_from_log_intercept(double m1, double log10_intercept) {
   return std::pow(10.0, -m1 * log10_intercept);  // 000 Eq. (48b) -> (48c)
 }
 
-Phase1Fit fit_phase1(std::span<const double> eps, std::span<const double> cycles,
-                     double eps_inf) {
+Phase1Fit fit_phase1(std::span<const double> eps, std::span<const double> cycles, double eps_inf) {
   // 000 Eq. (23): log10(ε − ε∞) = −(1/m1) log10 N − log10(A1)/m1.
   const std::size_t n = std::min(eps.size(), cycles.size());
   double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
@@ -273,8 +321,7 @@ double a2_scaled(double a2_at_delta1, double delta1, double delta2, double m2) {
   return a2_at_delta1 * std::pow(delta2 / delta1, 0.5 * (m2 - 2.0));  // 000 Eq. (29)
 }
 
-double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th,
-                                 double delta_k) {
+double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th, double delta_k) {
   return mean_tip_strain_range * delta_k_th / delta_k;  // 002 Eq. (13)
 }
 
@@ -292,8 +339,7 @@ double c0_osb(double a, double b, double d, double theta_k, double theta_j, doub
               double v_k, double v_j, double dx, double h) {
   if (s == 0.0) return 0.0;
   // 000 Eq. (32c)
-  return (a * d / xi * (theta_k / s + theta_j / s) + 2.0 * b) * v_k * v_j / (2.0 * dx * h * h) *
-         xi;
+  return (a * d / xi * (theta_k / s + theta_j / s) + 2.0 * b) * v_k * v_j / (2.0 * dx * h * h) * xi;
 }
 
 double c0_bond_based(double b, double xi, double v_k, double v_j, double dx, double h) {
@@ -318,12 +364,13 @@ double c1_coefficient(double c0, double load_ratio) {
   const double sign = load_ratio >= 0.0 ? 1.0 : -1.0;
   const double one_minus_r = 1.0 - load_ratio;
   // 000 Eq. (35c)
-  return std::abs(c0) * std::abs(1.0 - sign * load_ratio * load_ratio) / (one_minus_r * one_minus_r);
+  return std::abs(c0) * std::abs(1.0 - sign * load_ratio * load_ratio) /
+         (one_minus_r * one_minus_r);
 }
 
 EnergyLawBondParams energy_params_from_strain(double A, double m, double c1) {
   EnergyLawBondParams e;
-  e.n = 0.5 * m;                 // 000 Eq. (44a)
+  e.n = 0.5 * m;                // 000 Eq. (44a)
   e.B = A / std::pow(c1, e.n);  // 000 Eq. (44b)
   return e;
 }
@@ -371,7 +418,8 @@ double bilinear_s0_plane_stress(double g0, double youngs_modulus, double horizon
 }
 
 double bilinear_s0_plane_strain(double g0, double youngs_modulus, double horizon) {
-  return std::sqrt(5.0 * std::numbers::pi * g0 / (12.0 * youngs_modulus * horizon));  // 003 Eq. (43)
+  return std::sqrt(5.0 * std::numbers::pi * g0 /
+                   (12.0 * youngs_modulus * horizon));  // 003 Eq. (43)
 }
 
 double bilinear_s0_3d(double g0, double youngs_modulus, double horizon) {
@@ -387,7 +435,8 @@ double bilinear_static_damage(double s, double s0, double sc) {
 double bilinear_static_damage_increment(double s_old, double s_new, double s0, double sc) {
   // 003 Eq. (15)/(18)/(46), written as a difference of Eq. (14) so that it also covers steps that
   // start below s0 or end beyond sc.
-  return std::max(0.0, bilinear_static_damage(s_new, s0, sc) - bilinear_static_damage(s_old, s0, sc));
+  return std::max(0.0,
+                  bilinear_static_damage(s_new, s0, sc) - bilinear_static_damage(s_old, s0, sc));
 }
 
 double third_law_fatigue_rate(double s, double sc, double A, double m) {
@@ -465,8 +514,8 @@ double kt_cycle_dose(double sigma_max, double load_ratio, double frequency, doub
   return thermal_energy / (kPlanck * frequency) * std::exp(hi - U / thermal_energy) * mean_factor;
 }
 
-double kt_damage_after_cycles(double n_initial, double cycles, double dose_per_cycle,
-                              double lambda, double n0) {
+double kt_damage_after_cycles(double n_initial, double cycles, double dose_per_cycle, double lambda,
+                              double n0) {
   const double nd = cycles * dose_per_cycle;
   if (lambda == 1.0) return n0 - (n0 - n_initial) * std::exp(-nd);  // λ → 1 limit of Eq. (15)
   const double one_minus = 1.0 - lambda;

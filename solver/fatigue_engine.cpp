@@ -1,0 +1,376 @@
+#include "solver/fatigue_engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace peritwin {
+
+namespace {
+
+/// k additions of `increment` to `sum`, bit-identical to the loop: repeated subtraction of the
+/// negated value is exactly repeated addition under round-to-nearest (fatigue::advance_life).
+double advance_sum(double sum, double increment, std::int64_t k) {
+  return -fatigue::advance_life(-sum, increment, k);
+}
+
+bool same_rate_key(const LoadBlock& a, const LoadBlock& b, bool dose_mode) {
+  if (dose_mode) return a.alpha == b.alpha;
+  return a.p_max == b.p_max && a.r == b.r && a.alpha == b.alpha;
+}
+
+}  // namespace
+
+std::string validate(const LoadBlock& block) {
+  if (!std::isfinite(block.p_max)) return "p_max is not finite";
+  if (!std::isfinite(block.r)) return "r is not finite";
+  if (!std::isfinite(block.alpha)) return "alpha is not finite";
+  if (block.count < 1) return "count must be >= 1";
+  if (!(block.p_max > 0)) return "p_max must be > 0 (the peak load of a tensile cycle)";
+  if (!(block.r < 1.0)) return "r must be < 1 (R = P_min/P_max)";
+  return {};
+}
+
+double critical_stretch(const Material& material, double horizon) {
+  const double e = material.youngs_modulus;
+  const double nu = material.poisson_ratio;
+  const double mu = e / (2 * (1 + nu));
+  const double kappa = e / (2 * (1 - nu));  // 2D plane-stress bulk modulus
+  const double pi = std::numbers::pi;
+  const double gc = material.critical_energy_release_rate();
+  return std::sqrt(gc / ((6 / pi * mu + 16 / (9 * pi * pi) * (kappa - 2 * mu)) * horizon));
+}
+
+FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
+                             std::vector<Support> supports, std::vector<LoadTerm> loads,
+                             FatigueSettings settings)
+    : disc_(disc),
+      model_(model),
+      solver_(disc, model, std::move(supports), std::move(loads)),
+      settings_(settings) {
+  const auto nb = static_cast<std::size_t>(disc.num_bonds());
+  anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
+  rate_.assign(nb, 0.0);
+  phase_.assign(nb, 1);
+  breakable_.assign(nb, 0);
+  if (settings_.critical_stretch == 0.0 && model.material.fracture_toughness > 0) {
+    critical_stretch_ = critical_stretch(model.material, disc.horizon);
+  } else {
+    critical_stretch_ = settings_.critical_stretch;
+  }
+}
+
+bool FatigueEngine::dose_mode() const {
+  return settings_.law == FatigueLaw::strain_range && settings_.strain.eps_inf == 0.0 &&
+         settings_.strain.eps_inf_prop == 0.0;
+}
+
+bool FatigueEngine::initialize() {
+  const FactorReport r = solver_.solve();
+  ++solves_;
+  if (!r.ok()) {
+    failed_ = true;
+    failure_reason_ = r.message;
+    return false;
+  }
+  const auto& intact = solver_.intact();
+  for (std::size_t b = 0; b < breakable_.size(); ++b) {
+    const auto i = static_cast<std::size_t>(disc_.bond_i[b]);
+    const auto j = static_cast<std::size_t>(disc_.bond_j[b]);
+    breakable_[b] = intact[b] && !disc_.no_fail[i] && !disc_.no_fail[j] ? 1 : 0;
+  }
+  update_phases();
+  return true;
+}
+
+std::int64_t FatigueEngine::broken_bonds() const {
+  std::int64_t n = 0;
+  for (auto v : solver_.intact()) n += v ? 0 : 1;
+  return n;
+}
+
+double FatigueEngine::life(std::size_t b) const {
+  if (!dose_mode()) return anchor_life_[b];
+  return anchor_life_[b] - rate_[b] * dose_[phase_[b] - 1];
+}
+
+std::vector<double> FatigueEngine::remaining_life() const {
+  std::vector<double> lives(anchor_life_.size());
+  for (std::size_t b = 0; b < lives.size(); ++b) lives[b] = life(b);
+  return lives;
+}
+
+void FatigueEngine::materialize() {
+  if (!dose_mode()) return;
+  if (dose_[0] == 0.0 && dose_[1] == 0.0) return;
+  for (std::size_t b = 0; b < anchor_life_.size(); ++b) anchor_life_[b] = life(b);
+  dose_[0] = dose_[1] = 0.0;
+}
+
+void FatigueEngine::prepare_rates(const LoadBlock& block) {
+  const bool dose = dose_mode();
+  if (rates_valid_ && same_rate_key(rate_key_, block, dose)) return;
+  materialize();
+  const auto& p = settings_.strain;
+  const auto& intact = solver_.intact();
+  if (dose) {
+    solver_.stretch(1.0, block.alpha, stretch_);  // ŝ: stretch per unit load at α
+  } else {
+    solver_.stretch(block.p_max, block.alpha, stretch_);  // s⁺ at P_max
+  }
+  std::vector<double> g;
+  if (settings_.law == FatigueLaw::energy) {
+    std::vector<double> theta;
+    dilatations(disc_, model_, intact, stretch_, theta);
+    bond_energy_release_rates(disc_, model_, stretch_, theta, g);  // ḡ⁺, 000 Eq. (31)
+  }
+  for (std::size_t b = 0; b < rate_.size(); ++b) {
+    if (!intact[b]) {
+      rate_[b] = 0.0;
+      continue;
+    }
+    const auto phase = static_cast<fatigue::Phase>(phase_[b]);
+    const double s = stretch_[b];
+    switch (settings_.law) {
+      case FatigueLaw::strain_range:
+        if (dose) {
+          rate_[b] = phase_[b] == 1 ? fatigue::strain_bond_factor(p.A1, p.m1, s)
+                                    : fatigue::strain_bond_factor(p.A2, p.m2, s);
+        } else {  // 000 Eq. (15), (17)-(19)
+          rate_[b] = fatigue::strain_decrement(fatigue::strain_range_from_ratio(s, block.r),
+                                               phase, p);
+        }
+        break;
+      case FatigueLaw::energy: {  // 000 Eq. (30)-(39) with B_i, n_i from Eq. (44)-(46)
+        const double c0 = s != 0.0 ? g[b] / (s * s) : 0.0;
+        const double range = fatigue::energy_release_rate_range_from_ratio(c0, s, block.r);
+        rate_[b] = c0 > 0.0 ? fatigue::energy_decrement(range, phase,
+                                                        fatigue::c1_coefficient(c0, block.r), p)
+                            : 0.0;
+        break;
+      }
+      case FatigueLaw::kinetic: {  // 004 Eq. (12)-(15): remaining life falls by Φ per cycle
+        // Decision: the bond stress is E·s⁺, the stress of a bar at the bond's stretch (004 uses
+        // the bond's stress; a PD bond carries no other uniaxial stress measure).
+        const auto& k = settings_.kinetic;
+        const double sigma = model_.material.youngs_modulus * std::max(s, 0.0);
+        rate_[b] = sigma > 0.0 ? fatigue::kt_cycle_dose(sigma, block.r, k.frequency, k.U, k.gamma,
+                                                        fatigue::kt_thermal_energy(k.temperature))
+                               : 0.0;
+        break;
+      }
+    }
+  }
+  if (dose) {
+    dose_threshold_[0] = dose_threshold_[1] = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < rate_.size(); ++b) {
+      if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
+      double& t = dose_threshold_[phase_[b] - 1];
+      t = std::min(t, anchor_life_[b] / rate_[b]);
+    }
+  }
+  rates_valid_ = true;
+  rate_key_ = block;
+}
+
+std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block,
+                                                 std::int64_t limit) const {
+  const std::int64_t none = limit + 1;
+  if (!dose_mode()) {
+    std::int64_t best = none;
+    for (std::size_t b = 0; b < rate_.size(); ++b) {
+      if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
+      best = std::min(best, fatigue::cycles_to_failure(anchor_life_[b], rate_[b]));
+    }
+    return best;
+  }
+  const auto& p = settings_.strain;
+  const double increment[2] = {fatigue::load_dose(block.p_max, block.r, p.m1),
+                               fatigue::load_dose(block.p_max, block.r, p.m2)};
+  // Exact predicate of the per-cycle path: bond b has failed after k cycles of this block.
+  auto failed_after = [&](std::size_t b, std::int64_t k) {
+    const int ph = phase_[b] - 1;
+    return anchor_life_[b] - rate_[b] * advance_sum(dose_[ph], increment[ph], k) <= 0.0;
+  };
+  // O(1) absorption: if neither phase's dose reaches its smallest threshold within the block (with
+  // a margin far above round-off), no bond can fail in it.
+  bool may_break = false;
+  for (int ph = 0; ph < 2; ++ph) {
+    if (increment[ph] > 0.0 &&
+        advance_sum(dose_[ph], increment[ph], limit) >= dose_threshold_[ph] * (1 - 1e-9)) {
+      may_break = true;
+    }
+  }
+  if (!may_break) return none;
+  // Real-arithmetic estimate for every bond, then the exact cycle for the near-minimal ones.
+  std::int64_t best = none;
+  std::vector<std::pair<double, std::size_t>> estimates;
+  double min_estimate = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < rate_.size(); ++b) {
+    if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
+    const int ph = phase_[b] - 1;
+    if (!(increment[ph] > 0.0)) continue;
+    const double k = (anchor_life_[b] / rate_[b] - dose_[ph]) / increment[ph];
+    if (k > static_cast<double>(limit) * (1 + 1e-9) + 4) continue;
+    estimates.emplace_back(k, b);
+    min_estimate = std::min(min_estimate, k);
+  }
+  for (const auto& [estimate, b] : estimates) {
+    if (estimate > min_estimate * (1 + 1e-9) + 4) continue;
+    // Monotone predicate in k: gallop from the estimate, then bisect.
+    std::int64_t lo = 0;  // known not failed (or k = 0)
+    std::int64_t hi = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::ceil(estimate)), 1,
+                                               none);
+    if (failed_after(b, hi)) {
+      std::int64_t step = 1;
+      while (hi - step > 0 && failed_after(b, hi - step)) {
+        hi -= step;
+        step *= 2;
+      }
+      lo = std::max<std::int64_t>(0, hi - step);
+    } else {
+      std::int64_t step = 1;
+      lo = hi;
+      while (true) {
+        if (lo >= none) break;
+        hi = std::min(none, lo + step);
+        if (failed_after(b, hi)) break;
+        lo = hi;
+        step *= 2;
+      }
+      if (lo >= none) continue;
+    }
+    while (hi - lo > 1) {
+      const std::int64_t mid = lo + (hi - lo) / 2;
+      (failed_after(b, mid) ? hi : lo) = mid;
+    }
+    best = std::min(best, hi);
+  }
+  return best;
+}
+
+void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
+  if (dose_mode()) {
+    const auto& p = settings_.strain;
+    dose_[0] = advance_sum(dose_[0], fatigue::load_dose(block.p_max, block.r, p.m1), k);
+    dose_[1] = advance_sum(dose_[1], fatigue::load_dose(block.p_max, block.r, p.m2), k);
+    return;
+  }
+  for (std::size_t b = 0; b < rate_.size(); ++b) {
+    if (rate_[b] > 0.0) anchor_life_[b] = fatigue::advance_life(anchor_life_[b], rate_[b], k);
+  }
+}
+
+EngineStatus FatigueEngine::apply(const LoadBlock& block) {
+  if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
+  std::int64_t remaining = block.count;
+  while (remaining > 0) {
+    prepare_rates(block);
+    const std::int64_t k = cycles_to_next_break(block, remaining);
+    if (k > remaining) {
+      advance(block, remaining);
+      total_cycles_ += remaining;
+      break;
+    }
+    advance(block, k);
+    total_cycles_ += k;
+    remaining -= k;
+    if (!break_and_resolve(block)) return EngineStatus::final_failure;
+  }
+  return EngineStatus::ok;
+}
+
+EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
+  if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
+  const auto& p = settings_.strain;
+  for (std::int64_t c = 0; c < block.count; ++c) {
+    prepare_rates(block);
+    if (dose_mode()) {
+      dose_[0] += fatigue::load_dose(block.p_max, block.r, p.m1);
+      dose_[1] += fatigue::load_dose(block.p_max, block.r, p.m2);
+    } else {
+      for (std::size_t b = 0; b < rate_.size(); ++b) {
+        if (rate_[b] > 0.0) anchor_life_[b] = fatigue::step_life(anchor_life_[b], rate_[b]);
+      }
+    }
+    ++total_cycles_;
+    bool any = false;
+    for (std::size_t b = 0; b < rate_.size() && !any; ++b) any = breakable_[b] && life(b) <= 0.0;
+    if (any && !break_and_resolve(block)) return EngineStatus::final_failure;
+  }
+  return EngineStatus::ok;
+}
+
+bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
+  materialize();
+  std::vector<BondIndex> newly;
+  for (std::size_t b = 0; b < anchor_life_.size(); ++b) {
+    if (breakable_[b] && anchor_life_[b] <= 0.0) {  // 000 Eq. (20)
+      newly.push_back(static_cast<BondIndex>(b));
+      events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::fatigue});
+    }
+  }
+  if (!newly.empty() && !resolve(newly)) return false;
+  return static_cascade(block);
+}
+
+bool FatigueEngine::static_cascade(const LoadBlock& block) {
+  if (!(critical_stretch_ > 0.0)) return true;
+  std::vector<double> s;
+  while (true) {
+    solver_.stretch(block.p_max, block.alpha, s);
+    std::vector<BondIndex> newly;
+    for (std::size_t b = 0; b < s.size(); ++b) {
+      if (breakable_[b] && s[b] >= critical_stretch_) {  // 000 Eq. (7), (20)
+        newly.push_back(static_cast<BondIndex>(b));
+        events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::overload});
+      }
+    }
+    if (newly.empty()) return true;
+    materialize();
+    if (!resolve(newly)) return false;
+  }
+}
+
+bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
+  for (BondIndex b : newly_broken) {
+    breakable_[static_cast<std::size_t>(b)] = 0;
+    rate_[static_cast<std::size_t>(b)] = 0.0;
+  }
+  const FactorReport r = solver_.break_bonds(newly_broken);
+  ++solves_;
+  rates_valid_ = false;
+  if (!r.ok()) {
+    failed_ = true;
+    failure_reason_ = "final failure at cycle " + std::to_string(total_cycles_) + ": " + r.message;
+    return false;
+  }
+  update_phases();
+  return true;
+}
+
+void FatigueEngine::update_phases() {
+  damage_index(disc_, solver_.intact(), node_damage_);
+  const auto nn = static_cast<std::size_t>(disc_.num_nodes());
+  // 000 Sec. 4.4: node k is in phase II once k or any family member has φ ≥ φ0.
+  std::vector<std::uint8_t> node_growth(nn, 0);
+  for (std::size_t k = 0; k < nn; ++k) {
+    if (node_damage_[k] < settings_.phase_switch_damage) continue;
+    node_growth[k] = 1;
+    for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
+      const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
+      node_growth[static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)))] = 1;
+    }
+  }
+  // Decision: a bond follows phase II when either of its nodes does (the paper states the rule
+  // per material point; a bond belongs to two).
+  for (std::size_t b = 0; b < phase_.size(); ++b) {
+    phase_[b] = node_growth[static_cast<std::size_t>(disc_.bond_i[b])] ||
+                        node_growth[static_cast<std::size_t>(disc_.bond_j[b])]
+                    ? 2
+                    : 1;
+  }
+}
+
+}  // namespace peritwin

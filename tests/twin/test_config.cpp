@@ -1,0 +1,651 @@
+// twin/config: the example configs parse to the benchmark numbers, every error kind names file,
+// line and key path, and resolve() binds supports and loads to the expected nodes.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "solver/specimens.h"
+#include "twin/config.h"
+
+namespace peritwin::twin {
+namespace {
+
+std::string examples_dir() {
+#ifdef PERITWIN_EXAMPLES_DIR
+  return PERITWIN_EXAMPLES_DIR;
+#else
+  std::string file = __FILE__;  // <repo>/tests/twin/test_config.cpp
+  for (int i = 0; i < 3; ++i) file = file.substr(0, file.find_last_of('/'));
+  return file + "/examples";
+#endif
+}
+
+/// A TOML document as lines, so that tests can edit it and find the line numbers they expect.
+struct Doc {
+  std::vector<std::string> lines;
+
+  /// 1-based number of the first line starting with `prefix`.
+  [[nodiscard]] std::uint32_t line_of(std::string_view prefix, std::uint32_t from = 1) const {
+    for (std::size_t i = from - 1; i < lines.size(); ++i) {
+      if (lines[i].starts_with(prefix)) return static_cast<std::uint32_t>(i + 1);
+    }
+    ADD_FAILURE() << "no line starts with " << prefix;
+    return 0;
+  }
+  void replace(std::string_view prefix, std::string line) { lines[line_of(prefix) - 1] = line; }
+  void erase(std::string_view prefix) { lines.erase(lines.begin() + line_of(prefix) - 1); }
+  void insert_after(std::string_view prefix, std::string line) {
+    lines.insert(lines.begin() + line_of(prefix), std::move(line));
+  }
+  [[nodiscard]] std::string text() const {
+    std::string t;
+    for (const auto& l : lines) t += l + "\n";
+    return t;
+  }
+};
+
+/// A 10 mm x 5 mm plate with a hole, pulled at its right edge and held at its left edge.
+Doc plate() {
+  return {{
+      R"([[detail]])",
+      R"(id = "plate")",
+      R"([detail.geometry])",
+      R"(thickness = 0.005)",
+      R"(outline = [{ x_min = 0.0, y_min = 0.0, x_max = 0.010, y_max = 0.005 }])",
+      R"(holes = [{ centre = [0.005, 0.0025], radius = 0.001 }])",
+      R"([detail.grid])",
+      R"(dx = 0.0005)",
+      R"(horizon_ratio = 3.015)",
+      R"([detail.material])",
+      R"(E = 70e9)",
+      R"(nu = 0.3)",
+      R"([detail.fatigue])",
+      R"(law = "strain_range")",
+      R"(A1 = 100.0)",
+      R"(m1 = 2.0)",
+      R"(A2 = 1000.0)",
+      R"(m2 = 2.5)",
+      R"([[detail.load]])",
+      R"(point = [0.010, 0.0025])",
+      R"(constant = [1.0, 0.0])",
+      R"([[detail.support]])",
+      R"(region = { x_min = 0.0, y_min = 0.0, x_max = 0.0005, y_max = 0.005 })",
+  }};
+}
+
+using XY = std::pair<double, double>;
+XY xy(Point p) { return {p.x, p.y}; }
+
+ConfigResult parse(const Doc& doc) { return parse_config(doc.text(), "plate.toml"); }
+
+/// Exactly one error, at (line, path), whose reason contains `reason`.
+void expect_one_error(const ConfigResult& r, std::uint32_t line, std::string_view path,
+                      std::string_view reason) {
+  ASSERT_FALSE(r.ok());
+  ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
+  const ConfigError& e = r.errors[0];
+  EXPECT_EQ(e.file, "plate.toml");
+  EXPECT_EQ(e.line, line) << e.message();
+  EXPECT_EQ(e.path, path) << e.message();
+  EXPECT_NE(e.reason.find(reason), std::string::npos) << e.message();
+}
+
+TEST(Config, PlateParsesWithDefaults) {
+  Doc doc = plate();
+  doc.erase("horizon_ratio");
+  const ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  ASSERT_EQ(r.config->details.size(), 1u);
+  const DetailConfig& d = r.config->details[0];
+  EXPECT_EQ(d.id, "plate");
+  EXPECT_EQ(d.token, "PLATE");
+  EXPECT_EQ(d.horizon_ratio, 3.015);
+  EXPECT_EQ(d.geometry.rigid_factor, 200.0);
+  EXPECT_EQ(d.material.fracture_toughness, 0.0);
+  EXPECT_EQ(d.model.kind, ModelKind::state_based);
+  EXPECT_EQ(d.model.kernel, Kernel::constant);
+  EXPECT_EQ(d.model.plane, PlaneCondition::plane_stress);
+  EXPECT_TRUE(d.model.surface_correction);
+  EXPECT_EQ(d.fatigue.phase_switch_damage, 0.398);
+  EXPECT_EQ(d.fatigue.strain.eps_inf, 0.0);
+  EXPECT_EQ(d.fatigue.strain.eps_inf_prop, 0.0);
+  EXPECT_EQ(d.loads[0].per_cos.x, 0.0);
+  EXPECT_EQ(d.loads[0].where.line, doc.line_of("[[detail.load]]"));
+  EXPECT_EQ(d.loads[0].where.path, "detail[0].load[0]");
+  EXPECT_TRUE(d.supports[0].fix_x);
+  EXPECT_TRUE(d.supports[0].fix_y);
+  EXPECT_EQ(d.output.directory, "results/plate");
+  EXPECT_EQ(d.output.field_every_batches, 10);
+  EXPECT_FALSE(d.output.png);
+  EXPECT_EQ(d.life.criterion, LifeCriterion::phase3);
+  EXPECT_TRUE(d.life.empirical_spectrum());
+  EXPECT_EQ(d.life.band, BandSource::none);
+  EXPECT_EQ(d.checkpoint.every_batches, 100);
+  EXPECT_EQ(d.checkpoint.every_seconds, 300.0);
+}
+
+TEST(Config, B1Example) {
+  const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  ASSERT_EQ(r.config->details.size(), 1u);
+  const DetailConfig& d = r.config->details[0];
+  EXPECT_EQ(d.id, "b1-ct");
+  EXPECT_EQ(d.token, "B1_CT");
+  const DetailGeometry& g = d.geometry;
+  ASSERT_EQ(g.outline.size(), 1u);
+  EXPECT_EQ(xy({g.outline[0].x_min, g.outline[0].y_min}), XY(0.0, -0.030));
+  EXPECT_EQ(xy({g.outline[0].x_max, g.outline[0].y_max}), XY(0.0625, 0.030));
+  EXPECT_EQ(g.thickness, 0.010);
+  EXPECT_EQ(g.rigid_factor, 200.0);
+  EXPECT_TRUE(g.holes.empty());
+  ASSERT_EQ(g.notches.size(), 1u);
+  EXPECT_EQ(xy(g.notches[0].a), XY(-0.001, 0.0));
+  EXPECT_EQ(xy(g.notches[0].b), XY(0.0275, 0.0));
+  ASSERT_EQ(g.rigid_regions.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const Region& pin = g.rigid_regions[k];
+    ASSERT_EQ(pin.shape, Region::Shape::circle);
+    EXPECT_EQ(xy(pin.circle.centre), XY(0.0125, k == 0 ? 0.275 * 0.050 : -0.275 * 0.050));
+    EXPECT_EQ(pin.circle.radius, 0.00625);
+  }
+  EXPECT_EQ(d.dx, 0.001);
+  EXPECT_EQ(d.horizon_ratio, 3.015);
+  EXPECT_EQ(d.material.youngs_modulus, 68e9);
+  EXPECT_EQ(d.material.poisson_ratio, 0.33);
+  EXPECT_EQ(d.material.fracture_toughness, 48.7e6);
+  EXPECT_EQ(d.model.kind, ModelKind::state_based);
+  EXPECT_EQ(d.fatigue.law, FatigueLaw::strain_range);
+  EXPECT_EQ(d.fatigue.phase_switch_damage, 0.398);
+  EXPECT_EQ(d.fatigue.strain.A1, 103.7465);
+  EXPECT_EQ(d.fatigue.strain.m1, 2.29153);
+  EXPECT_EQ(d.fatigue.strain.A2, 1055.0);
+  EXPECT_EQ(d.fatigue.strain.m2, 2.6183);
+  ASSERT_EQ(d.loads.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const LoadSpec& l = d.loads[k];
+    ASSERT_EQ(l.target.kind, NodeSelector::Kind::region);
+    EXPECT_EQ(xy(l.target.region.circle.centre), xy(g.rigid_regions[k].circle.centre));
+    EXPECT_EQ(l.target.region.circle.radius, 0.00625);
+    EXPECT_EQ(xy(l.constant), XY(0.0, k == 0 ? 1.0 : -1.0));
+    EXPECT_EQ(xy(l.per_cos), XY(0.0, 0.0));
+    EXPECT_EQ(xy(l.per_sin), XY(0.0, 0.0));
+  }
+  EXPECT_EQ(d.loads[0].name, "upper pin");
+  ASSERT_EQ(d.supports.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    const SupportSpec& s = d.supports[k];
+    ASSERT_EQ(s.target.kind, NodeSelector::Kind::point);
+    EXPECT_EQ(xy(s.target.point), XY(0.0625, k == 0 ? 0.0005 : -0.0005));
+    EXPECT_TRUE(s.fix_x && s.fix_y);
+  }
+  EXPECT_EQ(d.output.directory, "results/b1-ct");
+  EXPECT_TRUE(d.output.png);
+  EXPECT_EQ(d.life.criterion, LifeCriterion::crack_length);
+  EXPECT_EQ(d.life.critical_crack_length, 0.020);
+  ASSERT_EQ(d.life.reference_spectrum.size(), 1u);
+  EXPECT_EQ(d.life.reference_spectrum[0], (SpectrumBlock{4000.0, 0.1, 0.0, 1000}));
+  EXPECT_EQ(d.life.band, BandSource::a2_scatter);
+  EXPECT_EQ(d.life.a2_relative_scatter, 0.2);
+  EXPECT_EQ(d.checkpoint.every_batches, 100);
+  EXPECT_EQ(d.checkpoint.every_seconds, 300.0);
+}
+
+TEST(Config, B1ExampleIsTheSpecimen) {
+  const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const DetailConfig& d = r.config->details[0];
+  const Specimen s = make_compact_tension(CompactTensionSpec{}, d.model, d.dx, d.horizon_ratio);
+  EXPECT_EQ(d.material.youngs_modulus, s.material.youngs_modulus);
+  EXPECT_EQ(d.material.poisson_ratio, s.material.poisson_ratio);
+  EXPECT_EQ(d.material.fracture_toughness, s.material.fracture_toughness);
+  EXPECT_EQ(d.geometry.thickness, s.geometry.thickness);
+  EXPECT_EQ(d.geometry.rigid_factor, s.geometry.rigid_factor);
+
+  // Same nodes, bonds, rigid nodes and pre-cut bonds (the pin boundary passes exactly through
+  // lattice points, so this also checks the pin centres to the last bit).
+  const Discretization disc = discretize(d);
+  ASSERT_EQ(disc.num_nodes(), 62 * 60);  // no holes: node (i, j) has index 62j + i
+  EXPECT_EQ(disc.num_nodes(), s.disc.num_nodes());
+  EXPECT_EQ(disc.bond_i, s.disc.bond_i);
+  EXPECT_EQ(disc.bond_j, s.disc.bond_j);
+  EXPECT_EQ(disc.rigid, s.disc.rigid);
+  EXPECT_EQ(disc.bond_precut, s.disc.bond_precut);
+
+  const ResolvedBoundary b = resolve(d, disc);
+  ASSERT_TRUE(b.ok());
+  ASSERT_EQ(b.supports.size(), 2u);
+  EXPECT_EQ(b.supports[0].nodes, std::vector<NodeIndex>{30 * 62 + 61});  // (61.5, 0.5) mm
+  EXPECT_EQ(b.supports[1].nodes, std::vector<NodeIndex>{29 * 62 + 61});  // (61.5, -0.5) mm
+  ASSERT_EQ(s.supports.size(), 2u);
+  ASSERT_EQ(b.loads.size(), 2u);
+  ASSERT_EQ(s.loads.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(b.supports[k].nodes, s.supports[k].nodes);
+    EXPECT_EQ(b.supports[k].fix_x, s.supports[k].fix_x);
+    EXPECT_EQ(b.supports[k].fix_y, s.supports[k].fix_y);
+    EXPECT_EQ(b.loads[k].nodes, s.loads[k].nodes);
+    EXPECT_EQ(b.loads[k].nodes.size(), 126u);
+    EXPECT_EQ(b.loads[k].constant.x, s.loads[k].constant.x);
+    EXPECT_EQ(b.loads[k].constant.y, s.loads[k].constant.y);
+  }
+}
+
+TEST(Config, B2Example) {
+  const ConfigResult r = load_config(examples_dir() + "/b2-cts-al6061.toml");
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const DetailConfig& d = r.config->details[0];
+  EXPECT_EQ(d.id, "b2-cts");
+  EXPECT_EQ(d.token, "B2_CTS");
+  const Rectangle& o = d.geometry.outline.at(0);
+  EXPECT_EQ(xy({o.x_min, o.y_min}), XY(0.0, -0.045));
+  EXPECT_EQ(xy({o.x_max, o.y_max}), XY(0.090, 0.045));
+  EXPECT_EQ(d.geometry.thickness, 0.010);
+  ASSERT_EQ(d.geometry.notches.size(), 1u);
+  EXPECT_EQ(xy(d.geometry.notches[0].a), XY(0.0, 0.0));
+  EXPECT_EQ(xy(d.geometry.notches[0].b), XY(0.045, 0.0));
+  const double xs[] = {0.010, 0.045, 0.080};
+  ASSERT_EQ(d.geometry.rigid_regions.size(), 6u);
+  for (int k = 0; k < 6; ++k) {
+    const Circle& c = d.geometry.rigid_regions[k].circle;
+    EXPECT_EQ(xy(c.centre), XY(xs[k % 3], k < 3 ? 0.030 : -0.030));
+    EXPECT_EQ(c.radius, 0.004);  // Ø 8 mm
+  }
+
+  // 000 Eq. (51) per unit P: F1 = 0.5 cos α + (e/f) sin α (+y), F2 = −sin α (x),
+  // F3 = 0.5 cos α − (e/f) sin α (+y).
+  const double e_over_f = 3.0 / 7.0;
+  ASSERT_EQ(d.loads.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    const LoadSpec& l = d.loads[k];
+    EXPECT_EQ(xy(l.target.region.circle.centre), XY(xs[k], 0.030));
+    EXPECT_EQ(xy(l.constant), XY(0.0, 0.0));
+  }
+  EXPECT_EQ(xy(d.loads[0].per_cos), XY(0.0, 0.5));
+  EXPECT_EQ(xy(d.loads[0].per_sin), XY(0.0, e_over_f));
+  EXPECT_EQ(xy(d.loads[1].per_cos), XY(0.0, 0.0));
+  EXPECT_EQ(xy(d.loads[1].per_sin), XY(-1.0, 0.0));
+  EXPECT_EQ(xy(d.loads[2].per_cos), XY(0.0, 0.5));
+  EXPECT_EQ(xy(d.loads[2].per_sin), XY(0.0, -e_over_f));
+  ASSERT_EQ(d.supports.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(xy(d.supports[k].target.region.circle.centre), XY(xs[k], -0.030));
+    EXPECT_TRUE(d.supports[k].fix_x && d.supports[k].fix_y);
+  }
+  EXPECT_EQ(d.life.criterion, LifeCriterion::connectivity);
+  EXPECT_TRUE(d.life.empirical_spectrum());
+  EXPECT_EQ(d.life.band, BandSource::none);
+
+  const Discretization disc = discretize(d);
+  EXPECT_EQ(disc.num_nodes(), 90 * 90);
+  const ResolvedBoundary b = resolve(d, disc);
+  ASSERT_TRUE(b.ok());
+  for (const auto& l : b.loads) EXPECT_EQ(l.nodes.size(), 52u);  // lattice points in Ø 8 mm
+}
+
+TEST(Config, ResolveSelectsNodesOnASmallGrid) {
+  // 4 x 3 nodes at x = 0.5, 1.5, 2.5, 3.5 mm and y = 0.5, 1.5, 2.5 mm: node (i, j) = 4j + i.
+  Doc doc = plate();
+  doc.replace("outline", "outline = [{ x_min = 0.0, y_min = 0.0, x_max = 0.004, y_max = 0.003 }]");
+  doc.erase("holes");
+  doc.replace("dx = ", "dx = 0.001");
+  doc.lines.resize(doc.line_of("[[detail.load]]") - 1);
+  doc.lines.insert(
+      doc.lines.end(),
+      {"[[detail.load]]", "region = { x_min = 0.001, y_min = 0.001, x_max = 0.003, y_max = 0.003 }",
+       "constant = [1.0, 2.0]", "per_cos = [3.0, 4.0]", "per_sin = [5.0, 6.0]", "[[detail.load]]",
+       "region = { centre = [0.0015, 0.0015], radius = 0.0011 }", "constant = [0.0, 1.0]",
+       "[[detail.support]]", "point = [0.0, 0.0]", "[[detail.support]]", "point = [0.004, 0.0011]",
+       "fix_x = false"});
+  const ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const DetailConfig& d = r.config->details[0];
+  const Discretization disc = discretize(d);
+  ASSERT_EQ(disc.num_nodes(), 12);
+  ResolvedBoundary b = resolve(d, disc);
+  ASSERT_TRUE(b.ok());
+  ASSERT_EQ(b.supports.size(), 2u);
+  EXPECT_EQ(b.supports[0].nodes, std::vector<NodeIndex>{0});
+  EXPECT_TRUE(b.supports[0].fix_x && b.supports[0].fix_y);
+  EXPECT_EQ(b.supports[1].nodes, std::vector<NodeIndex>{7});  // (3.5, 1.5) mm
+  EXPECT_FALSE(b.supports[1].fix_x);
+  EXPECT_TRUE(b.supports[1].fix_y);
+  ASSERT_EQ(b.loads.size(), 2u);
+  EXPECT_EQ(b.loads[0].nodes, (std::vector<NodeIndex>{5, 6, 9, 10}));
+  EXPECT_EQ(xy(b.loads[0].constant), XY(1.0, 2.0));
+  EXPECT_EQ(xy(b.loads[0].per_cos), XY(3.0, 4.0));
+  EXPECT_EQ(xy(b.loads[0].per_sin), XY(5.0, 6.0));
+  EXPECT_EQ(b.loads[1].nodes, (std::vector<NodeIndex>{1, 4, 5, 6, 9}));
+
+  // A region between the nodes selects none: an error naming the load, the rest is resolved.
+  doc.lines.insert(doc.lines.end(),
+                   {"[[detail.load]]", "region = { centre = [0.002, 0.002], radius = 0.0001 }",
+                    "constant = [0.0, 1.0]"});
+  const ConfigResult r2 = parse(doc);
+  ASSERT_TRUE(r2.ok()) << r2.error_text();
+  b = resolve(r2.config->details[0], disc);
+  ASSERT_EQ(b.errors.size(), 1u);
+  EXPECT_EQ(b.errors[0].line, 31u);  // its [[detail.load]] header
+  EXPECT_EQ(b.errors[0].path, "detail[0].load[2]");
+  EXPECT_EQ(b.errors[0].message(),
+            "plate.toml:31:1: detail[0].load[2]: the region selects no node at dx = 0.001 m");
+  EXPECT_EQ(b.loads.size(), 2u);
+}
+
+TEST(Config, ModelOptionsAndSeveralDetails) {
+  Doc doc = plate();
+  doc.insert_after("horizon_ratio", "[detail.model]");
+  doc.insert_after("[detail.model]", R"(kind = "bond_based")");
+  doc.insert_after("kind = ", R"(kernel = "conical")");
+  doc.insert_after("kernel = ", R"(plane = "plane_strain")");
+  doc.insert_after("plane = ", "surface_correction = false");
+  Doc second = plate();
+  second.replace("id = ", R"(id = "Plate_2")");
+  doc.lines.insert(doc.lines.end(), second.lines.begin(), second.lines.end());
+  const ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  ASSERT_EQ(r.config->details.size(), 2u);
+  const ModelOptions& m = r.config->details[0].model;
+  EXPECT_EQ(m.kind, ModelKind::bond_based);
+  EXPECT_EQ(m.kernel, Kernel::conical);
+  EXPECT_EQ(m.plane, PlaneCondition::plane_strain);
+  EXPECT_FALSE(m.surface_correction);
+  EXPECT_EQ(r.config->details[1].id, "Plate_2");
+  EXPECT_EQ(r.config->details[1].token, "PLATE_2");
+  EXPECT_EQ(r.config->details[1].where.line, 29u);
+  EXPECT_EQ(r.config->details[1].where.path, "detail[1]");
+  EXPECT_EQ(r.config->details[1].model.kind, ModelKind::state_based);
+}
+
+TEST(Config, FatigueLawsMapEveryField) {
+  const auto fatigue = [](std::vector<std::string> keys) {
+    Doc doc = plate();
+    const std::uint32_t at = doc.line_of("[detail.fatigue]");
+    doc.lines.erase(doc.lines.begin() + at, doc.lines.begin() + at + 5);  // law, A1, m1, A2, m2
+    doc.lines.insert(doc.lines.begin() + at, keys.begin(), keys.end());
+    const ConfigResult r = parse(doc);
+    EXPECT_TRUE(r.ok()) << r.error_text();
+    return r.ok() ? r.config->details[0].fatigue : FatigueConfig{};
+  };
+  const FatigueConfig e =
+      fatigue({R"(law = "energy")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
+               "eps_inf = 1e-4", "eps_inf_prop = 2e-5", "phi0 = 0.5"});
+  EXPECT_EQ(e.law, FatigueLaw::energy);
+  EXPECT_EQ(e.strain.A1, 1.5);
+  EXPECT_EQ(e.strain.m1, 2.5);
+  EXPECT_EQ(e.strain.A2, 3.5);
+  EXPECT_EQ(e.strain.m2, 4.5);
+  EXPECT_EQ(e.strain.eps_inf, 1e-4);
+  EXPECT_EQ(e.strain.eps_inf_prop, 2e-5);
+  EXPECT_EQ(e.phase_switch_damage, 0.5);
+
+  const FatigueConfig b = fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"});
+  EXPECT_EQ(b.law, FatigueLaw::bilinear);
+  EXPECT_EQ(b.bilinear.s0, 1e-3);
+  EXPECT_EQ(b.bilinear.sc, 3e-3);
+  EXPECT_EQ(b.bilinear.A, 2e8);
+  EXPECT_EQ(b.bilinear.m, 4.0);
+  EXPECT_EQ(b.phase_switch_damage, 0.398);
+
+  const FatigueConfig k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
+  EXPECT_EQ(k0.law, FatigueLaw::kinetic);
+  EXPECT_EQ(k0.kinetic.U, 2e-19);
+  EXPECT_EQ(k0.kinetic.gamma, 1e-28);
+  EXPECT_EQ(k0.kinetic.lambda, 9.0);
+  EXPECT_EQ(k0.kinetic.n0, 1.771);
+  EXPECT_EQ(k0.kinetic.temperature, 293.0);
+  EXPECT_EQ(k0.kinetic.frequency, 0.56);
+  const FatigueConfig k = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5",
+                                   "n0 = 1.5", "temperature = 300", "frequency = 10"});
+  EXPECT_EQ(k.kinetic.lambda, 5.0);
+  EXPECT_EQ(k.kinetic.n0, 1.5);
+  EXPECT_EQ(k.kinetic.temperature, 300.0);
+  EXPECT_EQ(k.kinetic.frequency, 10.0);
+}
+
+TEST(ConfigErrors, UnknownKey) {
+  Doc doc = plate();
+  doc.insert_after("nu = ", "Nu = 0.3");
+  const ConfigResult r = parse(doc);
+  expect_one_error(r, 13, "detail[0].material.Nu", "unknown key \"Nu\"");
+  EXPECT_EQ(r.errors[0].column, 1u);
+  EXPECT_EQ(r.errors[0].message(),
+            "plate.toml:13:1: detail[0].material.Nu: unknown key \"Nu\" (known here: E, nu, K_c)");
+}
+
+TEST(ConfigErrors, UnknownKeyInAnInlineTable) {
+  Doc doc = plate();
+  doc.replace("holes", R"(holes = [{ center = [0.005, 0.0025], radius = 0.001 }])");
+  const ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 2u) << r.error_text();
+  EXPECT_EQ(r.errors[0].line, 6u);
+  EXPECT_EQ(r.errors[0].path, "detail[0].geometry.holes[0].centre");
+  EXPECT_EQ(r.errors[0].reason, "missing required key \"centre\"");
+  EXPECT_EQ(r.errors[1].line, 6u);
+  EXPECT_EQ(r.errors[1].path, "detail[0].geometry.holes[0].center");
+  EXPECT_NE(r.errors[1].reason.find("unknown key"), std::string::npos);
+}
+
+TEST(ConfigErrors, WrongType) {
+  Doc doc = plate();
+  doc.replace("E = ", R"(E = "70e9")");
+  expect_one_error(parse(doc), 11, "detail[0].material.E", "expected a number, got a string");
+
+  doc = plate();
+  doc.lines.push_back("[detail.checkpoint]");
+  doc.lines.push_back("every_batches = 10.0");
+  expect_one_error(parse(doc), 25, "detail[0].checkpoint.every_batches",
+                   "expected an integer, got a floating-point number");
+
+  doc = plate();
+  doc.replace("point = ", "point = [0.010]");
+  expect_one_error(parse(doc), 20, "detail[0].load[0].point", "expected an array [x, y]");
+
+  doc = plate();  // [detail.load] instead of [[detail.load]]
+  doc.replace("[[detail.load]]", "[detail.load]");
+  expect_one_error(parse(doc), 19, "detail[0].load", "expected an array of tables");
+}
+
+TEST(ConfigErrors, MissingField) {
+  Doc doc = plate();
+  doc.erase("E = ");
+  expect_one_error(parse(doc), 10, "detail[0].material.E", "missing required key \"E\"");
+
+  doc = plate();
+  doc.erase("A2 = ");
+  expect_one_error(parse(doc), 13, "detail[0].fatigue.A2", "missing required key \"A2\"");
+
+  doc = plate();  // no [detail.material] at all: reported at the [[detail]] table
+  doc.erase("[detail.material]");
+  doc.erase("E = ");
+  doc.erase("nu = ");
+  const ConfigResult r = parse(doc);
+  expect_one_error(r, 1, "detail[0].material", "missing required key \"material\"");
+}
+
+TEST(ConfigErrors, ParameterOfAnotherLaw) {
+  Doc doc = plate();
+  doc.insert_after("m2 = ", "U = 2e-19");
+  expect_one_error(parse(doc), 19, "detail[0].fatigue.U",
+                   "unknown key \"U\" (known here: law, phi0, A1, m1, A2, m2, eps_inf, "
+                   "eps_inf_prop)");
+  doc = plate();
+  doc.replace("law = ", R"(law = "bilinear")");
+  const ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 7u) << r.error_text();  // s0, sc, A missing; A1, m1, A2, m2 unknown
+}
+
+TEST(ConfigErrors, HorizonRatioBelowOne) {
+  Doc doc = plate();
+  doc.replace("horizon_ratio", "horizon_ratio = 0.9");
+  expect_one_error(parse(doc), 9, "detail[0].grid.horizon_ratio", "must be >= 1");
+}
+
+TEST(ConfigErrors, HoleOutsideTheBody) {
+  Doc doc = plate();
+  doc.replace("holes", R"(holes = [{ centre = [0.005, 0.0025], radius = 0.001 },)");
+  doc.insert_after("holes", R"(  { centre = [0.050, 0.0025], radius = 0.001 }])");
+  expect_one_error(parse(doc), 7, "detail[0].geometry.holes[1]", "the hole lies outside the body");
+}
+
+TEST(ConfigErrors, NonPositiveYoungsModulus) {
+  for (const char* line : {"E = 0.0", "E = -70e9", "E = 0"}) {
+    Doc doc = plate();
+    doc.replace("E = ", line);
+    expect_one_error(parse(doc), 11, "detail[0].material.E", "must be > 0");
+  }
+}
+
+TEST(ConfigErrors, OtherImpossibleValues) {
+  struct Case {
+    const char* prefix;  ///< the line to replace
+    const char* line;
+    const char* at;  ///< the line the error is reported at
+    const char* path;
+    const char* reason;
+  };
+  const Case cases[] = {
+      {"nu = ", "nu = 0.5", "nu", "detail[0].material.nu", "must lie in (-1, 0.5)"},
+      {"nu = ", "nu = -1", "nu", "detail[0].material.nu", "must lie in (-1, 0.5)"},
+      {"dx = ", "dx = 0.0", "dx", "detail[0].grid.dx", "must be > 0"},
+      {"dx = ", "dx = 0.006", "dx", "detail[0].grid.dx",
+       "must not exceed the body's smaller side 0.005 m"},
+      {"thickness", "thickness = -1", "thickness", "detail[0].geometry.thickness", "must be > 0"},
+      {"holes", "holes = [{ centre = [0.005, 0.0025], radius = 0.0 }]", "holes",
+       "detail[0].geometry.holes[0].radius", "must be > 0"},
+      {"outline", "outline = [{ x_min = 0.0, y_min = 0.0, x_max = 0.0, y_max = 0.005 }]", "outline",
+       "detail[0].geometry.outline[0].x_max", "must be > x_min"},
+      {"point = ", "point = [0.011, 0.0025]", "point", "detail[0].load[0].point",
+       "lies outside the body"},
+      {"constant = ", "constant = [0.0, 0.0]", "[[detail.load]]", "detail[0].load[0]",
+       "every force component is zero"},
+      {"point = ", "point = [0.010, nan]", "point", "detail[0].load[0].point[1]",
+       "must be a finite number"},
+      {"law = ", R"(law = "paris")", "law", "detail[0].fatigue.law", "is not one of"},
+      {"A1 = ", "A1 = -100.0", "A1", "detail[0].fatigue.A1", "must be > 0 (got -100)"},
+      {"id = ", R"(id = "b1.ct")", "id", "detail[0].id", "is not 1 to 32 characters"},
+      {"region = ", "region = { x_min = 0.0, y_min = 0.0, x_max = 0.0005 }", "region",
+       "detail[0].support[0].region.y_max", "missing required key"},
+      {"region = ", "region = { radius = 0.001 }", "region", "detail[0].support[0].region.centre",
+       "missing required key"},
+      {"region = ", "region = {}", "region", "detail[0].support[0].region", "expected a rectangle"},
+  };
+  for (const Case& c : cases) {
+    Doc doc = plate();
+    doc.replace(c.prefix, c.line);
+    const std::uint32_t line = doc.line_of(c.at);
+    SCOPED_TRACE(c.line);
+    expect_one_error(parse(doc), line, c.path, c.reason);
+  }
+}
+
+TEST(ConfigErrors, StateBasedModelTakesTheConstantKernelOnly) {
+  Doc doc = plate();
+  doc.insert_after("horizon_ratio", "[detail.model]");
+  doc.insert_after("[detail.model]", R"(kernel = "gaussian")");
+  expect_one_error(parse(doc), 11, "detail[0].model.kernel", "constant kernel only");
+  doc.insert_after("[detail.model]", R"(kind = "bond_based")");
+  EXPECT_TRUE(parse(doc).ok());
+}
+
+TEST(ConfigErrors, DuplicateDetailIds) {
+  Doc doc = plate();
+  Doc second = plate();
+  second.replace("id = ", R"(id = "PLATE")");
+  second.lines.push_back("[detail.output]");
+  second.lines.push_back(R"(directory = "results/plate-2")");
+  doc.lines.insert(doc.lines.end(), second.lines.begin(), second.lines.end());
+  const ConfigResult r = parse(doc);
+  expect_one_error(r, 25, "detail[1].id", "same channel token PLATE as detail[0]");
+  EXPECT_EQ(r.errors[0].message(),
+            "plate.toml:25:6: detail[1].id: \"PLATE\" has the same channel token PLATE as "
+            "detail[0] (\"plate\", line 1)");
+}
+
+TEST(ConfigErrors, DuplicateOutputDirectories) {
+  Doc doc = plate();
+  Doc second = plate();
+  second.replace("id = ", R"(id = "plate-2")");
+  second.lines.push_back("[detail.output]");
+  second.lines.push_back(R"(directory = "results/plate")");
+  doc.lines.insert(doc.lines.end(), second.lines.begin(), second.lines.end());
+  expect_one_error(parse(doc), 48, "detail[1].output.directory", "also the output directory");
+}
+
+TEST(ConfigErrors, TomlSyntaxError) {
+  Doc doc = plate();
+  doc.replace("nu = ", "nu = = 0.3");
+  const ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 1u);
+  const ConfigError& e = r.errors[0];
+  EXPECT_EQ(e.line, 12u);
+  EXPECT_EQ(e.column, 6u);
+  EXPECT_EQ(e.path, "");
+  EXPECT_TRUE(e.message().starts_with("plate.toml:12:6: TOML syntax error: ")) << e.message();
+}
+
+TEST(ConfigErrors, AllErrorsAreReportedInLineOrder) {
+  Doc doc = plate();
+  doc.replace("thickness", "thickness = 0.0");
+  doc.replace("horizon_ratio", "horizon_ratio = 0.5");
+  doc.replace("E = ", "E = -1.0");
+  doc.replace("nu = ", "nu = true");
+  doc.insert_after("m2 = ", "bogus = 1");
+  const ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 5u) << r.error_text();
+  const std::vector<std::pair<std::uint32_t, std::string>> expected = {
+      {4, "detail[0].geometry.thickness"},
+      {9, "detail[0].grid.horizon_ratio"},
+      {11, "detail[0].material.E"},
+      {12, "detail[0].material.nu"},
+      {19, "detail[0].fatigue.bogus"}};
+  for (std::size_t k = 0; k < expected.size(); ++k) {
+    EXPECT_EQ(r.errors[k].line, expected[k].first) << r.errors[k].message();
+    EXPECT_EQ(r.errors[k].path, expected[k].second) << r.errors[k].message();
+  }
+}
+
+TEST(ConfigErrors, LifeSettings) {
+  Doc doc = plate();
+  doc.lines.push_back("[detail.life]");                                                     // 24
+  doc.lines.push_back(R"(criterion = "phase3")");                                           // 25
+  doc.lines.push_back("critical_crack_length = 0.01");                                      // 26
+  doc.lines.push_back(R"(reference_spectrum = [{ p_max = 4000.0, r = 1.0, count = 0 }])");  // 27
+  doc.lines.push_back(R"(band = "a2_scatter")");                                            // 28
+  const ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 4u) << r.error_text();
+  EXPECT_EQ(r.errors[0].path, "detail[0].life.a2_relative_scatter");  // missing: table line
+  EXPECT_EQ(r.errors[0].line, 24u);
+  EXPECT_EQ(r.errors[1].path, "detail[0].life.critical_crack_length");
+  EXPECT_EQ(r.errors[1].line, 26u);
+  EXPECT_EQ(r.errors[2].path, "detail[0].life.reference_spectrum[0].r");
+  EXPECT_EQ(r.errors[3].path, "detail[0].life.reference_spectrum[0].count");
+  EXPECT_EQ(r.errors[3].line, 27u);
+}
+
+TEST(ConfigErrors, FileAndDocumentLevel) {
+  const ConfigResult missing = load_config("/nonexistent/peritwin.toml");
+  ASSERT_EQ(missing.errors.size(), 1u);
+  EXPECT_EQ(missing.errors[0].message(),
+            "/nonexistent/peritwin.toml: cannot read the file: No such file or directory");
+  const ConfigResult directory = load_config(examples_dir());
+  ASSERT_EQ(directory.errors.size(), 1u);
+  EXPECT_EQ(directory.errors[0].reason, "cannot read the file: it is a directory");
+
+  const ConfigResult empty = parse_config("", "empty.toml");
+  ASSERT_EQ(empty.errors.size(), 1u);
+  EXPECT_EQ(empty.errors[0].path, "detail");
+
+  const ConfigResult stray = parse_config("title = \"x\"\n", "stray.toml");
+  ASSERT_EQ(stray.errors.size(), 2u) << stray.error_text();
+
+  const ConfigResult binary = parse_config(std::string("\0\xff\xfe[[", 5), "bin.toml");
+  EXPECT_FALSE(binary.ok());
+  EXPECT_EQ(binary.errors.size(), 1u);
+}
+
+}  // namespace
+}  // namespace peritwin::twin

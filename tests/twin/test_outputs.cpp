@@ -1,0 +1,574 @@
+// Outputs people look at and checkpoints: HDF5 results + XDMF, atomic verified checkpoints, PNGs.
+// Every expected number here is one the test itself wrote; the HDF5 and PNG files are read back
+// with the plain C APIs (hdf5.h, png.h), not with the code under test.
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <png.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "twin/checkpoint_io.h"
+#include "twin/damage_png.h"
+#include "twin/h5_file.h"
+#include "twin/results_writer.h"
+
+namespace peritwin {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+class OutputsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           ("peritwin-outputs-" + std::to_string(::getpid()) + "-" + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    // RAII: nothing the code under test (or the test) opened is still open.
+    EXPECT_EQ(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL), 0);
+    fs::remove_all(dir_);
+  }
+  fs::path dir_;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void spit(const fs::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+// --- raw HDF5 C API readers (independent of h5_file.h) ---------------------------------------
+
+template <class T>
+std::vector<T> raw_read(hid_t file, const char* path, hid_t memtype) {
+  const hid_t ds = H5Dopen2(file, path, H5P_DEFAULT);
+  EXPECT_GE(ds, 0) << path;
+  const hid_t space = H5Dget_space(ds);
+  std::vector<T> out(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+  if (!out.empty()) {
+    EXPECT_GE(H5Dread(ds, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), 0);
+  }
+  H5Sclose(space);
+  H5Dclose(ds);
+  return out;
+}
+
+std::int64_t raw_int_attribute(hid_t file, const char* object, const char* name) {
+  std::int64_t v = -1;
+  const hid_t a = H5Aopen_by_name(file, object, name, H5P_DEFAULT, H5P_DEFAULT);
+  EXPECT_GE(a, 0) << object << " @" << name;
+  EXPECT_GE(H5Aread(a, H5T_NATIVE_INT64, &v), 0);
+  H5Aclose(a);
+  return v;
+}
+
+/// Stored type class and size of a dataset.
+std::pair<H5T_class_t, std::size_t> raw_type(hid_t file, const char* path) {
+  const hid_t ds = H5Dopen2(file, path, H5P_DEFAULT);
+  const hid_t t = H5Dget_type(ds);
+  std::pair<H5T_class_t, std::size_t> out{H5Tget_class(t), H5Tget_size(t)};
+  H5Tclose(t);
+  H5Dclose(ds);
+  return out;
+}
+
+std::vector<TimeSeriesRow> sample_rows() {
+  TimeSeriesRow a;  // default NaNs for what is not computed yet
+  a.state_seq = 1;
+  a.total_cycles = 1000;
+  TimeSeriesRow b{2,   250000, 17,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
+                  0.1, 12.5e6, -0.3e6, 4.5e6,   3.9e6,    5.1e6};
+  TimeSeriesRow c{3,         9007199254740993LL,
+                  123456789, 0.1 + 0.2,
+                  1.0 / 3.0, -0.0,
+                  1e-300,    -3.14159,
+                  kNaN,      std::numeric_limits<double>::infinity(),
+                  0.0,       -1.0,
+                  2.5};
+  return {a, b, c};
+}
+
+void expect_rows_equal(const std::vector<TimeSeriesRow>& got,
+                       const std::vector<TimeSeriesRow>& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t r = 0; r < want.size(); ++r) {
+    EXPECT_EQ(got[r].state_seq, want[r].state_seq);
+    EXPECT_EQ(got[r].total_cycles, want[r].total_cycles);
+    EXPECT_EQ(got[r].broken_bonds, want[r].broken_bonds);
+    const double TimeSeriesRow::*members[] = {
+        &TimeSeriesRow::crack_length_m, &TimeSeriesRow::crack_projected_length_m,
+        &TimeSeriesRow::tip_x,          &TimeSeriesRow::tip_y,
+        &TimeSeriesRow::kink_angle_rad, &TimeSeriesRow::k_i,
+        &TimeSeriesRow::k_ii,           &TimeSeriesRow::remaining_cycles,
+        &TimeSeriesRow::remaining_low,  &TimeSeriesRow::remaining_high};
+    for (auto m : members) EXPECT_TRUE(same_bits(got[r].*m, want[r].*m)) << "row " << r;
+  }
+}
+
+struct Mesh {
+  std::vector<double> x, y;
+};
+Mesh sample_mesh() {
+  Mesh m;
+  for (int j = 0; j < 3; ++j) {
+    for (int i = 0; i < 4; ++i) {
+      m.x.push_back((i + 0.5) * 1e-3);
+      m.y.push_back((j + 0.5) * 1e-3 - 0.1);
+    }
+  }
+  return m;
+}
+
+TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
+  const fs::path h5 = dir_ / "ct-1.h5";
+  const Mesh mesh = sample_mesh();
+  const auto rows = sample_rows();
+  const std::vector<float> d0(12, 0.0f);
+  std::vector<float> d1(12, 0.25f);
+  d1[5] = 1.0f;
+  d1[6] = 0.123456789f;
+  {
+    ResultsWriter w(h5, {.detail = "ct-1"});
+    w.write_mesh(mesh.x, mesh.y);
+    w.append(rows[0]);
+    w.write_snapshot(1, 1000, std::span<const float>(d0));
+    w.append(rows[1]);
+    w.append(rows[2]);
+    w.write_snapshot(3, 9007199254740993LL, std::span<const float>(d1));
+    EXPECT_EQ(w.rows(), 3u);
+    EXPECT_EQ(w.snapshots().size(), 2u);
+  }
+  const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const auto seq = raw_read<std::int64_t>(f, "/timeseries/state_seq", H5T_NATIVE_INT64);
+  const auto cyc = raw_read<std::int64_t>(f, "/timeseries/total_cycles", H5T_NATIVE_INT64);
+  const auto bb = raw_read<std::int64_t>(f, "/timeseries/broken_bonds", H5T_NATIVE_INT64);
+  ASSERT_EQ(seq.size(), 3u);
+  std::vector<TimeSeriesRow> got(3);
+  for (std::size_t r = 0; r < 3; ++r) {
+    got[r].state_seq = seq[r];
+    got[r].total_cycles = cyc[r];
+    got[r].broken_bonds = bb[r];
+  }
+  const std::pair<const char*, double TimeSeriesRow::*> cols[] = {
+      {"crack_length_m", &TimeSeriesRow::crack_length_m},
+      {"crack_projected_length_m", &TimeSeriesRow::crack_projected_length_m},
+      {"tip_x", &TimeSeriesRow::tip_x},
+      {"tip_y", &TimeSeriesRow::tip_y},
+      {"kink_angle_rad", &TimeSeriesRow::kink_angle_rad},
+      {"k_i", &TimeSeriesRow::k_i},
+      {"k_ii", &TimeSeriesRow::k_ii},
+      {"remaining_cycles", &TimeSeriesRow::remaining_cycles},
+      {"remaining_low", &TimeSeriesRow::remaining_low},
+      {"remaining_high", &TimeSeriesRow::remaining_high}};
+  for (const auto& [name, member] : cols) {
+    const auto v =
+        raw_read<double>(f, ("/timeseries/" + std::string(name)).c_str(), H5T_NATIVE_DOUBLE);
+    ASSERT_EQ(v.size(), 3u) << name;
+    for (std::size_t r = 0; r < 3; ++r) got[r].*member = v[r];
+  }
+  expect_rows_equal(got, rows);
+
+  EXPECT_EQ(raw_read<double>(f, "/mesh/x", H5T_NATIVE_DOUBLE), mesh.x);
+  EXPECT_EQ(raw_read<double>(f, "/mesh/y", H5T_NATIVE_DOUBLE), mesh.y);
+  EXPECT_EQ(raw_int_attribute(f, "/mesh", "node_count"), 12);
+  EXPECT_EQ(raw_type(f, "/mesh/x"), std::make_pair(H5T_FLOAT, std::size_t{8}));
+  EXPECT_EQ(raw_type(f, "/fields/step_000000/damage"), std::make_pair(H5T_FLOAT, std::size_t{4}));
+  EXPECT_EQ(raw_read<float>(f, "/fields/step_000000/damage", H5T_NATIVE_FLOAT), d0);
+  EXPECT_EQ(raw_read<float>(f, "/fields/step_000001/damage", H5T_NATIVE_FLOAT), d1);
+  EXPECT_EQ(raw_int_attribute(f, "/fields/step_000000/damage", "state_seq"), 1);
+  EXPECT_EQ(raw_int_attribute(f, "/fields/step_000000/damage", "total_cycles"), 1000);
+  EXPECT_EQ(raw_int_attribute(f, "/fields/step_000001/damage", "state_seq"), 3);
+  EXPECT_EQ(raw_int_attribute(f, "/fields/step_000001", "total_cycles"), 9007199254740993LL);
+  H5Fclose(f);
+
+  // The library's own reader agrees.
+  expect_rows_equal(read_time_series(h5), rows);
+  const auto snaps = read_snapshot_list(h5);
+  ASSERT_EQ(snaps.size(), 2u);
+  EXPECT_EQ(read_snapshot_damage(h5, snaps[1]), d1);
+
+  // XDMF: both steps, their times, the dataset paths, and no temp file left behind.
+  const std::string xdmf = slurp(dir_ / "ct-1.xdmf");
+  for (const char* s :
+       {"<Xdmf Version=\"3.0\">", "CollectionType=\"Temporal\"", "Name=\"step_000000\"",
+        "Name=\"step_000001\"", "<Time Value=\"1000\"/>", "<Time Value=\"9007199254740993\"/>",
+        "TopologyType=\"Polyvertex\" NumberOfElements=\"12\"", "GeometryType=\"X_Y\"",
+        "ct-1.h5:/mesh/x", "ct-1.h5:/mesh/y", "ct-1.h5:/fields/step_000000/damage",
+        "ct-1.h5:/fields/step_000001/damage", "</Xdmf>"}) {
+    EXPECT_NE(xdmf.find(s), std::string::npos) << s;
+  }
+  auto count = [&](std::string_view needle) {
+    std::size_t n = 0;
+    for (auto p = xdmf.find(needle); p != std::string::npos; p = xdmf.find(needle, p + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<Grid "), 3u);
+  EXPECT_EQ(count("</Grid>"), 3u);
+  EXPECT_FALSE(fs::exists(dir_ / "ct-1.xdmf.tmp"));
+}
+
+TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
+  const fs::path h5 = dir_ / "d.h5";
+  const Mesh mesh = sample_mesh();
+  const auto rows = sample_rows();
+  {
+    ResultsWriter w(h5, {.detail = "d"});
+    w.write_mesh(mesh.x, mesh.y);
+    for (const auto& r : rows) w.append(r);
+    w.write_snapshot(1, 10, std::vector<double>(12, 0.5));
+    w.write_snapshot(3, 30, std::vector<double>(12, 0.75));
+  }
+  {  // A crash between the column appends of a row: one column one element longer.
+    h5::File f(h5, h5::File::Mode::read_write);
+    f.open_dataset("timeseries/state_seq").append<std::int64_t>(99);
+  }
+  ResultsWriter w(h5, {.detail = "d"});
+  EXPECT_FALSE(w.recovered_from().has_value());
+  EXPECT_EQ(w.rows(), 3u);
+  ASSERT_EQ(w.snapshots().size(), 2u);
+  EXPECT_EQ(w.node_count(), 12u);
+  w.write_mesh(mesh.x, mesh.y);  // same mesh: no-op
+  std::vector<double> other = mesh.x;
+  other[0] += 1e-9;
+  EXPECT_THROW(w.write_mesh(other, mesh.y), ResultsError);
+  EXPECT_THROW(w.write_snapshot(4, 40, std::vector<double>(11, 0.0)), ResultsError);
+
+  w.rewind_to(2);  // resume from a checkpoint at state 2
+  EXPECT_EQ(w.rows(), 2u);
+  ASSERT_EQ(w.snapshots().size(), 1u);
+  EXPECT_EQ(w.snapshots()[0].state_seq, 1);
+  w.write_snapshot(3, 31, std::vector<double>(12, 1.0));
+  EXPECT_EQ(w.snapshots().back().index, 1);
+  w.close();
+  const auto back = read_time_series(h5);
+  expect_rows_equal(back, {rows[0], rows[1]});
+  const auto snaps = read_snapshot_list(h5);
+  ASSERT_EQ(snaps.size(), 2u);
+  EXPECT_EQ(snaps[1].total_cycles, 31);
+  EXPECT_EQ(read_snapshot_damage(h5, snaps[1]), std::vector<float>(12, 1.0f));
+  const std::string xdmf = slurp(dir_ / "d.xdmf");
+  EXPECT_NE(xdmf.find("<Time Value=\"31\"/>"), std::string::npos);
+  EXPECT_EQ(xdmf.find("<Time Value=\"30\"/>"), std::string::npos);
+}
+
+TEST_F(OutputsTest, UnreadableResultsFileIsMovedAside) {
+  const fs::path h5 = dir_ / "x.h5";
+  spit(h5, "not an HDF5 file at all");
+  ResultsWriter w(h5, {.detail = "x"});
+  ASSERT_TRUE(w.recovered_from().has_value());
+  EXPECT_EQ(slurp(*w.recovered_from()), "not an HDF5 file at all");
+  EXPECT_EQ(w.rows(), 0u);
+}
+
+TEST_F(OutputsTest, H5ErrorsNameFileAndObject) {
+  const fs::path missing = dir_ / "missing.h5";
+  try {
+    h5::File f(missing, h5::File::Mode::read_only);
+    FAIL() << "opened a missing file";
+  } catch (const h5::Error& e) {
+    EXPECT_EQ(e.file(), missing.string());
+    EXPECT_NE(std::string(e.what()).find("missing.h5"), std::string::npos) << e.what();
+  }
+  h5::File f(dir_ / "a.h5", h5::File::Mode::create_exclusive);
+  f.write<double>("g/values", std::vector<double>{1.0, 2.0});
+  try {
+    (void)f.read<double>("g/nothing");
+    FAIL() << "read a missing dataset";
+  } catch (const h5::Error& e) {
+    EXPECT_EQ(e.object(), "/g/nothing");
+    EXPECT_NE(std::string(e.what()).find("a.h5"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)f.read_string("g/values"), h5::Error);
+  EXPECT_THROW(h5::File(dir_ / "a.h5", h5::File::Mode::create_exclusive), h5::Error);
+}
+
+// --- checkpoints -------------------------------------------------------------------------------
+
+CheckpointData sample_checkpoint(std::int64_t salt) {
+  CheckpointData d;
+  d.format_version = 7;
+  d.f64_arrays["remaining_life"] = {1.0,    -0.0,
+                                    kNaN,   std::numeric_limits<double>::infinity(),
+                                    5e-324, 0.1 * static_cast<double>(salt)};
+  d.f64_arrays["empty"] = {};
+  std::vector<double> big(5000);
+  for (std::size_t i = 0; i < big.size(); ++i)
+    big[i] = std::sin(static_cast<double>(i) + static_cast<double>(salt));
+  d.f64_arrays["big"] = big;
+  d.i64_arrays["seq"] = {std::numeric_limits<std::int64_t>::min(), -1,  0, 1,
+                         std::numeric_limits<std::int64_t>::max(), salt};
+  d.u8_arrays["broken"] = {0, 1, 255, 7};
+  d.i64_scalars["applied_seq"] = 42 + salt;
+  d.i64_scalars["min"] = std::numeric_limits<std::int64_t>::min();
+  d.f64_scalars["total_cycles"] = 1.5e9;
+  d.f64_scalars["nan"] = kNaN;
+  d.strings["source"] = "replay \xc3\xa9t\xc3\xa9 \"quoted\"";
+  d.strings["empty"] = "";
+  d.strings["config"] = std::string(100000, 'c');  // larger than an attribute may be
+  return d;
+}
+
+template <class T>
+void expect_arrays_equal(const std::map<std::string, std::vector<T>>& got,
+                         const std::map<std::string, std::vector<T>>& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (const auto& [name, values] : want) {
+    ASSERT_TRUE(got.contains(name)) << name;
+    const auto& g = got.at(name);
+    ASSERT_EQ(g.size(), values.size()) << name;
+    EXPECT_EQ(std::memcmp(g.data(), values.data(), values.size() * sizeof(T)), 0) << name;
+  }
+}
+
+void expect_checkpoints_equal(const CheckpointData& got, const CheckpointData& want) {
+  EXPECT_EQ(got.format_version, want.format_version);
+  expect_arrays_equal(got.f64_arrays, want.f64_arrays);
+  expect_arrays_equal(got.i64_arrays, want.i64_arrays);
+  expect_arrays_equal(got.u8_arrays, want.u8_arrays);
+  EXPECT_EQ(got.i64_scalars, want.i64_scalars);
+  ASSERT_EQ(got.f64_scalars.size(), want.f64_scalars.size());
+  for (const auto& [name, v] : want.f64_scalars) {
+    ASSERT_TRUE(got.f64_scalars.contains(name)) << name;
+    EXPECT_TRUE(same_bits(got.f64_scalars.at(name), v)) << name;
+  }
+  EXPECT_EQ(got.strings, want.strings);
+  EXPECT_EQ(checkpoint_checksum(got), checkpoint_checksum(want));
+}
+
+/// File offset of a contiguous dataset's first byte (raw HDF5).
+haddr_t data_offset(const fs::path& file, const char* dataset) {
+  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t ds = H5Dopen2(f, dataset, H5P_DEFAULT);
+  const haddr_t off = H5Dget_offset(ds);
+  H5Dclose(ds);
+  H5Fclose(f);
+  return off;
+}
+
+void flip_byte(const fs::path& file, std::size_t offset) {
+  std::string bytes = slurp(file);
+  ASSERT_LT(offset, bytes.size());
+  bytes[offset] = static_cast<char>(bytes[offset] ^ 0x5A);
+  spit(file, bytes);
+}
+
+void truncate_by(const fs::path& file, std::size_t cut) {
+  const std::string bytes = slurp(file);
+  spit(file, bytes.substr(0, bytes.size() - cut));
+}
+
+TEST_F(OutputsTest, CheckpointRoundTripIsExact) {
+  const fs::path p = dir_ / "cp-000000000001.h5";
+  const CheckpointData d = sample_checkpoint(1);
+  write_checkpoint(p, d);
+  EXPECT_FALSE(fs::exists(dir_ / "cp-000000000001.h5.tmp"));
+  expect_checkpoints_equal(read_checkpoint(p), d);
+  // Rewriting the same path replaces it atomically.
+  const CheckpointData d2 = sample_checkpoint(2);
+  write_checkpoint(p, d2);
+  expect_checkpoints_equal(read_checkpoint(p), d2);
+  EXPECT_NE(checkpoint_checksum(d), checkpoint_checksum(d2));
+
+  CheckpointData bad;
+  bad.f64_arrays["a/b"] = {1.0};
+  EXPECT_THROW(write_checkpoint(dir_ / "bad.h5", bad), std::invalid_argument);
+}
+
+TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
+  const CheckpointData d = sample_checkpoint(3);
+  const fs::path good = dir_ / "good.h5";
+  write_checkpoint(good, d);
+  const std::size_t size = fs::file_size(good);
+
+  for (const std::size_t cut : {std::size_t{1}, std::size_t{100}, size / 2, size - 8}) {
+    const fs::path t = dir_ / ("truncated-" + std::to_string(cut) + ".h5");
+    fs::copy_file(good, t);
+    truncate_by(t, cut);
+    EXPECT_THROW((void)read_checkpoint(t), CheckpointError) << "cut " << cut;
+  }
+
+  const fs::path c = dir_ / "corrupt.h5";
+  fs::copy_file(good, c);
+  const haddr_t off = data_offset(c, "/arrays/f64/big");
+  ASSERT_NE(off, HADDR_UNDEF);
+  flip_byte(c, static_cast<std::size_t>(off) + 8 * 1234 + 3);
+  try {
+    (void)read_checkpoint(c);
+    FAIL() << "a flipped byte went unnoticed";
+  } catch (const CheckpointError& e) {
+    EXPECT_EQ(e.path(), c);
+    EXPECT_NE(std::string(e.what()).find("checksum mismatch"), std::string::npos) << e.what();
+  }
+
+  const fs::path u = dir_ / "corrupt-u8.h5";
+  fs::copy_file(good, u);
+  flip_byte(u, static_cast<std::size_t>(data_offset(u, "/arrays/u8/broken")) + 2);
+  EXPECT_THROW((void)read_checkpoint(u), CheckpointError);
+  EXPECT_THROW((void)read_checkpoint(dir_ / "nope.h5"), CheckpointError);
+}
+
+TEST_F(OutputsTest, NewestValidCheckpointSkipsBrokenOnes) {
+  for (std::uint64_t seq : {1u, 2u, 3u, 10u}) {
+    write_checkpoint(checkpoint_path(dir_, "ct", seq),
+                     sample_checkpoint(static_cast<std::int64_t>(seq)));
+  }
+  EXPECT_EQ(checkpoint_path(dir_, "ct", 10).filename(), "ct-000000000010.h5");
+  spit(dir_ / "ct-2-000000000099.h5", "other detail");  // prefix "ct-2", not ours
+  spit(dir_ / "ct-abc.h5", "not a checkpoint name");
+  spit(dir_ / "ct-000000000011.h5.tmp", "in flight");
+  truncate_by(checkpoint_path(dir_, "ct", 10), 200);
+  const fs::path three = checkpoint_path(dir_, "ct", 3);
+  flip_byte(three, static_cast<std::size_t>(data_offset(three, "/arrays/i64/seq")) + 1);
+
+  const auto listed = list_checkpoints(dir_, "ct");
+  ASSERT_EQ(listed.size(), 4u);
+  EXPECT_EQ(listed[0].seq, 10u);
+  EXPECT_EQ(listed[3].seq, 1u);
+
+  std::vector<std::string> skipped;
+  const auto found = newest_valid_checkpoint(dir_, "ct", &skipped);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_EQ(found->file.seq, 2u);
+  expect_checkpoints_equal(found->data, sample_checkpoint(2));
+  ASSERT_EQ(skipped.size(), 2u);
+  EXPECT_NE(skipped[0].find("ct-000000000010.h5"), std::string::npos) << skipped[0];
+  EXPECT_NE(skipped[1].find("checksum"), std::string::npos) << skipped[1];
+
+  EXPECT_FALSE(newest_valid_checkpoint(dir_, "nothing").has_value());
+  EXPECT_FALSE(newest_valid_checkpoint(dir_ / "no-such-dir", "ct").has_value());
+}
+
+TEST_F(OutputsTest, PruneKeepsTheNewestK) {
+  for (std::uint64_t seq = 1; seq <= 5; ++seq) {
+    write_checkpoint(checkpoint_path(dir_, "ct", seq), sample_checkpoint(1));
+  }
+  spit(dir_ / "ct-000000000002.h5.tmp", "stale");
+  spit(dir_ / "ct-000000000009.h5.tmp", "in flight");
+  spit(dir_ / "ctx-000000000001.h5", "another prefix");
+  const auto removed = prune_checkpoints(dir_, "ct", 2);
+  EXPECT_EQ(removed.size(), 4u);  // seq 3, 2, 1 and the stale tmp of 2
+  const auto left = list_checkpoints(dir_, "ct");
+  ASSERT_EQ(left.size(), 2u);
+  EXPECT_EQ(left[0].seq, 5u);
+  EXPECT_EQ(left[1].seq, 4u);
+  EXPECT_FALSE(fs::exists(dir_ / "ct-000000000002.h5.tmp"));
+  EXPECT_TRUE(fs::exists(dir_ / "ct-000000000009.h5.tmp"));
+  EXPECT_TRUE(fs::exists(dir_ / "ctx-000000000001.h5"));
+  EXPECT_TRUE(prune_checkpoints(dir_, "ct", 2).empty());
+  EXPECT_THROW(prune_checkpoints(dir_, "ct", 0), std::invalid_argument);
+}
+
+// --- PNG ---------------------------------------------------------------------------------------
+
+std::uint32_t be32(const std::string& b, std::size_t at) {
+  return (std::uint32_t(std::uint8_t(b[at])) << 24) |
+         (std::uint32_t(std::uint8_t(b[at + 1])) << 16) |
+         (std::uint32_t(std::uint8_t(b[at + 2])) << 8) | std::uint32_t(std::uint8_t(b[at + 3]));
+}
+
+/// Signature, then the IHDR chunk first: returns {width, height}, checks 8-bit RGB.
+std::pair<std::uint32_t, std::uint32_t> png_header(const fs::path& p) {
+  const std::string b = slurp(p);
+  EXPECT_GE(b.size(), 33u);
+  const std::string signature("\x89PNG\r\n\x1a\n", 8);
+  EXPECT_EQ(b.substr(0, 8), signature);
+  EXPECT_EQ(be32(b, 8), 13u);  // IHDR length
+  EXPECT_EQ(b.substr(12, 4), "IHDR");
+  EXPECT_EQ(std::uint8_t(b[24]), 8);  // bit depth
+  EXPECT_EQ(std::uint8_t(b[25]), 2);  // colour type: RGB
+  return {be32(b, 16), be32(b, 20)};
+}
+
+/// Decoded RGB pixels with libpng (simplified read API).
+std::vector<std::uint8_t> png_pixels(const fs::path& p, std::uint32_t& w, std::uint32_t& h) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  EXPECT_NE(png_image_begin_read_from_file(&img, p.c_str()), 0) << img.message;
+  img.format = PNG_FORMAT_RGB;
+  std::vector<std::uint8_t> px(PNG_IMAGE_SIZE(img));
+  EXPECT_NE(png_image_finish_read(&img, nullptr, px.data(), 0, nullptr), 0) << img.message;
+  w = img.width;
+  h = img.height;
+  return px;
+}
+
+TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
+  // 20 x 10 nodes at cell centres (dx = 1 mm), a 4 x 4 hole, one fully damaged node at (5, 2).
+  const double dx = 1e-3;
+  std::vector<double> x, y, d;
+  for (int j = 0; j < 10; ++j) {
+    for (int i = 0; i < 20; ++i) {
+      if (i >= 12 && i < 16 && j >= 3 && j < 7) continue;
+      x.push_back((i + 0.5) * dx);
+      y.push_back((j + 0.5) * dx);
+      d.push_back(i == 5 && j == 2 ? 1.0 : 0.0);
+    }
+  }
+  const fs::path p = dir_ / "damage.png";
+  const DamageImageLayout layout = write_damage_png(p, x, y, d, dx);
+  // 800 / max(20, 10) = 40 pixels per node.
+  EXPECT_EQ(layout.node_pixels, 40);
+  EXPECT_EQ(png_header(p), std::make_pair(800u, 400u));
+
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  ASSERT_EQ(w, 800u);
+  auto at = [&](int col, int row) {  // centre pixel of grid cell (col, row from the top)
+    const std::size_t i = 3 * (std::size_t(row * 40 + 20) * w + std::size_t(col * 40 + 20));
+    return Rgb{px[i], px[i + 1], px[i + 2]};
+  };
+  const Rgb red = at(5, 9 - 2);
+  EXPECT_EQ(red, damage_color(1.0));
+  EXPECT_GT(red.r, 150);
+  EXPECT_LT(red.g, 80);
+  EXPECT_LT(red.b, 80);
+  EXPECT_EQ(at(0, 0), damage_color(0.0));
+  EXPECT_GT(damage_color(0.0).b, damage_color(0.0).r);
+  EXPECT_EQ(at(13, 9 - 4), (Rgb{255, 255, 255}));  // inside the hole: no material
+  EXPECT_EQ(damage_color(0.5), (Rgb{250, 220, 40}));
+
+  EXPECT_THROW(write_damage_png(p, x, y, std::vector<double>(3, 0.0), dx), PngError);
+  EXPECT_THROW(write_damage_png(p, x, y, d, 1e-9), PngError);
+}
+
+TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
+  std::vector<double> n, a;
+  for (int k = 0; k <= 50; ++k) {
+    n.push_back(2e4 * k);
+    a.push_back(1e-3 * (1.0 + 0.002 * k * k));
+  }
+  a[20] = kNaN;  // breaks the line, must not break the plot
+  const fs::path p = dir_ / "crack.png";
+  write_crack_length_png(p, n, a);
+  EXPECT_EQ(png_header(p), std::make_pair(800u, 500u));
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  std::size_t dark = 0;
+  for (std::size_t i = 0; i < px.size(); i += 3) dark += px[i] < 100 && px[i + 2] > 150;
+  EXPECT_GT(dark, 500u);  // the blue curve is there
+  write_crack_length_png(dir_ / "empty.png", {}, {}, {.width = 400, .height = 300});
+  EXPECT_EQ(png_header(dir_ / "empty.png"), std::make_pair(400u, 300u));
+}
+
+}  // namespace
+}  // namespace peritwin
