@@ -109,9 +109,13 @@ void FatigueEngine::materialize() {
 }
 
 void FatigueEngine::prepare_rates(const LoadBlock& block) {
-  const bool dose = dose_mode();
-  if (rates_valid_ && same_rate_key(rate_key_, block, dose)) return;
+  if (rates_valid_ && same_rate_key(rate_key_, block, dose_mode())) return;
   materialize();
+  compute_rates(block);
+}
+
+void FatigueEngine::compute_rates(const LoadBlock& block) {
+  const bool dose = dose_mode();
   const auto& p = settings_.strain;
   const auto& intact = solver_.intact();
   if (dose) {
@@ -371,6 +375,68 @@ void FatigueEngine::update_phases() {
                     ? 2
                     : 1;
   }
+}
+
+EngineState FatigueEngine::export_state() const {
+  EngineState s;
+  s.anchor_life = anchor_life_;
+  s.intact = solver_.intact();
+  s.dose[0] = dose_[0];
+  s.dose[1] = dose_[1];
+  s.rates_valid = rates_valid_;
+  s.rate_key = rate_key_;
+  s.total_cycles = total_cycles_;
+  s.events = events_;
+  s.failed = failed_;
+  s.failure_reason = failure_reason_;
+  return s;
+}
+
+bool FatigueEngine::import_state(const EngineState& s) {
+  if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
+    return false;
+  }
+  std::vector<BondIndex> broken;
+  for (std::size_t b = 0; b < s.intact.size(); ++b) {
+    if (!s.intact[b] && solver_.intact()[b]) broken.push_back(static_cast<BondIndex>(b));
+  }
+  anchor_life_ = s.anchor_life;
+  total_cycles_ = s.total_cycles;
+  events_ = s.events;
+  failed_ = s.failed;
+  failure_reason_ = s.failure_reason;
+  for (BondIndex b : broken) {
+    breakable_[static_cast<std::size_t>(b)] = 0;
+    rate_[static_cast<std::size_t>(b)] = 0.0;
+  }
+  if (!broken.empty() && !failed_) {
+    const FactorReport r = solver_.break_bonds(broken);
+    ++solves_;
+    if (!r.ok()) return false;
+  }
+  update_phases();
+  dose_[0] = s.dose[0];
+  dose_[1] = s.dose[1];
+  rates_valid_ = false;
+  if (s.rates_valid && !failed_) compute_rates(s.rate_key);
+  return true;
+}
+
+std::uint64_t FatigueEngine::state_hash() const {
+  std::uint64_t h = 1469598103934665603ULL;  // FNV-1a 64
+  auto mix = [&h](const void* data, std::size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ULL;
+    }
+  };
+  const auto lives = remaining_life();
+  mix(lives.data(), lives.size() * sizeof(double));
+  mix(solver_.intact().data(), solver_.intact().size());
+  mix(phase_.data(), phase_.size());
+  mix(&total_cycles_, sizeof(total_cycles_));
+  return h;
 }
 
 }  // namespace peritwin

@@ -64,6 +64,20 @@ struct BreakEvent {
 
 enum class EngineStatus { ok, final_failure };
 
+/// Everything needed to resume an engine bit-identically (checkpoints). The stiffness state is
+/// rebuilt from `intact` by one solve; rates are recomputed for the saved key without folding.
+struct EngineState {
+  std::vector<double> anchor_life;
+  std::vector<std::uint8_t> intact;
+  double dose[2] = {0.0, 0.0};
+  bool rates_valid = false;
+  LoadBlock rate_key;
+  std::int64_t total_cycles = 0;
+  std::vector<BreakEvent> events;
+  bool failed = false;
+  std::string failure_reason;
+};
+
 class FatigueEngine {
  public:
   FatigueEngine(const Discretization& disc, const PdModel& model, std::vector<Support> supports,
@@ -89,10 +103,18 @@ class FatigueEngine {
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
 
+  [[nodiscard]] EngineState export_state() const;
+  /// Restores a state exported from an engine built from the same model; false if it does not fit.
+  bool import_state(const EngineState& state);
+  /// FNV-1a 64 over the bits of every number that defines the state (lives, doses, bonds, cycles).
+  [[nodiscard]] std::uint64_t state_hash() const;
+
  private:
   [[nodiscard]] bool dose_mode() const;
   /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key).
   void prepare_rates(const LoadBlock& block);
+  /// Recomputes rate_ (and the dose thresholds) for `block` without folding the dose.
+  void compute_rates(const LoadBlock& block);
   /// Folds the accumulated dose into the anchors (λ0 ← λ, D ← 0).
   void materialize();
   /// Smallest k in [1, limit] at which some breakable bond reaches λ ≤ 0, or limit + 1.
