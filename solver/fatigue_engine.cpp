@@ -49,6 +49,7 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
       model_(model),
       solver_(disc, model, std::move(supports), std::move(loads)),
       settings_(settings) {
+  solver_.set_incremental(settings_.incremental);
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
   rate_.assign(nb, 0.0);

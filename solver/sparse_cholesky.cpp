@@ -3,6 +3,7 @@
 #include <cholmod.h>
 
 #include <cstdlib>
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -12,6 +13,7 @@ namespace peritwin {
 struct SparseCholesky::Impl {
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
+  std::vector<int> inverse_perm;  ///< row -> position in the factor's ordering
   Impl() {
     cholmod_start(&common);
     common.print = 0;
@@ -86,6 +88,7 @@ FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
                                      const std::vector<int>* permutation) {
   if (!upper.isCompressed()) return {FactorStatus::failed, "matrix is not compressed"};
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
+  impl_->inverse_perm.clear();
   cholmod_sparse a = Impl::view(upper);
   if (permutation != nullptr) {
     const int saved_methods = impl_->common.nmethods;
@@ -127,6 +130,70 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
     return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
                                         std::to_string(rcond) +
                                         "): a part of the model is unconstrained or has come loose"};
+  }
+  return {};
+}
+
+FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
+  if (columns.empty()) return {};
+  cholmod_factor* l = impl_->factor;
+  if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
+  auto& common = impl_->common;
+  if (l->is_super || l->is_ll) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
+      return {FactorStatus::failed, "cholmod_change_factor failed"};
+    }
+  }
+  const auto n = static_cast<std::size_t>(l->n);
+  if (impl_->inverse_perm.size() != n) {
+    impl_->inverse_perm.assign(n, 0);
+    const int* perm = static_cast<const int*>(l->Perm);
+    for (std::size_t k = 0; k < n; ++k) impl_->inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
+  }
+  std::size_t nnz = 0;
+  for (const auto& c : columns) nnz += c.rows.size();
+  cholmod_sparse* c = cholmod_allocate_sparse(n, columns.size(), nnz, 1, 1, 0, CHOLMOD_REAL, &common);
+  if (c == nullptr) return {FactorStatus::failed, "cholmod_allocate_sparse failed"};
+  auto* cp = static_cast<int*>(c->p);
+  auto* ci = static_cast<int*>(c->i);
+  auto* cx = static_cast<double*>(c->x);
+  std::vector<std::pair<int, double>> entries;
+  std::size_t pos = 0;
+  for (std::size_t col = 0; col < columns.size(); ++col) {
+    cp[col] = static_cast<int>(pos);
+    entries.clear();
+    for (std::size_t e = 0; e < columns[col].rows.size(); ++e) {
+      entries.emplace_back(impl_->inverse_perm[static_cast<std::size_t>(columns[col].rows[e])],
+                           columns[col].values[e]);
+    }
+    std::sort(entries.begin(), entries.end());
+    for (const auto& [row, value] : entries) {
+      ci[pos] = row;
+      cx[pos] = value;
+      ++pos;
+    }
+  }
+  cp[columns.size()] = static_cast<int>(pos);
+  const int ok = cholmod_updown(add ? 1 : 0, c, l, &common);
+  cholmod_free_sparse(&c, &common);
+  if (!ok || common.status < CHOLMOD_OK) {
+    return {FactorStatus::failed, "cholmod_updown failed (status " + std::to_string(common.status) + ")"};
+  }
+  if (!add) {
+    // LDLᵀ: D is the first entry of every column.
+    const int* lp = static_cast<const int*>(l->p);
+    const double* lx = static_cast<const double*>(l->x);
+    for (std::size_t j = 0; j < n; ++j) {
+      if (!(lx[lp[j]] > 0.0)) {
+        return {FactorStatus::not_positive_definite,
+                "stiffness is not positive definite after breaking bonds: a part of the model has come loose"};
+      }
+    }
+    const double rcond = cholmod_rcond(l, &common);
+    if (!(rcond > 1e-14)) {
+      return {FactorStatus::singular, "stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                                          "): a part of the model has come loose"};
+    }
   }
   return {};
 }

@@ -38,6 +38,15 @@ class SparseCholesky {
   /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
   /// a piece of the model that came loose) as a typed failure.
   FactorReport factorize(const SparseMatrix& upper);
+  /// A sparse column in the analyzed matrix's (unpermuted) row numbering.
+  struct Column {
+    std::vector<int> rows;
+    std::vector<double> values;
+  };
+  /// Low-rank modification of the factor: A ← A + Σ c·cᵀ (add = true) or A − Σ c·cᵀ, by CHOLMOD's
+  /// rank-k update/downdate (the factor becomes simplicial LDLᵀ on the first call). Reports a
+  /// downdate that leaves the matrix not positive definite or numerically singular.
+  FactorReport modify(const std::vector<Column>& columns, bool add);
   /// Solves A·X = B in place for every column of B.
   void solve(Eigen::MatrixXd& rhs) const;
 

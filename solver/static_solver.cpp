@@ -1,5 +1,6 @@
 #include "solver/static_solver.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -26,6 +27,47 @@ StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
     }
   }
   for (auto& f : free_index_) f = f < 0 ? -1 : num_free_++;
+  double sum = 0.0;
+  for (double k : model.bond_stiffness) sum += k;
+  ground_stiffness_ = model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
+  grounded_.assign(static_cast<std::size_t>(disc.num_nodes()), 0);
+}
+
+bool StaticSolver::isolated(NodeIndex k) const {
+  for (auto f = disc_.family_offset[static_cast<std::size_t>(k)];
+       f < disc_.family_offset[static_cast<std::size_t>(k) + 1]; ++f) {
+    if (intact_[static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(f)])]) return false;
+  }
+  return true;
+}
+
+SparseCholesky::Column StaticSolver::dilatation_row(NodeIndex k) const {
+  SparseCholesky::Column row;
+  auto add = [&](std::size_t dof, double v) {
+    const int f = free_index_[dof];
+    if (f < 0) return;
+    for (std::size_t e = 0; e < row.rows.size(); ++e) {
+      if (row.rows[e] == f) {
+        row.values[e] += v;
+        return;
+      }
+    }
+    row.rows.push_back(f);
+    row.values.push_back(v);
+  };
+  for (auto fam = disc_.family_offset[static_cast<std::size_t>(k)];
+       fam < disc_.family_offset[static_cast<std::size_t>(k) + 1]; ++fam) {
+    const auto b = static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(fam)]);
+    if (!intact_[b]) continue;
+    const double q = model_.dilatation_weight[b] / disc_.bond_length[b];
+    const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
+    const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
+    add(i, -q * disc_.bond_cos[b]);
+    add(i + 1, -q * disc_.bond_sin[b]);
+    add(j, q * disc_.bond_cos[b]);
+    add(j + 1, q * disc_.bond_sin[b]);
+  }
+  return row;
 }
 
 void StaticSolver::assemble() {
@@ -78,6 +120,20 @@ void StaticSolver::assemble() {
     SparseMatrix bt = bmat.transpose();
     k += bt * (alpha.asDiagonal() * bmat);
   }
+  // Ground springs on isolated nodes; every free DOF is in the diagonal's pattern (zeros elsewhere)
+  // so the pattern does not change when a node becomes isolated.
+  std::vector<Eigen::Triplet<double, int>> diag;
+  diag.reserve(static_cast<std::size_t>(num_free_));
+  for (NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
+    const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
+    for (std::size_t c = 0; c < 2; ++c) {
+      const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
+      if (f >= 0) diag.emplace_back(f, f, ground ? ground_stiffness_ : 0.0);
+    }
+  }
+  SparseMatrix ground(num_free_, num_free_);
+  ground.setFromTriplets(diag.begin(), diag.end());
+  k += ground;
   upper_ = k.triangularView<Eigen::Upper>();
   upper_.makeCompressed();
 }
@@ -129,29 +185,121 @@ FactorReport StaticSolver::solve() {
   if (!report.ok()) return report;
 
   t0 = std::chrono::steady_clock::now();
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_free_, 3);
-  for (int basis = 0; basis < 3; ++basis) {
-    const auto f = basis_force(static_cast<Basis>(basis));
-    for (std::size_t dof = 0; dof < f.size(); ++dof) {
-      if (free_index_[dof] >= 0) rhs(free_index_[dof], basis) = f[dof];
-    }
-  }
-  cholesky_.solve(rhs);
-  for (int basis = 0; basis < 3; ++basis) {
-    auto& u = u_[static_cast<std::size_t>(basis)];
-    u.assign(free_index_.size(), 0.0);
-    for (std::size_t dof = 0; dof < u.size(); ++dof) {
-      if (free_index_[dof] >= 0) u[dof] = rhs(free_index_[dof], basis);
-    }
-    bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
-  }
+  solve_bases();
   timings_.solve_s = seconds_since(t0);
   return report;
 }
 
+void StaticSolver::solve_bases() {
+  std::vector<int> loaded;
+  std::array<std::vector<double>, 3> forces;
+  for (int basis = 0; basis < 3; ++basis) {
+    forces[static_cast<std::size_t>(basis)] = basis_force(static_cast<Basis>(basis));
+    bool any = false;
+    for (double v : forces[static_cast<std::size_t>(basis)]) any = any || v != 0.0;
+    if (any) loaded.push_back(basis);
+  }
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_free_, static_cast<Eigen::Index>(loaded.size()));
+  for (std::size_t c = 0; c < loaded.size(); ++c) {
+    const auto& f = forces[static_cast<std::size_t>(loaded[c])];
+    for (std::size_t dof = 0; dof < f.size(); ++dof) {
+      if (free_index_[dof] >= 0) rhs(free_index_[dof], static_cast<Eigen::Index>(c)) = f[dof];
+    }
+  }
+  if (!loaded.empty()) cholesky_.solve(rhs);
+  for (int basis = 0; basis < 3; ++basis) {
+    auto& u = u_[static_cast<std::size_t>(basis)];
+    u.assign(free_index_.size(), 0.0);
+    const auto it = std::find(loaded.begin(), loaded.end(), basis);
+    if (it != loaded.end()) {
+      const auto c = static_cast<Eigen::Index>(it - loaded.begin());
+      for (std::size_t dof = 0; dof < u.size(); ++dof) {
+        if (free_index_[dof] >= 0) u[dof] = rhs(free_index_[dof], c);
+      }
+    }
+    bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
+  }
+}
+
 FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!incremental_ || !cholesky_.analyzed()) {
+    for (BondIndex b : bonds) intact_[static_cast<std::size_t>(b)] = 0;
+    for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
+      if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
+    }
+    if (modified_) {  // the factor is simplicial LDLᵀ now: analyze again for a supernodal one
+      cholesky_ = SparseCholesky();
+      modified_ = false;
+    }
+    auto r = solve();
+    refactor_s_ += seconds_since(t0);
+    return r;
+  }
+  // K_new = K − Σ_b k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied as
+  // one rank-k update (the added terms) followed by one downdate (the removed ones).
+  std::vector<SparseCholesky::Column> added, removed;
+  const bool osb = model_.options.kind == ModelKind::state_based;
+  std::vector<NodeIndex> nodes;
+  for (BondIndex bond : bonds) {
+    const auto b = static_cast<std::size_t>(bond);
+    if (!intact_[b]) continue;
+    SparseCholesky::Column g;
+    const double w = std::sqrt(model_.bond_stiffness[b]);
+    const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
+    const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
+    const std::array<std::pair<std::size_t, double>, 4> dofs{
+        {{i, -disc_.bond_cos[b]}, {i + 1, -disc_.bond_sin[b]}, {j, disc_.bond_cos[b]},
+         {j + 1, disc_.bond_sin[b]}}};
+    for (const auto& [dof, v] : dofs) {
+      if (free_index_[dof] >= 0) {
+        g.rows.push_back(free_index_[dof]);
+        g.values.push_back(w * v);
+      }
+    }
+    if (!g.rows.empty() && w > 0.0) removed.push_back(std::move(g));
+    nodes.push_back(disc_.bond_i[b]);
+    nodes.push_back(disc_.bond_j[b]);
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  std::vector<SparseCholesky::Column> old_rows;
+  if (osb) {
+    for (NodeIndex k : nodes) old_rows.push_back(dilatation_row(k));
+  }
   for (BondIndex b : bonds) intact_[static_cast<std::size_t>(b)] = 0;
-  return solve();
+  for (std::size_t n = 0; osb && n < nodes.size(); ++n) {
+    const double alpha = model_.dilatation_stiffness[static_cast<std::size_t>(nodes[n])];
+    auto new_row = dilatation_row(nodes[n]);
+    auto old_row = old_rows[n];
+    const double w = std::sqrt(std::abs(alpha));
+    for (auto& v : new_row.values) v *= w;
+    for (auto& v : old_row.values) v *= w;
+    // α > 0 adds α·b'b'ᵀ and removes α·bbᵀ; α < 0 (ν < 1/3) the other way round.
+    auto& gain = alpha > 0 ? added : removed;
+    auto& loss = alpha > 0 ? removed : added;
+    if (!new_row.rows.empty()) gain.push_back(std::move(new_row));
+    if (!old_row.rows.empty()) loss.push_back(std::move(old_row));
+  }
+  for (NodeIndex k : nodes) {
+    if (grounded_[static_cast<std::size_t>(k)] || !isolated(k)) continue;
+    grounded_[static_cast<std::size_t>(k)] = 1;
+    for (std::size_t c = 0; c < 2; ++c) {
+      const int f = free_index_[2 * static_cast<std::size_t>(k) + c];
+      if (f >= 0) added.push_back({{f}, {std::sqrt(ground_stiffness_)}});
+    }
+  }
+  modified_ = true;
+  FactorReport r = cholesky_.modify(added, true);
+  if (r.ok()) r = cholesky_.modify(removed, false);
+  ++updates_;
+  if (!r.ok()) {
+    update_s_ += seconds_since(t0);
+    return r;
+  }
+  solve_bases();
+  update_s_ += seconds_since(t0);
+  return r;
 }
 
 std::vector<double> StaticSolver::basis_force(Basis b) const {

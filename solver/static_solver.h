@@ -50,8 +50,15 @@ class StaticSolver {
 
   /// Assembles, factorizes and solves the three basis cases for the current bond state.
   FactorReport solve();
-  /// Breaks the given bonds and re-solves (refactorizing path: same pattern, new values).
+  /// Breaks the given bonds and re-solves: by a low-rank update of the factor when incremental
+  /// (CHOLMOD rank-k update/downdate; exact up to round-off), else by refactorizing (the oracle).
   FactorReport break_bonds(std::span<const BondIndex> bonds);
+  void set_incremental(bool incremental) { incremental_ = incremental; }
+  [[nodiscard]] bool incremental() const { return incremental_; }
+  /// Seconds spent in low-rank updates and in refactorizations after the first solve.
+  [[nodiscard]] double update_seconds() const { return update_s_; }
+  [[nodiscard]] double refactor_seconds() const { return refactor_s_; }
+  [[nodiscard]] int updates() const { return updates_; }
 
   [[nodiscard]] const std::vector<std::uint8_t>& intact() const { return intact_; }
   /// Basis displacement (full DOF vector, zeros on supports) and basis bond stretches.
@@ -80,6 +87,12 @@ class StaticSolver {
  private:
   void assemble();
   [[nodiscard]] std::vector<int> dof_ordering() const;
+  /// Solves the basis cases with the current factor; bases without load are zero.
+  void solve_bases();
+  /// Row of B (θ_k = B_k·u) of node k over the free DOFs, for the current bond state.
+  [[nodiscard]] SparseCholesky::Column dilatation_row(NodeIndex k) const;
+  /// Nodes with no intact bond get a ground spring (they would make K singular).
+  [[nodiscard]] bool isolated(NodeIndex k) const;
 
   const Discretization& disc_;
   const PdModel& model_;
@@ -94,6 +107,13 @@ class StaticSolver {
   std::array<std::vector<double>, 3> s_;
   SolveTimings timings_;
   int factorizations_ = 0;
+  bool incremental_ = false;
+  bool modified_ = false;  ///< the factor was updated in place (simplicial LDLᵀ now)
+  double ground_stiffness_ = 0.0;
+  std::vector<std::uint8_t> grounded_;
+  double update_s_ = 0.0;
+  double refactor_s_ = 0.0;
+  int updates_ = 0;
 };
 
 }  // namespace peritwin

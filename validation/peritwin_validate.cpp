@@ -1,0 +1,87 @@
+// peritwin-validate: builds the benchmarks of ../shared/benchmarks/README.md and prints one JSON
+// line per result. Long-running: not part of the default test run.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "validation/b1_compact_tension.h"
+
+namespace {
+
+using namespace peritwin;
+using namespace peritwin::validation;
+
+void write_csv(const std::filesystem::path& path, const CrackHistory& h) {
+  std::ofstream out(path);
+  out << "cycles,crack_length_m\n";
+  for (std::size_t i = 0; i < h.cycles.size(); ++i) {
+    out << static_cast<long long>(h.cycles[i]) << ',' << h.crack_length[i] << '\n';
+  }
+}
+
+int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int iterations) {
+  const CompactTensionSpec spec;
+  const ParisLaw paris;
+  auto law = fatigue::al6061_t6_strain_params();
+  law.A2 = a2_trial;
+  const std::int64_t record_every = 250;
+  // Calibration at 4 kN, R = 0.1 (000 App. A): fit C_trial over the stable growth range and
+  // rescale A2 by C_exp/C_trial (000 Eq. 26b), iterated.
+  const double p_cal = 4000, r_cal = 0.1;
+  const double a_end_cal = critical_crack_length(spec, p_cal);
+  CrackHistory h;
+  for (int it = 0; it < iterations; ++it) {
+    h = run_compact_tension(spec, dx, law, p_cal, r_cal, a_end_cal + 0.002, record_every, true);
+    const double c_trial = fitted_paris_constant(spec, h, p_cal, r_cal, paris.m,
+                                                 spec.initial_crack + 0.001, a_end_cal - 0.001);
+    std::fprintf(stderr, "calibration %d: A2 %.6g C_trial %.4g (%.1f s, %lld bonds)\n", it, law.A2,
+                 c_trial, h.wall_s, static_cast<long long>(h.broken_bonds));
+    if (!std::isfinite(c_trial)) return 1;
+    law.A2 = fatigue::a2_calibrated(law.A2, paris.c, c_trial);
+  }
+  struct Case {
+    double p_max, r;
+    bool calibration;
+  };
+  for (const Case c : {Case{4000, 0.1, true}, Case{5000, 0.1, false}, Case{6000, 0.1, false},
+                       Case{5000, 0.3, false}}) {
+    const double a_end = critical_crack_length(spec, c.p_max);
+    h = run_compact_tension(spec, dx, law, c.p_max, c.r, a_end + 0.002, record_every, true);
+    const double pd_life = cycles_at_length(h, a_end);
+    const double ref = paris_life(spec, paris, c.p_max, c.r, a_end);
+    char name[64];
+    std::snprintf(name, sizeof name, "b1_p%.0f_r%.1f.csv", c.p_max, c.r);
+    write_csv(out_dir / name, h);
+    std::printf(
+        "{\"case\":\"B1\",\"p_max\":%.0f,\"r\":%.2f,\"calibration\":%s,\"a2\":%.6g,\"dx_m\":%.6g,"
+        "\"critical_crack_m\":%.6f,\"pd_life\":%.0f,\"paris_life\":%.0f,\"rel_error\":%.4f,"
+        "\"wall_s\":%.1f}\n",
+        c.p_max, c.r, c.calibration ? "true" : "false", law.A2, dx, a_end, pd_life, ref,
+        pd_life / ref - 1, h.wall_s);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-validate: benchmark validations as JSON lines"};
+  std::string which = "B1";
+  double dx = 0.001;
+  double a2_trial = 1055;
+  int iterations = 3;
+  std::string out = "results/validation";
+  app.add_option("--case", which, "B1 | B4")->check(CLI::IsMember({"B1", "B4"}));
+  app.add_option("--dx", dx, "grid spacing (m)")->check(CLI::Range(1e-5, 0.01));
+  app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
+  app.add_option("--iterations", iterations, "B1: calibration iterations")->check(CLI::Range(1, 10));
+  app.add_option("--out", out, "directory for CSV output");
+  CLI11_PARSE(app, argc, argv);
+  std::filesystem::create_directories(out);
+  if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
+  return 2;
+}
