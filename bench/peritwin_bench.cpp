@@ -1,6 +1,6 @@
 // peritwin-bench: performance figures as one JSON line per run.
-//   peritwin-bench static --model bb|osb --nodes N
-// builds the B1 compact-tension specimen with about N nodes and times one cold static solve.
+//   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
+//   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
 #include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include "solver/fatigue_engine.h"
 #include "solver/specimens.h"
 #include "solver/static_solver.h"
 
@@ -54,6 +55,54 @@ int run_static(const std::string& model_name, double target_nodes) {
   return 0;
 }
 
+int run_fatigue(double target_nodes, double a2_at_1mm) {
+  // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
+  // final stiffness refactorized a few times to measure the ratio in this run.
+  using namespace peritwin;
+  ModelOptions options;
+  options.kind = ModelKind::state_based;
+  const CompactTensionSpec spec;
+  const double dx = compact_tension_spacing(spec, target_nodes);
+  const Specimen s = make_compact_tension(spec, options, dx);
+  FatigueSettings settings;
+  settings.strain = fatigue::al6061_t6_strain_params();
+  // A2 calibrated at Δx = 1 mm, scaled to this horizon by 000 Eq. (29).
+  settings.strain.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, settings.strain.m2);
+  settings.incremental = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  if (!engine.initialize()) {
+    std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
+    return 1;
+  }
+  while (engine.apply({4000.0, 0.1, 0.0, 1000}) == EngineStatus::ok &&
+         engine.total_cycles() < 10'000'000) {
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const auto& solver = engine.solver();
+  const double per_update = solver.updates() > 0 ? solver.update_seconds() / solver.updates() : 0;
+  // Refactorizing path on the same model: assemble + numeric factorization + solve.
+  StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
+  if (!refactor.solve().ok()) return 1;
+  const auto t1 = std::chrono::steady_clock::now();
+  const int repeats = 3;
+  for (int i = 0; i < repeats; ++i) {
+    const BondIndex b = 0;
+    if (!refactor.break_bonds(std::span(&b, 1)).ok()) return 1;
+  }
+  const double per_refactor =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
+  std::printf(
+      "{\"bench\":\"fatigue\",\"nodes\":%d,\"bonds\":%d,\"cycles\":%lld,\"broken_bonds\":%lld,"
+      "\"solves\":%d,\"wall_s\":%.2f,\"update_s_mean\":%.5f,\"refactor_s_mean\":%.4f,"
+      "\"incremental_over_refactor\":%.1f,\"final_failure\":%s,\"peak_rss_mb\":%.1f}\n",
+      s.disc.num_nodes(), s.disc.num_bonds(), static_cast<long long>(engine.total_cycles()),
+      static_cast<long long>(engine.broken_bonds()), engine.solves(), wall, per_update,
+      per_refactor, per_update > 0 ? per_refactor / per_update : 0.0,
+      engine.failed() ? "true" : "false", peak_rss_mb());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -65,7 +114,13 @@ int main(int argc, char** argv) {
   stat->add_option("--model", model, "bb (bond-based) or osb (ordinary state-based)")
       ->check(CLI::IsMember({"bb", "osb"}));
   stat->add_option("--nodes", nodes, "approximate number of nodes")->check(CLI::Range(100.0, 1e7));
+  auto* fat = app.add_subcommand("fatigue", "B1 at 4 kN from a0 to final failure");
+  double fatigue_nodes = 15000;
+  double a2 = 1353;
+  fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")->check(CLI::Range(100.0, 1e7));
+  fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)");
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes);
+  if (fat->parsed()) return run_fatigue(fatigue_nodes, a2);
   return 2;
 }
