@@ -345,6 +345,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
   }
   const FactorReport r = solver_.break_bonds(newly_broken);
   ++solves_;
+  resolve_groups_.push_back(static_cast<std::int64_t>(newly_broken.size()));
   rates_valid_ = false;
   if (!r.ok()) {
     failed_ = true;
@@ -388,6 +389,7 @@ EngineState FatigueEngine::export_state() const {
   s.rate_key = rate_key_;
   s.total_cycles = total_cycles_;
   s.events = events_;
+  s.resolve_groups = resolve_groups_;
   s.failed = failed_;
   s.failure_reason = failure_reason_;
   return s;
@@ -397,24 +399,43 @@ bool FatigueEngine::import_state(const EngineState& s) {
   if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
     return false;
   }
-  std::vector<BondIndex> broken;
-  for (std::size_t b = 0; b < s.intact.size(); ++b) {
-    if (!s.intact[b] && solver_.intact()[b]) broken.push_back(static_cast<BondIndex>(b));
+  // The re-solves to replay: on a fresh engine, the recorded groups of events when they account
+  // for every event (same updates, same factor bit for bit), else one group of every bond broken
+  // since now.
+  std::vector<std::vector<BondIndex>> groups;
+  std::int64_t grouped = 0;
+  for (auto g : s.resolve_groups) grouped += g;
+  if (events_.empty() && !s.resolve_groups.empty() &&
+      grouped == static_cast<std::int64_t>(s.events.size())) {
+    std::size_t e = 0;
+    for (auto g : s.resolve_groups) {
+      auto& group = groups.emplace_back();
+      for (std::int64_t i = 0; i < g; ++i, ++e) group.push_back(s.events[e].bond);
+    }
+  } else {
+    auto& group = groups.emplace_back();
+    for (std::size_t b = 0; b < s.intact.size(); ++b) {
+      if (!s.intact[b] && solver_.intact()[b]) group.push_back(static_cast<BondIndex>(b));
+    }
   }
   anchor_life_ = s.anchor_life;
   total_cycles_ = s.total_cycles;
   events_ = s.events;
+  resolve_groups_ = s.resolve_groups;
   failed_ = s.failed;
   failure_reason_ = s.failure_reason;
-  for (BondIndex b : broken) {
-    breakable_[static_cast<std::size_t>(b)] = 0;
-    rate_[static_cast<std::size_t>(b)] = 0.0;
+  for (const auto& group : groups) {
+    for (BondIndex b : group) {
+      breakable_[static_cast<std::size_t>(b)] = 0;
+      rate_[static_cast<std::size_t>(b)] = 0.0;
+    }
+    if (!group.empty() && !failed_) {
+      const FactorReport r = solver_.break_bonds(group);
+      ++solves_;
+      if (!r.ok()) return false;
+    }
   }
-  if (!broken.empty() && !failed_) {
-    const FactorReport r = solver_.break_bonds(broken);
-    ++solves_;
-    if (!r.ok()) return false;
-  }
+  if (solver_.intact() != s.intact && !failed_) return false;
   update_phases();
   dose_[0] = s.dose[0];
   dose_[1] = s.dose[1];

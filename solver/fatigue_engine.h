@@ -74,6 +74,9 @@ struct EngineState {
   LoadBlock rate_key;
   std::int64_t total_cycles = 0;
   std::vector<BreakEvent> events;
+  /// Number of events per re-solve, in order: import_state replays the re-solves group by group,
+  /// so that an incrementally updated factor is rebuilt by the same updates (bit-identical).
+  std::vector<std::int64_t> resolve_groups;
   bool failed = false;
   std::string failure_reason;
 };
@@ -150,6 +153,7 @@ class FatigueEngine {
 
   std::int64_t total_cycles_ = 0;
   std::vector<BreakEvent> events_;
+  std::vector<std::int64_t> resolve_groups_;  ///< events per resolve() call (EngineState)
   bool failed_ = false;
   std::string failure_reason_;
   int solves_ = 0;
