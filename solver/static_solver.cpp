@@ -27,6 +27,16 @@ StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
     }
   }
   for (auto& f : free_index_) f = f < 0 ? -1 : num_free_++;
+  // Mixed form for the state-based model when every α_k = 2a·V_k/h < 0 (a < 0 ⇔ ν < 1/3):
+  //   [K_bb  Bᵀ    ] [u]   [f]
+  //   [B    −A⁻¹   ] [w] = [0],   A = diag(α_k),
+  // whose Schur complement on w is K_bb + Bᵀ·A·B = K. −A⁻¹ is positive, and so is the Schur
+  // complement, hence the whole matrix is SPD: Cholesky applies, the coupling reach is δ instead
+  // of 2δ, and breaking a bond is a rank-3 change with 4-6 nonzeros per vector.
+  mixed_ = model.options.kind == ModelKind::state_based && !model.dilatation_stiffness.empty() &&
+           std::all_of(model.dilatation_stiffness.begin(), model.dilatation_stiffness.end(),
+                       [](double a) { return a < 0.0; });
+  num_unknowns_ = num_free_ + (mixed_ ? disc.num_nodes() : 0);
   double sum = 0.0;
   for (double k : model.bond_stiffness) sum += k;
   ground_stiffness_ = model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
@@ -68,6 +78,16 @@ SparseCholesky::Column StaticSolver::dilatation_row(NodeIndex k) const {
     add(j + 1, q * disc_.bond_sin[b]);
   }
   return row;
+}
+
+void StaticSolver::append_ground(std::vector<Eigen::Triplet<double, int>>& entries) const {
+  for (NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
+    const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
+    for (std::size_t c = 0; c < 2; ++c) {
+      const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
+      if (f >= 0) entries.emplace_back(f, f, ground ? ground_stiffness_ : 0.0);
+    }
+  }
 }
 
 void StaticSolver::assemble() {
@@ -112,6 +132,27 @@ void StaticSolver::assemble() {
       add_row(b_entries, disc_.bond_i[b], b, q);
       add_row(b_entries, disc_.bond_j[b], b, q);
     }
+    if (mixed_) {
+      // Upper triangle of the mixed matrix: K_bb, then Bᵀ in the (u, w) block, then −A⁻¹.
+      std::vector<Eigen::Triplet<double, int>> m;
+      m.reserve(static_cast<std::size_t>(k.nonZeros()) / 2 + b_entries.size() +
+                2 * static_cast<std::size_t>(num_unknowns_));
+      for (int c = 0; c < k.outerSize(); ++c) {
+        for (SparseMatrix::InnerIterator it(k, c); it; ++it) {
+          if (it.row() <= it.col()) m.emplace_back(it.row(), it.col(), it.value());
+        }
+      }
+      for (const auto& t : b_entries) m.emplace_back(t.col(), num_free_ + t.row(), t.value());
+      for (NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
+        m.emplace_back(num_free_ + node, num_free_ + node,
+                       -1.0 / model_.dilatation_stiffness[static_cast<std::size_t>(node)]);
+      }
+      append_ground(m);
+      upper_.resize(num_unknowns_, num_unknowns_);
+      upper_.setFromTriplets(m.begin(), m.end());
+      upper_.makeCompressed();
+      return;
+    }
     SparseMatrix bmat(disc_.num_nodes(), num_free_);
     bmat.setFromTriplets(b_entries.begin(), b_entries.end());
     b_entries = {};
@@ -123,14 +164,7 @@ void StaticSolver::assemble() {
   // Ground springs on isolated nodes; every free DOF is in the diagonal's pattern (zeros elsewhere)
   // so the pattern does not change when a node becomes isolated.
   std::vector<Eigen::Triplet<double, int>> diag;
-  diag.reserve(static_cast<std::size_t>(num_free_));
-  for (NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
-    const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
-    for (std::size_t c = 0; c < 2; ++c) {
-      const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
-      if (f >= 0) diag.emplace_back(f, f, ground ? ground_stiffness_ : 0.0);
-    }
-  }
+  append_ground(diag);
   SparseMatrix ground(num_free_, num_free_);
   ground.setFromTriplets(diag.begin(), diag.end());
   k += ground;
@@ -151,19 +185,20 @@ std::vector<int> StaticSolver::dof_ordering() const {
   SparseMatrix incidence(nn, nn);
   incidence.setFromTriplets(links.begin(), links.end());
   SparseMatrix node_graph = incidence.selfadjointView<Eigen::Upper>();
-  if (model_.options.kind == ModelKind::state_based) {
+  if (model_.options.kind == ModelKind::state_based && !mixed_) {
     node_graph = node_graph * node_graph;  // the dilatation couples nodes two bonds apart
   }
   SparseMatrix node_upper = node_graph.triangularView<Eigen::Upper>();
   node_upper.makeCompressed();
   const std::vector<int> node_order = SparseCholesky::fill_reducing_ordering(node_upper);
   std::vector<int> order;
-  order.reserve(static_cast<std::size_t>(num_free_));
+  order.reserve(static_cast<std::size_t>(num_unknowns_));
   for (int k : node_order) {
     for (int c = 0; c < 2; ++c) {
       const int f = free_index_[2 * static_cast<std::size_t>(k) + static_cast<std::size_t>(c)];
       if (f >= 0) order.push_back(f);
     }
+    if (mixed_) order.push_back(num_free_ + k);
   }
   return order;
 }
@@ -191,6 +226,7 @@ FactorReport StaticSolver::solve() {
 }
 
 void StaticSolver::solve_bases() {
+  const auto t0 = std::chrono::steady_clock::now();
   std::vector<int> loaded;
   std::array<std::vector<double>, 3> forces;
   for (int basis = 0; basis < 3; ++basis) {
@@ -199,7 +235,8 @@ void StaticSolver::solve_bases() {
     for (double v : forces[static_cast<std::size_t>(basis)]) any = any || v != 0.0;
     if (any) loaded.push_back(basis);
   }
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(num_free_, static_cast<Eigen::Index>(loaded.size()));
+  Eigen::MatrixXd rhs =
+      Eigen::MatrixXd::Zero(num_unknowns_, static_cast<Eigen::Index>(loaded.size()));
   for (std::size_t c = 0; c < loaded.size(); ++c) {
     const auto& f = forces[static_cast<std::size_t>(loaded[c])];
     for (std::size_t dof = 0; dof < f.size(); ++dof) {
@@ -219,6 +256,7 @@ void StaticSolver::solve_bases() {
     }
     bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
   }
+  basis_solve_s_ += seconds_since(t0);
 }
 
 FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
@@ -239,7 +277,7 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
   // K_new = K − Σ_b k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied as
   // one rank-k update (the added terms) followed by one downdate (the removed ones).
   std::vector<SparseCholesky::Column> added, removed;
-  const bool osb = model_.options.kind == ModelKind::state_based;
+  const bool osb = model_.options.kind == ModelKind::state_based && !mixed_;
   std::vector<NodeIndex> nodes;
   for (BondIndex bond : bonds) {
     const auto b = static_cast<std::size_t>(bond);
@@ -255,6 +293,28 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
       if (free_index_[dof] >= 0) {
         g.rows.push_back(free_index_[dof]);
         g.values.push_back(w * v);
+      }
+    }
+    if (mixed_) {
+      // The bond's entries q/ξ·g in the (u, w_i) and (u, w_j) blocks go too:
+      // −c(x·yᵀ + y·xᵀ) = (c/2)(x − y)(x − y)ᵀ − (c/2)(x + y)(x + y)ᵀ, x = g, y = e_wi + e_wj.
+      const double c = model_.dilatation_weight[b] / disc_.bond_length[b];
+      const double r = std::sqrt(0.5 * c);
+      SparseCholesky::Column plus, minus;
+      for (std::size_t e = 0; e < g.rows.size(); ++e) {
+        plus.rows.push_back(g.rows[e]);
+        plus.values.push_back(r * g.values[e] / w);
+      }
+      minus = plus;
+      for (const NodeIndex k : {disc_.bond_i[b], disc_.bond_j[b]}) {
+        plus.rows.push_back(num_free_ + k);
+        plus.values.push_back(r);
+        minus.rows.push_back(num_free_ + k);
+        minus.values.push_back(-r);
+      }
+      if (c > 0.0) {
+        added.push_back(std::move(minus));
+        removed.push_back(std::move(plus));
       }
     }
     if (!g.rows.empty() && w > 0.0) removed.push_back(std::move(g));

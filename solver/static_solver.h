@@ -59,6 +59,8 @@ class StaticSolver {
   [[nodiscard]] double update_seconds() const { return update_s_; }
   [[nodiscard]] double refactor_seconds() const { return refactor_s_; }
   [[nodiscard]] int updates() const { return updates_; }
+  /// Seconds spent in the triangular solves of the basis cases (all paths).
+  [[nodiscard]] double basis_solve_seconds() const { return basis_solve_s_; }
 
   [[nodiscard]] const std::vector<std::uint8_t>& intact() const { return intact_; }
   /// Basis displacement (full DOF vector, zeros on supports) and basis bond stretches.
@@ -76,6 +78,10 @@ class StaticSolver {
 
   [[nodiscard]] const SolveTimings& timings() const { return timings_; }
   [[nodiscard]] std::int32_t num_free_dofs() const { return num_free_; }
+  /// True when the state-based system is solved in its mixed form (see docs/solver.md): the
+  /// unknowns are the free displacements followed by one w_k = α_k·θ_k per node.
+  [[nodiscard]] bool mixed_form() const { return mixed_; }
+  [[nodiscard]] std::int32_t num_unknowns() const { return num_unknowns_; }
   [[nodiscard]] const SparseMatrix& stiffness_upper() const { return upper_; }
   [[nodiscard]] const std::vector<std::int32_t>& free_index() const { return free_index_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
@@ -86,6 +92,7 @@ class StaticSolver {
 
  private:
   void assemble();
+  void append_ground(std::vector<Eigen::Triplet<double, int>>& entries) const;
   [[nodiscard]] std::vector<int> dof_ordering() const;
   /// Solves the basis cases with the current factor; bases without load are zero.
   void solve_bases();
@@ -101,6 +108,8 @@ class StaticSolver {
   std::vector<std::uint8_t> intact_;
   std::vector<std::int32_t> free_index_;  ///< DOF -> free index, -1 when supported
   std::int32_t num_free_ = 0;
+  bool mixed_ = false;
+  std::int32_t num_unknowns_ = 0;
   SparseMatrix upper_;
   SparseCholesky cholesky_;
   std::array<std::vector<double>, 3> u_;
@@ -114,6 +123,7 @@ class StaticSolver {
   double update_s_ = 0.0;
   double refactor_s_ = 0.0;
   int updates_ = 0;
+  double basis_solve_s_ = 0.0;
 };
 
 }  // namespace peritwin
