@@ -36,4 +36,40 @@ Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions
   return s;
 }
 
+double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes) {
+  const double rows = 2.0 * std::round(spec.height /
+                                       std::sqrt(spec.width * spec.height / target_nodes) / 2.0);
+  return spec.height / rows;
+}
+
+Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
+                                    const ModelOptions& options, double dx,
+                                    double horizon_ratio) {
+  Specimen s;
+  s.name = "B2-CTS";
+  s.material = spec.material;
+  s.geometry.thickness = spec.thickness;
+  s.geometry.outline.push_back({0.0, -0.5 * spec.height, spec.width, 0.5 * spec.height});
+  s.initial_crack_tip = {spec.crack_length, 0.0};
+  s.geometry.notches.push_back({{-dx, 0.0}, s.initial_crack_tip});
+  const double xc = 0.5 * spec.width;
+  const double r = 0.5 * spec.hole_diameter;
+  const double xs[3] = {xc - 0.5 * spec.hole_spacing, xc, xc + 0.5 * spec.hole_spacing};
+  std::vector<Circle> upper, lower;
+  for (double x : xs) {
+    upper.push_back({{x, spec.hole_offset}, r});
+    lower.push_back({{x, -spec.hole_offset}, r});
+  }
+  for (const auto& c : upper) s.geometry.rigid_regions.push_back(Region::of(c));
+  for (const auto& c : lower) s.geometry.rigid_regions.push_back(Region::of(c));
+  s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
+  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
+  const double ef = spec.hole_offset / spec.hole_spacing;
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});  // F1
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[1])), {}, {}, {-1.0, 0.0}});        // F2
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[2])), {}, {0.0, 0.5}, {0.0, -ef}}); // F3
+  return s;
+}
+
 }  // namespace peritwin

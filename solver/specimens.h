@@ -43,4 +43,29 @@ double compact_tension_spacing(const CompactTensionSpec& spec, double target_nod
 Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions& options,
                               double dx, double horizon_ratio = 3.015);
 
+/// B2: compact tension shear (Richard-type CTS) in Al 6061-T6 after 000 Sec. 6.2, proportions of
+/// the benchmarks README: W = 90 mm, height 90 mm, B = 10 mm, crack along y = 0 to x = 45 mm; three
+/// loading holes per half at y = ±e (e = 30 mm), x = 45 ∓ f/2 (f = 70 mm) and x = 45 mm, filled with
+/// rigid material (hole diameter 8 mm: not given by the paper, chosen here). The lower hole
+/// material is fixed; the upper holes carry 000 Eq. (51) per unit P:
+/// F1 = P(½cos α + (e/f) sin α) in +y (outer left), F2 = −P sin α in x (middle),
+/// F3 = P(½cos α − (e/f) sin α) in +y (outer right).
+struct CompactTensionShearSpec {
+  double width = 0.090;
+  double height = 0.090;
+  double thickness = 0.010;
+  double crack_length = 0.045;
+  double hole_offset = 0.030;    ///< e
+  double hole_spacing = 0.070;   ///< f
+  double hole_diameter = 0.008;
+  Material material{68e9, 0.33, 48.7e6};
+};
+
+/// Grid spacing giving about `target_nodes` nodes, rounded so that y = 0 falls between rows.
+double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes);
+
+Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
+                                    const ModelOptions& options, double dx,
+                                    double horizon_ratio = 3.015);
+
 }  // namespace peritwin

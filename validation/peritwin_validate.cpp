@@ -5,9 +5,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 
 #include "validation/b1_compact_tension.h"
+#include "validation/b2_compact_tension_shear.h"
 
 namespace {
 
@@ -69,6 +71,21 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
   return 0;
 }
 
+int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth) {
+  auto law = fatigue::al6061_t6_strain_params();
+  // A2 calibrated on B1 at Δx = 1 mm (peritwin-validate --case B1), scaled to this horizon by
+  // 000 Eq. (29).
+  law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, law.m2);
+  const double pi = std::numbers::pi;
+  const KinkResult r = run_compact_tension_shear(alpha_deg * pi / 180, dx, law, growth);
+  std::printf(
+      "{\"case\":\"B2\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,"
+      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f}\n",
+      alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.mts_beta * 180 / pi, r.growth,
+      static_cast<long long>(r.cycles), dx, r.wall_s);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,7 +95,14 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B4")->check(CLI::IsMember({"B1", "B4"}));
+  app.add_option("--case", which, "B1 | B2 | B4")->check(CLI::IsMember({"B1", "B2", "B4"}));
+  double alpha = 45;
+  double a2_at_1mm = 1353;
+  double growth = 0.010;
+  app.add_option("--alpha", alpha, "B2: load angle (degrees, 0 <= alpha < 90)")
+      ->check(CLI::Range(0.0, 89.999));
+  app.add_option("--a2", a2_at_1mm, "B2: A2 calibrated on B1 at dx = 1 mm");
+  app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)");
   app.add_option("--dx", dx, "grid spacing (m)")->check(CLI::Range(1e-5, 0.01));
   app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
   app.add_option("--iterations", iterations, "B1: calibration iterations")->check(CLI::Range(1, 10));
@@ -86,5 +110,6 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
+  if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth);
   return 2;
 }
