@@ -10,6 +10,7 @@
 
 #include "validation/b1_compact_tension.h"
 #include "validation/b2_compact_tension_shear.h"
+#include "validation/b4_analytical.h"
 
 namespace {
 
@@ -111,5 +112,6 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
   if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth);
+  if (which == "B4") return validation::run_b4();
   return 2;
 }
