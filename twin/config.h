@@ -42,7 +42,9 @@
 //                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count
 //                        (>= 1)}, ...] (repeated until the criterion is met), band "none" |
 //                        "a2_scatter", a2_relative_scatter (0 < s < 1, the life band from
-//                        A2·(1 ± s); R with and only with "a2_scatter")
+//                        A2·(1 ± s); R with and only with "a2_scatter"), every_batches 10 (>= 0,
+//                        0 = never: in deterministic mode an estimate is computed synchronously
+//                        whenever state_seq is a multiple of it, state 0 included)
 //   [detail.checkpoint]  every_batches 100 (>= 0, 0 = off), every_seconds 300 (s, >= 0, 0 = off;
 //                        wall clock: it decides when a checkpoint is written, never a number)
 //
@@ -148,6 +150,8 @@ struct LifeConfig {
   std::vector<SpectrumBlock> reference_spectrum;
   BandSource band = BandSource::none;
   double a2_relative_scatter = 0.0;  ///< a2_scatter only
+  /// Deterministic mode: estimate at every state_seq that is a multiple of this (0 = never).
+  std::int64_t every_batches = 10;
   [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }
 };
 

@@ -379,6 +379,8 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, Life
                  read_spectrum_block(ctx, e, p, l.reference_spectrum);
                });
   }
+  l.every_batches = r.integer("every_batches", l.every_batches);
+  r.check("every_batches", l.every_batches >= 0, "must be >= 0 (0 = never)");
   const auto band = r.choice<BandSource>(
       "band", {{"none", BandSource::none}, {"a2_scatter", BandSource::a2_scatter}}, l.band);
   l.band = band.value_or(l.band);

@@ -1,0 +1,109 @@
+// Decoding load batches defensively: wrong fingerprint, truncation, oversize, malformed lengths.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "twin/messages_io.h"
+
+namespace peritwin::twin {
+namespace {
+
+std::vector<std::uint8_t> encode(const peritwin_msgs::load_batch_t& m) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+peritwin_msgs::load_batch_t sample(int blocks = 3) {
+  Batch b{"b1-ct", "replay", 7, {}};
+  for (int i = 0; i < blocks; ++i) b.blocks.push_back({4000.0 + i, 0.1, 0.25, 10 + i});
+  return batch_message(b, 123);
+}
+
+TEST(DecodeBatch, RoundTrip) {
+  const auto bytes = encode(sample());
+  const Decoded d = decode_batch(bytes.data(), bytes.size());
+  ASSERT_TRUE(d.batch.has_value()) << d.error.why;
+  EXPECT_EQ(d.batch->detail_id, "b1-ct");
+  EXPECT_EQ(d.batch->source_id, "replay");
+  EXPECT_EQ(d.batch->seq, 7);
+  ASSERT_EQ(d.batch->blocks.size(), 3u);
+  EXPECT_EQ(d.batch->blocks[2].p_max, 4002.0);
+  EXPECT_EQ(d.batch->blocks[2].count, 12);
+}
+
+TEST(DecodeBatch, EveryTruncationIsRejected) {
+  const auto bytes = encode(sample());
+  for (std::size_t n = 0; n < bytes.size(); ++n) {
+    const Decoded d = decode_batch(bytes.data(), n);
+    EXPECT_FALSE(d.batch.has_value()) << n;
+    EXPECT_EQ(d.error.verdict, Verdict::decode);
+    EXPECT_EQ(d.error.what, "message");
+    EXPECT_FALSE(d.error.why.empty());
+  }
+}
+
+TEST(DecodeBatch, WrongFingerprint) {
+  auto bytes = encode(sample());
+  bytes[3] ^= 0x40;
+  const Decoded d = decode_batch(bytes.data(), bytes.size());
+  EXPECT_FALSE(d.batch.has_value());
+  EXPECT_NE(d.error.why.find("fingerprint"), std::string::npos) << d.error.why;
+  // Another type's bytes.
+  peritwin_msgs::reject_t r;
+  r.detail_id = "b1-ct";
+  std::vector<std::uint8_t> other(static_cast<std::size_t>(r.getEncodedSize()));
+  r.encode(other.data(), 0, static_cast<int>(other.size()));
+  EXPECT_FALSE(decode_batch(other.data(), other.size()).batch.has_value());
+}
+
+TEST(DecodeBatch, OversizedPayloads) {
+  auto bytes = encode(sample());
+  bytes.push_back(0);
+  Decoded d = decode_batch(bytes.data(), bytes.size());
+  EXPECT_FALSE(d.batch.has_value());
+  EXPECT_NE(d.error.why.find("oversized"), std::string::npos) << d.error.why;
+  std::vector<std::uint8_t> huge(kMaxBatchPayload + 1, 0);
+  d = decode_batch(huge.data(), huge.size());
+  EXPECT_FALSE(d.batch.has_value());
+  EXPECT_NE(d.error.why.find("oversized"), std::string::npos) << d.error.why;
+}
+
+TEST(DecodeBatch, MalformedLengthsDoNotAllocate) {
+  const auto good = encode(sample(1));
+  // num_blocks sits right before the 32 bytes of the one block.
+  const std::size_t at = good.size() - 32 - 4;
+  for (const std::uint32_t n : {0x7fffffffu, 0x80000000u, 2u}) {
+    auto bytes = good;
+    for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
+    const Decoded d = decode_batch(bytes.data(), bytes.size());
+    EXPECT_FALSE(d.batch.has_value()) << n;
+  }
+  // detail_id length (after fingerprint and utime): negative, zero, past the end.
+  for (const std::uint32_t n : {0xffffffffu, 0u, 0x10000u}) {
+    auto bytes = good;
+    for (int i = 0; i < 4; ++i) bytes[16 + i] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
+    EXPECT_FALSE(decode_batch(bytes.data(), bytes.size()).batch.has_value()) << n;
+  }
+  // A string without its NUL.
+  auto bytes = good;
+  bytes[16 + 4 + 5] = 'x';  // "b1-ct" + NUL: the NUL is at offset 5
+  EXPECT_FALSE(decode_batch(bytes.data(), bytes.size()).batch.has_value());
+}
+
+TEST(Json, NonFiniteIsNull) {
+  peritwin_msgs::damage_state_t s;
+  s.detail_id = "d\"x";
+  s.total_cycles = 0;
+  s.broken_bonds = 0;
+  s.remaining_cycles = std::numeric_limits<double>::infinity();
+  s.state_hash = "00ff";
+  const std::string j = summary_json(s);
+  EXPECT_EQ(j,
+            "{\"detail\":\"d\\\"x\",\"cycles\":0,\"broken_bonds\":0,\"crack_length_m\":0,"
+            "\"remaining_cycles\":null,\"state_hash\":\"00ff\"}");
+}
+
+}  // namespace
+}  // namespace peritwin::twin

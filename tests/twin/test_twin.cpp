@@ -1,0 +1,247 @@
+// Twin: every reject reason, exactly-once bookkeeping, state messages, checkpoint resume.
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "tests/twin/twin_fixtures.h"
+#include "twin/messages_io.h"
+
+namespace peritwin::twin {
+namespace {
+
+using testing::b1_config;
+using testing::b1_model;
+using testing::batch;
+using testing::make_twin;
+
+constexpr LoadBlock kBlock{4000.0, 0.1, 0.0, 1000};
+const double kNan = std::numeric_limits<double>::quiet_NaN();
+const double kInf = std::numeric_limits<double>::infinity();
+
+class TwinTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { model_ = b1_model(b1_config()); }
+  static void TearDownTestSuite() { model_.reset(); }
+  static std::shared_ptr<const DetailModel> model_;
+};
+std::shared_ptr<const DetailModel> TwinTest::model_;
+
+TEST_F(TwinTest, VirginState) {
+  auto twin = make_twin(model_);
+  EXPECT_EQ(twin->state_seq(), 0);
+  EXPECT_EQ(twin->broken_bonds(), 0);
+  EXPECT_EQ(twin->failure(), Failure::none);
+  EXPECT_TRUE(twin->applied().empty());
+  EXPECT_EQ(twin->state_hash_hex().size(), 16u);
+  EXPECT_EQ(make_twin(model_)->state_hash(), twin->state_hash());
+}
+
+struct RejectCase {
+  const char* name;
+  Batch batch;
+  Verdict verdict;
+  const char* what;
+};
+
+TEST_F(TwinTest, EveryRejectReasonLeavesTheModelUntouched) {
+  auto twin = make_twin(model_);
+  ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
+  const auto hash = twin->state_hash();
+  auto with = [](LoadBlock b) { return batch(2, {kBlock, b}); };
+  std::vector<RejectCase> cases = {
+      {"wrong detail", {"b2-cts", "test", 2, {kBlock}}, Verdict::wrong_detail, "detail_id"},
+      {"empty source", {"b1-ct", "", 2, {kBlock}}, Verdict::invalid, "source_id"},
+      {"blank in source", {"b1-ct", "a b", 2, {kBlock}}, Verdict::invalid, "source_id"},
+      {"long source", {"b1-ct", std::string(65, 's'), 2, {kBlock}}, Verdict::invalid, "source_id"},
+      {"seq 0", batch(0, {kBlock}), Verdict::invalid, "seq"},
+      {"seq < 0", batch(-5, {kBlock}), Verdict::invalid, "seq"},
+      {"no blocks", batch(2, {}), Verdict::invalid, "num_blocks"},
+      {"too many blocks", batch(2, std::vector<LoadBlock>(kMaxBlocksPerBatch + 1, kBlock)),
+       Verdict::invalid, "num_blocks"},
+      {"p_max NaN", with({kNan, 0.1, 0, 1}), Verdict::invalid, "blocks[1].p_max"},
+      {"p_max inf", with({kInf, 0.1, 0, 1}), Verdict::invalid, "blocks[1].p_max"},
+      {"p_max 0", with({0.0, 0.1, 0, 1}), Verdict::invalid, "blocks[1].p_max"},
+      {"p_max < 0", with({-1.0, 0.1, 0, 1}), Verdict::invalid, "blocks[1].p_max"},
+      {"r NaN", with({4000, kNan, 0, 1}), Verdict::invalid, "blocks[1].r"},
+      {"r = 1", with({4000, 1.0, 0, 1}), Verdict::invalid, "blocks[1].r"},
+      {"r > 1", with({4000, 1.2, 0, 1}), Verdict::invalid, "blocks[1].r"},
+      {"r < -10", with({4000, -11.0, 0, 1}), Verdict::invalid, "blocks[1].r"},
+      {"r -inf", with({4000, -kInf, 0, 1}), Verdict::invalid, "blocks[1].r"},
+      {"alpha NaN", with({4000, 0.1, kNan, 1}), Verdict::invalid, "blocks[1].alpha"},
+      {"count 0", with({4000, 0.1, 0, 0}), Verdict::invalid, "blocks[1].count"},
+      {"count < 0", with({4000, 0.1, 0, -3}), Verdict::invalid, "blocks[1].count"},
+      {"too many cycles", batch(2, {{4000, 0.1, 0, kMaxBatchCycles}, {4000, 0.1, 0, 1}}),
+       Verdict::invalid, "blocks[1].count"},
+      {"duplicate", batch(1, {kBlock}), Verdict::duplicate, "seq"},
+      {"gap", batch(3, {kBlock}), Verdict::gap, "seq"},
+  };
+  for (const auto& c : cases) {
+    const Outcome o = twin->apply(c.batch);
+    EXPECT_EQ(o.verdict, c.verdict) << c.name << ": " << o.why;
+    EXPECT_EQ(o.what, c.what) << c.name;
+    EXPECT_FALSE(o.why.empty()) << c.name;
+    EXPECT_EQ(twin->state_hash(), hash) << c.name;
+    EXPECT_EQ(twin->state_seq(), 1) << c.name;
+    EXPECT_EQ(twin->applied_seq("test"), 1) << c.name;
+  }
+  EXPECT_EQ(twin->counters().duplicates, 1);
+  EXPECT_EQ(twin->counters().gaps, 1);
+  EXPECT_EQ(twin->counters().rejected, static_cast<std::int64_t>(cases.size()) - 1);
+}
+
+TEST_F(TwinTest, FailedDetailRejectsNewBatches) {
+  // A tiny critical crack length: the first crack growth ends the life.
+  auto model = b1_model(b1_config(
+      "every_batches = 0", {{"critical_crack_length = 0.020", "critical_crack_length = 0.0005"}}));
+  auto twin = make_twin(model);
+  std::int64_t seq = 1;
+  while (twin->failure() == Failure::none && seq < 100) {
+    ASSERT_TRUE(twin->apply(batch(seq++, {{4000, 0.1, 0, 5000}})).applied());
+  }
+  ASSERT_EQ(twin->failure(), Failure::end_criterion);
+  EXPECT_EQ(twin->life().central, 0.0);
+  EXPECT_EQ(twin->life().state_seq, twin->state_seq());
+  const auto hash = twin->state_hash();
+  const Outcome o = twin->apply(batch(seq, {kBlock}));
+  EXPECT_EQ(o.verdict, Verdict::failed);
+  EXPECT_EQ(twin->state_hash(), hash);
+  // Duplicates stay duplicates after failure.
+  EXPECT_EQ(twin->apply(batch(1, {kBlock})).verdict, Verdict::duplicate);
+}
+
+TEST_F(TwinTest, ExactlyOnceInOrderPerSource) {
+  auto twin = make_twin(model_);
+  auto reference = make_twin(model_);
+  const LoadBlock b[] = {
+      {4000, 0.1, 0, 1000}, {4100, 0.1, 0, 900}, {3900, 0.2, 0, 800}, {4200, 0.0, 0, 700}};
+  // Out of order: 1, 3, 2, 4 -> 3 and 4 are gaps (rejected), 2 is applied; resent 3, 4 apply.
+  EXPECT_TRUE(twin->apply(batch(1, {b[0]})).applied());
+  EXPECT_EQ(twin->apply(batch(3, {b[2]})).verdict, Verdict::gap);
+  EXPECT_TRUE(twin->apply(batch(2, {b[1]})).applied());
+  EXPECT_EQ(twin->apply(batch(4, {b[3]})).verdict, Verdict::gap);
+  EXPECT_EQ(twin->applied_seq("test"), 2);
+  EXPECT_TRUE(twin->apply(batch(3, {b[2]})).applied());
+  EXPECT_EQ(twin->apply(batch(3, {b[2]})).verdict, Verdict::duplicate);
+  EXPECT_EQ(twin->apply(batch(1, {b[0]})).verdict, Verdict::duplicate);
+  EXPECT_TRUE(twin->apply(batch(4, {b[3]})).applied());
+  EXPECT_EQ(twin->counters().gaps, 2);
+  EXPECT_EQ(twin->counters().duplicates, 2);
+  EXPECT_EQ(twin->counters().applied, 4);
+  // A second source has its own sequence.
+  EXPECT_TRUE(twin->apply(batch(1, {b[0]}, "gauge-2")).applied());
+  EXPECT_EQ(twin->apply(batch(1, {b[0]}, "gauge-2")).verdict, Verdict::duplicate);
+  EXPECT_EQ(twin->state_seq(), 5);
+  EXPECT_EQ(twin->applied_seq("gauge-2"), 1);
+  EXPECT_EQ(twin->applied_seq("unknown"), 0);
+
+  // The same applied sequence without the noise gives the same state.
+  for (std::int64_t s = 1; s <= 4; ++s) {
+    ASSERT_TRUE(reference->apply(batch(s, {b[s - 1]})).applied());
+  }
+  ASSERT_TRUE(reference->apply(batch(1, {b[0]}, "gauge-2")).applied());
+  EXPECT_EQ(reference->state_hash(), twin->state_hash());
+  EXPECT_EQ(reference->engine().total_cycles(), 1000 + 900 + 800 + 700 + 1000);
+}
+
+TEST_F(TwinTest, StateMessage) {
+  auto twin = make_twin(model_);
+  ASSERT_TRUE(twin->apply(batch(1, {{4000, 0.1, 0, 20000}}, "zeta")).applied());
+  ASSERT_TRUE(twin->apply(batch(1, {{4000, 0.1, 0, 5000}}, "alpha")).applied());
+  const auto m = state_message(*twin, 42);
+  EXPECT_EQ(m.utime, 42);
+  EXPECT_EQ(m.detail_id, "b1-ct");
+  EXPECT_EQ(m.state_seq, 2);
+  ASSERT_EQ(m.num_sources, 2);
+  EXPECT_EQ(m.source_ids, (std::vector<std::string>{"alpha", "zeta"}));
+  EXPECT_EQ(m.applied_seq, (std::vector<std::int64_t>{1, 1}));
+  EXPECT_EQ(m.total_cycles, 25000);
+  EXPECT_EQ(m.broken_bonds, twin->broken_bonds());
+  EXPECT_GT(m.broken_bonds, 0);
+  EXPECT_GT(m.max_damage, 0.0);
+  EXPECT_LE(m.max_damage, 1.0);
+  EXPECT_EQ(m.num_cracks, static_cast<std::int32_t>(m.cracks.size()));
+  EXPECT_EQ(m.failure, 0);
+  EXPECT_EQ(m.state_hash, twin->state_hash_hex());
+  EXPECT_TRUE(std::isnan(m.remaining_cycles));  // every_batches = 0: no estimate
+  EXPECT_EQ(m.remaining_life_seq, -1);
+  // It encodes and decodes.
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  peritwin_msgs::damage_state_t back;
+  ASSERT_EQ(back.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  EXPECT_EQ(back.state_hash, m.state_hash);
+  const std::string json = summary_json(m);
+  EXPECT_NE(json.find("\"detail\":\"b1-ct\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"remaining_cycles\":null"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"state_hash\":\"" + m.state_hash + "\""), std::string::npos) << json;
+  // Field chunks cover every node.
+  const auto field = field_messages(*twin, 42);
+  ASSERT_EQ(field.size(), 1u);
+  EXPECT_EQ(field[0].total_nodes, model_->disc().num_nodes());
+  EXPECT_EQ(field[0].num_nodes, field[0].total_nodes);
+}
+
+TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
+  // Enough load for hundreds of breaks (incremental re-solves) before and after the checkpoint.
+  std::vector<Batch> history;
+  for (std::int64_t s = 1; s <= 10; ++s) {
+    history.push_back(batch(s, {{4000, 0.1, 0, 4000}, {4400, 0.15, 0, 1000}}));
+  }
+  auto straight = make_twin(model_);
+  for (const auto& b : history) ASSERT_TRUE(straight->apply(b).applied());
+  ASSERT_GT(straight->broken_bonds(), 50);
+
+  auto first = make_twin(model_);
+  for (std::size_t i = 0; i < 5; ++i) ASSERT_TRUE(first->apply(history[i]).applied());
+  ASSERT_GT(first->broken_bonds(), 10);
+  const auto dir = std::filesystem::temp_directory_path() / "peritwin_twin_ckpt_test";
+  std::filesystem::remove_all(dir);
+  const auto path = checkpoint_path(dir, "checkpoint", 5);
+  std::filesystem::create_directories(dir);
+  write_checkpoint(path, first->to_checkpoint());
+
+  auto resumed = make_twin(model_);
+  std::string error;
+  ASSERT_TRUE(resumed->restore(read_checkpoint(path), &error)) << error;
+  EXPECT_EQ(resumed->state_hash(), first->state_hash());
+  EXPECT_EQ(resumed->state_seq(), 5);
+  EXPECT_EQ(resumed->applied_seq("test"), 5);
+  EXPECT_EQ(resumed->apply(history[4]).verdict, Verdict::duplicate);
+  for (std::size_t i = 5; i < history.size(); ++i)
+    ASSERT_TRUE(resumed->apply(history[i]).applied());
+  EXPECT_EQ(resumed->state_hash(), straight->state_hash());
+  EXPECT_EQ(resumed->engine().break_events().size(), straight->engine().break_events().size());
+  EXPECT_EQ(state_message(*resumed, 0).state_hash, state_message(*straight, 0).state_hash);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
+  auto twin = make_twin(model_);
+  ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
+  const CheckpointData data = twin->to_checkpoint();
+  auto other = b1_model(b1_config("every_batches = 0", {{"A2 = 1055.0", "A2 = 1000.0"}}));
+  auto target = make_twin(other);
+  std::string error;
+  EXPECT_FALSE(target->restore(data, &error));
+  EXPECT_NE(error.find("different model"), std::string::npos) << error;
+  CheckpointData broken = data;
+  broken.i64_arrays.erase("event_bond");
+  auto again = make_twin(model_);
+  EXPECT_FALSE(again->restore(broken, &error));
+  EXPECT_NE(error.find("event_bond"), std::string::npos) << error;
+}
+
+TEST(SolverSettings, BilinearIsRejectedClearly) {
+  const auto config = b1_config("every_batches = 0");
+  DetailConfig bilinear = config;
+  bilinear.fatigue.law = FatigueLaw::bilinear;
+  std::string error;
+  EXPECT_EQ(DetailModel::build(bilinear, &error), nullptr);
+  EXPECT_NE(error.find("bilinear"), std::string::npos) << error;
+  EXPECT_NE(error.find("detail[0].fatigue.law"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace peritwin::twin

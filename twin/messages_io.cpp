@@ -1,0 +1,291 @@
+#include "twin/messages_io.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+namespace peritwin::twin {
+
+namespace {
+
+std::uint64_t read_be(const unsigned char* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+Outcome decode_error(std::string why) { return {Verdict::decode, "message", std::move(why)}; }
+
+/// Walks the load_batch_t layout without allocating; empty when the generated decoder can be
+/// given the bytes safely and will consume exactly all of them.
+std::string check_layout(const unsigned char* p, std::size_t size) {
+  std::size_t pos = 0;
+  auto need = [&](std::size_t n, const char* what) -> std::string {
+    if (size - pos < n) {
+      return std::string("truncated payload: ") + std::to_string(size) + " bytes end inside " +
+             what;
+    }
+    return {};
+  };
+  if (auto e = need(8, "the fingerprint"); !e.empty()) return e;
+  if (static_cast<std::int64_t>(read_be(p, 8)) != peritwin_msgs::load_batch_t::getHash()) {
+    return "wrong fingerprint: not a peritwin_msgs.load_batch_t of this version";
+  }
+  pos = 8;
+  if (auto e = need(8, "utime"); !e.empty()) return e;
+  pos += 8;
+  for (const char* field : {"detail_id", "source_id"}) {
+    if (auto e = need(4, field); !e.empty()) return e;
+    const auto len = static_cast<std::int32_t>(read_be(p + pos, 4));
+    pos += 4;
+    if (len < 1) return std::string("malformed ") + field + " length " + std::to_string(len);
+    if (auto e = need(static_cast<std::size_t>(len), field); !e.empty()) return e;
+    if (p[pos + static_cast<std::size_t>(len) - 1] != 0) {
+      return std::string(field) + " is not NUL-terminated";
+    }
+    if (std::memchr(p + pos, 0, static_cast<std::size_t>(len) - 1) != nullptr) {
+      return std::string(field) + " contains a NUL byte";
+    }
+    pos += static_cast<std::size_t>(len);
+  }
+  if (auto e = need(12, "seq and num_blocks"); !e.empty()) return e;
+  pos += 8;
+  const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
+  pos += 4;
+  if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
+  const std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks);
+  if (size < expected) {
+    return "truncated payload: " + std::to_string(size) +
+           " bytes, num_blocks = " + std::to_string(blocks) + " needs " + std::to_string(expected);
+  }
+  if (size > expected) {
+    return "oversized payload: " + std::to_string(size - expected) +
+           " bytes after the message's end";
+  }
+  return {};
+}
+
+void append_number(std::string& out, double v) {
+  if (!std::isfinite(v)) {
+    out += "null";
+    return;
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  out += buf;
+}
+
+void append_string(std::string& out, const std::string& s) {
+  out += '"';
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  out += '"';
+}
+
+}  // namespace
+
+std::int64_t now_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Decoded decode_batch(const void* data, std::size_t size) {
+  Decoded out;
+  if (size > kMaxBatchPayload) {
+    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
+                             std::to_string(kMaxBatchPayload));
+    return out;
+  }
+  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size);
+      !e.empty()) {
+    out.error = decode_error(e);
+    return out;
+  }
+  peritwin_msgs::load_batch_t msg;
+  const int used = msg.decode(data, 0, static_cast<int>(size));
+  if (used < 0 || static_cast<std::size_t>(used) != size) {
+    out.error = decode_error("not decodable as peritwin_msgs.load_batch_t");
+    return out;
+  }
+  Batch b;
+  b.detail_id = msg.detail_id;
+  b.source_id = msg.source_id;
+  b.seq = msg.seq;
+  b.blocks.reserve(msg.blocks.size());
+  for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
+  out.batch = std::move(b);
+  return out;
+}
+
+peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime) {
+  peritwin_msgs::load_batch_t m;
+  m.utime = utime;
+  m.detail_id = batch.detail_id;
+  m.source_id = batch.source_id;
+  m.seq = batch.seq;
+  for (const auto& b : batch.blocks) {
+    peritwin_msgs::load_block_t k;
+    k.p_max = b.p_max;
+    k.r = b.r;
+    k.alpha = b.alpha;
+    k.count = b.count;
+    m.blocks.push_back(k);
+  }
+  m.num_blocks = static_cast<std::int32_t>(m.blocks.size());
+  return m;
+}
+
+peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime) {
+  peritwin_msgs::damage_state_t m;
+  m.utime = utime;
+  m.detail_id = twin.detail_id();
+  m.state_seq = twin.state_seq();
+  for (const auto& [source, seq] : twin.applied()) {
+    m.source_ids.push_back(source);
+    m.applied_seq.push_back(seq);
+  }
+  m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
+  const FatigueEngine& engine = twin.engine();
+  m.total_cycles = engine.total_cycles();
+  m.broken_bonds = twin.broken_bonds();
+  const CrackReport& report = twin.cracks();
+  m.max_damage = report.max_damage;
+  bool overload = false;
+  for (const auto& e : engine.break_events())
+    overload = overload || e.cause == BreakCause::overload;
+  for (const auto& c : report.cracks) {
+    if (c.length <= 0.0 && c.nodes == 0) continue;  // not initiated
+    peritwin_msgs::crack_t k;
+    k.notch_index = c.notch;
+    k.origin_x = c.origin.x;
+    k.origin_y = c.origin.y;
+    k.tip_x = c.tip.x;
+    k.tip_y = c.tip.y;
+    k.length_m = c.length;
+    k.projected_length_m = c.projected_length;
+    k.kink_angle_rad = c.kink_angle;
+    k.num_nodes = c.nodes;
+    k.phase = twin.failure() != Failure::none || overload ? peritwin_msgs::crack_t::PHASE_FINAL
+              : c.length > 0.0 ? peritwin_msgs::crack_t::PHASE_PROPAGATION
+                               : peritwin_msgs::crack_t::PHASE_INITIATION;
+    m.cracks.push_back(k);
+  }
+  m.num_cracks = static_cast<std::int32_t>(m.cracks.size());
+  m.k_i = report.k_i;
+  m.k_ii = report.k_ii;
+  const LifeEstimate& life = twin.life();
+  m.remaining_cycles = life.central;
+  m.remaining_cycles_low = life.low;
+  m.remaining_cycles_high = life.high;
+  m.remaining_life_seq = life.seq;
+  m.remaining_life_source = life.source;
+  m.failure = static_cast<std::int8_t>(twin.failure());
+  m.state_hash = twin.state_hash_hex();
+  return m;
+}
+
+peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
+                                       std::int64_t seq, const Outcome& outcome,
+                                       std::int64_t utime) {
+  peritwin_msgs::reject_t m;
+  m.utime = utime;
+  m.detail_id = detail_id;
+  m.source_id = source;
+  m.seq = seq;
+  m.code = static_cast<std::int8_t>(outcome.verdict);
+  m.what = outcome.what;
+  m.why = outcome.why;
+  return m;
+}
+
+std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime) {
+  const auto& damage = twin.engine().node_damage();
+  const auto total = static_cast<std::int32_t>(damage.size());
+  const std::int32_t per = peritwin_msgs::damage_field_t::MAX_NODES_PER_CHUNK;
+  const std::int32_t chunks = std::max<std::int32_t>(1, (total + per - 1) / per);
+  std::vector<peritwin_msgs::damage_field_t> out;
+  for (std::int32_t c = 0; c < chunks; ++c) {
+    peritwin_msgs::damage_field_t m;
+    m.utime = utime;
+    m.detail_id = twin.detail_id();
+    m.state_seq = twin.state_seq();
+    m.chunk_index = c;
+    m.num_chunks = chunks;
+    m.total_nodes = total;
+    m.first_node = c * per;
+    m.num_nodes = std::min(per, total - m.first_node);
+    m.damage.reserve(static_cast<std::size_t>(m.num_nodes));
+    for (std::int32_t k = 0; k < m.num_nodes; ++k) {
+      m.damage.push_back(static_cast<float>(damage[static_cast<std::size_t>(m.first_node + k)]));
+    }
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+double crack_length(const peritwin_msgs::damage_state_t& state) {
+  return state.cracks.empty() ? 0.0 : state.cracks.front().length_m;
+}
+
+std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source) {
+  for (std::size_t i = 0; i < state.source_ids.size() && i < state.applied_seq.size(); ++i) {
+    if (state.source_ids[i] == source) return state.applied_seq[i];
+  }
+  return 0;
+}
+
+std::string state_json(const peritwin_msgs::damage_state_t& s) {
+  std::string out = "{\"detail\":";
+  append_string(out, s.detail_id);
+  out += ",\"state_seq\":" + std::to_string(s.state_seq);
+  out += ",\"cycles\":" + std::to_string(s.total_cycles);
+  out += ",\"broken_bonds\":" + std::to_string(s.broken_bonds);
+  out += ",\"crack_length_m\":";
+  append_number(out, crack_length(s));
+  out += ",\"max_damage\":";
+  append_number(out, s.max_damage);
+  out += ",\"k_i\":";
+  append_number(out, s.k_i);
+  out += ",\"remaining_cycles\":";
+  append_number(out, s.remaining_cycles);
+  out += ",\"remaining_low\":";
+  append_number(out, s.remaining_cycles_low);
+  out += ",\"remaining_high\":";
+  append_number(out, s.remaining_cycles_high);
+  out += ",\"remaining_life_seq\":" + std::to_string(s.remaining_life_seq);
+  out += ",\"failure\":" + std::to_string(static_cast<int>(s.failure));
+  out += ",\"state_hash\":";
+  append_string(out, s.state_hash);
+  out += '}';
+  return out;
+}
+
+std::string summary_json(const peritwin_msgs::damage_state_t& s) {
+  std::string out = "{\"detail\":";
+  append_string(out, s.detail_id);
+  out += ",\"cycles\":" + std::to_string(s.total_cycles);
+  out += ",\"broken_bonds\":" + std::to_string(s.broken_bonds);
+  out += ",\"crack_length_m\":";
+  append_number(out, crack_length(s));
+  out += ",\"remaining_cycles\":";
+  append_number(out, s.remaining_cycles);
+  out += ",\"state_hash\":";
+  append_string(out, s.state_hash);
+  out += '}';
+  return out;
+}
+
+}  // namespace peritwin::twin

@@ -1,0 +1,60 @@
+// The twin's LCM messages (peritwin_msgs, messages/*.lcm): decoding load batches defensively,
+// building state, field, reject and batch messages, and the JSON lines the replay tool prints.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <peritwin_msgs/damage_field_t.hpp>
+#include <peritwin_msgs/damage_state_t.hpp>
+#include <peritwin_msgs/load_batch_t.hpp>
+#include <peritwin_msgs/reject_t.hpp>
+#include <peritwin_msgs/status_t.hpp>
+#include <string>
+#include <vector>
+
+#include "twin/twin.h"
+
+namespace peritwin::twin {
+
+/// Largest load_batch_t payload accepted (a full batch of kMaxBlocksPerBatch blocks with two
+/// maximal ids fits).
+inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
+
+/// Microseconds since the Unix epoch (the informational utime of every message).
+std::int64_t now_utime();
+
+/// A decoded batch, or (verdict decode) why not: wrong fingerprint, truncated, oversized,
+/// malformed string or array length. Never allocates more than the payload justifies.
+struct Decoded {
+  std::optional<Batch> batch;
+  Outcome error;
+};
+Decoded decode_batch(const void* data, std::size_t size);
+
+peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
+
+peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime);
+
+/// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).
+peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
+                                       std::int64_t seq, const Outcome& outcome,
+                                       std::int64_t utime);
+
+/// The damage field of the current state in chunks of at most MAX_NODES_PER_CHUNK nodes.
+std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime);
+
+/// Main crack length (m) of a state message (0 without cracks).
+double crack_length(const peritwin_msgs::damage_state_t& state);
+/// Last applied seq of `source` in a state message (0 when the source is unknown).
+std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source);
+
+/// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
+/// max_damage, k_i, remaining_cycles, remaining_low, remaining_high, remaining_life_seq,
+/// failure, state_hash. Non-finite numbers are written as null.
+std::string state_json(const peritwin_msgs::damage_state_t& state);
+/// The final summary: {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles",
+/// "state_hash"}.
+std::string summary_json(const peritwin_msgs::damage_state_t& state);
+
+}  // namespace peritwin::twin
