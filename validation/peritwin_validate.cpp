@@ -10,6 +10,7 @@
 
 #include "validation/b1_compact_tension.h"
 #include "validation/b2_compact_tension_shear.h"
+#include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
 
 namespace {
@@ -87,6 +88,23 @@ int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth) {
   return 0;
 }
 
+int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double max_cycles) {
+  const double p_max = 5500;  // ΔK ≈ 20 MPa·√m at a0 (000 Eq. A2), the ΔK of 002 Eq. (13)
+  const auto prefix = (out_dir / (limit ? "b3_limit" : "b3_no_limit")).string();
+  const auto r = run_ct_with_hole(dx, p_max, limit, prefix, static_cast<std::int64_t>(max_cycles));
+  for (const auto& e : r.events) {
+    std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"event\":\"%s\",\"cycle\":%lld,"
+                "\"x_m\":%.5f,\"y_m\":%.5f}\n",
+                limit ? "true" : "false", e.what.c_str(), static_cast<long long>(e.cycle),
+                e.where.x, e.where.y);
+  }
+  std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"cycles\":%lld,\"broken_bonds\":%lld,"
+              "\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
+              limit ? "true" : "false", static_cast<long long>(r.cycles),
+              static_cast<long long>(r.broken_bonds), dx, r.wall_s, prefix.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -96,7 +114,12 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B2 | B4")->check(CLI::IsMember({"B1", "B2", "B4"}));
+  app.add_option("--case", which, "B1 | B2 | B3 | B4")
+      ->check(CLI::IsMember({"B1", "B2", "B3", "B4"}));
+  bool no_limit = false;
+  double max_cycles = 5e6;
+  app.add_flag("--no-propagation-limit", no_limit, "B3: without 002 Eq. (12)");
+  app.add_option("--max-cycles", max_cycles, "B3: stop after this many cycles");
   double alpha = 45;
   double a2_at_1mm = 1353;
   double growth = 0.010;
@@ -112,6 +135,7 @@ int main(int argc, char** argv) {
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
   if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth);
+  if (which == "B3") return run_b3(dx, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
   return 2;
 }
