@@ -91,7 +91,10 @@ int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth) {
 int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double max_cycles) {
   const double p_max = 5500;  // ΔK ≈ 20 MPa·√m at a0 (000 Eq. A2), the ΔK of 002 Eq. (13)
   const auto prefix = (out_dir / (limit ? "b3_limit" : "b3_no_limit")).string();
-  const auto r = run_ct_with_hole(dx, p_max, limit, prefix, static_cast<std::int64_t>(max_cycles));
+  const double a2 = calibrate_b3_a2(dx, p_max, 1000.0, 0.002);
+  std::fprintf(stderr, "B3: A2 calibrated to %.6g per cycle\n", a2);
+  const auto r =
+      run_ct_with_hole(dx, p_max, limit, a2, prefix, static_cast<std::int64_t>(max_cycles));
   for (const auto& e : r.events) {
     std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"event\":\"%s\",\"cycle\":%lld,"
                 "\"x_m\":%.5f,\"y_m\":%.5f}\n",
@@ -99,9 +102,9 @@ int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double m
                 e.where.x, e.where.y);
   }
   std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"cycles\":%lld,\"broken_bonds\":%lld,"
-              "\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
+              "\"a2\":%.6g,\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
               limit ? "true" : "false", static_cast<long long>(r.cycles),
-              static_cast<long long>(r.broken_bonds), dx, r.wall_s, prefix.c_str());
+              static_cast<long long>(r.broken_bonds), a2, dx, r.wall_s, prefix.c_str());
   return 0;
 }
 
