@@ -50,8 +50,7 @@ int run_static(const std::string& model_name, double target_nodes) {
       model_name.c_str(), specimen.disc.num_nodes(), specimen.disc.num_bonds(), specimen.disc.dx,
       build_s, t.assemble_s, t.analyze_s, t.factor_s, t.solve_s,
       build_s + t.assemble_s + t.analyze_s + t.factor_s + t.solve_s,
-      solver.factor().factor_nonzeros(), 1000.0 * (u[2 * up + 1] - u[2 * low + 1]),
-      peak_rss_mb());
+      solver.factor().factor_nonzeros(), 1000.0 * (u[2 * up + 1] - u[2 * low + 1]), peak_rss_mb());
   return 0;
 }
 
@@ -94,13 +93,14 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
   std::printf(
       "{\"bench\":\"fatigue\",\"nodes\":%d,\"bonds\":%d,\"cycles\":%lld,\"broken_bonds\":%lld,"
-      "\"solves\":%d,\"wall_s\":%.2f,\"update_total_s\":%.2f,\"basis_solve_total_s\":%.2f,\"update_s_mean\":%.5f,\"refactor_s_mean\":%.4f,"
+      "\"solves\":%d,\"wall_s\":%.2f,\"update_total_s\":%.2f,\"basis_solve_total_s\":%.2f,\"update_"
+      "s_mean\":%.5f,\"refactor_s_mean\":%.4f,"
       "\"incremental_over_refactor\":%.1f,\"final_failure\":%s,\"peak_rss_mb\":%.1f}\n",
       s.disc.num_nodes(), s.disc.num_bonds(), static_cast<long long>(engine.total_cycles()),
-      static_cast<long long>(engine.broken_bonds()), engine.solves(), wall,
-      solver.update_seconds(), solver.basis_solve_seconds(), per_update,
-      per_refactor, per_update > 0 ? per_refactor / per_update : 0.0,
-      engine.failed() ? "true" : "false", peak_rss_mb());
+      static_cast<long long>(engine.broken_bonds()), engine.solves(), wall, solver.update_seconds(),
+      solver.basis_solve_seconds(), per_update, per_refactor,
+      per_update > 0 ? per_refactor / per_update : 0.0, engine.failed() ? "true" : "false",
+      peak_rss_mb());
   return 0;
 }
 
@@ -118,7 +118,8 @@ int main(int argc, char** argv) {
   auto* fat = app.add_subcommand("fatigue", "B1 at 4 kN from a0 to final failure");
   double fatigue_nodes = 15000;
   double a2 = 1353;
-  fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")->check(CLI::Range(100.0, 1e7));
+  fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")
+      ->check(CLI::Range(100.0, 1e7));
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)");

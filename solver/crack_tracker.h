@@ -20,8 +20,8 @@ struct CrackMetrics {
   Point tip;                      ///< the crack-path node farthest along the path
   double length = 0.0;            ///< length along the path from the notch tip (m)
   double projected_length = 0.0;  ///< (tip − origin)·notch direction (m)
-  double kink_angle = 0.0;        ///< β: angle from the notch direction to the early path (rad, CCW +)
-  std::int32_t nodes = 0;         ///< damaged nodes in the crack
+  double kink_angle = 0.0;  ///< β: angle from the notch direction to the early path (rad, CCW +)
+  std::int32_t nodes = 0;   ///< damaged nodes in the crack
 };
 
 struct CrackTrackerOptions {
@@ -53,8 +53,8 @@ struct StressIntensity {
 };
 StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
                                                   const std::vector<double>& u, Point tip,
-                                                  Point direction, double r1, double r2,
-                                                  double mu, double kappa);
+                                                  Point direction, double r1, double r2, double mu,
+                                                  double kappa);
 
 /// Kolosov constant of 001 Eq. (59) and the shear modulus of the model's effective material.
 double kolosov_kappa(double poisson_ratio, PlaneCondition plane);

@@ -23,23 +23,25 @@ struct Discretization {
   double dx = 0.0;         ///< grid spacing Δx (m)
   double horizon = 0.0;    ///< δ (m)
   double thickness = 0.0;  ///< h (m)
-  Rectangle box;           ///< grid origin: node (i, j) sits at (x_min + (i+½)Δx, y_min + (j+½)Δx)
+  Rectangle box;  ///< grid origin: node (i, j) sits at (x_min + (i+½)Δx, y_min + (j+½)Δx)
 
   std::vector<Point> position;
-  std::vector<double> volume;           ///< V = Δx²·h
-  std::vector<std::uint8_t> rigid;      ///< node inside a rigid region
-  std::vector<std::uint8_t> no_fail;    ///< node inside a no-fail zone
+  std::vector<double> volume;         ///< V = Δx²·h
+  std::vector<std::uint8_t> rigid;    ///< node inside a rigid region
+  std::vector<std::uint8_t> no_fail;  ///< node inside a no-fail zone
 
   std::vector<NodeIndex> bond_i, bond_j;
-  std::vector<double> bond_length;          ///< ξ (m)
-  std::vector<double> bond_cos, bond_sin;   ///< unit vector from i to j (000 Eq. 3e-3f)
-  std::vector<double> bond_volume_factor;   ///< 001 Eq. (36)
-  std::vector<std::uint8_t> bond_precut;    ///< cut by a notch/pre-crack at construction
+  std::vector<double> bond_length;         ///< ξ (m)
+  std::vector<double> bond_cos, bond_sin;  ///< unit vector from i to j (000 Eq. 3e-3f)
+  std::vector<double> bond_volume_factor;  ///< 001 Eq. (36)
+  std::vector<std::uint8_t> bond_precut;   ///< cut by a notch/pre-crack at construction
 
   std::vector<std::int32_t> family_offset;  ///< size num_nodes()+1
   std::vector<BondIndex> family_bonds;      ///< bonds of node k: [offset[k], offset[k+1])
 
-  [[nodiscard]] std::int32_t num_nodes() const { return static_cast<std::int32_t>(position.size()); }
+  [[nodiscard]] std::int32_t num_nodes() const {
+    return static_cast<std::int32_t>(position.size());
+  }
   [[nodiscard]] std::int32_t num_bonds() const { return static_cast<std::int32_t>(bond_i.size()); }
   [[nodiscard]] NodeIndex other_end(BondIndex b, NodeIndex k) const {
     return bond_i[b] == k ? bond_j[b] : bond_i[b];

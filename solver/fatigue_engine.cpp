@@ -143,8 +143,8 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
           rate_[b] = phase_[b] == 1 ? fatigue::strain_bond_factor(p.A1, p.m1, s)
                                     : fatigue::strain_bond_factor(p.A2, p.m2, s);
         } else {  // 000 Eq. (15), (17)-(19)
-          rate_[b] = fatigue::strain_decrement(fatigue::strain_range_from_ratio(s, block.r),
-                                               phase, p);
+          rate_[b] =
+              fatigue::strain_decrement(fatigue::strain_range_from_ratio(s, block.r), phase, p);
         }
         break;
       case FatigueLaw::energy: {  // 000 Eq. (30)-(39) with B_i, n_i from Eq. (44)-(46)
@@ -179,8 +179,7 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
   rate_key_ = block;
 }
 
-std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block,
-                                                 std::int64_t limit) const {
+std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::int64_t limit) const {
   const std::int64_t none = limit + 1;
   if (!dose_mode()) {
     std::int64_t best = none;
@@ -225,8 +224,8 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block,
     if (estimate > min_estimate * (1 + 1e-9) + 4) continue;
     // Monotone predicate in k: gallop from the estimate, then bisect.
     std::int64_t lo = 0;  // known not failed (or k = 0)
-    std::int64_t hi = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::ceil(estimate)), 1,
-                                               none);
+    std::int64_t hi =
+        std::clamp<std::int64_t>(static_cast<std::int64_t>(std::ceil(estimate)), 1, none);
     if (failed_after(b, hi)) {
       std::int64_t step = 1;
       while (hi - step > 0 && failed_after(b, hi - step)) {

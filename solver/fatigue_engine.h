@@ -144,12 +144,12 @@ class FatigueEngine {
   std::vector<std::uint8_t> phase_;      ///< 1 or 2 per bond
   std::vector<std::uint8_t> breakable_;  ///< intact and outside no-fail zones
   std::vector<double> node_damage_;
-  double dose_[2] = {0.0, 0.0};          ///< D for phase I and phase II (dose mode)
+  double dose_[2] = {0.0, 0.0};  ///< D for phase I and phase II (dose mode)
   /// min over breakable bonds of λ0/F per phase (dose mode): no bond can fail before D reaches it.
   double dose_threshold_[2] = {0.0, 0.0};
   bool rates_valid_ = false;
   LoadBlock rate_key_;
-  std::vector<double> stretch_;          ///< stretch at the rate key's (P_max, α)
+  std::vector<double> stretch_;  ///< stretch at the rate key's (P_max, α)
 
   std::int64_t total_cycles_ = 0;
   std::vector<BreakEvent> events_;

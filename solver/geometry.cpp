@@ -33,8 +33,8 @@ bool segments_cross(Point p1, Point p2, Point q1, Point q2) {
 }
 
 bool DetailGeometry::is_material(Point p) const {
-  const bool in_outline =
-      std::any_of(outline.begin(), outline.end(), [p](const Rectangle& r) { return r.contains(p); });
+  const bool in_outline = std::any_of(outline.begin(), outline.end(),
+                                      [p](const Rectangle& r) { return r.contains(p); });
   if (!in_outline) return false;
   return std::none_of(holes.begin(), holes.end(), [p](const Circle& c) { return c.contains(p); });
 }

@@ -12,7 +12,8 @@ constexpr double pi = std::numbers::pi;
 
 /// Strain energy density per squared isotropic strain, W_ccm/ε², of the plane model.
 double isotropic_energy_coefficient(double e, double nu, PlaneCondition plane) {
-  return plane == PlaneCondition::plane_stress ? e / (1.0 - nu) : e / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  return plane == PlaneCondition::plane_stress ? e / (1.0 - nu)
+                                               : e / ((1.0 + nu) * (1.0 - 2.0 * nu));
 }
 
 }  // namespace
@@ -58,8 +59,7 @@ double kernel_second_moment(Kernel kernel, double horizon) {
     case Kernel::gaussian: {
       // ∫_0^δ r² e^{-(pr/δ)²} dr = (δ/p)³ (√π erf(p)/4 − p e^{-p²}/2), p = 2.
       constexpr double p = 2.0;
-      return d3 / (p * p * p) *
-             (std::sqrt(pi) * std::erf(p) / 4.0 - p * std::exp(-p * p) / 2.0);
+      return d3 / (p * p * p) * (std::sqrt(pi) * std::erf(p) / 4.0 - p * std::exp(-p * p) / 2.0);
     }
   }
   return d3 / 3.0;
@@ -118,8 +118,8 @@ PdModel build_model(const Discretization& disc, const Material& material,
     const Eigen::Vector3d modes(c2 * c2, s2 * s2, c2 * s2);
     const Eigen::Vector3d basis(c2 * c2, s2 * s2, 2.0 * c2 * s2);
     const Eigen::Vector2d dil(c2, s2);
-    for (const auto k : {static_cast<std::size_t>(disc.bond_i[b]),
-                         static_cast<std::size_t>(disc.bond_j[b])}) {
+    for (const auto k :
+         {static_cast<std::size_t>(disc.bond_i[b]), static_cast<std::size_t>(disc.bond_j[b])}) {
       const double v = disc.volume[static_cast<std::size_t>(
           disc.other_end(static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
       energy_moments[k] += w * v * modes * basis.transpose();
@@ -261,9 +261,9 @@ void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& i
     double alive = 0.0;
     for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
       const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
-      const double w = disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(
-                                                        disc.other_end(static_cast<BondIndex>(b),
-                                                                       static_cast<NodeIndex>(k)))];
+      const double w =
+          disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(disc.other_end(
+                                           static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
       total += w;
       if (intact[b]) alive += w;
     }

@@ -17,9 +17,9 @@ enum class Kernel { constant, conical, gaussian };
 enum class PlaneCondition { plane_stress, plane_strain };
 
 struct Material {
-  double youngs_modulus = 0.0;          ///< E (Pa)
-  double poisson_ratio = 0.0;           ///< ν (state-based only; bond-based fixes ν, see below)
-  double fracture_toughness = 0.0;      ///< K_c (Pa·√m), 0 = not given
+  double youngs_modulus = 0.0;      ///< E (Pa)
+  double poisson_ratio = 0.0;       ///< ν (state-based only; bond-based fixes ν, see below)
+  double fracture_toughness = 0.0;  ///< K_c (Pa·√m), 0 = not given
   /// G_c = K_c²/E (benchmarks/README B1); 0 when K_c is not given.
   [[nodiscard]] double critical_energy_release_rate() const {
     return fracture_toughness * fracture_toughness / youngs_modulus;
@@ -69,8 +69,8 @@ StateBasedConstants state_based_constants(const Material& material, PlaneConditi
 ///                      stiffness block k_b·e⊗e (BB: c·β·V_i·V_j/ξ; OSB b-term: 4b·β·V_i·V_j/(hξ))
 ///   dilatation_weight  q_b: θ_k = Σ_b q_b·s_b over k's family (000 Eq. 3c), OSB only
 /// and for every node k (OSB only): dilatation_stiffness[k] = 2a·V_k/h, the coefficient of θ_k² in
-/// the node's strain energy; the dilatation part of K is Bᵀ·diag(2a·V/h)·B with θ = B·u (000 App. B).
-/// Broken bonds keep their coefficients here; the bond state lives with the solver.
+/// the node's strain energy; the dilatation part of K is Bᵀ·diag(2a·V/h)·B with θ = B·u (000 App.
+/// B). Broken bonds keep their coefficients here; the bond state lives with the solver.
 struct PdModel {
   Material material;
   ModelOptions options;

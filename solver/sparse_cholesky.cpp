@@ -2,9 +2,9 @@
 
 #include <cholmod.h>
 
-#include <cstdlib>
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -19,11 +19,6 @@ struct SparseCholesky::Impl {
     common.print = 0;
     common.error_handler = nullptr;
     common.quick_return_if_not_posdef = 1;
-    if (const char* o = std::getenv("PERITWIN_ORDERING")) {
-      common.nmethods = 1;
-      const std::string name = o;
-      common.method[0].ordering = name == "amd" ? CHOLMOD_AMD : name == "metis" ? CHOLMOD_METIS : CHOLMOD_NESDIS;
-    }
   }
   ~Impl() {
     if (factor != nullptr) cholmod_free_factor(&factor, &common);
@@ -95,16 +90,16 @@ FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
     const int saved_ordering = impl_->common.method[0].ordering;
     impl_->common.nmethods = 1;
     impl_->common.method[0].ordering = CHOLMOD_GIVEN;
-    impl_->factor = cholmod_analyze_p(&a, const_cast<int*>(permutation->data()), nullptr, 0,
-                                      &impl_->common);
+    impl_->factor =
+        cholmod_analyze_p(&a, const_cast<int*>(permutation->data()), nullptr, 0, &impl_->common);
     impl_->common.nmethods = saved_methods;
     impl_->common.method[0].ordering = saved_ordering;
   } else {
     impl_->factor = cholmod_analyze(&a, &impl_->common);
   }
   if (impl_->factor == nullptr || impl_->common.status < CHOLMOD_OK) {
-    return {FactorStatus::failed, "cholmod_analyze failed (status " +
-                                      std::to_string(impl_->common.status) + ")"};
+    return {FactorStatus::failed,
+            "cholmod_analyze failed (status " + std::to_string(impl_->common.status) + ")"};
   }
   return {};
 }
@@ -124,12 +119,11 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
     return {FactorStatus::failed,
             "cholmod_factorize failed (status " + std::to_string(impl_->common.status) + ")"};
   }
-  if (std::getenv("PERITWIN_VERBOSE")) std::fprintf(stderr, "cholmod: fl %.3g lnz %.3g super %d\n", impl_->common.fl, impl_->common.lnz, impl_->factor->is_super);
   const double rcond = cholmod_rcond(impl_->factor, &impl_->common);
   if (!(rcond > 1e-14)) {
-    return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
-                                        std::to_string(rcond) +
-                                        "): a part of the model is unconstrained or has come loose"};
+    return {FactorStatus::singular,
+            "stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                "): a part of the model is unconstrained or has come loose"};
   }
   return {};
 }
@@ -148,11 +142,13 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   if (impl_->inverse_perm.size() != n) {
     impl_->inverse_perm.assign(n, 0);
     const int* perm = static_cast<const int*>(l->Perm);
-    for (std::size_t k = 0; k < n; ++k) impl_->inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
+    for (std::size_t k = 0; k < n; ++k)
+      impl_->inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
   }
   std::size_t nnz = 0;
   for (const auto& c : columns) nnz += c.rows.size();
-  cholmod_sparse* c = cholmod_allocate_sparse(n, columns.size(), nnz, 1, 1, 0, CHOLMOD_REAL, &common);
+  cholmod_sparse* c =
+      cholmod_allocate_sparse(n, columns.size(), nnz, 1, 1, 0, CHOLMOD_REAL, &common);
   if (c == nullptr) return {FactorStatus::failed, "cholmod_allocate_sparse failed"};
   auto* cp = static_cast<int*>(c->p);
   auto* ci = static_cast<int*>(c->i);
@@ -177,7 +173,8 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   const int ok = cholmod_updown(add ? 1 : 0, c, l, &common);
   cholmod_free_sparse(&c, &common);
   if (!ok || common.status < CHOLMOD_OK) {
-    return {FactorStatus::failed, "cholmod_updown failed (status " + std::to_string(common.status) + ")"};
+    return {FactorStatus::failed,
+            "cholmod_updown failed (status " + std::to_string(common.status) + ")"};
   }
   if (!add) {
     // LDLᵀ: D is the first entry of every column.
@@ -186,12 +183,14 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
     for (std::size_t j = 0; j < n; ++j) {
       if (!(lx[lp[j]] > 0.0)) {
         return {FactorStatus::not_positive_definite,
-                "stiffness is not positive definite after breaking bonds: a part of the model has come loose"};
+                "stiffness is not positive definite after breaking bonds: a part of the model has "
+                "come loose"};
       }
     }
     const double rcond = cholmod_rcond(l, &common);
     if (!(rcond > 1e-14)) {
-      return {FactorStatus::singular, "stiffness is numerically singular (rcond " + std::to_string(rcond) +
+      return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
+                                          std::to_string(rcond) +
                                           "): a part of the model has come loose"};
     }
   }

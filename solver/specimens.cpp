@@ -37,14 +37,13 @@ Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions
 }
 
 double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes) {
-  const double rows = 2.0 * std::round(spec.height /
-                                       std::sqrt(spec.width * spec.height / target_nodes) / 2.0);
+  const double rows =
+      2.0 * std::round(spec.height / std::sqrt(spec.width * spec.height / target_nodes) / 2.0);
   return spec.height / rows;
 }
 
 Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
-                                    const ModelOptions& options, double dx,
-                                    double horizon_ratio) {
+                                    const ModelOptions& options, double dx, double horizon_ratio) {
   Specimen s;
   s.name = "B2-CTS";
   s.material = spec.material;
@@ -66,9 +65,9 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
   const double ef = spec.hole_offset / spec.hole_spacing;
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});  // F1
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[1])), {}, {}, {-1.0, 0.0}});        // F2
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[2])), {}, {0.0, 0.5}, {0.0, -ef}}); // F3
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});   // F1
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[1])), {}, {}, {-1.0, 0.0}});         // F2
+  s.loads.push_back({s.disc.nodes_in(Region::of(upper[2])), {}, {0.0, 0.5}, {0.0, -ef}});  // F3
   return s;
 }
 

@@ -30,9 +30,9 @@ struct Specimen {
 /// Load pattern: +P at the upper pin (in +y), −P at the lower pin, spread over the pin material;
 /// the two nodes nearest (1.25W, ±Δx/2) are fixed.
 struct CompactTensionSpec {
-  double width = 0.050;               ///< W
-  double thickness = 0.010;           ///< B
-  double initial_crack = 0.3 * 0.050; ///< a0, measured from the load line
+  double width = 0.050;                ///< W
+  double thickness = 0.010;            ///< B
+  double initial_crack = 0.3 * 0.050;  ///< a0, measured from the load line
   Material material{68e9, 0.33, 48.7e6};
 };
 
@@ -45,8 +45,8 @@ Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions
 
 /// B2: compact tension shear (Richard-type CTS) in Al 6061-T6 after 000 Sec. 6.2, proportions of
 /// the benchmarks README: W = 90 mm, height 90 mm, B = 10 mm, crack along y = 0 to x = 45 mm; three
-/// loading holes per half at y = ±e (e = 30 mm), x = 45 ∓ f/2 (f = 70 mm) and x = 45 mm, filled with
-/// rigid material (hole diameter 8 mm: not given by the paper, chosen here). The lower hole
+/// loading holes per half at y = ±e (e = 30 mm), x = 45 ∓ f/2 (f = 70 mm) and x = 45 mm, filled
+/// with rigid material (hole diameter 8 mm: not given by the paper, chosen here). The lower hole
 /// material is fixed; the upper holes carry 000 Eq. (51) per unit P:
 /// F1 = P(½cos α + (e/f) sin α) in +y (outer left), F2 = −P sin α in x (middle),
 /// F3 = P(½cos α − (e/f) sin α) in +y (outer right).
@@ -55,8 +55,8 @@ struct CompactTensionShearSpec {
   double height = 0.090;
   double thickness = 0.010;
   double crack_length = 0.045;
-  double hole_offset = 0.030;    ///< e
-  double hole_spacing = 0.070;   ///< f
+  double hole_offset = 0.030;   ///< e
+  double hole_spacing = 0.070;  ///< f
   double hole_diameter = 0.008;
   Material material{68e9, 0.33, 48.7e6};
 };

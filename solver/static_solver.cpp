@@ -39,14 +39,16 @@ StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
   num_unknowns_ = num_free_ + (mixed_ ? disc.num_nodes() : 0);
   double sum = 0.0;
   for (double k : model.bond_stiffness) sum += k;
-  ground_stiffness_ = model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
+  ground_stiffness_ =
+      model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
   grounded_.assign(static_cast<std::size_t>(disc.num_nodes()), 0);
 }
 
 bool StaticSolver::isolated(NodeIndex k) const {
   for (auto f = disc_.family_offset[static_cast<std::size_t>(k)];
        f < disc_.family_offset[static_cast<std::size_t>(k) + 1]; ++f) {
-    if (intact_[static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(f)])]) return false;
+    if (intact_[static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(f)])])
+      return false;
   }
   return true;
 }
@@ -112,8 +114,7 @@ void StaticSolver::assemble() {
   };
   for (std::size_t b = 0; b < nb; ++b) {
     add_row(g_entries, static_cast<int>(b), b, 1.0);  // row b: e·(u_j − u_i)
-    weight[static_cast<Eigen::Index>(b)] =
-        intact_[b] ? model_.bond_stiffness[b] : 0.0;
+    weight[static_cast<Eigen::Index>(b)] = intact_[b] ? model_.bond_stiffness[b] : 0.0;
     if (disc_.bond_precut[b]) weight[static_cast<Eigen::Index>(b)] = 0.0;
   }
   SparseMatrix g(static_cast<Eigen::Index>(nb), num_free_);
@@ -286,9 +287,10 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
     const double w = std::sqrt(model_.bond_stiffness[b]);
     const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
     const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
-    const std::array<std::pair<std::size_t, double>, 4> dofs{
-        {{i, -disc_.bond_cos[b]}, {i + 1, -disc_.bond_sin[b]}, {j, disc_.bond_cos[b]},
-         {j + 1, disc_.bond_sin[b]}}};
+    const std::array<std::pair<std::size_t, double>, 4> dofs{{{i, -disc_.bond_cos[b]},
+                                                              {i + 1, -disc_.bond_sin[b]},
+                                                              {j, disc_.bond_cos[b]},
+                                                              {j + 1, disc_.bond_sin[b]}}};
     for (const auto& [dof, v] : dofs) {
       if (free_index_[dof] >= 0) {
         g.rows.push_back(free_index_[dof]);
@@ -366,8 +368,9 @@ std::vector<double> StaticSolver::basis_force(Basis b) const {
   std::vector<double> f(2 * static_cast<std::size_t>(disc_.num_nodes()), 0.0);
   for (const auto& load : loads_) {
     if (load.nodes.empty()) continue;
-    const Point part = b == basis_constant ? load.constant : b == basis_cos ? load.per_cos
-                                                                            : load.per_sin;
+    const Point part = b == basis_constant ? load.constant
+                       : b == basis_cos    ? load.per_cos
+                                           : load.per_sin;
     const double share = 1.0 / static_cast<double>(load.nodes.size());
     for (NodeIndex k : load.nodes) {
       f[2 * static_cast<std::size_t>(k)] += part.x * share;
@@ -406,9 +409,9 @@ std::vector<double> StaticSolver::internal_force(const std::vector<double>& u) c
     const auto j = static_cast<std::size_t>(disc_.bond_j[b]);
     double magnitude = model_.bond_stiffness[b] * disc_.bond_length[b] * stretch_values[b];
     if (osb) {
-      magnitude += model_.dilatation_weight[b] / disc_.bond_length[b] *
-                   (model_.dilatation_stiffness[i] * theta[i] +
-                    model_.dilatation_stiffness[j] * theta[j]);
+      magnitude +=
+          model_.dilatation_weight[b] / disc_.bond_length[b] *
+          (model_.dilatation_stiffness[i] * theta[i] + model_.dilatation_stiffness[j] * theta[j]);
     }
     // A stretched bond pulls i toward j: internal resisting force K·u is −(pull) on i.
     f[2 * i] -= magnitude * disc_.bond_cos[b];

@@ -94,8 +94,8 @@ double fitted_paris_constant(const CompactTensionSpec& spec, const CrackHistory&
     const double n1 = cycles_at_length(h, a + step);
     if (n0 < 0 || n1 <= n0) continue;
     const double rate_mm = step * 1e3 / (n1 - n0);
-    const double dk = compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width,
-                                              a + 0.5 * step) / 1e6;
+    const double dk =
+        compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width, a + 0.5 * step) / 1e6;
     sum += std::log(rate_mm) - m * std::log(dk);
     ++count;
   }

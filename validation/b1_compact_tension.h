@@ -43,7 +43,8 @@ CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
 double cycles_at_length(const CrackHistory& history, double a);
 
 /// Least-squares Paris constant C (with M fixed) of a PD crack history over [a_from, a_to]:
-/// da/dN by central differences of the recorded history, ΔK by 000 Eq. (A2) (000 App. A, Eq. A1-A3).
+/// da/dN by central differences of the recorded history, ΔK by 000 Eq. (A2) (000 App. A, Eq.
+/// A1-A3).
 double fitted_paris_constant(const CompactTensionSpec& spec, const CrackHistory& history,
                              double p_max, double r, double m, double a_from, double a_to);
 

@@ -8,11 +8,11 @@
 namespace peritwin::validation {
 
 struct KinkResult {
-  double alpha = 0.0;          ///< load angle (rad)
-  double beta = 0.0;           ///< kink angle measured on the grown crack (rad, CCW +)
-  double kii_over_ki = 0.0;    ///< at the initial tip, 001 Eq. (62)-(63)
-  double mts_beta = 0.0;       ///< maximum tangential stress prediction from that ratio (rad)
-  double growth = 0.0;         ///< crack length grown when β was measured (m)
+  double alpha = 0.0;        ///< load angle (rad)
+  double beta = 0.0;         ///< kink angle measured on the grown crack (rad, CCW +)
+  double kii_over_ki = 0.0;  ///< at the initial tip, 001 Eq. (62)-(63)
+  double mts_beta = 0.0;     ///< maximum tangential stress prediction from that ratio (rad)
+  double growth = 0.0;       ///< crack length grown when β was measured (m)
   std::int64_t cycles = 0;
   double wall_s = 0.0;
 };

@@ -1,4 +1,6 @@
 // B4 (benchmarks/README.md): single-bond and analytical checks, one JSON line each.
+#include "validation/b4_analytical.h"
+
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -6,15 +8,15 @@
 
 #include "replay/rainflow.h"
 #include "solver/fatigue_law.h"
-#include "validation/b4_analytical.h"
 
 namespace peritwin::validation {
 
 namespace {
 void print(const char* check, double value, double expected) {
-  std::printf("{\"case\":\"B4\",\"check\":\"%s\",\"value\":%.10g,\"expected\":%.10g,"
-              "\"rel_error\":%.3e}\n",
-              check, value, expected, expected != 0 ? value / expected - 1 : value);
+  std::printf(
+      "{\"case\":\"B4\",\"check\":\"%s\",\"value\":%.10g,\"expected\":%.10g,"
+      "\"rel_error\":%.3e}\n",
+      check, value, expected, expected != 0 ? value / expected - 1 : value);
 }
 }  // namespace
 
@@ -25,14 +27,17 @@ int run_b4() {
   // per-cycle remaining-life iteration must reach λ ≤ 0 at ceil(N).
   const double eps = 1e-3;
   const double n21 = 1.0 / (al.A1 * std::pow(eps, al.m1));
-  print("strain_life_eq21", static_cast<double>(cycles_to_failure(1.0, strain_decrement_phase1(eps, al.A1, al.m1, 0.0))),
-        std::ceil(n21));
+  print(
+      "strain_life_eq21",
+      static_cast<double>(cycles_to_failure(1.0, strain_decrement_phase1(eps, al.A1, al.m1, 0.0))),
+      std::ceil(n21));
   // 000 Eq. (22) with the fatigue limit of SAE 1020 (002 Table 2).
   const StrainLawParams steel = sae1020_strain_params();
   const double eps2 = 5e-3;
   const double n22 = 1.0 / (steel.A1 * std::pow(eps2 - steel.eps_inf, steel.m1));
   print("strain_life_eq22",
-        static_cast<double>(cycles_to_failure(1.0, strain_decrement_phase1(eps2, steel.A1, steel.m1, steel.eps_inf))),
+        static_cast<double>(cycles_to_failure(
+            1.0, strain_decrement_phase1(eps2, steel.A1, steel.m1, steel.eps_inf))),
         std::ceil(n22));
   // Energy-based model (000 Eq. 30-46): with B_i, n_i from Eq. (44)-(46) the decrement per cycle
   // equals the strain law's, for a bond-based bond with C0 from Eq. (33), R = 0.1.

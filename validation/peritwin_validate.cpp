@@ -96,15 +96,17 @@ int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double m
   const auto r =
       run_ct_with_hole(dx, p_max, limit, a2, prefix, static_cast<std::int64_t>(max_cycles));
   for (const auto& e : r.events) {
-    std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"event\":\"%s\",\"cycle\":%lld,"
-                "\"x_m\":%.5f,\"y_m\":%.5f}\n",
-                limit ? "true" : "false", e.what.c_str(), static_cast<long long>(e.cycle),
-                e.where.x, e.where.y);
+    std::printf(
+        "{\"case\":\"B3\",\"propagation_limit\":%s,\"event\":\"%s\",\"cycle\":%lld,"
+        "\"x_m\":%.5f,\"y_m\":%.5f}\n",
+        limit ? "true" : "false", e.what.c_str(), static_cast<long long>(e.cycle), e.where.x,
+        e.where.y);
   }
-  std::printf("{\"case\":\"B3\",\"propagation_limit\":%s,\"cycles\":%lld,\"broken_bonds\":%lld,"
-              "\"a2\":%.6g,\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
-              limit ? "true" : "false", static_cast<long long>(r.cycles),
-              static_cast<long long>(r.broken_bonds), a2, dx, r.wall_s, prefix.c_str());
+  std::printf(
+      "{\"case\":\"B3\",\"propagation_limit\":%s,\"cycles\":%lld,\"broken_bonds\":%lld,"
+      "\"a2\":%.6g,\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
+      limit ? "true" : "false", static_cast<long long>(r.cycles),
+      static_cast<long long>(r.broken_bonds), a2, dx, r.wall_s, prefix.c_str());
   return 0;
 }
 
@@ -132,7 +134,8 @@ int main(int argc, char** argv) {
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)");
   app.add_option("--dx", dx, "grid spacing (m)")->check(CLI::Range(1e-5, 0.01));
   app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
-  app.add_option("--iterations", iterations, "B1: calibration iterations")->check(CLI::Range(1, 10));
+  app.add_option("--iterations", iterations, "B1: calibration iterations")
+      ->check(CLI::Range(1, 10));
   app.add_option("--out", out, "directory for CSV output");
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);

@@ -53,7 +53,8 @@ TEST(CrackTracker, KinkedCrackReportsItsAngle) {
     const double ry = g.disc.position[k].y;
     const double along = rx * std::cos(beta) + ry * std::sin(beta);
     const double across = -rx * std::sin(beta) + ry * std::cos(beta);
-    if (along > 0 && along < 0.008 && std::abs(across) < 0.0006) damage[static_cast<std::size_t>(k)] = 0.5;
+    if (along > 0 && along < 0.008 && std::abs(across) < 0.0006)
+      damage[static_cast<std::size_t>(k)] = 0.5;
   }
   CrackTrackerOptions o;
   o.kink_distance = 0.004;
@@ -74,8 +75,10 @@ TEST(CrackTracker, UndamagedModelHasNoCrack) {
 
 TEST(CompactTensionK, MatchesAstmE647Polynomial) {
   // 000 Eq. (A2) at q/W = 0.5: f = (2.5/0.5^1.5)(0.886 + 2.32 − 3.33 + 1.84 − 0.35) = 9.6591...
-  const double f = 2.5 / std::pow(0.5, 1.5) * (0.886 + 4.64 * 0.5 - 13.32 * 0.25 + 14.72 * 0.125 - 5.6 * 0.0625);
-  EXPECT_NEAR(compact_tension_delta_k(1000.0, 0.01, 0.05, 0.025), 1000.0 / (0.01 * std::sqrt(0.05)) * f, 1e-6);
+  const double f =
+      2.5 / std::pow(0.5, 1.5) * (0.886 + 4.64 * 0.5 - 13.32 * 0.25 + 14.72 * 0.125 - 5.6 * 0.0625);
+  EXPECT_NEAR(compact_tension_delta_k(1000.0, 0.01, 0.05, 0.025),
+              1000.0 / (0.01 * std::sqrt(0.05)) * f, 1e-6);
   EXPECT_NEAR(f, 9.6591, 1e-3);
 }
 

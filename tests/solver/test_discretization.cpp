@@ -28,8 +28,8 @@ TEST(Discretization, BondsEqualBruteForcePairSearch) {
   std::set<std::pair<int, int>> expected;
   for (int a = 0; a < d.num_nodes(); ++a) {
     for (int b = a + 1; b < d.num_nodes(); ++b) {
-      const double r = std::hypot(d.position[b].x - d.position[a].x,
-                                  d.position[b].y - d.position[a].y);
+      const double r =
+          std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
       if (partial_volume_factor(r, d.horizon, dx) > 0) expected.insert({a, b});
     }
   }

@@ -32,7 +32,8 @@ NotchedPlate make_notched_plate(ModelKind kind, bool notched = true, int columns
   const double h = 0.5 * rows * dx;
   p.supports.push_back({p.disc.nodes_in(Region::of(Rectangle{-1, -h, 1, -h + dx})), true, true});
   // Opening load on the top edge layer, in +y; a sin α part in x to exercise the basis.
-  p.loads.push_back({p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
+  p.loads.push_back(
+      {p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
   return p;
 }
 
@@ -91,8 +92,10 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
   FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(fast.initialize());
   ASSERT_TRUE(slow.initialize());
-  const std::vector<LoadBlock> blocks = {{1000.0, 0.1, 0.0, 120}, {800.0, 0.1, 0.0, 1},
-                                         {1000.0, 0.3, 0.0, 37},  {1100.0, -0.2, 0.2, 90},
+  const std::vector<LoadBlock> blocks = {{1000.0, 0.1, 0.0, 120},
+                                         {800.0, 0.1, 0.0, 1},
+                                         {1000.0, 0.3, 0.0, 37},
+                                         {1100.0, -0.2, 0.2, 90},
                                          {1000.0, 0.1, 0.0, 400}};
   for (const auto& block : blocks) {
     fast.apply(block);
@@ -104,10 +107,11 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
 
 INSTANTIATE_TEST_SUITE_P(
     Laws, BlockEqualsPerCycle,
-    ::testing::Values(LawCase{"strain_dose_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0},
-                      LawCase{"strain_dose_osb", FatigueLaw::strain_range, ModelKind::state_based, 0},
-                      LawCase{"strain_limit_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0.3},
-                      LawCase{"energy_osb", FatigueLaw::energy, ModelKind::state_based, 0}),
+    ::testing::Values(
+        LawCase{"strain_dose_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0},
+        LawCase{"strain_dose_osb", FatigueLaw::strain_range, ModelKind::state_based, 0},
+        LawCase{"strain_limit_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0.3},
+        LawCase{"energy_osb", FatigueLaw::energy, ModelKind::state_based, 0}),
     [](const ::testing::TestParamInfo<LawCase>& p) { return std::string(p.param.name); });
 
 TEST(BlockStepping, ManyOneCycleBlocksEqualOneLongBlock) {
@@ -194,7 +198,8 @@ TEST_P(IncrementalEqualsRefactor, SameBreakSequence) {
   FatigueEngine incremental(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(refactor.initialize());
   ASSERT_TRUE(incremental.initialize());
-  for (const LoadBlock block : {LoadBlock{1000.0, 0.1, 0.0, 500}, LoadBlock{1100.0, 0.1, 0.3, 300}}) {
+  for (const LoadBlock block :
+       {LoadBlock{1000.0, 0.1, 0.0, 500}, LoadBlock{1100.0, 0.1, 0.3, 300}}) {
     refactor.apply(block);
     incremental.apply(block);
   }

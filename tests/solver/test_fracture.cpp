@@ -33,10 +33,14 @@ CenterCrack make_center_crack(double width, double a, double dx, double horizon,
   o.kernel = kernel;
   p.model = build_model(p.disc, Material{70e9, 1.0 / 3.0, 0.0}, o, 200.0);
   const double force = 1.0 * width * p.geometry.thickness;  // σ = 1 Pa per unit P
-  p.loads.push_back(
-      {p.disc.nodes_in(Region::of(Rectangle{-width, width - dx, width, 2 * width})), {0, force}, {}, {}});
-  p.loads.push_back(
-      {p.disc.nodes_in(Region::of(Rectangle{-width, -2 * width, width, -width + dx})), {0, -force}, {}, {}});
+  p.loads.push_back({p.disc.nodes_in(Region::of(Rectangle{-width, width - dx, width, 2 * width})),
+                     {0, force},
+                     {},
+                     {}});
+  p.loads.push_back({p.disc.nodes_in(Region::of(Rectangle{-width, -2 * width, width, -width + dx})),
+                     {0, -force},
+                     {},
+                     {}});
   // Minimal supports away from the crack: the left-edge node at y = +Δx/2 pinned, the right-edge
   // node at y = +Δx/2 fixed in y (the loads are self-balanced).
   p.supports.push_back({{p.disc.nearest_node({-0.5 * width, 0.5 * dx})}, true, true});
@@ -61,7 +65,8 @@ double k_i_by_extrapolation(const CenterCrack& p, const std::vector<double>& u, 
   const double xb = a - p.disc.position[p.disc.nearest_node({a - r1, 0.5 * dx})].x;
   const double xd = a - p.disc.position[p.disc.nearest_node({a - r2, 0.5 * dx})].x;
   return 2 * mu * std::sqrt(2 * pi) / (kappa + 1) *
-         (half_opening(r1) * xd / std::sqrt(xb) - half_opening(r2) * xb / std::sqrt(xd)) / (xd - xb);
+         (half_opening(r1) * xd / std::sqrt(xb) - half_opening(r2) * xb / std::sqrt(xd)) /
+         (xd - xb);
 }
 
 TEST(CenterCrackedPlate, StressIntensityByExtrapolationMatchesFeddersen) {
@@ -94,8 +99,8 @@ double crack_centre_opening(double dx, double horizon) {
 /// 2v = (4σa/E)·V1(a/b), V1 from Tada, Paris & Irwin (plane stress).
 double tada_centre_opening() {
   const double e = 70e9, a = 0.0048, b = 0.012, t = a / b;
-  const double v1 = -0.071 - 0.535 * t + 0.169 * t * t + 0.020 * t * t * t -
-                    1.071 / t * std::log(1 - t);
+  const double v1 =
+      -0.071 - 0.535 * t + 0.169 * t * t + 0.020 * t * t * t - 1.071 / t * std::log(1 - t);
   return 4 * a / e * v1;
 }
 

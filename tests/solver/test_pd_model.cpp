@@ -17,8 +17,9 @@ TEST(Micromodulus, ConstantKernelPlaneStressIs9EOverPiHDelta3) {
   ModelOptions o;
   o.kind = ModelKind::bond_based;
   const double delta = 0.003, h = 0.01;
-  EXPECT_NEAR(bond_micromodulus(m, o, delta, h) / (9 * m.youngs_modulus / (pi * h * delta * delta * delta)),
-              1.0, 1e-14);
+  EXPECT_NEAR(
+      bond_micromodulus(m, o, delta, h) / (9 * m.youngs_modulus / (pi * h * delta * delta * delta)),
+      1.0, 1e-14);
   o.plane = PlaneCondition::plane_strain;  // 48E/(5πhδ³) for ν = 1/4
   EXPECT_NEAR(bond_micromodulus(m, o, delta, h) /
                   (48 * m.youngs_modulus / (5 * pi * h * delta * delta * delta)),
@@ -33,8 +34,8 @@ TEST(Micromodulus, GaussianKernelMatchesBouaraquiaEq30) {
   const double delta = 0.00078, h = 0.001;
   const double e4 = std::exp(4.0);
   // 001 Eq. (30): c0 = 96 e⁴ E / ((e⁴ √π erf(2) − 4) h π δ³)
-  const double expected =
-      96 * e4 * m.youngs_modulus / ((e4 * std::sqrt(pi) * std::erf(2.0) - 4) * h * pi * std::pow(delta, 3));
+  const double expected = 96 * e4 * m.youngs_modulus /
+                          ((e4 * std::sqrt(pi) * std::erf(2.0) - 4) * h * pi * std::pow(delta, 3));
   EXPECT_NEAR(bond_micromodulus(m, o, delta, h) / expected, 1.0, 1e-13);
 }
 
@@ -46,7 +47,8 @@ TEST(Micromodulus, ConicalKernelPlaneStrainMatchesZhangBobaruEq4) {
   o.plane = PlaneCondition::plane_strain;
   const double delta = 0.001, h = 1.0, nu = 0.25;
   // 002 Eq. (4): c(ξ) = 24E/((1 − ν − 2ν²)πδ³)·(1 − ξ/δ), per unit thickness.
-  const double expected = 24 * m.youngs_modulus / ((1 - nu - 2 * nu * nu) * pi * std::pow(delta, 3));
+  const double expected =
+      24 * m.youngs_modulus / ((1 - nu - 2 * nu * nu) * pi * std::pow(delta, 3));
   EXPECT_NEAR(bond_micromodulus(m, o, delta, h) / expected, 1.0, 1e-13);
   EXPECT_DOUBLE_EQ(kernel_shape(Kernel::conical, 0.25), 0.75);
 }
@@ -55,7 +57,7 @@ TEST(StateBased, ConstantsAreNguyenEq4) {
   const Material m{68e9, 0.33, 0.0};
   const double delta = 0.0015, h = 0.01;
   const auto c = state_based_constants(m, PlaneCondition::plane_stress, delta, h);
-  EXPECT_DOUBLE_EQ(c.a, 68e9 * h * (3 * 0.33 - 1) / (4 * (1 - 0.33 * 0.33)));  // 000 Eq. (4a)
+  EXPECT_DOUBLE_EQ(c.a, 68e9 * h * (3 * 0.33 - 1) / (4 * (1 - 0.33 * 0.33)));   // 000 Eq. (4a)
   EXPECT_DOUBLE_EQ(c.b, 3 * 68e9 / ((1 + 0.33) * pi * delta * delta * delta));  // 000 Eq. (4b)
   EXPECT_DOUBLE_EQ(c.d, 2 / (pi * h * delta * delta));                          // 000 Eq. (4c)
   // Plane strain maps E → E/(1−ν²), ν → ν/(1−ν).

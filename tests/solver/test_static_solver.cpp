@@ -30,8 +30,8 @@ class SolverModels : public ::testing::TestWithParam<ModelKind> {};
 TEST_P(SolverModels, InternalForcesBalanceAppliedLoads) {
   // Equilibrium: at every free DOF the bond-by-bond internal force equals the applied load, and
   // the reactions at the supports balance the total applied load (to solver precision).
-  auto plate = testing::make_tension_plate(aluminium, options_for(GetParam()), 0.02, 0.01,
-                                           0.0005, 80e6);
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.02, 0.01, 0.0005, 80e6);
   StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   const auto& u = solver.basis_displacement(basis_constant);
@@ -53,8 +53,8 @@ TEST_P(SolverModels, InternalForcesBalanceAppliedLoads) {
 }
 
 TEST_P(SolverModels, StiffnessIsSymmetricAndRigidMotionIsForceFree) {
-  auto plate = testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006,
-                                           0.0005, 1e6);
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
   StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   std::mt19937 rng(7);
@@ -89,8 +89,8 @@ TEST_P(SolverModels, StiffnessIsSymmetricAndRigidMotionIsForceFree) {
 TEST_P(SolverModels, CholmodAgreesWithUmfpackOracle) {
   // The same reduced system solved by an LU factorization (UMFPACK) of the full symmetric matrix
   // (for the state-based model with ν < 1/3 the mixed form: displacements then w = α·θ).
-  auto plate = testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006,
-                                           0.0005, 1e6);
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
   StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   SparseMatrix full = solver.stiffness_upper().selfadjointView<Eigen::Upper>();
@@ -114,8 +114,8 @@ TEST_P(SolverModels, CholmodAgreesWithUmfpackOracle) {
 }
 
 TEST_P(SolverModels, UnsupportedModelIsATypedFailure) {
-  auto plate = testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006,
-                                           0.0005, 1e6);
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
   StaticSolver solver(plate.disc, plate.model, {}, plate.loads);
   const FactorReport r = solver.solve();
   EXPECT_FALSE(r.ok());
@@ -125,8 +125,8 @@ TEST_P(SolverModels, UnsupportedModelIsATypedFailure) {
 TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   // Oracle for the re-solve path: break a band of bonds through break_bonds(), compare with a
   // fresh solver whose discretization had those bonds cut from the start.
-  auto plate = testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006,
-                                           0.0005, 1e6);
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
   StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   std::vector<BondIndex> cut;
