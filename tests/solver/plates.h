@@ -6,19 +6,14 @@
 
 #include "solver/discretization.h"
 #include "solver/pd_model.h"
+#include "solver/specimens.h"
 #include "solver/static_solver.h"
 
 namespace peritwin::testing {
 
 /// Rectangular plate [0,L]×[−H/2,H/2] under a uniform traction σ on its right edge layer, the
 /// left edge layer on rollers (u = 0) and one left node pinned in y: uniaxial stress σ.
-struct TensionPlate {
-  DetailGeometry geometry;
-  Discretization disc;
-  PdModel model;
-  std::vector<Support> supports;
-  std::vector<LoadTerm> loads;  // basis_constant: total force σ·H·h at P = 1
-};
+using TensionPlate = Specimen;  // geometry, discretization, model, supports, loads
 
 inline TensionPlate make_tension_plate(const Material& material, const ModelOptions& options,
                                        double length, double height, double dx, double sigma) {

@@ -4,19 +4,14 @@
 #include <cmath>
 
 #include "solver/fatigue_engine.h"
+#include "solver/specimens.h"
 
 namespace peritwin {
 namespace {
 
 /// A small edge-notched plate in tension (bond-based or state-based), the peridynamic analogue of
 /// a fatigue coupon; the engine tests only need something that cracks in a few hundred cycles.
-struct NotchedPlate {
-  DetailGeometry geometry;
-  Discretization disc;
-  PdModel model;
-  std::vector<Support> supports;
-  std::vector<LoadTerm> loads;
-};
+using NotchedPlate = Specimen;  // geometry, discretization, model, supports, loads
 
 NotchedPlate make_notched_plate(ModelKind kind, bool notched = true, int columns = 24,
                                 int rows = 16) {

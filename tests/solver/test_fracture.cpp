@@ -5,6 +5,7 @@
 
 #include "solver/discretization.h"
 #include "solver/pd_model.h"
+#include "solver/specimens.h"
 #include "solver/static_solver.h"
 
 namespace peritwin {
@@ -14,13 +15,7 @@ constexpr double pi = std::numbers::pi;
 
 /// Center-cracked plate of width W and height 2W, crack 2a along y = 0 (between two node rows),
 /// uniform tension σ on the top and bottom edge layers; bond-based plane stress (ν = 1/3).
-struct CenterCrack {
-  DetailGeometry geometry;
-  Discretization disc;
-  PdModel model;
-  std::vector<Support> supports;
-  std::vector<LoadTerm> loads;
-};
+using CenterCrack = Specimen;  // geometry, discretization, model, supports, loads
 
 CenterCrack make_center_crack(double width, double a, double dx, double horizon, Kernel kernel) {
   CenterCrack p;
