@@ -63,11 +63,22 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   for (const auto& c : lower) s.geometry.rigid_regions.push_back(Region::of(c));
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
-  for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
   const double ef = spec.hole_offset / spec.hole_spacing;
   s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});   // F1
   s.loads.push_back({s.disc.nodes_in(Region::of(upper[1])), {}, {}, {-1.0, 0.0}});         // F2
   s.loads.push_back({s.disc.nodes_in(Region::of(upper[2])), {}, {0.0, 0.5}, {0.0, -ef}});  // F3
+  if (spec.lower_holes_fixed) {
+    for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
+  } else {
+    // The lower half of the device applies the point reflection of the upper forces (the CTS
+    // loading is antisymmetric under a half turn): −F3 at the lower left, +P sin α in x at the
+    // middle, −F1 at the lower right; each half is then in force and moment equilibrium.
+    s.loads.push_back({s.disc.nodes_in(Region::of(lower[0])), {}, {0.0, -0.5}, {0.0, ef}});
+    s.loads.push_back({s.disc.nodes_in(Region::of(lower[1])), {}, {}, {1.0, 0.0}});
+    s.loads.push_back({s.disc.nodes_in(Region::of(lower[2])), {}, {0.0, -0.5}, {0.0, -ef}});
+    s.supports.push_back({{s.disc.nearest_node(lower[1].centre)}, true, true});
+    s.supports.push_back({{s.disc.nearest_node(lower[2].centre)}, false, true});
+  }
   return s;
 }
 

@@ -14,9 +14,10 @@ double mts_kink_angle(double rho) {
 }
 
 KinkResult run_compact_tension_shear(double alpha, double dx, const fatigue::StrainLawParams& law,
-                                     double growth) {
+                                     double growth, bool lower_holes_fixed) {
   const auto t0 = std::chrono::steady_clock::now();
-  const CompactTensionShearSpec spec;
+  CompactTensionShearSpec spec;
+  spec.lower_holes_fixed = lower_holes_fixed;
   ModelOptions options;
   options.kind = ModelKind::state_based;
   const Specimen s = make_compact_tension_shear(spec, options, dx);

@@ -19,7 +19,7 @@ struct KinkResult {
 
 /// Runs B2 at α with P = 16 kN, R = 0.1 until the crack has grown `growth` (m).
 KinkResult run_compact_tension_shear(double alpha, double dx, const fatigue::StrainLawParams& law,
-                                     double growth);
+                                     double growth, bool lower_holes_fixed = true);
 
 /// Maximum tangential stress criterion: β = 2·atan((1 − √(1 + 8ρ²))/(4ρ)), ρ = K_II/K_I.
 double mts_kink_angle(double kii_over_ki);

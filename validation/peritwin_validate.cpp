@@ -73,17 +73,18 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
   return 0;
 }
 
-int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth) {
+int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth, bool loaded_lower) {
   auto law = fatigue::al6061_t6_strain_params();
   // A2 calibrated on B1 at Δx = 1 mm (peritwin-validate --case B1), scaled to this horizon by
   // 000 Eq. (29).
   law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, law.m2);
   const double pi = std::numbers::pi;
-  const KinkResult r = run_compact_tension_shear(alpha_deg * pi / 180, dx, law, growth);
+  const KinkResult r =
+      run_compact_tension_shear(alpha_deg * pi / 180, dx, law, growth, !loaded_lower);
   std::printf(
-      "{\"case\":\"B2\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,"
+      "{\"case\":\"B2\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,"
       "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f}\n",
-      alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.mts_beta * 180 / pi, r.growth,
+      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.mts_beta * 180 / pi, r.growth,
       static_cast<long long>(r.cycles), dx, r.wall_s);
   return 0;
 }
@@ -131,6 +132,9 @@ int main(int argc, char** argv) {
   app.add_option("--alpha", alpha, "B2: load angle (degrees, 0 <= alpha < 90)")
       ->check(CLI::Range(0.0, 89.999));
   app.add_option("--a2", a2_at_1mm, "B2: A2 calibrated on B1 at dx = 1 mm");
+  bool loaded_lower = false;
+  app.add_flag("--loaded-lower-holes", loaded_lower,
+               "B2: lower holes carry the mirrored forces instead of being fixed");
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)");
   app.add_option("--dx", dx, "grid spacing (m)")->check(CLI::Range(1e-5, 0.01));
   app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
@@ -140,7 +144,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
-  if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth);
+  if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth, loaded_lower);
   if (which == "B3") return run_b3(dx, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
   return 2;
