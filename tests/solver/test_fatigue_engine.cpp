@@ -40,7 +40,10 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
   EXPECT_TRUE(probe.solve().ok());
   std::vector<double> s;
   probe.stretch(load, 0.0, s);
-  const double smax = *std::max_element(s.begin(), s.end());
+  double smax = 0.0;  // over intact bonds: a bond cut by the notch "stretches" by the opening
+  for (std::size_t b = 0; b < s.size(); ++b) {
+    if (!p.disc.bond_precut[b]) smax = std::max(smax, s[b]);
+  }
   const double eps = smax * (1 - r);
   FatigueSettings f;
   f.law = law;
@@ -51,6 +54,21 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
   f.strain.A1 = 1.0 / (first_failure * std::pow(eps - f.strain.eps_inf, f.strain.m1));
   f.strain.A2 = 0.2 / (first_failure * std::pow(eps, f.strain.m2));
   f.incremental = false;
+  if (law == FatigueLaw::kinetic) {
+    // 004 Eq. (12)-(15): pick the activation energy U so that the most stressed bond
+    // (σ = E·s_max) loses its unit life in `first_failure` cycles (Φ monotone in U: bisection).
+    auto& k = f.kinetic;
+    k.gamma = 1e-28;
+    const double sigma = p.model.material.youngs_modulus * smax;
+    const double theta = fatigue::kt_thermal_energy(k.temperature);
+    double lo = 0.0, hi = 1e-17;
+    for (int i = 0; i < 200; ++i) {
+      const double u = 0.5 * (lo + hi);
+      const double dose = fatigue::kt_cycle_dose(sigma, r, k.frequency, u, k.gamma, theta);
+      (dose > 1.0 / first_failure ? lo : hi) = u;
+    }
+    k.U = 0.5 * (lo + hi);
+  }
   return f;
 }
 
@@ -212,6 +230,58 @@ TEST_P(IncrementalEqualsRefactor, SameBreakSequence) {
 
 INSTANTIATE_TEST_SUITE_P(BothModels, IncrementalEqualsRefactor,
                          ::testing::Values(ModelKind::bond_based, ModelKind::state_based));
+
+}  // namespace
+}  // namespace peritwin
+
+namespace peritwin {
+namespace {
+
+TEST(Phases, PreCrackPutsItsTipInPhaseTwoAndFarBondsInPhaseOne) {
+  // 000 Sec. 4.4: the nodes along a cut have φ ≥ φ0 = 0.398 (0.409 in the interior for
+  // δ = 3.015Δx with the partial volumes of 001 Eq. (36), more near a free edge), so the
+  // pre-crack's neighbourhood is in phase II from the start; a bond far from it (more than 2δ) is
+  // in phase I.
+  const auto plate = make_notched_plate(ModelKind::bond_based);
+  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(engine.initialize());
+  const double dx = plate.disc.dx;
+  const NodeIndex face = plate.disc.nearest_node({3 * dx, 0.5 * dx});
+  EXPECT_GE(engine.node_damage()[static_cast<std::size_t>(face)], 0.398);
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    const Point a = plate.disc.position[plate.disc.bond_i[b]];
+    const Point c = plate.disc.position[plate.disc.bond_j[b]];
+    const double mid_x = 0.5 * (a.x + c.x), mid_y = 0.5 * (a.y + c.y);
+    if (std::abs(mid_y) < dx && mid_x < 6 * dx) {
+      EXPECT_EQ(engine.bond_phase()[b], 2) << b;
+    }
+    if (mid_x > 6 * dx + 3 * plate.disc.horizon) {
+      EXPECT_EQ(engine.bond_phase()[b], 1) << b;
+    }
+  }
+}
+
+TEST(NoFailZone, BondsInsideNeverBreak) {
+  // 002 Sec. 7: a no-fail zone around the notch tip: its bonds keep losing life but never break,
+  // while the same load breaks them without the zone.
+  auto plate = make_notched_plate(ModelKind::bond_based);
+  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  const Circle zone{{6 * plate.disc.dx, 0.0}, 4 * plate.disc.dx};
+  for (NodeIndex k = 0; k < plate.disc.num_nodes(); ++k) {
+    plate.disc.no_fail[static_cast<std::size_t>(k)] = zone.contains(plate.disc.position[k]) ? 1 : 0;
+  }
+  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(engine.initialize());
+  engine.apply({1000.0, 0.1, 0.0, 1000});  // the phase II tip bonds last 750 cycles
+  for (const auto& e : engine.break_events()) {
+    const auto i = static_cast<std::size_t>(plate.disc.bond_i[e.bond]);
+    const auto j = static_cast<std::size_t>(plate.disc.bond_j[e.bond]);
+    EXPECT_FALSE(plate.disc.no_fail[i] || plate.disc.no_fail[j]) << "bond " << e.bond;
+  }
+  const auto lives = engine.remaining_life();
+  EXPECT_LT(*std::min_element(lives.begin(), lives.end()), 0.0);  // protected bonds went past 0
+}
 
 }  // namespace
 }  // namespace peritwin
