@@ -53,8 +53,8 @@ struct Discretization {
   [[nodiscard]] std::vector<NodeIndex> nodes_in(const Region& region) const;
 };
 
-/// Builds nodes on the grid clipped to the geometry, families within δ + Δx/2 (the support of the
-/// partial-volume weight, 001 Eq. 36), cuts bonds crossing the notches. horizon = δ in metres.
+/// Builds nodes on the grid clipped to the geometry, families within δ weighted by the partial
+/// volumes of 001 Eq. (36), cuts bonds crossing the notches. horizon = δ in metres.
 Discretization discretize(const DetailGeometry& geometry, double dx, double horizon);
 
 }  // namespace peritwin

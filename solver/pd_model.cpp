@@ -104,7 +104,8 @@ PdModel build_model(const Discretization& disc, const Material& material,
   // discrete family moments Σ w·G·c⁴, Σ w·G·s⁴, Σ w·G·c²s² equal the continuum ones over a full
   // horizon; these three moments are all the strain energy sees (uniaxial x, uniaxial y, shear),
   // so the interior reproduces E and ν exactly, which the x/y-only correction cannot on a square
-  // lattice (3·Σc²s²/Σc⁴ = 0.949 at δ = 3.015Δx: ν 5 % low). The dilatation gets
+  // lattice (3·Σc²s²/Σc⁴ = 1.007 for the families within δ = 3.015Δx, 0.949 if they reached
+  // δ + Δx/2). The dilatation gets
   // G_k(n) = A' c² + B' s² matching Σ c² and Σ s². A bond takes the mean of its two nodes.
   std::vector<Eigen::Matrix3d> energy_moments(nn, Eigen::Matrix3d::Zero());
   std::vector<Eigen::Matrix2d> dil_moments(nn, Eigen::Matrix2d::Zero());

@@ -19,7 +19,7 @@ TEST(PartialVolume, MatchesBouaraquiaEq36) {
 
 TEST(Discretization, BondsEqualBruteForcePairSearch) {
   // A plate with a hole: the cell-list families must equal an O(N²) search over all node pairs
-  // closer than δ + Δx/2 (the support of 001 Eq. 36).
+  // within δ.
   DetailGeometry g;
   g.outline = {{0.0, 0.0, 0.02, 0.01}, {0.02, 0.0, 0.03, 0.004}};
   g.holes = {{{0.01, 0.005}, 0.002}};
@@ -30,16 +30,16 @@ TEST(Discretization, BondsEqualBruteForcePairSearch) {
     for (int b = a + 1; b < d.num_nodes(); ++b) {
       const double r =
           std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
-      if (partial_volume_factor(r, d.horizon, dx) > 0) expected.insert({a, b});
+      if (r <= d.horizon) expected.insert({a, b});
     }
   }
   std::set<std::pair<int, int>> found;
   for (int b = 0; b < d.num_bonds(); ++b) found.insert({d.bond_i[b], d.bond_j[b]});
   EXPECT_EQ(found.size(), static_cast<std::size_t>(d.num_bonds()));  // no duplicates
   EXPECT_EQ(found, expected);
-  // An interior node has the 36 lattice neighbours with i² + j² ≤ 12 (|ξ| < 3.515Δx).
+  // An interior node has the 28 lattice neighbours with i² + j² ≤ 9 (|ξ| ≤ 3.015Δx).
   const NodeIndex centre = d.nearest_node({0.004, 0.005});
-  EXPECT_EQ(d.family_offset[centre + 1] - d.family_offset[centre], 36);
+  EXPECT_EQ(d.family_offset[centre + 1] - d.family_offset[centre], 28);
   // Unit vectors point from bond_i to bond_j.
   for (int b = 0; b < d.num_bonds(); ++b) {
     const auto pi = d.position[d.bond_i[b]];
