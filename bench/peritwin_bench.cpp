@@ -117,7 +117,7 @@ int main(int argc, char** argv) {
   stat->add_option("--nodes", nodes, "approximate number of nodes")->check(CLI::Range(100.0, 1e7));
   auto* fat = app.add_subcommand("fatigue", "B1 at 4 kN from a0 to final failure");
   double fatigue_nodes = 15000;
-  double a2 = 1353;
+  double a2 = 1301;
   fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")
       ->check(CLI::Range(100.0, 1e7));
   std::string fatigue_model = "osb";

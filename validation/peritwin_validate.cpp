@@ -127,7 +127,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-propagation-limit", no_limit, "B3: without 002 Eq. (12)");
   app.add_option("--max-cycles", max_cycles, "B3: stop after this many cycles");
   double alpha = 45;
-  double a2_at_1mm = 1353;
+  double a2_at_1mm = 1301;
   double growth = 0.010;
   app.add_option("--alpha", alpha, "B2: load angle (degrees, 0 <= alpha < 90)")
       ->check(CLI::Range(0.0, 89.999));
