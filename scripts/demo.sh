@@ -1,12 +1,71 @@
 #!/usr/bin/env bash
-# Installs the Debian packages, builds, and runs the main job available today: a cold static solve
-# of the B1 compact-tension specimen (bond-based and state-based), printing timings and the
-# load-line opening as JSON lines. (The daemon + replay demo replaces this when the twin exists.)
+# The demo: installs the Debian packages, builds, then runs the twin service end to end on the
+# B1 compact-tension example (examples/b1-ct-al6061.toml, the 1 mm demo grid):
+#   an LCM TCP hub on 127.0.0.1 (lcm.jar's TCPService; nothing leaves the machine),
+#   the daemon (build/bin/peritwin --deterministic),
+#   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1),
+# and prints every state: cycles, broken bonds, crack length and the remaining life with its band
+# (re-estimated every 10 batches). The daemon stops at the end-of-life criterion (8 mm of crack
+# growth), then gets SIGTERM, checkpoints and writes its results and pictures under out/demo/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+root=$(pwd)
 bash scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
-cmake --build build -j "$(nproc)"
-for model in bb osb; do
-  ./build/bin/peritwin-bench static --model "$model" --nodes "${NODES:-15000}"
+build=${BUILD_DIR:-build}
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" -j "$(nproc)" --target peritwin peritwin-replay
+bin="$root/$build/bin"
+
+demo="$root/out/demo"
+rm -rf "$demo"
+mkdir -p "$demo"
+
+# A free loopback port for the hub (PORT=... to choose one).
+port=${PORT:-}
+if [ -z "$port" ]; then
+  for p in $(seq 7731 7799); do
+    if ! (exec 3<>"/dev/tcp/127.0.0.1/$p") 2>/dev/null; then port=$p; break; fi
+  done
+fi
+url="tcpq://127.0.0.1:$port"
+
+hub_pid="" daemon_pid=""
+cleanup() {
+  if [ -n "$daemon_pid" ] && kill -0 "$daemon_pid" 2>/dev/null; then kill -TERM "$daemon_pid"; fi
+  if [ -n "$hub_pid" ] && kill -0 "$hub_pid" 2>/dev/null; then kill "$hub_pid"; fi
+}
+trap cleanup EXIT
+
+start=$(date +%s)
+java -cp /usr/share/java/lcm.jar lcm.lcm.TCPService "$port" >"$demo/hub.log" 2>&1 &
+hub_pid=$!
+for _ in $(seq 100); do
+  (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null && break
+  sleep 0.1
 done
+echo "demo: LCM hub on $url (log: out/demo/hub.log)"
+
+(cd "$demo" && exec "$bin/peritwin" --config "$root/examples/b1-ct-al6061.toml" \
+   --lcm-url "$url" --state-dir state --deterministic) >"$demo/daemon.log" 2>&1 &
+daemon_pid=$!
+echo "demo: daemon started (log: out/demo/daemon.log); replaying examples/b1-cycles.csv in lockstep"
+echo
+
+"$bin/peritwin-replay" --config examples/b1-ct-al6061.toml \
+  --history examples/b1-cycles.csv --format cycles --lcm-url "$url" --lockstep \
+  2> >(grep -v '^LCM tcpq' >&2)
+
+echo
+kill -TERM "$daemon_pid"
+rc=0
+wait "$daemon_pid" || rc=$?
+daemon_pid=""
+echo "demo: daemon stopped with exit code $rc after $(( $(date +%s) - start )) s"
+grep -E "checkpoint \(stop\)|pictures|stopped at" "$demo/daemon.log" | sed 's/^[^ ]* [^ ]* [a-z]* /  /'
+echo
+echo "demo: results in out/demo/results/b1-ct/"
+echo "  b1-ct.h5 + b1-ct.xdmf    time series and damage snapshots (open the .xdmf in ParaView)"
+echo "  b1-ct-damage.png         damage map at the end"
+echo "  b1-ct-crack-length.png   crack length against cycles"
+echo "  checkpoints in out/demo/state/b1-ct/ (a restart of the daemon resumes from them)"
+exit "$rc"

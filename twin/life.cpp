@@ -101,7 +101,8 @@ std::vector<LoadBlock> reference_spectrum(const DetailModel& model,
 }
 
 double simulate_life(const DetailModel& model, const EngineState& state,
-                     const std::vector<LoadBlock>& spectrum, double a2_factor) {
+                     const std::vector<LoadBlock>& spectrum, double a2_factor,
+                     const std::atomic<bool>* cancel) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (spectrum.empty()) return nan;
   const auto engine = model.make_engine(a2_factor);
@@ -118,6 +119,7 @@ double simulate_life(const DetailModel& model, const EngineState& state,
   while (true) {
     bool broke = false;
     for (const LoadBlock& level : spectrum) {
+      if (cancel != nullptr && cancel->load(std::memory_order_relaxed)) return nan;
       LoadBlock block = level;
       block.count = level.count > std::numeric_limits<std::int64_t>::max() / multiplier
                         ? std::numeric_limits<std::int64_t>::max() / 2
@@ -163,21 +165,24 @@ double simulate_life(const DetailModel& model, const EngineState& state,
 }
 
 LifeEstimate estimate_life(const DetailModel& model, const EngineState& state,
-                           const std::vector<LoadBlock>& spectrum, bool parallel) {
+                           const std::vector<LoadBlock>& spectrum, bool parallel,
+                           const std::atomic<bool>* cancel) {
   LifeEstimate out;
   const LifeConfig& life = model.config().life;
   const bool band =
       life.band == BandSource::a2_scatter && model.settings().law != peritwin::FatigueLaw::kinetic;
   if (!band) {
-    out.central = simulate_life(model, state, spectrum, 1.0);
+    out.central = simulate_life(model, state, spectrum, 1.0, cancel);
     out.low = out.high = out.central;
     return out;
   }
   const double s = life.a2_relative_scatter;
   const auto policy = parallel ? std::launch::async : std::launch::deferred;
-  auto low = std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 + s); });
-  auto high = std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 - s); });
-  out.central = simulate_life(model, state, spectrum, 1.0);
+  auto low =
+      std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 + s, cancel); });
+  auto high =
+      std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 - s, cancel); });
+  out.central = simulate_life(model, state, spectrum, 1.0, cancel);
   const double a = low.get(), b = high.get();
   // Larger A2 damages faster: the low end. Ordered so that low <= central <= high holds even if
   // the crack path makes the relation non-monotone.

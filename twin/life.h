@@ -16,6 +16,7 @@
 // All of it is a pure function of (model, engine state, spectrum, A2 factor).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <deque>
 #include <limits>
@@ -69,13 +70,16 @@ std::vector<LoadBlock> reference_spectrum(const DetailModel& model,
 
 /// Cycles from `state` until the end criterion under `spectrum` (repeated), A2 scaled by
 /// `a2_factor`. 0 when already met, +Inf when not met within kMaxSimulatedCycles, NaN when the
-/// state cannot be imported or the spectrum is empty.
+/// state cannot be imported or the spectrum is empty, or when `cancel` becomes true (checked
+/// between blocks).
 double simulate_life(const DetailModel& model, const EngineState& state,
-                     const std::vector<LoadBlock>& spectrum, double a2_factor);
+                     const std::vector<LoadBlock>& spectrum, double a2_factor,
+                     const std::atomic<bool>* cancel = nullptr);
 
 /// Central value and band (3 forward simulations, run concurrently when `parallel`).
 /// state_seq/seq/source are left for the caller to fill in.
 LifeEstimate estimate_life(const DetailModel& model, const EngineState& state,
-                           const std::vector<LoadBlock>& spectrum, bool parallel = true);
+                           const std::vector<LoadBlock>& spectrum, bool parallel = true,
+                           const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace peritwin::twin

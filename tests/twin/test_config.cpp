@@ -185,7 +185,8 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.output.directory, "results/b1-ct");
   EXPECT_TRUE(d.output.png);
   EXPECT_EQ(d.life.criterion, LifeCriterion::crack_length);
-  EXPECT_EQ(d.life.critical_crack_length, 0.020);
+  EXPECT_EQ(d.life.critical_crack_length, 0.008);
+  EXPECT_EQ(d.life.every_batches, 10);
   ASSERT_EQ(d.life.reference_spectrum.size(), 1u);
   EXPECT_EQ(d.life.reference_spectrum[0], (SpectrumBlock{4000.0, 0.1, 0.0, 1000}));
   EXPECT_EQ(d.life.band, BandSource::a2_scatter);

@@ -46,7 +46,7 @@ class LifeTest : public ::testing::Test {
  public:
   static std::shared_ptr<const DetailModel> no_band_model() {
     return b1_model(b1_config("every_batches = 2",
-                              {{"critical_crack_length = 0.020", "critical_crack_length = 0.002"},
+                              {{"critical_crack_length = 0.008", "critical_crack_length = 0.002"},
                                {"band = \"a2_scatter\"", "band = \"none\""},
                                {"a2_relative_scatter = 0.2", ""}}));
   }
@@ -55,7 +55,7 @@ class LifeTest : public ::testing::Test {
   // A short critical crack length keeps the forward simulations to a few dozen re-solves.
   static void SetUpTestSuite() {
     model_ = b1_model(b1_config(
-        "every_batches = 2", {{"critical_crack_length = 0.020", "critical_crack_length = 0.002"}}));
+        "every_batches = 2", {{"critical_crack_length = 0.008", "critical_crack_length = 0.002"}}));
   }
   static void TearDownTestSuite() { model_.reset(); }
   static std::shared_ptr<const DetailModel> model_;

@@ -92,7 +92,7 @@ TEST_F(TwinTest, EveryRejectReasonLeavesTheModelUntouched) {
 TEST_F(TwinTest, FailedDetailRejectsNewBatches) {
   // A tiny critical crack length: the first crack growth ends the life.
   auto model = b1_model(b1_config(
-      "every_batches = 0", {{"critical_crack_length = 0.020", "critical_crack_length = 0.0005"}}));
+      "every_batches = 0", {{"critical_crack_length = 0.008", "critical_crack_length = 0.0005"}}));
   auto twin = make_twin(model);
   std::int64_t seq = 1;
   while (twin->failure() == Failure::none && seq < 100) {

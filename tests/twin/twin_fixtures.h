@@ -22,13 +22,14 @@ inline std::string read_text(const std::string& path) {
 
 using Edits = std::vector<std::pair<std::string, std::string>>;
 
-/// The B1 example text with `life_extra` inserted under [detail.life] and every edit's first
-/// string replaced by its second.
+/// The B1 example text with `life_extra` (default: no remaining-life estimates) replacing its
+/// `every_batches = 10` line under [detail.life], and every edit's first string replaced by its
+/// second.
 inline std::string b1_text(const std::string& life_extra = "every_batches = 0",
                            const Edits& edits = {}) {
   std::string text = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
-  const std::string anchor = "[detail.life]\n";
-  text.replace(text.find(anchor), anchor.size(), anchor + life_extra + "\n");
+  const std::string anchor = "\nevery_batches = 10\n";
+  text.replace(text.find(anchor), anchor.size(), "\n" + life_extra + "\n");
   for (const auto& [from, to] : edits) {
     const auto p = text.find(from);
     EXPECT_NE(p, std::string::npos) << from;

@@ -1,0 +1,147 @@
+// peritwin-replay: feeds a recorded load history to the twin of one detail.
+//
+//   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
+//                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
+//                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
+//
+// Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
+// --in-process runs the twin library directly with the same config (deterministic mode, no LCM).
+// Output: one line per state update (human text, or JSON with --json) on stdout, then a summary
+// line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","state_hash"} with
+// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress).
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+
+#include "replay/replay_tool.h"
+
+namespace {
+std::atomic<int> g_signal{0};
+extern "C" void on_signal(int signal) { g_signal.store(signal); }
+constexpr int kExitOk = 0, kExitUsage = 2, kExitRuntime = 3;
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace peritwin;
+  CLI::App app{"peritwin-replay: recorded load history -> load blocks -> the twin"};
+  std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
+  bool lockstep = false, in_process = false, json = false;
+  replay::BatchingOptions batching;
+  replay::ReplayOptions options;
+  app.add_option("--config", config_file, "detail configuration (TOML)")->required();
+  app.add_option("--history", history, "load history file")->required();
+  app.add_option("--format", format, "series|cycles|spectrum|lcm-log (default cycles)")
+      ->check(CLI::IsMember({"series", "cycles", "spectrum", "lcm-log"}));
+  app.add_option("--detail", detail_id, "detail id (default: the config's first detail)");
+  app.add_option("--source", source_id, "source id of the batches (default replay)");
+  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
+  app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
+  app.add_flag("--in-process", in_process, "run the twin library here (no LCM, no daemon)");
+  app.add_flag("--json", json, "JSON lines: one per state update, then a summary");
+  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 16)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--batch-cycles", batching.max_cycles,
+                 "close a batch once it holds this many cycles (default 1000)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--give-up-after", options.give_up_after_s,
+                 "seconds without progress before failing (default 120)");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitUsage;
+  }
+  options.lockstep = lockstep;
+
+  const auto loaded = twin::load_config(config_file);
+  if (!loaded.ok()) {
+    std::cerr << loaded.error_text();
+    return kExitUsage;
+  }
+  const twin::DetailConfig* detail = &loaded.config->details.front();
+  if (!detail_id.empty()) {
+    detail = nullptr;
+    for (const auto& d : loaded.config->details) {
+      if (d.id == detail_id) detail = &d;
+    }
+    if (detail == nullptr) {
+      std::cerr << "peritwin-replay: no detail \"" << detail_id << "\" in " << config_file << "\n";
+      return kExitUsage;
+    }
+  }
+  const auto fmt = format == "series"     ? replay::InputFormat::series
+                   : format == "spectrum" ? replay::InputFormat::spectrum
+                   : format == "lcm-log"  ? replay::InputFormat::lcm_log
+                                          : replay::InputFormat::cycles;
+  const auto history_blocks = replay::read_history(history, fmt, detail->id);
+  if (!history_blocks.error.empty()) {
+    std::cerr << "peritwin-replay: " << history_blocks.error << "\n";
+    return kExitUsage;
+  }
+  if (const auto bad = replay::check_blocks(history_blocks.blocks); !bad.empty()) {
+    std::cerr << "peritwin-replay: " << history << ": history " << bad
+              << " (the daemon would reject it)\n";
+    return kExitUsage;
+  }
+  if (source_id.empty() || source_id.size() > twin::kMaxSourceIdLength) {
+    std::cerr << "peritwin-replay: --source must have 1 to 64 characters\n";
+    return kExitUsage;
+  }
+  auto batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching);
+  std::int64_t cycles = 0;
+  for (const auto& b : history_blocks.blocks) cycles += b.count;
+  std::cerr << "peritwin-replay: " << history << ": " << history_blocks.blocks.size() << " blocks, "
+            << cycles << " cycles -> " << batches.size() << " batches for " << detail->id
+            << (in_process ? " (in-process)"
+                : lockstep ? " (lockstep)"
+                           : "")
+            << "\n";
+  if (!history_blocks.note.empty()) std::cerr << "peritwin-replay: " << history_blocks.note << "\n";
+
+  std::int64_t last_seq = -2, last_life = -2;
+  auto print = [&](const peritwin_msgs::damage_state_t& s) {
+    if (s.state_seq == last_seq && s.remaining_life_seq == last_life) return;
+    last_seq = s.state_seq;
+    last_life = s.remaining_life_seq;
+    std::cout << (json ? twin::state_json(s) : replay::describe(s)) << std::endl;
+  };
+
+  std::optional<peritwin_msgs::damage_state_t> final_state;
+  if (in_process) {
+    const auto r = replay::run_in_process(*detail, batches, print);
+    if (!r.error.empty()) {
+      std::cerr << "peritwin-replay: " << r.error << "\n";
+      return kExitUsage;
+    }
+    final_state = r.final_state;
+  } else {
+    if (lcm_url.empty()) {
+      if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
+    }
+    lcm::LCM lcm(lcm_url);
+    if (!lcm.good()) {
+      std::cerr << "peritwin-replay: cannot open LCM at \"" << lcm_url << "\"\n";
+      return kExitRuntime;
+    }
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, nullptr);
+    sigaction(SIGINT, &sa, nullptr);
+    replay::LcmReplayer replayer(lcm, std::move(batches), options);
+    const auto r = replayer.run(print, [] { return g_signal.load() == 0; });
+    std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
+              << " resend(s)\n";
+    if (!r.ok) {
+      std::cerr << "peritwin-replay: " << r.error << "\n";
+      return kExitRuntime;
+    }
+    final_state = r.final_state;
+  }
+  if (json && final_state) std::cout << twin::summary_json(*final_state) << std::endl;
+  return kExitOk;
+}

@@ -1,0 +1,256 @@
+#include "replay/replay_tool.h"
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <set>
+
+#include "messages/channels.h"
+
+namespace peritwin::replay {
+
+namespace {
+double since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+}  // namespace
+
+peritwin::LoadBlock to_engine(const LoadBlock& b) { return {b.p_max, b.r, b.alpha, b.count}; }
+
+HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format,
+                           const std::string& detail_id) {
+  HistoryBlocks out;
+  if (format != InputFormat::lcm_log) {
+    const HistoryFormat f = format == InputFormat::series   ? HistoryFormat::series
+                            : format == InputFormat::cycles ? HistoryFormat::cycles
+                                                            : HistoryFormat::spectrum;
+    const auto read = read_blocks(file, f);
+    if (!read.ok()) {
+      out.error = read.error().message();
+      return out;
+    }
+    for (const auto& b : read.value().blocks) out.blocks.push_back(to_engine(b));
+    if (format == InputFormat::series) {
+      const auto& s = read.value().stats;
+      out.note = "rainflow: " + std::to_string(s.reversals) + " reversals, " +
+                 std::to_string(s.full_cycles) + " full and " + std::to_string(s.half_cycles) +
+                 " half cycles, " + std::to_string(s.rounded_up_half_cycles) +
+                 " unpaired halves rounded up, " + std::to_string(s.compressive_cycles) +
+                 " compressive cycles skipped";
+    }
+    return out;
+  }
+  try {
+    lcm::LogFile log(file.string(), "r");
+    if (!log.good()) {
+      out.error = file.string() + ": cannot open as an LCM log";
+      return out;
+    }
+    const std::string channel = messages::channel(detail_id, messages::Kind::kLoad);
+    std::set<std::pair<std::string, std::int64_t>> seen;
+    std::int64_t skipped = 0, events = 0;
+    while (const lcm::LogEvent* e = log.readNextEvent()) {
+      if (e->channel != channel) continue;
+      ++events;
+      const auto decoded = twin::decode_batch(e->data, static_cast<std::size_t>(e->datalen));
+      if (!decoded.batch || decoded.batch->detail_id != detail_id ||
+          !seen.insert({decoded.batch->source_id, decoded.batch->seq}).second) {
+        ++skipped;
+        continue;
+      }
+      for (const auto& b : decoded.batch->blocks) out.blocks.push_back(b);
+    }
+    out.note = "LCM log: " + std::to_string(events) + " events on " + channel + ", " +
+               std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
+    if (out.blocks.empty()) out.error = file.string() + ": no load blocks on " + channel;
+  } catch (const std::exception& e) {
+    out.error = file.string() + ": " + e.what();
+  }
+  return out;
+}
+
+std::vector<twin::Batch> make_twin_batches(const std::vector<peritwin::LoadBlock>& blocks,
+                                           const std::string& detail_id,
+                                           const std::string& source_id,
+                                           const BatchingOptions& options) {
+  std::vector<twin::Batch> out;
+  twin::Batch current{detail_id, source_id, 1, {}};
+  std::int64_t cycles = 0;
+  for (const auto& b : blocks) {
+    current.blocks.push_back(b);
+    cycles += b.count;
+    if (current.blocks.size() >= std::max<std::size_t>(1, options.max_blocks) ||
+        cycles >= options.max_cycles) {
+      out.push_back(std::move(current));
+      current = {detail_id, source_id, static_cast<std::int64_t>(out.size()) + 1, {}};
+      cycles = 0;
+    }
+  }
+  if (!current.blocks.empty()) out.push_back(std::move(current));
+  return out;
+}
+
+std::string check_blocks(const std::vector<peritwin::LoadBlock>& blocks) {
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    const auto o = twin::check_block(blocks[i], i);
+    if (!o.applied()) return o.what + ": " + o.why;
+  }
+  return {};
+}
+
+LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options)
+    : lcm_(lcm), batches_(std::move(batches)), options_(options) {
+  if (!batches_.empty()) {
+    detail_id_ = batches_.front().detail_id;
+    source_id_ = batches_.front().source_id;
+  }
+  if (options_.lockstep) options_.window = 1;
+  options_.window = std::max<std::size_t>(1, options_.window);
+  load_channel_ = messages::channel(detail_id_, messages::Kind::kLoad);
+  state_sub_ = lcm_.subscribe(messages::channel(detail_id_, messages::Kind::kState),
+                              &LcmReplayer::on_state_msg, this);
+  reject_sub_ = lcm_.subscribe(messages::channel(detail_id_, messages::Kind::kReject),
+                               &LcmReplayer::on_reject_msg, this);
+  state_sub_->setQueueCapacity(100'000);
+  reject_sub_->setQueueCapacity(100'000);
+}
+
+LcmReplayer::~LcmReplayer() {
+  lcm_.unsubscribe(state_sub_);
+  lcm_.unsubscribe(reject_sub_);
+}
+
+void LcmReplayer::on_state_msg(const lcm::ReceiveBuffer*, const std::string&,
+                               const peritwin_msgs::damage_state_t* state) {
+  if (state->detail_id == detail_id_) inbox_.push_back(*state);
+}
+
+void LcmReplayer::on_reject_msg(const lcm::ReceiveBuffer*, const std::string&,
+                                const peritwin_msgs::reject_t* reject) {
+  if (reject->source_id == source_id_ && reject->code == peritwin_msgs::reject_t::CODE_FAILED) {
+    ++rejected_failed_;
+  }
+}
+
+void LcmReplayer::publish(std::int64_t seq) {
+  const auto m =
+      twin::batch_message(batches_[static_cast<std::size_t>(seq - 1)], twin::now_utime());
+  lcm_.publish(load_channel_, &m);
+  ++published_;
+}
+
+ReplayResult LcmReplayer::run(
+    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
+    const std::function<bool()>& idle) {
+  ReplayResult result;
+  const auto n = static_cast<std::int64_t>(batches_.size());
+  std::int64_t applied = -1;  // unknown until the first STATE
+  std::int64_t next = 1;      // next seq to publish
+  auto last_progress = std::chrono::steady_clock::now();
+  auto last_send = last_progress;
+  double resend_after = options_.resend_after_s;  // doubles while the daemon stays silent
+  while (true) {
+    const std::int64_t base = std::max<std::int64_t>(applied, 0);
+    const std::int64_t limit =
+        std::min<std::int64_t>(n, base + static_cast<std::int64_t>(options_.window));
+    while (next <= limit) {
+      publish(next++);
+      last_send = std::chrono::steady_clock::now();
+    }
+    errno = 0;
+    if (lcm_.handleTimeout(20) < 0 && errno != EINTR) {
+      result.error = "LCM failed while receiving";
+      break;
+    }
+    for (const auto& s : inbox_) {
+      const std::int64_t a = twin::applied_seq(s, source_id_);
+      if (a != applied) {
+        last_progress = std::chrono::steady_clock::now();
+        resend_after = options_.resend_after_s;
+      }
+      if (applied >= 0 && a < applied) {  // the daemon went back (restart from a checkpoint)
+        next = a + 1;
+        ++result.rewinds;
+      }
+      applied = a;
+      next = std::max(next, applied + 1);
+      result.final_state = s;
+      if (on_state) on_state(s);
+    }
+    inbox_.clear();
+    if (applied >= n) {
+      result.ok = true;
+      break;
+    }
+    if (result.final_state && result.final_state->failure != 0 && rejected_failed_ > 0) {
+      result.ok = true;  // the detail reached its end of life: the rest is refused
+      break;
+    }
+    if (since(last_progress) > options_.give_up_after_s) {
+      result.error = "no progress from the daemon for " + std::to_string(options_.give_up_after_s) +
+                     " s (applied seq " + std::to_string(applied) + " of " + std::to_string(n) +
+                     ")";
+      break;
+    }
+    if (since(last_progress) > resend_after && since(last_send) > resend_after) {
+      next = std::max<std::int64_t>(applied, 0) + 1;  // go back: resend what is not applied
+      ++result.rewinds;
+      resend_after = std::min(2 * resend_after, 30.0);
+    }
+    if (idle && !idle()) {
+      result.error = "interrupted";
+      break;
+    }
+  }
+  result.published = published_;
+  return result;
+}
+
+InProcessResult run_in_process(
+    const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
+    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state) {
+  InProcessResult result;
+  auto model = twin::DetailModel::build(detail, &result.error);
+  if (!model) return result;
+  auto t = twin::Twin::create(model, {twin::LifeMode::synchronous, true}, &result.error);
+  if (!t) return result;
+  t->catch_up_life();
+  auto state = twin::state_message(*t, twin::now_utime());
+  if (on_state) on_state(state);
+  for (const auto& b : batches) {
+    const auto outcome = t->apply(b);
+    if (outcome.verdict == twin::Verdict::failed) break;
+    if (!outcome.applied()) {
+      result.error = "batch " + std::to_string(b.seq) + ": " + outcome.what + ": " + outcome.why;
+      return result;
+    }
+    state = twin::state_message(*t, twin::now_utime());
+    if (on_state) on_state(state);
+  }
+  result.final_state = state;
+  return result;
+}
+
+std::string describe(const peritwin_msgs::damage_state_t& s) {
+  char buf[320];
+  std::string life = "remaining life not estimated yet";
+  if (s.failure != 0) {
+    life = s.failure == peritwin_msgs::damage_state_t::FAILURE_SINGULAR
+               ? "FINAL FAILURE (the detail came apart)"
+               : "END OF LIFE (criterion met)";
+  } else if (std::isfinite(s.remaining_cycles)) {
+    std::snprintf(buf, sizeof buf, "remaining %.0f cycles [%.0f, %.0f] (estimated at seq %s)",
+                  s.remaining_cycles, s.remaining_cycles_low, s.remaining_cycles_high,
+                  s.remaining_life_seq < 0 ? "0" : std::to_string(s.remaining_life_seq).c_str());
+    life = buf;
+  } else if (std::isinf(s.remaining_cycles)) {
+    life = "remaining life unbounded under the reference spectrum";
+  }
+  std::snprintf(buf, sizeof buf, "state %lld: %lld cycles, %lld broken bonds, crack %.2f mm, ",
+                static_cast<long long>(s.state_seq), static_cast<long long>(s.total_cycles),
+                static_cast<long long>(s.broken_bonds), 1e3 * twin::crack_length(s));
+  return buf + life;
+}
+
+}  // namespace peritwin::replay

@@ -1,0 +1,92 @@
+// The twin service on an LCM instance: one Twin per configured detail, fed by
+// PERITWIN_<DETAIL>_LOAD, publishing STATE after every applied batch (and once at start), REJECT
+// for every batch not applied, FIELD (throttled, chunked) and STATUS (heartbeat, 1 s).
+// Checkpoints: <state_dir>/<id>/checkpoint-<state_seq>.h5, atomically, every
+// checkpoint.every_batches applied batches or checkpoint.every_seconds (wall clock; only when the
+// state changed) and at stop(); start() resumes from the newest valid one. The three newest are
+// kept. Results per detail: see twin/detail_outputs.h.
+//
+// The service runs on the thread that calls poll() (LCM handlers run inside it). It is the
+// daemon's core and also runs in-process in tests (memq://) and in the ingest benchmark.
+// Modes: deterministic (remaining life synchronously at fixed state_seq points, reproducible) or
+// not (a worker thread per detail; estimates are published with the seq they belong to).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "twin/config.h"
+#include "twin/detail_outputs.h"
+#include "twin/life_worker.h"
+#include "twin/twin.h"
+
+namespace peritwin::twin {
+
+struct DaemonOptions {
+  std::filesystem::path state_dir = "state";
+  bool deterministic = false;
+  bool results = true;  ///< HDF5/XDMF results and PNGs
+  bool checkpoints = true;
+  int queue_capacity = 100'000;  ///< LCM subscription queue (messages); LCM's default is 30
+  double status_period_s = 1.0;
+  bool record_latency = false;  ///< keep receipt -> STATE publish latencies (benchmark)
+};
+
+class Daemon {
+ public:
+  Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  /// Builds every detail's model and twin, resumes from checkpoints, opens results, subscribes,
+  /// publishes the initial states. False with `error` (config-like problems such as an
+  /// unsupported law are reported the same way; the caller decides the exit code).
+  bool start(std::string* error);
+  /// Handles LCM messages for up to `timeout_ms` and does the periodic chores (status, timed
+  /// checkpoints, finished life estimates). Returns false after a runtime failure (see error()).
+  bool poll(int timeout_ms);
+  /// The periodic chores only (when someone else drives lcm.handle()).
+  void tick();
+  /// Final checkpoints, results and PNGs, a "stopping" status. Idempotent.
+  void stop();
+
+  [[nodiscard]] const std::string& error() const { return error_; }
+  [[nodiscard]] std::size_t num_details() const { return details_.size(); }
+  [[nodiscard]] const Twin& twin(std::size_t i) const;
+  [[nodiscard]] const DetailOutputs* outputs(std::size_t i) const;
+  /// Receipt -> STATE publish latencies (s) of applied batches, when record_latency.
+  [[nodiscard]] const std::vector<double>& latencies() const { return latencies_; }
+  [[nodiscard]] std::int64_t checkpoints_written() const { return checkpoints_written_; }
+
+ private:
+  struct Detail;
+  void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  void publish_state(Detail& d);
+  void publish_fields(Detail& d);
+  void publish_status(Detail& d, const char* health);
+  void checkpoint(Detail& d, const char* why);
+  void submit_life(Detail& d);
+  void fail(std::string why);
+
+  lcm::LCM& lcm_;
+  TwinConfig config_;
+  DaemonOptions options_;
+  std::vector<std::unique_ptr<Detail>> details_;
+  std::chrono::steady_clock::time_point started_;
+  std::chrono::steady_clock::time_point last_status_;
+  std::vector<double> latencies_;
+  std::int64_t checkpoints_written_ = 0;
+  std::string error_;
+  bool stopped_ = false;
+};
+
+/// <state_dir>/<detail id>
+std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
+                                       const std::string& detail_id);
+
+}  // namespace peritwin::twin
