@@ -1,0 +1,173 @@
+// Across processes over tcpq://127.0.0.1:PORT with LCM's Java TCP hub (loopback only): the
+// daemon binary fed by the replay binary in lockstep reaches exactly the in-process states, and a
+// daemon killed with SIGKILL mid-history resumes from its checkpoint to the same final state.
+// Skipped (GTEST_SKIP) only when java or lcm.jar is missing.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "tests/twin/process.h"
+#include "tests/twin/twin_fixtures.h"
+
+namespace peritwin::twin {
+namespace {
+
+namespace fs = std::filesystem;
+using peritwin::testing::free_port;
+using peritwin::testing::Process;
+using peritwin::testing::wait_for_port;
+
+constexpr const char* kLcmJar = "/usr/share/java/lcm.jar";
+
+std::string find_java() {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path != nullptr ? path : "/usr/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const auto end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / "java";
+    if (!candidate.parent_path().empty() && fs::exists(candidate)) return candidate.string();
+    start = end + 1;
+  }
+  return {};
+}
+
+std::int64_t state_seq_of(const std::string& json) {
+  const auto p = json.find("\"state_seq\":");
+  return p == std::string::npos ? -1 : std::atoll(json.c_str() + p + 12);
+}
+
+class CrossProcess : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    java_ = find_java();
+    if (java_.empty() || !fs::exists(kLcmJar)) GTEST_SKIP() << "java or " << kLcmJar << " missing";
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / (std::string("peritwin_xproc_") + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    port_ = free_port();
+    url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
+    hub_ = std::make_unique<Process>(
+        std::vector<std::string>{java_, "-cp", kLcmJar, "lcm.lcm.TCPService",
+                                 std::to_string(port_)},
+        (dir_ / "hub.log").string());
+    ASSERT_TRUE(hub_->started());
+    ASSERT_TRUE(wait_for_port(port_, 30.0)) << "the LCM hub did not come up on " << url_;
+    // B1 on the demo grid; a 3 mm life criterion without band keeps the synchronous estimates
+    // (states 0, 10, 20) to a few seconds; checkpoints every 4 batches.
+    config_ = (dir_ / "b1.toml").string();
+    std::ofstream(config_) << testing::b1_text(
+        "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
+                               {"band = \"a2_scatter\"", "band = \"none\""},
+                               {"a2_relative_scatter = 0.2", ""},
+                               {"every_batches = 100", "every_batches = 4"}});
+    history_ = (dir_ / "history.csv").string();
+    std::ofstream h(history_);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+  }
+  void TearDown() override {
+    hub_.reset();
+    if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
+  }
+
+  std::unique_ptr<Process> daemon(const std::string& log) {
+    return std::make_unique<Process>(
+        std::vector<std::string>{std::string(PERITWIN_BIN_DIR) + "/peritwin", "--config", config_,
+                                 "--lcm-url", url_, "--state-dir", (dir_ / "state").string(),
+                                 "--deterministic", "--no-results", "--log-level", "debug"},
+        (dir_ / log).string());
+  }
+  std::unique_ptr<Process> replay(bool in_process) {
+    std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay",
+                                  "--config",
+                                  config_,
+                                  "--history",
+                                  history_,
+                                  "--json"};
+    if (in_process) {
+      argv.push_back("--in-process");
+    } else {
+      for (const auto* a : {"--lcm-url", url_.c_str(), "--lockstep", "--give-up-after", "60"}) {
+        argv.emplace_back(a);
+      }
+    }
+    return std::make_unique<Process>(argv, (dir_ / "replay.log").string());
+  }
+  /// Every JSON line until end of output (the last one is the summary).
+  static std::vector<std::string> lines_to_end(Process& p, double timeout_s = 120) {
+    std::vector<std::string> lines;
+    while (auto line = p.read_line(timeout_s)) lines.push_back(*line);
+    return lines;
+  }
+  static void expect_clean_stop(Process& p) {
+    p.signal(SIGTERM);
+    const auto status = p.wait_for(30);
+    ASSERT_TRUE(status.has_value()) << "no exit after SIGTERM";
+    EXPECT_TRUE(WIFEXITED(*status)) << *status;
+    EXPECT_EQ(WEXITSTATUS(*status), 0);
+  }
+
+  std::string java_, url_, config_, history_;
+  int port_ = 0;
+  fs::path dir_;
+  std::unique_ptr<Process> hub_;
+};
+
+TEST_F(CrossProcess, DaemonOverTcpqEqualsInProcess) {
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_GE(reference.size(), 26u);  // states 0..24 and the summary
+
+  auto d = daemon("daemon.log");
+  auto r = replay(false);
+  const auto lines = lines_to_end(*r);
+  const auto status = r->wait_for(10);
+  ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());  // the summary, state_hash and remaining life included
+  // Every state the daemon published equals the in-process one (same JSON, no wall clock in it).
+  std::size_t compared = 0;
+  for (const auto& line : lines) {
+    const auto seq = state_seq_of(line);
+    if (seq < 1) continue;
+    ASSERT_LT(static_cast<std::size_t>(seq), reference.size());
+    EXPECT_EQ(line, reference[static_cast<std::size_t>(seq)]);
+    ++compared;
+  }
+  EXPECT_EQ(compared, 24u);
+  expect_clean_stop(*d);
+}
+
+TEST_F(CrossProcess, SigkillMidHistoryResumesToTheSameFinalState) {
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+
+  auto first = daemon("daemon1.log");
+  auto r = replay(false);
+  std::int64_t seen = -1;
+  while (seen < 11) {
+    const auto line = r->read_line(60);
+    ASSERT_TRUE(line.has_value()) << "the replay stopped before state 11";
+    seen = std::max(seen, state_seq_of(*line));
+  }
+  first->signal(SIGKILL);
+  ASSERT_TRUE(first->wait_for(10).has_value());
+  auto second = daemon("daemon2.log");
+  const auto lines = lines_to_end(*r);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());
+  const auto status = r->wait_for(10);
+  ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
+  expect_clean_stop(*second);
+  std::ifstream log(dir_ / "daemon2.log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("resumed from"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace peritwin::twin

@@ -1,0 +1,175 @@
+// The daemon service and the replay client on one in-process LCM (memq://): every state through
+// LCM equals the in-process run, rejects are published with their reasons, a stopped daemon
+// resumes from its checkpoint and a full replay then gives the same final state.
+#include <filesystem>
+#include <map>
+
+#include "messages/channels.h"
+#include "replay/replay_tool.h"
+#include "tests/twin/twin_fixtures.h"
+#include "twin/daemon.h"
+
+namespace peritwin::twin {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::b1_text;
+
+TwinConfig config_of(const std::string& text) {
+  auto r = parse_config(text, "b1-memq.toml");
+  EXPECT_TRUE(r.ok()) << r.error_text();
+  return *r.config;
+}
+
+std::vector<Batch> history(int n, std::int64_t cycles = 1500) {
+  std::vector<LoadBlock> blocks;
+  for (int i = 0; i < n; ++i) blocks.push_back({4000.0 + 25.0 * (i % 3), 0.1, 0.0, cycles});
+  return replay::make_twin_batches(blocks, "b1-ct", "replay", {4, 1000});
+}
+
+class MemqTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("peritwin_memq_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    options_.state_dir = dir_ / "state";
+    options_.deterministic = true;
+    options_.results = false;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+  DaemonOptions options_;
+};
+
+std::map<std::int64_t, std::string> in_process_hashes(const TwinConfig& config,
+                                                      const std::vector<Batch>& batches) {
+  std::map<std::int64_t, std::string> hashes;
+  const auto r = replay::run_in_process(config.details[0], batches,
+                                        [&](const auto& s) { hashes[s.state_seq] = s.state_hash; });
+  EXPECT_TRUE(r.error.empty()) << r.error;
+  return hashes;
+}
+
+TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
+  const TwinConfig config = config_of(b1_text());
+  const auto batches = history(12);  // 12 x 1500 cycles in batches of 4 blocks / 1000 cycles
+  ASSERT_EQ(batches.size(), 12u);
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  Daemon daemon(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(daemon.start(&error)) << error;
+  std::map<std::int64_t, std::string> seen;
+  replay::LcmReplayer replayer(lcm, batches, {false, 5, 3.0, 60.0});
+  const auto result = replayer.run([&](const auto& s) { seen[s.state_seq] = s.state_hash; },
+                                   [&] {
+                                     daemon.tick();
+                                     return true;
+                                   });
+  ASSERT_TRUE(result.ok) << result.error;
+  ASSERT_TRUE(result.final_state);
+  EXPECT_EQ(result.final_state->state_seq, 12);
+  EXPECT_EQ(result.published, 12);  // nothing resent on a loss-free transport
+  const auto expected = in_process_hashes(config, batches);
+  for (std::int64_t s = 1; s <= 12; ++s) {
+    ASSERT_TRUE(seen.count(s)) << s;
+    EXPECT_EQ(seen[s], expected.at(s)) << s;
+  }
+  EXPECT_GT(daemon.twin(0).broken_bonds(), 0);
+  daemon.stop();
+  EXPECT_EQ(daemon.checkpoints_written(), 1);  // at stop
+}
+
+TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
+  const TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(daemon.start(&error)) << error;
+  std::vector<peritwin_msgs::reject_t> rejects;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  struct Sink {
+    std::vector<peritwin_msgs::reject_t>* rejects;
+    std::vector<peritwin_msgs::damage_state_t>* states;
+    void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+      rejects->push_back(*m);
+    }
+    void state(const lcm::ReceiveBuffer*, const std::string&,
+               const peritwin_msgs::damage_state_t* m) {
+      states->push_back(*m);
+    }
+  } sink{&rejects, &states};
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Sink::reject, &sink);
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::state, &sink);
+  const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
+  auto send = [&](const Batch& b) {
+    const auto m = batch_message(b, 0);
+    lcm.publish(load, &m);
+  };
+  const LoadBlock ok{4000, 0.1, 0, 100};
+  const std::uint8_t garbage[] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  lcm.publish(load, garbage, sizeof garbage);        // decode
+  send({"b1-ct", "p", 1, {ok, {4000, 2.0, 0, 1}}});  // invalid
+  send({"b2-cts", "p", 1, {ok}});                    // wrong detail
+  send({"b1-ct", "p", 1, {ok}});                     // applied
+  send({"b1-ct", "p", 1, {ok}});                     // duplicate
+  send({"b1-ct", "p", 5, {ok}});                     // gap
+  for (int i = 0; i < 50 && (rejects.size() < 5 || states.size() < 3); ++i) daemon.poll(20);
+  ASSERT_EQ(rejects.size(), 5u);
+  using R = peritwin_msgs::reject_t;
+  EXPECT_EQ(rejects[0].code, R::CODE_DECODE);
+  EXPECT_EQ(rejects[0].seq, -1);
+  EXPECT_EQ(rejects[0].source_id, "");
+  EXPECT_EQ(rejects[1].code, R::CODE_INVALID);
+  EXPECT_EQ(rejects[1].what, "blocks[1].r");
+  EXPECT_EQ(rejects[2].code, R::CODE_WRONG_DETAIL);
+  EXPECT_EQ(rejects[3].code, R::CODE_DUPLICATE);
+  EXPECT_EQ(rejects[4].code, R::CODE_GAP);
+  EXPECT_EQ(rejects[4].seq, 5);
+  for (const auto& r : rejects) {
+    EXPECT_EQ(r.detail_id, "b1-ct");
+    EXPECT_FALSE(r.why.empty());
+  }
+  // After the applied batch, and republished after the duplicate and the gap (the initial state
+  // went out before this test subscribed).
+  ASSERT_EQ(states.size(), 3u);
+  EXPECT_EQ(states.back().state_seq, 1);
+  EXPECT_EQ(applied_seq(states.back(), "p"), 1);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 1);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
+  const TwinConfig config = config_of(b1_text());
+  const auto batches = history(16);
+  const auto expected = in_process_hashes(config, batches);
+  lcm::LCM lcm("memq://");
+  {
+    Daemon first(lcm, config, options_);
+    std::string error;
+    ASSERT_TRUE(first.start(&error)) << error;
+    const std::vector<Batch> half(batches.begin(), batches.begin() + 7);
+    replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, 60.0});
+    ASSERT_TRUE(replayer.run({}, {}).ok);
+    first.stop();
+    EXPECT_EQ(first.twin(0).state_hash_hex(), expected.at(7));
+  }
+  Daemon second(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(second.start(&error)) << error;
+  EXPECT_EQ(second.twin(0).state_seq(), 7);
+  EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(7));
+  // The whole history again: 1..7 are duplicates, 8..16 are applied.
+  replay::LcmReplayer replayer(lcm, batches, {false, 16, 3.0, 60.0});
+  const auto result = replayer.run({}, {});
+  ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_EQ(result.final_state->state_hash, expected.at(16));
+  EXPECT_EQ(second.twin(0).counters().duplicates, 7);
+  second.stop();
+}
+
+}  // namespace
+}  // namespace peritwin::twin
