@@ -1,6 +1,8 @@
 // The daemon service and the replay client on one in-process LCM (memq://): every state through
 // LCM equals the in-process run, rejects are published with their reasons, a stopped daemon
 // resumes from its checkpoint and a full replay then gives the same final state.
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <map>
 
@@ -169,6 +171,57 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
   EXPECT_EQ(result.final_state->state_hash, expected.at(16));
   EXPECT_EQ(second.twin(0).counters().duplicates, 7);
   second.stop();
+}
+
+TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
+  // Not deterministic: a worker thread estimates; ingest goes on meanwhile. Every estimate is a
+  // pure function of the state it names, so it equals the synchronous one for that state.
+  const TwinConfig config = config_of(b1_text(
+      "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
+                             {"band = \"a2_scatter\"", "band = \"none\""},
+                             {"a2_relative_scatter = 0.2", ""}}));
+  options_.deterministic = false;
+  const auto batches = history(6);
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(daemon.start(&error)) << error;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  replay::LcmReplayer replayer(lcm, batches, {false, 6, 3.0, 60.0});
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_TRUE(replayer
+                  .run([&](const auto& s) { states.push_back(s); },
+                       [&] {
+                         daemon.tick();
+                         return true;
+                       })
+                  .ok);
+  const double ingest_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Keep polling until the estimate of the final state arrives (the worker restarts on the
+  // newest state whenever it finishes).
+  struct Sink {
+    std::vector<peritwin_msgs::damage_state_t>* states;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::damage_state_t* m) {
+      states->push_back(*m);
+    }
+  } sink{&states};
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
+  for (int i = 0; i < 1200 && (states.empty() || states.back().remaining_life_seq != 6); ++i) {
+    daemon.poll(50);
+  }
+  ASSERT_EQ(states.back().remaining_life_seq, 6);
+  EXPECT_EQ(states.back().remaining_life_source, "replay");
+  EXPECT_EQ(states.back().state_seq, 6);
+  // Estimates lag: the first states went out before any estimate.
+  EXPECT_TRUE(std::isnan(states.front().remaining_cycles) || states.front().remaining_life_seq < 6);
+  auto twin = Twin::create(DetailModel::build(config.details[0], &error), {}, &error);
+  for (const auto& b : batches) ASSERT_TRUE(twin->apply(b).applied());
+  twin->estimate_life_now();
+  EXPECT_EQ(states.back().remaining_cycles, twin->life().central);
+  EXPECT_EQ(states.back().state_hash, twin->state_hash_hex());
+  RecordProperty("ingest_s", std::to_string(ingest_s));
+  daemon.stop();
 }
 
 }  // namespace
