@@ -125,7 +125,6 @@ bool Daemon::start(std::string* error) {
 
 void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
   if (!error_.empty()) return;
-  const auto receipt = std::chrono::steady_clock::now();
   Twin& twin = *d.twin;
   const Decoded decoded = decode_batch(rbuf->data, rbuf->data_size);
   if (!decoded.batch) {
@@ -167,8 +166,10 @@ void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
     return;
   }
   publish_state(d);
-  if (options_.record_latency)
-    latencies_.push_back(seconds(std::chrono::steady_clock::now() - receipt));
+  if (options_.record_latency) {
+    // From LCM's receive time (wall clock, us): includes the wait in the subscription queue.
+    latencies_.push_back(1e-6 * static_cast<double>(now_utime() - rbuf->recv_utime));
+  }
   spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", twin.detail_id(),
                 batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
                 twin.broken_bonds());

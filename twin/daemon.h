@@ -59,7 +59,7 @@ class Daemon {
   [[nodiscard]] std::size_t num_details() const { return details_.size(); }
   [[nodiscard]] const Twin& twin(std::size_t i) const;
   [[nodiscard]] const DetailOutputs* outputs(std::size_t i) const;
-  /// Receipt -> STATE publish latencies (s) of applied batches, when record_latency.
+  /// LCM receive time -> STATE publish latencies (s) of applied batches, when record_latency.
   [[nodiscard]] const std::vector<double>& latencies() const { return latencies_; }
   [[nodiscard]] std::int64_t checkpoints_written() const { return checkpoints_written_; }
 

@@ -1,6 +1,8 @@
 #include "twin/twin.h"
 
+#include <bit>
 #include <charconv>
+#include <cstring>
 #include <cmath>
 
 namespace peritwin::twin {
@@ -163,33 +165,69 @@ Outcome Twin::apply(const Batch& batch) {
   return {};
 }
 
-std::uint64_t Twin::state_hash() const {
-  std::uint64_t h = 1469598103934665603ULL;
-  auto mix = [&h](const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= p[i];
-      h *= 1099511628211ULL;
-    }
-  };
-  const std::uint64_t engine_hash = engine_->state_hash();
-  mix(&engine_hash, sizeof engine_hash);
-  mix(&state_seq_, sizeof state_seq_);
-  for (const auto& [source, seq] : applied_) {
-    mix(source.data(), source.size() + 1);  // with the terminating NUL
-    mix(&seq, sizeof seq);
+namespace {
+
+/// FNV-1a 64 over 64-bit words (one xor-multiply per word, not per byte): the state hash runs
+/// after every batch over every bond, byte-wise FNV cost a quarter of the ingest time.
+class WordHash {
+ public:
+  void word(std::uint64_t w) {
+    h_ ^= w;
+    h_ *= 1099511628211ULL;
   }
-  const auto failure = static_cast<std::int8_t>(failure_);
-  mix(&failure, 1);
-  auto mix_block = [&](const LoadBlock& b) {
-    mix(&b.p_max, sizeof b.p_max);
-    mix(&b.r, sizeof b.r);
-    mix(&b.alpha, sizeof b.alpha);
-    mix(&b.count, sizeof b.count);
-  };
-  if (last_block_) mix_block(*last_block_);
-  for (const auto& b : spectrum_.blocks()) mix_block(b);
-  return h;
+  void real(double v) { word(std::bit_cast<std::uint64_t>(v)); }
+  void integer(std::int64_t v) { word(static_cast<std::uint64_t>(v)); }
+  /// Bytes packed little-endian 8 to a word, then the length.
+  void bytes(const std::uint8_t* p, std::size_t n) {
+    std::size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, p + i, 8);
+      word(w);
+    }
+    std::uint64_t tail = 0;
+    for (std::size_t k = 0; i + k < n; ++k) tail |= std::uint64_t{p[i + k]} << (8 * k);
+    word(tail);
+    word(n);
+  }
+  void text(const std::string& s) {
+    bytes(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
+  }
+  void block(const LoadBlock& b) {
+    real(b.p_max);
+    real(b.r);
+    real(b.alpha);
+    integer(b.count);
+  }
+  [[nodiscard]] std::uint64_t get() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 1469598103934665603ULL;
+};
+
+}  // namespace
+
+std::uint64_t Twin::state_hash() const {
+  // The model: every bond's remaining life (bits), intact flag and phase, the cycle count; then
+  // the bookkeeping. Equal hashes <=> bit-identical states (up to 64-bit collisions).
+  WordHash h;
+  for (const double life : engine_->remaining_life()) h.real(life);
+  const auto& intact = engine_->solver().intact();
+  h.bytes(intact.data(), intact.size());
+  const auto& phase = engine_->bond_phase();
+  h.bytes(phase.data(), phase.size());
+  h.integer(engine_->total_cycles());
+  h.integer(state_seq_);
+  for (const auto& [source, seq] : applied_) {
+    h.text(source);
+    h.integer(seq);
+  }
+  h.integer(static_cast<std::int64_t>(failure_));
+  h.integer(last_block_ ? 1 : 0);
+  if (last_block_) h.block(*last_block_);
+  h.integer(static_cast<std::int64_t>(spectrum_.blocks().size()));
+  for (const auto& b : spectrum_.blocks()) h.block(b);
+  return h.get();
 }
 
 std::string Twin::state_hash_hex() const { return hex64(state_hash()); }

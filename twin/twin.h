@@ -126,8 +126,9 @@ class Twin {
   [[nodiscard]] const TwinCounters& counters() const { return counters_; }
   /// Broken bonds since the virgin state (notch-cut bonds not counted).
   [[nodiscard]] std::int64_t broken_bonds() const;
-  /// FNV-1a 64 over the engine's state hash, state_seq, the applied seq per source, the failure
-  /// code, the last block and the rolling spectrum. Not over the life estimate.
+  /// FNV-1a 64 over 64-bit words of every bond's remaining life, intact flag and phase, the
+  /// cycle count, state_seq, the applied seq per source, the failure code, the last block and
+  /// the rolling spectrum (twin.cpp). Not over the life estimate.
   [[nodiscard]] std::uint64_t state_hash() const;
   [[nodiscard]] std::string state_hash_hex() const;
 

@@ -1,0 +1,209 @@
+// peritwin-bench-ingest: how fast the daemon absorbs load cycles over LCM when no bond breaks.
+//
+// Starts LCM's Java TCP hub on a free loopback port (unless --lcm-url is given), runs the daemon
+// service (twin/daemon.h) on its own thread and LCM connection, and feeds it with the replay
+// client (replay/replay_tool.h, lockstep off, `--window` batches in flight) a history of
+// single-cycle blocks at loads far too low to break a bond (P_max cycling over 400..550 N,
+// R = 0.1), batched as peritwin-replay batches them (16 blocks or 1000 cycles per batch), after
+// a one-batch lockstep warm-up.
+// Remaining-life estimates and checkpoints are off; results (HDF5 rows) are written unless
+// --no-results. Prints one JSON line:
+//   {"bench":"ingest","cycles_per_s":…,"p50_ms":…,"p99_ms":…,"batches":…,"cycles":…,
+//    "blocks_per_batch":…,"broken_bonds":…,"transport":"tcpq","results":…}
+// cycles_per_s: cycles of the history / time from the first publish to the STATE showing the
+// last batch applied. Latency: LCM's receive time of a batch at the daemon -> its STATE publish.
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <spdlog/spdlog.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include "replay/replay_tool.h"
+#include "twin/daemon.h"
+
+extern char** environ;
+
+namespace {
+
+int free_port() {
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t len = sizeof addr;
+  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(s);
+  return ntohs(addr.sin_port);
+}
+
+bool port_open(int port) {
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool ok = connect(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
+  close(s);
+  return ok;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const auto i = static_cast<std::size_t>(p * static_cast<double>(v.size() - 1) + 0.5);
+  return v[std::min(i, v.size() - 1)];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace peritwin;
+  CLI::App app{"peritwin-bench-ingest: load cycles absorbed per second by the daemon over tcpq"};
+  std::string config_file = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml";
+  std::string lcm_url;
+  std::int64_t cycles = 100'000;
+  std::size_t window = 64;
+  bool no_results = false;
+  app.add_option("--config", config_file, "detail configuration (default: the B1 example)");
+  app.add_option("--cycles", cycles, "single-cycle blocks to send (default 100000)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--window", window, "batches in flight (default 64)")->check(CLI::PositiveNumber);
+  app.add_option("--lcm-url", lcm_url, "use this LCM URL instead of starting a hub");
+  app.add_flag("--no-results", no_results, "do not write the HDF5 results");
+  CLI11_PARSE(app, argc, argv);
+
+  spdlog::set_level(spdlog::level::warn);
+  auto loaded = twin::load_config(config_file);
+  if (!loaded.ok()) {
+    std::cerr << loaded.error_text();
+    return 2;
+  }
+  twin::TwinConfig config = *loaded.config;
+  config.details.resize(1);
+  twin::DetailConfig& detail = config.details[0];
+  detail.life.every_batches = 0;
+  detail.checkpoint = {0, 0.0};
+  detail.output.field_every_batches = 0;
+  const auto work = std::filesystem::temp_directory_path() /
+                    ("peritwin_bench_ingest_" + std::to_string(getpid()));
+  detail.output.directory = (work / "results").string();
+
+  pid_t hub = -1;
+  if (lcm_url.empty()) {
+    const int port = free_port();
+    const std::string port_text = std::to_string(port);
+    const char* args[] = {
+        "java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", port_text.c_str(), nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    if (posix_spawnp(&hub, "java", &actions, nullptr, const_cast<char**>(args), environ) != 0) {
+      std::cerr << "peritwin-bench-ingest: cannot start java (LCM hub)\n";
+      return 3;
+    }
+    posix_spawn_file_actions_destroy(&actions);
+    for (int i = 0; i < 300 && !port_open(port); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    lcm_url = "tcpq://127.0.0.1:" + port_text;
+  }
+  auto stop_hub = [&] {
+    if (hub > 0) {
+      kill(hub, SIGTERM);
+      waitpid(hub, nullptr, 0);
+    }
+    std::filesystem::remove_all(work);
+  };
+
+  // The daemon on its own thread and LCM connection.
+  std::atomic<bool> ready{false}, stop{false}, failed{false};
+  std::vector<double> latencies;
+  std::int64_t broken = -1;
+  std::thread daemon_thread([&] {
+    lcm::LCM lcm(lcm_url);
+    twin::DaemonOptions options;
+    options.state_dir = work / "state";
+    options.checkpoints = false;
+    options.results = !no_results;
+    options.record_latency = true;
+    twin::Daemon daemon(lcm, config, options);
+    std::string error;
+    if (!lcm.good() || !daemon.start(&error)) {
+      std::cerr << "peritwin-bench-ingest: daemon: " << error << "\n";
+      failed = true;
+      ready = true;
+      return;
+    }
+    ready = true;
+    while (!stop) daemon.poll(20);
+    latencies = daemon.latencies();
+    broken = daemon.twin(0).broken_bonds();
+    daemon.stop();
+  });
+  while (!ready) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  if (failed) {
+    daemon_thread.join();
+    stop_hub();
+    return 3;
+  }
+
+  std::vector<LoadBlock> blocks;
+  for (std::int64_t i = 0; i < cycles; ++i) {
+    blocks.push_back({400.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
+  }
+  const replay::BatchingOptions batching;
+  auto batches = replay::make_twin_batches(blocks, detail.id, "bench", batching);
+  const auto num_batches = batches.size();
+  replay::ReplayResult result;
+  double seconds = 0.0;
+  {
+    lcm::LCM lcm(lcm_url);
+    // Warm-up: one batch of another source in lockstep, so that both LCM clients are known to
+    // the hub (a fresh subscription is registered asynchronously) before the clock starts.
+    replay::ReplayOptions warm_options;
+    warm_options.lockstep = true;
+    warm_options.resend_after_s = 0.5;
+    replay::LcmReplayer warm_up(
+        lcm, replay::make_twin_batches({{400.0, 0.1, 0.0, 1}}, detail.id, "warm-up", batching),
+        warm_options);
+    if (!warm_up.run({}, {}).ok) {
+      std::cerr << "peritwin-bench-ingest: no answer from the daemon\n";
+    }
+    replay::ReplayOptions options;
+    options.window = window;
+    replay::LcmReplayer replayer(lcm, std::move(batches), options);
+    const auto t0 = std::chrono::steady_clock::now();
+    result = replayer.run({}, {});
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  stop = true;
+  daemon_thread.join();
+  stop_hub();
+  if (!result.ok) {
+    std::cerr << "peritwin-bench-ingest: " << result.error << "\n";
+    return 3;
+  }
+  std::printf(
+      "{\"bench\":\"ingest\",\"cycles_per_s\":%.1f,\"p50_ms\":%.3f,\"p99_ms\":%.3f,"
+      "\"batches\":%zu,\"cycles\":%lld,\"blocks_per_batch\":%zu,\"broken_bonds\":%lld,"
+      "\"transport\":\"tcpq\",\"results\":%s,\"resends\":%lld}\n",
+      static_cast<double>(cycles) / seconds, 1e3 * percentile(latencies, 0.50),
+      1e3 * percentile(latencies, 0.99), num_batches, static_cast<long long>(cycles),
+      batching.max_blocks, static_cast<long long>(broken), no_results ? "false" : "true",
+      static_cast<long long>(result.rewinds));
+  return broken == 0 ? 0 : 1;
+}
