@@ -173,6 +173,37 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
   second.stop();
 }
 
+TEST_F(MemqTest, OneTwinPerDetailEachOnItsOwnChannels) {
+  // B1 and B2 (examples) in one config: batches go to the twin of their channel only.
+  const std::string b2 =
+      testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
+  const TwinConfig config = config_of(b1_text() + "\n" + b2);
+  ASSERT_EQ(config.details.size(), 2u);
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(daemon.start(&error)) << error;
+  ASSERT_EQ(daemon.num_details(), 2u);
+  auto send = [&](const Batch& b) {
+    const auto m = batch_message(b, 0);
+    lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
+  };
+  send({"b1-ct", "a", 1, {{4000, 0.1, 0, 1000}}});
+  send({"b2-cts", "a", 1, {{6000, 0.1, 0.3, 500}}});
+  send({"b1-ct", "a", 2, {{4000, 0.1, 0, 1000}}});
+  for (int i = 0; i < 20; ++i) daemon.poll(10);
+  EXPECT_EQ(daemon.twin(0).detail_id(), "b1-ct");
+  EXPECT_EQ(daemon.twin(0).state_seq(), 2);
+  EXPECT_EQ(daemon.twin(0).engine().total_cycles(), 2000);
+  EXPECT_EQ(daemon.twin(1).detail_id(), "b2-cts");
+  EXPECT_EQ(daemon.twin(1).state_seq(), 1);
+  EXPECT_EQ(daemon.twin(1).engine().total_cycles(), 500);
+  // B2 estimates under the empirical spectrum: none at state 0 (nothing received yet).
+  EXPECT_TRUE(std::isnan(daemon.twin(1).life().central));
+  daemon.stop();
+  EXPECT_TRUE(fs::exists(options_.state_dir / "b2-cts"));
+}
+
 TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   // Not deterministic: a worker thread estimates; ingest goes on meanwhile. Every estimate is a
   // pure function of the state it names, so it equals the synchronous one for that state.
