@@ -60,6 +60,13 @@ int main(int argc, char** argv) {
     for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
     return kExitUsage;
   }
+  for (const auto& detail : loaded.config->details) {
+    std::string why;
+    if (!peritwin::twin::solver_settings(detail, &why)) {  // e.g. a law the engine lacks
+      spdlog::error("config: {}", why);
+      return kExitUsage;
+    }
+  }
   if (lcm_url.empty()) {
     if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
   }
@@ -88,8 +95,7 @@ int main(int argc, char** argv) {
     std::string error;
     if (!daemon.start(&error)) {
       spdlog::critical("start-up failed: {}", error);
-      // An unsupported fatigue law is a config problem; everything else is a runtime failure.
-      return error.find("fatigue.law") != std::string::npos ? kExitUsage : kExitRuntime;
+      return kExitRuntime;
     }
     spdlog::info("ready");
     while (g_signal.load() == 0) {
