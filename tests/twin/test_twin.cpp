@@ -187,7 +187,7 @@ TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
   // Enough load for hundreds of breaks (incremental re-solves) before and after the checkpoint.
   std::vector<Batch> history;
   for (std::int64_t s = 1; s <= 10; ++s) {
-    history.push_back(batch(s, {{4000, 0.1, 0, 4000}, {4400, 0.15, 0, 1000}}));
+    history.push_back(batch(s, {{4000, 0.1, 0, 3000}, {4400, 0.15, 0, 800}}));
   }
   auto straight = make_twin(model_);
   for (const auto& b : history) ASSERT_TRUE(straight->apply(b).applied());
@@ -221,7 +221,7 @@ TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
   auto twin = make_twin(model_);
   ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
   const CheckpointData data = twin->to_checkpoint();
-  auto other = b1_model(b1_config("every_batches = 0", {{"A2 = 1055.0", "A2 = 1000.0"}}));
+  auto other = b1_model(b1_config("every_batches = 0", {{"A2 = 1301.0", "A2 = 1000.0"}}));
   auto target = make_twin(other);
   std::string error;
   EXPECT_FALSE(target->restore(data, &error));
