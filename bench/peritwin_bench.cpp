@@ -1,11 +1,15 @@
 // peritwin-bench: performance figures as one JSON line per run.
 //   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
+//   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <vector>
 #include <string>
 
 #include "solver/fatigue_engine.h"
@@ -107,6 +111,18 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
 }  // namespace
 
 int main(int argc, char** argv) {
+  // `peritwin-bench ingest ...` runs peritwin-bench-ingest (it needs LCM and the twin library,
+  // which this solver benchmark does not link) from the same directory with the same arguments.
+  if (argc >= 2 && std::string(argv[1]) == "ingest") {
+    const auto self = std::filesystem::read_symlink("/proc/self/exe");
+    const std::string ingest = (self.parent_path() / "peritwin-bench-ingest").string();
+    std::vector<char*> args{const_cast<char*>(ingest.c_str())};
+    for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
+    args.push_back(nullptr);
+    execv(ingest.c_str(), args.data());
+    std::perror("peritwin-bench: cannot run peritwin-bench-ingest");
+    return 2;
+  }
   CLI::App app{"peritwin-bench: performance figures as JSON lines"};
   app.require_subcommand(1);
   auto* stat = app.add_subcommand("static", "one cold static solve of the B1 CT specimen");
