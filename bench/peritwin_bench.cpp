@@ -9,8 +9,8 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "solver/fatigue_engine.h"
 #include "solver/specimens.h"

@@ -321,6 +321,12 @@ bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
 
 bool FatigueEngine::static_cascade(const LoadBlock& block) {
   if (!(critical_stretch_ > 0.0)) return true;
+  // Stretch is P times a per-α basis combination and rounding is monotone, so if no bond reached
+  // s_c at (P_c, α) since the last re-solve, none reaches it at (P ≤ P_c, α): skip the O(bonds)
+  // scan.
+  if (cascade_checked_ && block.alpha == cascade_alpha_ && block.p_max <= cascade_p_max_) {
+    return true;
+  }
   std::vector<double> s;
   while (true) {
     solver_.stretch(block.p_max, block.alpha, s);
@@ -331,7 +337,12 @@ bool FatigueEngine::static_cascade(const LoadBlock& block) {
         events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::overload});
       }
     }
-    if (newly.empty()) return true;
+    if (newly.empty()) {
+      cascade_checked_ = true;
+      cascade_alpha_ = block.alpha;
+      cascade_p_max_ = block.p_max;
+      return true;
+    }
     materialize();
     if (!resolve(newly)) return false;
   }
@@ -342,6 +353,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
     breakable_[static_cast<std::size_t>(b)] = 0;
     rate_[static_cast<std::size_t>(b)] = 0.0;
   }
+  cascade_checked_ = false;
   const FactorReport r = solver_.break_bonds(newly_broken);
   ++solves_;
   resolve_groups_.push_back(static_cast<std::int64_t>(newly_broken.size()));
@@ -398,6 +410,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
     return false;
   }
+  cascade_checked_ = false;
   // The re-solves to replay: on a fresh engine, the recorded groups of events when they account
   // for every event (same updates, same factor bit for bit), else one group of every bond broken
   // since now.

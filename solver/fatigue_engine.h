@@ -151,6 +151,11 @@ class FatigueEngine {
   LoadBlock rate_key_;
   std::vector<double> stretch_;  ///< stretch at the rate key's (P_max, α)
 
+  /// The phase III scan found nothing at (cascade_p_max_, cascade_alpha_) since the last re-solve.
+  bool cascade_checked_ = false;
+  double cascade_p_max_ = 0.0;
+  double cascade_alpha_ = 0.0;
+
   std::int64_t total_cycles_ = 0;
   std::vector<BreakEvent> events_;
   std::vector<std::int64_t> resolve_groups_;  ///< events per resolve() call (EngineState)
