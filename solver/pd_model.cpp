@@ -165,8 +165,6 @@ PdModel build_model(const Discretization& disc, const Material& material,
   };
 
   m.bond_stiffness.resize(nb);
-  m.correction_energy.resize(nb);
-  m.correction_dilatation.resize(nb, 1.0);
   if (osb) {
     m.constants = state_based_constants(material, options.plane, delta, h);
     m.dilatation_weight.resize(nb);
@@ -183,13 +181,11 @@ PdModel build_model(const Discretization& disc, const Material& material,
     const double c2 = c * c;
     const double s2 = s * s;
     const double g_energy = 0.5 * (energy_factor(i, c2, s2) + energy_factor(j, c2, s2));
-    m.correction_energy[b] = g_energy;
     const double rigid = disc.rigid[i] && disc.rigid[j] ? rigid_factor : 1.0;
     const double vv = disc.volume[i] * disc.volume[j];
     if (osb) {
       m.bond_stiffness[b] = rigid * 4.0 * m.constants.b * g_energy * beta * vv / (h * xi);
       const double g_dil = 0.5 * (dilatation_factor(i, c2, s2) + dilatation_factor(j, c2, s2));
-      m.correction_dilatation[b] = g_dil;
       m.dilatation_weight[b] = m.constants.d * g_dil * beta * disc.volume[j];
     } else {
       const double micromodulus = m.micromodulus * kernel_shape(kernel, xi / delta);

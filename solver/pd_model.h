@@ -79,8 +79,6 @@ struct PdModel {
   std::vector<double> bond_stiffness;
   std::vector<double> dilatation_weight;
   std::vector<double> dilatation_stiffness;
-  std::vector<double> correction_energy;      ///< surface correction of the energy term per bond
-  std::vector<double> correction_dilatation;  ///< surface correction of the dilatation per bond
 };
 
 PdModel build_model(const Discretization& disc, const Material& material,

@@ -53,10 +53,21 @@ bool StaticSolver::isolated(NodeIndex k) const {
   return true;
 }
 
+std::array<std::pair<int, double>, 4> StaticSolver::bond_gradient(std::size_t b,
+                                                                  double scale) const {
+  const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
+  const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
+  const double c = scale * disc_.bond_cos[b];
+  const double s = scale * disc_.bond_sin[b];
+  return {{{free_index_[i], -c},
+           {free_index_[i + 1], -s},
+           {free_index_[j], c},
+           {free_index_[j + 1], s}}};
+}
+
 SparseCholesky::Column StaticSolver::dilatation_row(NodeIndex k) const {
   SparseCholesky::Column row;
-  auto add = [&](std::size_t dof, double v) {
-    const int f = free_index_[dof];
+  auto add = [&](int f, double v) {
     if (f < 0) return;
     for (std::size_t e = 0; e < row.rows.size(); ++e) {
       if (row.rows[e] == f) {
@@ -71,13 +82,10 @@ SparseCholesky::Column StaticSolver::dilatation_row(NodeIndex k) const {
        fam < disc_.family_offset[static_cast<std::size_t>(k) + 1]; ++fam) {
     const auto b = static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(fam)]);
     if (!intact_[b]) continue;
-    const double q = model_.dilatation_weight[b] / disc_.bond_length[b];
-    const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
-    const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
-    add(i, -q * disc_.bond_cos[b]);
-    add(i + 1, -q * disc_.bond_sin[b]);
-    add(j, q * disc_.bond_cos[b]);
-    add(j + 1, q * disc_.bond_sin[b]);
+    for (const auto& [f, v] :
+         bond_gradient(b, model_.dilatation_weight[b] / disc_.bond_length[b])) {
+      add(f, v);
+    }
   }
   return row;
 }
@@ -102,14 +110,8 @@ void StaticSolver::assemble() {
   Eigen::VectorXd weight(static_cast<Eigen::Index>(nb));
   auto add_row = [&](std::vector<Eigen::Triplet<double, int>>& t, int row, std::size_t b,
                      double scale) {
-    const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
-    const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
-    const double c = scale * disc_.bond_cos[b];
-    const double s = scale * disc_.bond_sin[b];
-    const std::array<std::pair<std::size_t, double>, 4> dofs{
-        {{i, -c}, {i + 1, -s}, {j, c}, {j + 1, s}}};
-    for (const auto& [dof, value] : dofs) {
-      if (free_index_[dof] >= 0) t.emplace_back(row, free_index_[dof], value);
+    for (const auto& [f, value] : bond_gradient(b, scale)) {
+      if (f >= 0) t.emplace_back(row, f, value);
     }
   };
   for (std::size_t b = 0; b < nb; ++b) {
@@ -285,16 +287,10 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
     if (!intact_[b]) continue;
     SparseCholesky::Column g;
     const double w = std::sqrt(model_.bond_stiffness[b]);
-    const auto i = 2 * static_cast<std::size_t>(disc_.bond_i[b]);
-    const auto j = 2 * static_cast<std::size_t>(disc_.bond_j[b]);
-    const std::array<std::pair<std::size_t, double>, 4> dofs{{{i, -disc_.bond_cos[b]},
-                                                              {i + 1, -disc_.bond_sin[b]},
-                                                              {j, disc_.bond_cos[b]},
-                                                              {j + 1, disc_.bond_sin[b]}}};
-    for (const auto& [dof, v] : dofs) {
-      if (free_index_[dof] >= 0) {
-        g.rows.push_back(free_index_[dof]);
-        g.values.push_back(w * v);
+    for (const auto& [f, v] : bond_gradient(b, w)) {
+      if (f >= 0) {
+        g.rows.push_back(f);
+        g.values.push_back(v);
       }
     }
     if (mixed_) {
@@ -303,9 +299,11 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
       const double c = model_.dilatation_weight[b] / disc_.bond_length[b];
       const double r = std::sqrt(0.5 * c);
       SparseCholesky::Column plus, minus;
-      for (std::size_t e = 0; e < g.rows.size(); ++e) {
-        plus.rows.push_back(g.rows[e]);
-        plus.values.push_back(r * g.values[e] / w);
+      for (const auto& [f, v] : bond_gradient(b, r)) {
+        if (f >= 0) {
+          plus.rows.push_back(f);
+          plus.values.push_back(v);
+        }
       }
       minus = plus;
       for (const NodeIndex k : {disc_.bond_i[b], disc_.bond_j[b]}) {

@@ -96,6 +96,10 @@ class StaticSolver {
   [[nodiscard]] std::vector<int> dof_ordering() const;
   /// Solves the basis cases with the current factor; bases without load are zero.
   void solve_bases();
+  /// The bond's gradient scale·e·(u_j − u_i) as (free index, coefficient) pairs; supported DOFs
+  /// have index −1.
+  [[nodiscard]] std::array<std::pair<int, double>, 4> bond_gradient(std::size_t b,
+                                                                    double scale) const;
   /// Row of B (θ_k = B_k·u) of node k over the free DOFs, for the current bond state.
   [[nodiscard]] SparseCholesky::Column dilatation_row(NodeIndex k) const;
   /// Nodes with no intact bond get a ground spring (they would make K singular).

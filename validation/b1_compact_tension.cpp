@@ -25,11 +25,7 @@ double paris_life(const CompactTensionSpec& spec, const ParisLaw& paris, double 
     const double dk = compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width, a) / 1e6;
     return 1.0 / (paris.c * std::pow(dk, paris.m) * 1e-3);
   };
-  const int panels = 2000;
-  const double h = (a_end - spec.initial_crack) / panels;
-  double sum = dn_da(spec.initial_crack) + dn_da(a_end);
-  for (int i = 1; i < panels; ++i) sum += (i % 2 ? 4 : 2) * dn_da(spec.initial_crack + i * h);
-  return sum * h / 3;
+  return integrate_simpson(dn_da, spec.initial_crack, a_end, 2000);
 }
 
 CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,

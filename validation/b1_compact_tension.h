@@ -26,6 +26,15 @@ struct CrackHistory {
   int solves = 0;
 };
 
+/// Composite Simpson rule of f over [a, b] with an even number of panels.
+template <class F>
+double integrate_simpson(F&& f, double a, double b, int panels) {
+  const double h = (b - a) / panels;
+  double sum = f(a) + f(b);
+  for (int i = 1; i < panels; ++i) sum += (i % 2 ? 4 : 2) * f(a + i * h);
+  return sum * h / 3;
+}
+
 /// Crack length at which K_max = K_c with the ASTM E647 K (000 Eq. A2).
 double critical_crack_length(const CompactTensionSpec& spec, double p_max);
 

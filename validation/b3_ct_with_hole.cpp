@@ -6,6 +6,7 @@
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
+#include "validation/b1_compact_tension.h"
 
 namespace peritwin::validation {
 
@@ -125,11 +126,7 @@ double calibrate_b3_a2(double dx, double p_max, double a2_trial, double growth) 
     const double dk = compact_tension_delta_k(p_max * (1 - r), b, w, a) / 1e6;
     return 1.0 / (4.5e-10 * std::pow(std::max(dk - 11.6, 1e-9), 2.1));
   };
-  const int panels = 200;
-  const double h = growth / panels;
-  double sum = dn_da(a0) + dn_da(a0 + growth);
-  for (int i = 1; i < panels; ++i) sum += (i % 2 ? 4 : 2) * dn_da(a0 + i * h);
-  const double paris = sum * h / 3;
+  const double paris = integrate_simpson(dn_da, a0, a0 + growth, 200);
   double a2 = a2_trial;
   for (int it = 0; it < 2; ++it) {
     const auto run = run_ct_with_hole(dx, p_max, true, a2, "", 100'000'000, growth);

@@ -82,10 +82,11 @@ int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth, bool lo
   const KinkResult r =
       run_compact_tension_shear(alpha_deg * pi / 180, dx, law, growth, !loaded_lower);
   std::printf(
-      "{\"case\":\"B2\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,"
+      "{\"case\":\"B2\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_"
+      "ki\":%.4f,"
       "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f}\n",
-      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.mts_beta * 180 / pi, r.growth,
-      static_cast<long long>(r.cycles), dx, r.wall_s);
+      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
+      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, r.wall_s);
   return 0;
 }
 
