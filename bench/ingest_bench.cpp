@@ -3,8 +3,8 @@
 // Starts LCM's Java TCP hub on a free loopback port (unless --lcm-url is given), runs the daemon
 // service (twin/daemon.h) on its own thread and LCM connection, and feeds it with the replay
 // client (replay/replay_tool.h, lockstep off, `--window` batches in flight) a history of
-// single-cycle blocks at loads far too low to break a bond (P_max cycling over 400..550 N,
-// R = 0.1), batched as peritwin-replay batches them (16 blocks or 1000 cycles per batch), after
+// single-cycle blocks at loads far too low to break a bond (P_max cycling over 200..350 N,
+// R = 0.1), batched as peritwin-replay batches them (1024 blocks or 1000 cycles per batch), after
 // a one-batch lockstep warm-up.
 // Remaining-life estimates and checkpoints are off; results (HDF5 rows) are written unless
 // --no-results. Prints one JSON line:
@@ -74,15 +74,20 @@ int main(int argc, char** argv) {
   CLI::App app{"peritwin-bench-ingest: load cycles absorbed per second by the daemon over tcpq"};
   std::string config_file = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml";
   std::string lcm_url;
-  std::int64_t cycles = 100'000;
+  std::int64_t cycles = 1'000'000;
   std::size_t window = 64;
   bool no_results = false;
+  replay::BatchingOptions batching;
   app.add_option("--config", config_file, "detail configuration (default: the B1 example)");
-  app.add_option("--cycles", cycles, "single-cycle blocks to send (default 100000)")
+  app.add_option("--cycles", cycles, "single-cycle blocks to send (default 1000000)")
       ->check(CLI::PositiveNumber);
   app.add_option("--window", window, "batches in flight (default 64)")->check(CLI::PositiveNumber);
   app.add_option("--lcm-url", lcm_url, "use this LCM URL instead of starting a hub");
   app.add_flag("--no-results", no_results, "do not write the HDF5 results");
+  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--batch-cycles", batching.max_cycles, "cycles per batch at most")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
 
   spdlog::set_level(spdlog::level::warn);
@@ -163,9 +168,8 @@ int main(int argc, char** argv) {
 
   std::vector<LoadBlock> blocks;
   for (std::int64_t i = 0; i < cycles; ++i) {
-    blocks.push_back({400.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
+    blocks.push_back({200.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
   }
-  const replay::BatchingOptions batching;
   auto batches = replay::make_twin_batches(blocks, detail.id, "bench", batching);
   const auto num_batches = batches.size();
   replay::ReplayResult result;
@@ -178,7 +182,7 @@ int main(int argc, char** argv) {
     warm_options.lockstep = true;
     warm_options.resend_after_s = 0.5;
     replay::LcmReplayer warm_up(
-        lcm, replay::make_twin_batches({{400.0, 0.1, 0.0, 1}}, detail.id, "warm-up", batching),
+        lcm, replay::make_twin_batches({{200.0, 0.1, 0.0, 1}}, detail.id, "warm-up", batching),
         warm_options);
     if (!warm_up.run({}, {}).ok) {
       std::cerr << "peritwin-bench-ingest: no answer from the daemon\n";
@@ -203,7 +207,7 @@ int main(int argc, char** argv) {
       "\"transport\":\"tcpq\",\"results\":%s,\"resends\":%lld}\n",
       static_cast<double>(cycles) / seconds, 1e3 * percentile(latencies, 0.50),
       1e3 * percentile(latencies, 0.99), num_batches, static_cast<long long>(cycles),
-      batching.max_blocks, static_cast<long long>(broken), no_results ? "false" : "true",
+      static_cast<std::size_t>(cycles) / std::max<std::size_t>(1, num_batches), static_cast<long long>(broken), no_results ? "false" : "true",
       static_cast<long long>(result.rewinds));
   return broken == 0 ? 0 : 1;
 }

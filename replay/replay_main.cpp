@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
   app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
   app.add_flag("--in-process", in_process, "run the twin library here (no LCM, no daemon)");
   app.add_flag("--json", json, "JSON lines: one per state update, then a summary");
-  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 16)")
+  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 1024)")
       ->check(CLI::PositiveNumber);
   app.add_option("--batch-cycles", batching.max_cycles,
                  "close a batch once it holds this many cycles (default 1000)")

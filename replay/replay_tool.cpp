@@ -159,7 +159,7 @@ ReplayResult LcmReplayer::run(
       last_send = std::chrono::steady_clock::now();
     }
     errno = 0;
-    if (lcm_.handleTimeout(20) < 0 && errno != EINTR) {
+    if (twin::handle_lcm(lcm_, 20) < 0 && errno != EINTR) {
       result.error = "LCM failed while receiving";
       break;
     }

@@ -46,7 +46,9 @@ HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format
                            const std::string& detail_id);
 
 struct BatchingOptions {
-  std::size_t max_blocks = 16;
+  // 1024 blocks = 32 KB of payload: below LCM 1.3.1's 64 KB UDP fragmentation limit, and large
+  // enough that a rainflow-counted history of 1-cycle blocks is not limited by round trips.
+  std::size_t max_blocks = 1024;
   std::int64_t max_cycles = 1000;
 };
 

@@ -261,7 +261,7 @@ void Daemon::tick() {
 bool Daemon::poll(int timeout_ms) {
   if (!error_.empty()) return false;
   errno = 0;
-  if (lcm_.handleTimeout(timeout_ms) < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
+  if (handle_lcm(lcm_, timeout_ms) < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
     fail("LCM failed while receiving");
     return false;
   }

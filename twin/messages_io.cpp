@@ -1,5 +1,9 @@
 #include "twin/messages_io.h"
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -95,6 +99,18 @@ void append_string(std::string& out, const std::string& s) {
 }
 
 }  // namespace
+
+int handle_lcm(lcm::LCM& lcm, int timeout_ms) {
+  const int fd = lcm.getFileno();
+  int type = 0;
+  socklen_t len = sizeof type;
+  if (fd >= 0 && getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
+    const int on = 1;
+    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
+    setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &on, sizeof on);
+  }
+  return lcm.handleTimeout(timeout_ms);
+}
 
 std::int64_t now_utime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <peritwin_msgs/damage_field_t.hpp>
 #include <peritwin_msgs/damage_state_t.hpp>
@@ -20,6 +21,15 @@ namespace peritwin::twin {
 /// Largest load_batch_t payload accepted (a full batch of kMaxBlocksPerBatch blocks with two
 /// maximal ids fits).
 inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
+
+/// lcm.handleTimeout(timeout_ms) with the socket tuned for LCM's TCP hub. LCM 1.3.1's Java hub
+/// (lcm.lcm.TCPService) writes every relayed message in five small unbuffered writes without
+/// TCP_NODELAY, and the C client writes a published one in several too; Nagle's algorithm then
+/// holds each message's tail until the peer ACKs its head, which Linux delays by up to 40 ms:
+/// a lockstep round trip took ~90 ms. Before each receive we disable Nagle on our end and ask
+/// for immediate ACKs (TCP_QUICKACK is not sticky, hence every call); both are no-ops on the
+/// memq and UDP transports.
+int handle_lcm(lcm::LCM& lcm, int timeout_ms);
 
 /// Microseconds since the Unix epoch (the informational utime of every message).
 std::int64_t now_utime();
