@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace peritwin {
@@ -17,7 +19,11 @@ StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
                            std::vector<Support> supports, std::vector<LoadTerm> loads)
     : disc_(disc), model_(model), supports_(std::move(supports)), loads_(std::move(loads)) {
   intact_.resize(static_cast<std::size_t>(disc.num_bonds()));
-  for (std::size_t b = 0; b < intact_.size(); ++b) intact_[b] = disc.bond_precut[b] ? 0 : 1;
+  factor_.resize(intact_.size());
+  for (std::size_t b = 0; b < intact_.size(); ++b) {
+    intact_[b] = disc.bond_precut[b] ? 0 : 1;
+    factor_[b] = intact_[b] ? 1.0 : 0.0;
+  }
   const auto ndof = 2 * static_cast<std::size_t>(disc.num_nodes());
   free_index_.assign(ndof, 0);
   for (const auto& s : supports_) {
@@ -116,7 +122,7 @@ void StaticSolver::assemble() {
   };
   for (std::size_t b = 0; b < nb; ++b) {
     add_row(g_entries, static_cast<int>(b), b, 1.0);  // row b: e·(u_j − u_i)
-    weight[static_cast<Eigen::Index>(b)] = intact_[b] ? model_.bond_stiffness[b] : 0.0;
+    weight[static_cast<Eigen::Index>(b)] = intact_[b] ? model_.bond_stiffness[b] * factor_[b] : 0.0;
     if (disc_.bond_precut[b]) weight[static_cast<Eigen::Index>(b)] = 0.0;
   }
   SparseMatrix g(static_cast<Eigen::Index>(nb), num_free_);
@@ -262,23 +268,58 @@ void StaticSolver::solve_bases() {
   basis_solve_s_ += seconds_since(t0);
 }
 
+FactorReport StaticSolver::refactor_resolve(std::chrono::steady_clock::time_point t0) {
+  for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
+    if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
+  }
+  if (modified_) {  // the factor is simplicial LDLᵀ now: analyze again for a supernodal one
+    cholesky_ = SparseCholesky();
+    modified_ = false;
+  }
+  auto r = solve();
+  refactor_s_ += seconds_since(t0);
+  return r;
+}
+
+void StaticSolver::ground_isolated(const std::vector<NodeIndex>& nodes,
+                                   std::vector<SparseCholesky::Column>& added) {
+  for (NodeIndex k : nodes) {
+    if (grounded_[static_cast<std::size_t>(k)] || !isolated(k)) continue;
+    grounded_[static_cast<std::size_t>(k)] = 1;
+    for (std::size_t c = 0; c < 2; ++c) {
+      const int f = free_index_[2 * static_cast<std::size_t>(k) + c];
+      if (f >= 0) added.push_back({{f}, {std::sqrt(ground_stiffness_)}});
+    }
+  }
+}
+
+FactorReport StaticSolver::update_resolve(const std::vector<SparseCholesky::Column>& added,
+                                          const std::vector<SparseCholesky::Column>& removed,
+                                          std::chrono::steady_clock::time_point t0) {
+  modified_ = true;
+  FactorReport r = cholesky_.modify(added, true);
+  if (r.ok()) r = cholesky_.modify(removed, false);
+  ++updates_;
+  if (!r.ok()) {
+    update_s_ += seconds_since(t0);
+    return r;
+  }
+  solve_bases();
+  update_s_ += seconds_since(t0);
+  return r;
+}
+
 FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!incremental_ || !cholesky_.analyzed()) {
-    for (BondIndex b : bonds) intact_[static_cast<std::size_t>(b)] = 0;
-    for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
-      if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
+    for (BondIndex b : bonds) {
+      intact_[static_cast<std::size_t>(b)] = 0;
+      factor_[static_cast<std::size_t>(b)] = 0.0;
     }
-    if (modified_) {  // the factor is simplicial LDLᵀ now: analyze again for a supernodal one
-      cholesky_ = SparseCholesky();
-      modified_ = false;
-    }
-    auto r = solve();
-    refactor_s_ += seconds_since(t0);
-    return r;
+    return refactor_resolve(t0);
   }
-  // K_new = K − Σ_b k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied as
-  // one rank-k update (the added terms) followed by one downdate (the removed ones).
+  // K_new = K − Σ_b f_b·k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied
+  // as one rank-k update (the added terms) followed by one downdate (the removed ones).
   std::vector<SparseCholesky::Column> added, removed;
   const bool osb = model_.options.kind == ModelKind::state_based && !mixed_;
   std::vector<NodeIndex> nodes;
@@ -286,7 +327,7 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
     const auto b = static_cast<std::size_t>(bond);
     if (!intact_[b]) continue;
     SparseCholesky::Column g;
-    const double w = std::sqrt(model_.bond_stiffness[b]);
+    const double w = std::sqrt(model_.bond_stiffness[b] * factor_[b]);
     for (const auto& [f, v] : bond_gradient(b, w)) {
       if (f >= 0) {
         g.rows.push_back(f);
@@ -327,7 +368,10 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
   if (osb) {
     for (NodeIndex k : nodes) old_rows.push_back(dilatation_row(k));
   }
-  for (BondIndex b : bonds) intact_[static_cast<std::size_t>(b)] = 0;
+  for (BondIndex b : bonds) {
+    intact_[static_cast<std::size_t>(b)] = 0;
+    factor_[static_cast<std::size_t>(b)] = 0.0;
+  }
   for (std::size_t n = 0; osb && n < nodes.size(); ++n) {
     const double alpha = model_.dilatation_stiffness[static_cast<std::size_t>(nodes[n])];
     auto new_row = dilatation_row(nodes[n]);
@@ -341,25 +385,69 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
     if (!new_row.rows.empty()) gain.push_back(std::move(new_row));
     if (!old_row.rows.empty()) loss.push_back(std::move(old_row));
   }
-  for (NodeIndex k : nodes) {
-    if (grounded_[static_cast<std::size_t>(k)] || !isolated(k)) continue;
-    grounded_[static_cast<std::size_t>(k)] = 1;
-    for (std::size_t c = 0; c < 2; ++c) {
-      const int f = free_index_[2 * static_cast<std::size_t>(k) + c];
-      if (f >= 0) added.push_back({{f}, {std::sqrt(ground_stiffness_)}});
+  ground_isolated(nodes, added);
+  return update_resolve(added, removed, t0);
+}
+
+FactorReport StaticSolver::set_bond_factors(std::span<const BondIndex> bonds,
+                                            std::span<const double> factors) {
+  if (model_.options.kind != ModelKind::bond_based) {
+    throw std::logic_error("StaticSolver::set_bond_factors: bond-based models only");
+  }
+  if (bonds.size() != factors.size()) {
+    throw std::invalid_argument("StaticSolver::set_bond_factors: as many factors as bonds");
+  }
+  for (std::size_t n = 0; n < bonds.size(); ++n) {
+    const auto b = static_cast<std::size_t>(bonds[n]);
+    if (b >= factor_.size()) {
+      throw std::invalid_argument("StaticSolver::set_bond_factors: bond index out of range");
+    }
+    if (!(factors[n] >= 0.0 && factors[n] <= 1.0)) {
+      throw std::invalid_argument("StaticSolver::set_bond_factors: factor " +
+                                  std::to_string(factors[n]) + " outside [0, 1]");
+    }
+    if (!intact_[b] && factors[n] > 0.0) {
+      throw std::invalid_argument("StaticSolver::set_bond_factors: bond " +
+                                  std::to_string(bonds[n]) + " is broken");
     }
   }
-  modified_ = true;
-  FactorReport r = cholesky_.modify(added, true);
-  if (r.ok()) r = cholesky_.modify(removed, false);
-  ++updates_;
-  if (!r.ok()) {
-    update_s_ += seconds_since(t0);
-    return r;
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!incremental_ || !cholesky_.analyzed()) {
+    for (std::size_t n = 0; n < bonds.size(); ++n) {
+      const auto b = static_cast<std::size_t>(bonds[n]);
+      factor_[b] = factors[n];
+      if (factors[n] == 0.0) intact_[b] = 0;
+    }
+    return refactor_resolve(t0);
   }
-  solve_bases();
-  update_s_ += seconds_since(t0);
-  return r;
+  // K_new = K + Σ_b (f_new − f_old)·k_b·g_b·g_bᵀ: stiffer bonds in one update, softer ones in one
+  // downdate, each column g_b scaled by sqrt(|f_new − f_old|·k_b).
+  std::vector<SparseCholesky::Column> added, removed;
+  std::vector<NodeIndex> nodes;
+  for (std::size_t n = 0; n < bonds.size(); ++n) {
+    const auto b = static_cast<std::size_t>(bonds[n]);
+    const double change = factors[n] - factor_[b];
+    factor_[b] = factors[n];
+    if (factors[n] == 0.0 && intact_[b]) {
+      intact_[b] = 0;
+      nodes.push_back(disc_.bond_i[b]);
+      nodes.push_back(disc_.bond_j[b]);
+    }
+    if (change == 0.0) continue;
+    const double w = std::sqrt(std::abs(change) * model_.bond_stiffness[b]);
+    SparseCholesky::Column g;
+    for (const auto& [f, v] : bond_gradient(b, w)) {
+      if (f >= 0) {
+        g.rows.push_back(f);
+        g.values.push_back(v);
+      }
+    }
+    if (!g.rows.empty() && w > 0.0) (change > 0.0 ? added : removed).push_back(std::move(g));
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  ground_isolated(nodes, added);
+  return update_resolve(added, removed, t0);
 }
 
 std::vector<double> StaticSolver::basis_force(Basis b) const {
@@ -405,7 +493,8 @@ std::vector<double> StaticSolver::internal_force(const std::vector<double>& u) c
     if (!intact_[b]) continue;
     const auto i = static_cast<std::size_t>(disc_.bond_i[b]);
     const auto j = static_cast<std::size_t>(disc_.bond_j[b]);
-    double magnitude = model_.bond_stiffness[b] * disc_.bond_length[b] * stretch_values[b];
+    double magnitude =
+        model_.bond_stiffness[b] * factor_[b] * disc_.bond_length[b] * stretch_values[b];
     if (osb) {
       magnitude +=
           model_.dilatation_weight[b] / disc_.bond_length[b] *

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <chrono>
 #include <span>
 #include <string>
 #include <vector>
@@ -53,6 +54,18 @@ class StaticSolver {
   /// Breaks the given bonds and re-solves: by a low-rank update of the factor when incremental
   /// (CHOLMOD rank-k update/downdate; exact up to round-off), else by refactorizing (the oracle).
   FactorReport break_bonds(std::span<const BondIndex> bonds);
+  /// Sets the stiffness factor f_b = 1 − D_b of each listed bond (1 intact, 0 broken; 0 ≤ f ≤ 1),
+  /// bond-based models only (std::logic_error for state-based). Incremental: CHOLMOD rank update/
+  /// downdate with the bond vector scaled by sqrt(|f_old − f_new|·c); otherwise refactorization
+  /// (the oracle). Re-solves the basis cases like break_bonds. A factor of 0 is the same as
+  /// breaking the bond. std::invalid_argument for a factor outside [0, 1], a size mismatch, or a
+  /// factor above 0 for a broken bond (a broken bond stays broken).
+  FactorReport set_bond_factors(std::span<const BondIndex> bonds, std::span<const double> factors);
+  /// The bond's stiffness factor: 1 for intact, 0 for broken, in between for a softened bond.
+  [[nodiscard]] double bond_factor(BondIndex b) const {
+    return factor_[static_cast<std::size_t>(b)];
+  }
+  [[nodiscard]] const std::vector<double>& bond_factors() const { return factor_; }
   void set_incremental(bool incremental) { incremental_ = incremental; }
   [[nodiscard]] bool incremental() const { return incremental_; }
   /// Seconds spent in low-rank updates and in refactorizations after the first solve.
@@ -104,12 +117,22 @@ class StaticSolver {
   [[nodiscard]] SparseCholesky::Column dilatation_row(NodeIndex k) const;
   /// Nodes with no intact bond get a ground spring (they would make K singular).
   [[nodiscard]] bool isolated(NodeIndex k) const;
+  /// Refactorizing re-solve after intact_/factor_ changed (grounds nodes that became isolated).
+  FactorReport refactor_resolve(std::chrono::steady_clock::time_point t0);
+  /// Ground springs (added columns) for the nodes that became isolated.
+  void ground_isolated(const std::vector<NodeIndex>& nodes,
+                       std::vector<SparseCholesky::Column>& added);
+  /// Applies the added then the removed columns to the factor and re-solves the basis cases.
+  FactorReport update_resolve(const std::vector<SparseCholesky::Column>& added,
+                              const std::vector<SparseCholesky::Column>& removed,
+                              std::chrono::steady_clock::time_point t0);
 
   const Discretization& disc_;
   const PdModel& model_;
   std::vector<Support> supports_;
   std::vector<LoadTerm> loads_;
   std::vector<std::uint8_t> intact_;
+  std::vector<double> factor_;  ///< stiffness factor of each bond's pair term (0 when broken)
   std::vector<std::int32_t> free_index_;  ///< DOF -> free index, -1 when supported
   std::int32_t num_free_ = 0;
   bool mixed_ = false;

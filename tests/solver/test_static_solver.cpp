@@ -163,6 +163,157 @@ TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   EXPECT_EQ(solver.factorizations(), 2);
 }
 
+// Bond stiffness factors (bilinear softening, 003): bond-based model only.
+class BondFactors : public ::testing::Test {
+ protected:
+  testing::TensionPlate plate = testing::make_tension_plate(
+      aluminium, options_for(ModelKind::bond_based), 0.01, 0.006, 0.0005, 1e6);
+  /// Bonds crossing a vertical line at x (a band across the plate's middle).
+  std::vector<BondIndex> band(double x) const {
+    std::vector<BondIndex> out;
+    for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+      const Point a = plate.disc.position[plate.disc.bond_i[b]];
+      const Point c = plate.disc.position[plate.disc.bond_j[b]];
+      if (segments_cross(a, c, {x, -0.001}, {x, 0.0015})) out.push_back(b);
+    }
+    return out;
+  }
+  static void expect_same(const std::vector<double>& u, const std::vector<double>& oracle,
+                          double rel) {
+    ASSERT_EQ(u.size(), oracle.size());
+    const double scale = max_abs(oracle);
+    for (std::size_t i = 0; i < u.size(); ++i) EXPECT_NEAR(u[i], oracle[i], rel * scale) << i;
+  }
+};
+
+TEST_F(BondFactors, IncrementalSofteningEqualsRefactorization) {
+  // Random factors on two overlapping sets of bonds, in two steps (the second one softens some
+  // bonds further, stiffens none, and breaks a few via factor 0): rank updates vs refactoring.
+  StaticSolver incremental(plate.disc, plate.model, plate.supports, plate.loads);
+  incremental.set_incremental(true);
+  StaticSolver refactor(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(incremental.solve().ok());
+  ASSERT_TRUE(refactor.solve().ok());
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> uni(0.05, 1.0);
+  std::vector<BondIndex> first = band(0.004);
+  std::vector<double> f1(first.size());
+  for (auto& f : f1) f = uni(rng);
+  ASSERT_GT(first.size(), 10u);
+  ASSERT_TRUE(incremental.set_bond_factors(first, f1).ok());
+  ASSERT_TRUE(refactor.set_bond_factors(first, f1).ok());
+  expect_same(incremental.basis_displacement(basis_constant),
+              refactor.basis_displacement(basis_constant), 1e-9);
+  std::vector<BondIndex> second = band(0.006);
+  second.insert(second.end(), first.begin(), first.begin() + 5);
+  std::vector<double> f2(second.size());
+  for (std::size_t n = 0; n < second.size(); ++n) {
+    const double old = incremental.bond_factor(second[n]);
+    f2[n] = n % 7 == 0 ? 0.0 : old * uni(rng);
+  }
+  ASSERT_TRUE(incremental.set_bond_factors(second, f2).ok());
+  ASSERT_TRUE(refactor.set_bond_factors(second, f2).ok());
+  EXPECT_EQ(incremental.factorizations(), 1);
+  EXPECT_EQ(incremental.updates(), 2);
+  EXPECT_EQ(refactor.factorizations(), 3);
+  EXPECT_EQ(incremental.intact(), refactor.intact());
+  EXPECT_EQ(incremental.bond_factors(), refactor.bond_factors());
+  EXPECT_EQ(incremental.bond_factor(second[0]), 0.0);
+  EXPECT_FALSE(incremental.intact()[static_cast<std::size_t>(second[0])]);
+  for (int basis = 0; basis < 3; ++basis) {
+    expect_same(incremental.basis_displacement(static_cast<Basis>(basis)),
+                refactor.basis_displacement(static_cast<Basis>(basis)), 1e-9);
+  }
+  // Breaking a softened bond removes only its remaining stiffness.
+  const std::vector<BondIndex> broken(second.begin() + 1, second.begin() + 4);
+  ASSERT_TRUE(incremental.break_bonds(broken).ok());
+  ASSERT_TRUE(refactor.break_bonds(broken).ok());
+  expect_same(incremental.basis_displacement(basis_constant),
+              refactor.basis_displacement(basis_constant), 1e-9);
+  for (BondIndex b : broken) EXPECT_EQ(incremental.bond_factor(b), 0.0);
+}
+
+TEST_F(BondFactors, SofteningToZeroEqualsBreaking) {
+  const std::vector<BondIndex> cut = band(0.005);
+  const std::vector<double> zeros(cut.size(), 0.0);
+  for (bool incremental : {true, false}) {
+    StaticSolver softened(plate.disc, plate.model, plate.supports, plate.loads);
+    StaticSolver broken(plate.disc, plate.model, plate.supports, plate.loads);
+    softened.set_incremental(incremental);
+    broken.set_incremental(incremental);
+    ASSERT_TRUE(softened.solve().ok());
+    ASSERT_TRUE(broken.solve().ok());
+    ASSERT_TRUE(softened.set_bond_factors(cut, zeros).ok());
+    ASSERT_TRUE(broken.break_bonds(cut).ok());
+    EXPECT_EQ(softened.intact(), broken.intact());
+    EXPECT_EQ(softened.bond_factors(), broken.bond_factors());
+    expect_same(softened.basis_displacement(basis_constant),
+                broken.basis_displacement(basis_constant), 1e-12);
+  }
+}
+
+TEST_F(BondFactors, SoftenedModelIsInEquilibrium) {
+  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  solver.set_incremental(true);
+  ASSERT_TRUE(solver.solve().ok());
+  const std::vector<BondIndex> bonds = band(0.005);
+  std::vector<double> factors(bonds.size());
+  for (std::size_t n = 0; n < bonds.size(); ++n)
+    factors[n] = 0.1 + 0.2 * static_cast<double>(n % 5);
+  ASSERT_TRUE(solver.set_bond_factors(bonds, factors).ok());
+  const auto& u = solver.basis_displacement(basis_constant);
+  const auto f_int = solver.internal_force(u);
+  const auto f_ext = solver.basis_force(basis_constant);
+  const double scale = max_abs(f_ext);
+  for (std::size_t dof = 0; dof < u.size(); ++dof) {
+    if (solver.free_index()[dof] >= 0) {
+      EXPECT_NEAR(f_int[dof], f_ext[dof], 1e-9 * scale) << dof;
+    }
+  }
+}
+
+TEST_F(BondFactors, UniformFactorScalesDisplacementByItsInverse) {
+  // Every bond at factor f: K becomes f·K, so u = u_intact / f (uniform tension).
+  StaticSolver intact(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(intact.solve().ok());
+  std::vector<BondIndex> all;
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    if (intact.intact()[static_cast<std::size_t>(b)]) all.push_back(b);
+  }
+  const double f = 0.37;
+  const std::vector<double> factors(all.size(), f);
+  for (bool incremental : {false, true}) {
+    StaticSolver soft(plate.disc, plate.model, plate.supports, plate.loads);
+    soft.set_incremental(incremental);
+    ASSERT_TRUE(soft.solve().ok());
+    ASSERT_TRUE(soft.set_bond_factors(all, factors).ok());
+    std::vector<double> expected = intact.basis_displacement(basis_constant);
+    for (auto& x : expected) x /= f;
+    expect_same(soft.basis_displacement(basis_constant), expected, 1e-9);
+  }
+}
+
+TEST(BondFactorsErrors, StateBasedAndInvalidFactorsAreRejected) {
+  auto osb = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.004,
+                                         0.003, 0.0005, 1e6);
+  StaticSolver s(osb.disc, osb.model, osb.supports, osb.loads);
+  ASSERT_TRUE(s.solve().ok());
+  const std::vector<BondIndex> one{0};
+  const std::vector<double> half{0.5};
+  EXPECT_THROW((void)s.set_bond_factors(one, half), std::logic_error);
+  auto bb = testing::make_tension_plate(aluminium, options_for(ModelKind::bond_based), 0.004, 0.003,
+                                        0.0005, 1e6);
+  StaticSolver b(bb.disc, bb.model, bb.supports, bb.loads);
+  ASSERT_TRUE(b.solve().ok());
+  EXPECT_EQ(b.bond_factor(0), 1.0);
+  const std::vector<double> bad{1.5};
+  EXPECT_THROW((void)b.set_bond_factors(one, bad), std::invalid_argument);
+  const std::vector<double> two{0.5, 0.5};
+  EXPECT_THROW((void)b.set_bond_factors(one, two), std::invalid_argument);
+  ASSERT_TRUE(b.break_bonds(one).ok());
+  EXPECT_THROW((void)b.set_bond_factors(one, half), std::invalid_argument);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothModels, SolverModels,
                          ::testing::Values(ModelKind::bond_based, ModelKind::state_based));
 
