@@ -42,6 +42,24 @@ double critical_stretch(const Material& material, double horizon) {
   return std::sqrt(gc / ((6 / pi * mu + 16 / (9 * pi * pi) * (kappa - 2 * mu)) * horizon));
 }
 
+double critical_bond_energy(const Material& material, double crack_interactions) {
+  if (!(crack_interactions > 0.0)) return 0.0;
+  return material.critical_energy_release_rate() / crack_interactions;  // 000 Eq. (12)
+}
+
+double crack_crossing_interactions(double horizon_over_dx) {
+  // Family offsets (p, q) in grid units within δ (the discretization's rule, with its tolerance).
+  const double r2 = horizon_over_dx * horizon_over_dx * (1 + 1e-12);
+  const int reach = static_cast<int>(std::floor(horizon_over_dx)) + 1;
+  double crossings = 0.0;
+  for (int q = 1; q <= reach; ++q) {
+    for (int p = -reach; p <= reach; ++p) {
+      if (p * p + q * q <= r2) crossings += q;  // q rows apart: q crossings per Δx of the cut
+    }
+  }
+  return 2.0 * crossings;  // 000 Eq. (10a): ḡ is half the bond's energy per Δx·h
+}
+
 FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
                              std::vector<Support> supports, std::vector<LoadTerm> loads,
                              FatigueSettings settings)
@@ -59,6 +77,14 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
     critical_stretch_ = critical_stretch(model.material, disc.horizon);
   } else {
     critical_stretch_ = settings_.critical_stretch;
+  }
+  if (settings_.critical_bond_energy == 0.0 && model.material.fracture_toughness > 0) {
+    const double n_c = settings_.crack_interactions > 0.0
+                           ? settings_.crack_interactions
+                           : crack_crossing_interactions(disc.horizon / disc.dx);
+    critical_bond_energy_ = critical_bond_energy(model.material, n_c);
+  } else {
+    critical_bond_energy_ = settings_.critical_bond_energy;
   }
 }
 
@@ -320,19 +346,35 @@ bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
 }
 
 bool FatigueEngine::static_cascade(const LoadBlock& block) {
-  if (!(critical_stretch_ > 0.0)) return true;
+  const bool energy = settings_.static_failure == StaticFailure::critical_bond_energy;
+  const double limit = energy ? critical_bond_energy_ : critical_stretch_;
+  if (!(limit > 0.0)) return true;
   // Stretch is P times a per-α basis combination and rounding is monotone, so if no bond reached
   // s_c at (P_c, α) since the last re-solve, none reaches it at (P ≤ P_c, α): skip the O(bonds)
-  // scan.
+  // scan. The bond energy is evaluated as fl(P²)·ḡ(P = 1), which is monotone in P as well.
   if (cascade_checked_ && block.alpha == cascade_alpha_ && block.p_max <= cascade_p_max_) {
     return true;
   }
   std::vector<double> s;
+  std::vector<double> theta;
+  std::vector<double> g;
+  const double p2 = block.p_max * block.p_max;
   while (true) {
-    solver_.stretch(block.p_max, block.alpha, s);
+    if (energy) {
+      // 000 Eq. (31): ḡ is a quadratic form in (s, θ), and s, θ are linear in P, so ḡ(P) =
+      // P²·ḡ(1) exactly in real arithmetic; ḡ(1) from the unit-load stretches and dilatations.
+      solver_.stretch(1.0, block.alpha, s);
+      dilatations(disc_, model_, solver_.intact(), s, theta);
+      bond_energy_release_rates(disc_, model_, s, theta, g);
+    } else {
+      solver_.stretch(block.p_max, block.alpha, s);
+    }
     std::vector<BondIndex> newly;
     for (std::size_t b = 0; b < s.size(); ++b) {
-      if (breakable_[b] && s[b] >= critical_stretch_) {  // 000 Eq. (7), (20)
+      if (!breakable_[b]) continue;
+      // 000 Eq. (9) (ḡ ≥ g_c) or Eq. (7) (s ≥ s_c), then Eq. (20)
+      const bool breaks = energy ? p2 * g[b] >= limit : s[b] >= limit;
+      if (breaks) {
         newly.push_back(static_cast<BondIndex>(b));
         events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::overload});
       }

@@ -38,6 +38,12 @@ std::string validate(const LoadBlock& block);
 
 enum class FatigueLaw { strain_range, energy, kinetic };
 
+/// Phase III (static failure at P_max) criterion.
+enum class StaticFailure {
+  critical_stretch,      ///< 000 Eq. (7)-(8): a bond breaks when s ≥ s_c
+  critical_bond_energy,  ///< 000 Eq. (9)-(12): a bond breaks when ḡ (Eq. 10-11, 31) ≥ g_c
+};
+
 struct FatigueSettings {
   FatigueLaw law = FatigueLaw::strain_range;
   fatigue::StrainLawParams strain;  ///< laws strain_range and energy (000 Eq. 44-46 maps A, m)
@@ -47,12 +53,31 @@ struct FatigueSettings {
   /// Phase III (000 Eq. 7-8, 20): bonds whose stretch at P_max reaches s_c break statically.
   /// 0 = compute s_c from G_c = K_c²/E with 000 Eq. (8); < 0 = no static failure.
   double critical_stretch = 0.0;
+  /// Which phase III criterion applies (the other one's value is ignored).
+  StaticFailure static_failure = StaticFailure::critical_stretch;
+  /// 000 Eq. (9): critical energy release rate of one bond g_c (J/m²), compared with the bond's ḡ
+  /// of 000 Eq. (10)-(11) (written out as Eq. 31; bond-based: a = 0, Eq. 33). 0 = g_c = G_c/N_c
+  /// from K_c (000 Eq. 12, G_c = K_c²/E); < 0 = no static failure.
+  double critical_bond_energy = 0.0;
+  /// N_c of 000 Eq. (12): interactions per unit crack area, 36 for δ = 3.015Δx (000 Sec. 2);
+  /// 0 = count them on the grid (crack_crossing_interactions). Used only when g_c comes from K_c.
+  double crack_interactions = 36.0;
   /// Re-solve after breaks by CHOLMOD rank updates (exact) instead of refactorizing.
   bool incremental = true;
 };
 
 /// 000 Eq. (8): s_c = sqrt(G_c / ((6μ/π + 16(κ − 2μ)/(9π²))·δ)), plane-stress κ, μ of the material.
 double critical_stretch(const Material& material, double horizon);
+
+/// 000 Eq. (12): g_c = G_c/N_c with G_c = K_c²/E; 0 when K_c is not given.
+double critical_bond_energy(const Material& material, double crack_interactions);
+
+/// N_c of 000 Eq. (12) counted on a square grid with families within δ: a straight cut between two
+/// grid rows is crossed, per Δx of its length, by Σ q bonds over the family offsets (p, q) with
+/// q > 0 (q rows apart), and every bond counts twice since 000 Eq. (10a) gives it the energy
+/// ḡ = ½(g_kj + g_jk) = E_b/(2Δx·h) (E_b the bond's strain energy, Eq. 10b-11): a crack of unit
+/// area then releases N_c·ḡ. 36 for δ = 3.015Δx (28 neighbours), the value of 000 Sec. 2.
+double crack_crossing_interactions(double horizon_over_dx);
 
 enum class BreakCause : std::uint8_t { fatigue = 1, overload = 2 };
 
@@ -138,6 +163,7 @@ class FatigueEngine {
   StaticSolver solver_;
   FatigueSettings settings_;
   double critical_stretch_ = 0.0;
+  double critical_bond_energy_ = 0.0;  ///< g_c, 000 Eq. (9), (12)
 
   std::vector<double> anchor_life_;      ///< λ0 (dose mode) or λ (direct mode)
   std::vector<double> rate_;             ///< F_b (dose mode) or d_b (direct mode)

@@ -7,7 +7,10 @@
 #include <string>
 
 #include "replay/rainflow.h"
+#include "solver/discretization.h"
+#include "solver/fatigue_engine.h"
 #include "solver/fatigue_law.h"
+#include "solver/pd_model.h"
 
 namespace peritwin::validation {
 
@@ -18,6 +21,43 @@ void print(const char* check, double value, double expected) {
       "\"rel_error\":%.3e}\n",
       check, value, expected, expected != 0 ? value / expected - 1 : value);
 }
+
+/// 000 Eq. (9)-(12): N_c counted on the grid against the paper's 36 for δ = 3.015Δx, and the two
+/// phase III criteria against each other: bonds crossing a cut, all at the critical stretch of
+/// 000 Eq. (8), have a mean ḡ (Eq. 31/33) that should be g_c = G_c/N_c (lattice error ~6 %).
+void critical_bond_energy_checks() {
+  print("gc_crack_interactions_eq12", crack_crossing_interactions(3.015), 36.0);
+  const double dx = 0.001;
+  DetailGeometry geometry;
+  geometry.thickness = 0.002;
+  geometry.outline = {{0.0, 0.0, 40 * dx, 40 * dx}};
+  const Discretization d = discretize(geometry, dx, 3.015 * dx);
+  ModelOptions options;
+  options.kind = ModelKind::bond_based;
+  const Material al{68.9e9, 1.0 / 3.0, 29e6};
+  const PdModel model = build_model(d, al, options, 200.0);
+  const double sc = critical_stretch(al, d.horizon);
+  const std::vector<double> s(static_cast<std::size_t>(d.num_bonds()), sc);
+  std::vector<double> theta, g;
+  dilatations(d, model, std::vector<std::uint8_t>(s.size(), 1), s, theta);
+  bond_energy_release_rates(d, model, s, theta, g);
+  const double y_cut = 20 * dx, x0 = 15 * dx;
+  double sum = 0.0;
+  int n = 0;
+  for (BondIndex b = 0; b < d.num_bonds(); ++b) {
+    const Point a = d.position[d.bond_i[b]];
+    const Point c = d.position[d.bond_j[b]];
+    if ((a.y - y_cut) * (c.y - y_cut) >= 0) continue;
+    const double x = a.x + (c.x - a.x) * (y_cut - a.y) / (c.y - a.y);
+    if (x < x0 || x >= x0 + 10 * dx) continue;
+    sum += g[static_cast<std::size_t>(b)];
+    ++n;
+  }
+  print("gc_mean_crossing_energy_at_sc_eq8_vs_eq12", sum / n, critical_bond_energy(al, 36.0));
+}
+
+void bilinear_checks() {}
+
 }  // namespace
 
 int run_b4() {
@@ -69,6 +109,8 @@ int run_b4() {
   }
   print("rainflow_astm_cycles", total, 4.0);
   print("rainflow_astm_range_sum", weighted, 3 * 0.5 + 4 * 1.5 + 6 * 0.5 + 8 * 1.0 + 9 * 0.5);
+  critical_bond_energy_checks();
+  bilinear_checks();
   return 0;
 }
 

@@ -35,7 +35,8 @@ NotchedPlate make_notched_plate(ModelKind kind, bool notched = true, int columns
 /// Parameters scaled so that the most stretched bond fails after about `first_failure` cycles
 /// of P_max = p, R = r: A = 1/(N·ε^m) from 000 Eq. (21).
 FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load, double r,
-                             double first_failure, double eps_inf_fraction = 0.0) {
+                             double first_failure, double eps_inf_fraction = 0.0,
+                             StaticFailure static_failure = StaticFailure::critical_stretch) {
   StaticSolver probe(p.disc, p.model, p.supports, p.loads);
   EXPECT_TRUE(probe.solve().ok());
   std::vector<double> s;
@@ -48,6 +49,19 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
   FatigueSettings f;
   f.law = law;
   f.critical_stretch = 4 * smax;  // phase III only for the bonds at the very tip, late
+  f.static_failure = static_failure;
+  if (static_failure == StaticFailure::critical_bond_energy) {
+    // 000 Eq. (9): g_c 10 % above the largest intact-bond ḡ (Eq. 31) at the load, so that phase
+    // III breaks bonds in the blocks at a higher P_max.
+    std::vector<double> theta, g;
+    dilatations(p.disc, p.model, probe.intact(), s, theta);
+    bond_energy_release_rates(p.disc, p.model, s, theta, g);
+    double gmax = 0.0;
+    for (std::size_t b = 0; b < g.size(); ++b) {
+      if (!p.disc.bond_precut[b]) gmax = std::max(gmax, g[b]);
+    }
+    f.critical_bond_energy = 1.1 * gmax;
+  }
   f.strain.m1 = 2.29153;
   f.strain.m2 = 2.6183;
   f.strain.eps_inf = eps_inf_fraction * eps;
@@ -91,6 +105,7 @@ struct LawCase {
   FatigueLaw law;
   ModelKind kind;
   double eps_inf_fraction;
+  StaticFailure static_failure = StaticFailure::critical_stretch;
 };
 
 class BlockEqualsPerCycle : public ::testing::TestWithParam<LawCase> {};
@@ -100,7 +115,8 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
   // states to cycle-by-cycle integration (the oracle), for a mixed sequence of blocks.
   const auto c = GetParam();
   const auto plate = make_notched_plate(c.kind);
-  const auto settings = settings_for(plate, c.law, 1000.0, 0.1, 150.0, c.eps_inf_fraction);
+  const auto settings =
+      settings_for(plate, c.law, 1000.0, 0.1, 150.0, c.eps_inf_fraction, c.static_failure);
   FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, settings);
   FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(fast.initialize());
@@ -116,6 +132,12 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
     expect_same_state(fast, slow);
   }
   EXPECT_GT(fast.broken_bonds(), 20);  // the test must actually crack the plate
+  if (c.static_failure == StaticFailure::critical_bond_energy) {
+    const auto overloads =
+        std::count_if(fast.break_events().begin(), fast.break_events().end(),
+                      [](const BreakEvent& e) { return e.cause == BreakCause::overload; });
+    EXPECT_GT(overloads, 0);  // phase III by 000 Eq. (9) must actually have happened
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -124,7 +146,13 @@ INSTANTIATE_TEST_SUITE_P(
         LawCase{"strain_dose_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0},
         LawCase{"strain_dose_osb", FatigueLaw::strain_range, ModelKind::state_based, 0},
         LawCase{"strain_limit_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0.3},
-        LawCase{"energy_osb", FatigueLaw::energy, ModelKind::state_based, 0}),
+        LawCase{"energy_osb", FatigueLaw::energy, ModelKind::state_based, 0},
+        LawCase{"strain_dose_bb_gc", FatigueLaw::strain_range, ModelKind::bond_based, 0,
+                StaticFailure::critical_bond_energy},
+        LawCase{"strain_limit_osb_gc", FatigueLaw::strain_range, ModelKind::state_based, 0.3,
+                StaticFailure::critical_bond_energy},
+        LawCase{"energy_osb_gc", FatigueLaw::energy, ModelKind::state_based, 0,
+                StaticFailure::critical_bond_energy}),
     [](const ::testing::TestParamInfo<LawCase>& p) { return std::string(p.param.name); });
 
 TEST(BlockStepping, ManyOneCycleBlocksEqualOneLongBlock) {
