@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <deque>
 
 #include "messages/channels.h"
 #include "twin/checkpoint_io.h"
@@ -24,6 +26,11 @@ std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
   return state_dir / detail_id;
 }
 
+struct Daemon::Received {
+  std::vector<std::uint8_t> bytes;
+  std::int64_t recv_utime = 0;  ///< LCM's receive time, us since the Unix epoch
+};
+
 struct Daemon::Detail {
   Daemon* daemon = nullptr;
   std::unique_ptr<Twin> twin;
@@ -34,7 +41,8 @@ struct Daemon::Detail {
   std::filesystem::path state_dir;
   std::int64_t checkpoint_seq = -1;  ///< state_seq of the newest checkpoint on disk
   std::chrono::steady_clock::time_point last_checkpoint;
-  std::int64_t errors = 0;  ///< rejected (not duplicates) and undecodable batches
+  std::int64_t errors = 0;     ///< rejected (not duplicates), undecodable and dropped batches
+  std::deque<Received> inbox;  ///< received, not yet applied, in arrival order
 };
 
 Daemon::Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options)
@@ -125,8 +133,19 @@ bool Daemon::start(std::string* error) {
 
 void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
   if (!error_.empty()) return;
+  if (d.inbox.size() >= static_cast<std::size_t>(std::max(1, options_.queue_capacity))) {
+    ++d.errors;
+    spdlog::warn("[{}] inbox full ({} batches): a batch of {} bytes is dropped",
+                 d.twin->detail_id(), d.inbox.size(), rbuf->data_size);
+    return;
+  }
+  const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+  d.inbox.push_back({{data, data + rbuf->data_size}, rbuf->recv_utime});
+}
+
+void Daemon::apply_received(Detail& d, const Received& r) {
   Twin& twin = *d.twin;
-  const Decoded decoded = decode_batch(rbuf->data, rbuf->data_size);
+  const Decoded decoded = decode_batch(r.bytes.data(), r.bytes.size());
   if (!decoded.batch) {
     ++d.errors;
     spdlog::warn("[{}] reject (decode): {}", twin.detail_id(), decoded.error.why);
@@ -168,7 +187,7 @@ void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
   publish_state(d);
   if (options_.record_latency) {
     // From LCM's receive time (wall clock, us): includes the wait in the subscription queue.
-    latencies_.push_back(1e-6 * static_cast<double>(now_utime() - rbuf->recv_utime));
+    latencies_.push_back(1e-6 * static_cast<double>(now_utime() - r.recv_utime));
   }
   spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", twin.detail_id(),
                 batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
@@ -203,8 +222,12 @@ void Daemon::publish_status(Detail& d, const char* health) {
   m.health =
       d.twin->failure() != Failure::none && std::string_view(health) == "ok" ? "failed" : health;
   m.last_seq = d.twin->state_seq();
-  m.pending = 0;  // LCM's queue is not observable through its C++ API
-  m.lag_s = 0.0;
+  m.pending = static_cast<std::int32_t>(d.inbox.size());
+  m.lag_s =
+      d.inbox.empty()
+          ? 0.0
+          : std::max(0.0, 1e-6 * static_cast<double>(now_utime() - d.inbox.front().recv_utime));
+  if (m.lag_s > options_.degraded_lag_s && m.health == "ok") m.health = "degraded";
   m.uptime_s = seconds(std::chrono::steady_clock::now() - started_);
   m.errors = d.errors;
   m.duplicates = d.twin->counters().duplicates;
@@ -247,6 +270,18 @@ void Daemon::submit_life(Detail& d) {
 }
 
 void Daemon::tick() {
+  for (auto& d : details_) {
+    while (!d->inbox.empty() && error_.empty()) {
+      const Received r = std::move(d->inbox.front());
+      d->inbox.pop_front();
+      apply_received(*d, r);
+      chores();  // a heartbeat is due even while a backlog is being worked off
+    }
+  }
+  chores();
+}
+
+void Daemon::chores() {
   const auto now = std::chrono::steady_clock::now();
   const bool status_due = seconds(now - last_status_) >= options_.status_period_s;
   if (status_due) last_status_ = now;
@@ -261,7 +296,10 @@ void Daemon::tick() {
 bool Daemon::poll(int timeout_ms) {
   if (!error_.empty()) return false;
   errno = 0;
-  if (handle_lcm(lcm_, timeout_ms) < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
+  int handled = handle_lcm(lcm_, timeout_ms);
+  // Take everything already waiting on the socket, so that STATUS can count it.
+  for (int n = 0; handled > 0 && n < options_.queue_capacity; ++n) handled = handle_lcm(lcm_, 0);
+  if (handled < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
     fail("LCM failed while receiving");
     return false;
   }

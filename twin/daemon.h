@@ -6,6 +6,11 @@
 // state changed) and at stop(); start() resumes from the newest valid one. The three newest are
 // kept. Results per detail: see twin/detail_outputs.h.
 //
+// Received batches go into a per-detail inbox (raw bytes + LCM receive time) and are applied in
+// order by tick(); poll() first drains every message already waiting on the LCM socket, so STATUS
+// can report how many batches wait (pending) and the age of the oldest one (lag_s) — LCM's own
+// subscription queue is not observable through its API.
+//
 // The service runs on the thread that calls poll() (LCM handlers run inside it). It is the
 // daemon's core and also runs in-process in tests (memq://) and in the ingest benchmark.
 // Modes: deterministic (remaining life synchronously at fixed state_seq points, reproducible) or
@@ -31,7 +36,11 @@ struct DaemonOptions {
   bool deterministic = false;
   bool results = true;  ///< HDF5/XDMF results and PNGs
   bool checkpoints = true;
-  int queue_capacity = 100'000;  ///< LCM subscription queue (messages); LCM's default is 30
+  /// LCM subscription queue and the daemon's inbox per detail (messages); LCM's default is 30.
+  /// A batch arriving at a full inbox is dropped (counted as an error): the producer sees the gap
+  /// and resends.
+  int queue_capacity = 100'000;
+  double degraded_lag_s = 10.0;  ///< STATUS says "degraded" when the oldest waiting batch is older
   double status_period_s = 1.0;
   bool record_latency = false;  ///< keep receipt -> STATE publish latencies (benchmark)
 };
@@ -50,7 +59,8 @@ class Daemon {
   /// Handles LCM messages for up to `timeout_ms` and does the periodic chores (status, timed
   /// checkpoints, finished life estimates). Returns false after a runtime failure (see error()).
   bool poll(int timeout_ms);
-  /// The periodic chores only (when someone else drives lcm.handle()).
+  /// Applies the batches received so far, in order, and does the periodic chores; call it after
+  /// lcm.handle() when someone else drives LCM.
   void tick();
   /// Final checkpoints, results and PNGs, a "stopping" status. Idempotent.
   void stop();
@@ -65,7 +75,10 @@ class Daemon {
 
  private:
   struct Detail;
+  struct Received;
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  void apply_received(Detail& d, const Received& r);
+  void chores();
   void publish_state(Detail& d);
   void publish_fields(Detail& d);
   void publish_status(Detail& d, const char* health);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <thread>
 
 #include "messages/channels.h"
 #include "replay/replay_tool.h"
@@ -155,7 +156,13 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
     ASSERT_TRUE(first.start(&error)) << error;
     const std::vector<Batch> half(batches.begin(), batches.begin() + 7);
     replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, 60.0});
-    ASSERT_TRUE(replayer.run({}, {}).ok);
+    ASSERT_TRUE(replayer
+                    .run({},
+                         [&] {
+                           first.tick();  // the replayer drives LCM: the daemon applies here
+                           return true;
+                         })
+                    .ok);
     first.stop();
     EXPECT_EQ(first.twin(0).state_hash_hex(), expected.at(7));
   }
@@ -166,7 +173,10 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
   EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(7));
   // The whole history again: 1..7 are duplicates, 8..16 are applied.
   replay::LcmReplayer replayer(lcm, batches, {false, 16, 3.0, 60.0});
-  const auto result = replayer.run({}, {});
+  const auto result = replayer.run({}, [&] {
+    second.tick();
+    return true;
+  });
   ASSERT_TRUE(result.ok) << result.error;
   EXPECT_EQ(result.final_state->state_hash, expected.at(16));
   EXPECT_EQ(second.twin(0).counters().duplicates, 7);
@@ -252,6 +262,49 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   EXPECT_EQ(states.back().remaining_cycles, twin->life().central);
   EXPECT_EQ(states.back().state_hash, twin->state_hash_hex());
   RecordProperty("ingest_s", std::to_string(ingest_s));
+  daemon.stop();
+}
+
+TEST_F(MemqTest, StatusCountsTheBatchesWaitingAndTheAgeOfTheOldest) {
+  const TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  options_.status_period_s = 0.0;  // a STATUS after every applied batch
+  Daemon daemon(lcm, config, options_);
+  std::string error;
+  ASSERT_TRUE(daemon.start(&error)) << error;
+  std::vector<peritwin_msgs::status_t> statuses;
+  struct Sink {
+    std::vector<peritwin_msgs::status_t>* statuses;
+    void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
+      statuses->push_back(*m);
+    }
+  } sink{&statuses};
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Sink::status, &sink);
+  const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
+  for (std::int64_t seq = 1; seq <= 3; ++seq) {
+    const auto m = batch_message({"b1-ct", "p", seq, {{4000, 0.1, 0, 10}}}, 0);
+    lcm.publish(load, &m);
+  }
+  while (lcm.handleTimeout(0) > 0) {  // received into the inbox, not yet applied
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  daemon.tick();  // applies the three, a STATUS after each
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_GE(statuses.size(), 3u);
+  // After batch k of 3: 3 − k still wait, the oldest of them received >= 30 ms ago.
+  for (int k = 1; k <= 3; ++k) {
+    const auto& s = statuses[static_cast<std::size_t>(k - 1)];
+    EXPECT_EQ(s.last_seq, k);
+    EXPECT_EQ(s.pending, 3 - k);
+    if (k < 3) {
+      EXPECT_GE(s.lag_s, 0.030);
+      EXPECT_LT(s.lag_s, 30.0);
+    } else {
+      EXPECT_EQ(s.lag_s, 0.0);
+    }
+    EXPECT_EQ(s.health, "ok");
+  }
   daemon.stop();
 }
 
