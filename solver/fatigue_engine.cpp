@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 
 namespace peritwin {
 
@@ -67,8 +68,27 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
       model_(model),
       solver_(disc, model, std::move(supports), std::move(loads)),
       settings_(settings) {
-  solver_.set_incremental(settings_.incremental);
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
+  if (settings_.law == FatigueLaw::bilinear) {
+    if (model.options.kind != ModelKind::bond_based) {
+      throw std::invalid_argument(
+          "FatigueEngine: the bilinear law (003) needs a bond-based model (its damage scales a "
+          "bond's pair stiffness, 003 Eq. 45)");
+    }
+    const std::string msg = fatigue::validate(settings_.bilinear);
+    if (!msg.empty()) throw std::invalid_argument("FatigueEngine: bilinear law: " + msg);
+    if (settings_.cycle_increment < 1) {
+      throw std::invalid_argument("FatigueEngine: cycle_increment must be >= 1");
+    }
+    if (!(settings_.softening_tolerance > 0.0) || settings_.softening_max_iterations < 1) {
+      throw std::invalid_argument(
+          "FatigueEngine: softening_tolerance must be > 0 and softening_max_iterations >= 1");
+    }
+    settings_.incremental = false;  // see the file comment
+    damage_.assign(nb, 0.0);
+    max_stretch_.assign(nb, 0.0);
+  }
+  solver_.set_incremental(settings_.incremental);
   anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
   rate_.assign(nb, 0.0);
   phase_.assign(nb, 1);
@@ -118,6 +138,7 @@ std::int64_t FatigueEngine::broken_bonds() const {
 }
 
 double FatigueEngine::life(std::size_t b) const {
+  if (bilinear()) return 1.0 - damage_[b];
   if (!dose_mode()) return anchor_life_[b];
   return anchor_life_[b] - rate_[b] * dose_[phase_[b] - 1];
 }
@@ -181,6 +202,9 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
                             : 0.0;
         break;
       }
+      case FatigueLaw::bilinear:  // integrated by bilinear_increment, no per-cycle rate
+        rate_[b] = 0.0;
+        break;
       case FatigueLaw::kinetic: {  // 004 Eq. (12)-(15): remaining life falls by Φ per cycle
         // Decision: the bond stress is E·s⁺, the stress of a bar at the bond's stretch (004 uses
         // the bond's stress; a PD bond carries no other uniaxial stress measure).
@@ -293,6 +317,7 @@ void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
 }
 
 EngineStatus FatigueEngine::apply(const LoadBlock& block) {
+  if (bilinear()) return apply_bilinear(block);
   if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
   std::int64_t remaining = block.count;
   while (remaining > 0) {
@@ -312,6 +337,11 @@ EngineStatus FatigueEngine::apply(const LoadBlock& block) {
 }
 
 EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
+  if (bilinear()) {
+    if (block.count < 0) throw std::invalid_argument("apply_per_cycle: count < 0");
+    const std::vector<std::int64_t> ones(static_cast<std::size_t>(block.count), 1);
+    return apply_increments(block, ones);
+  }
   if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
   const auto& p = settings_.strain;
   for (std::int64_t c = 0; c < block.count; ++c) {
@@ -330,6 +360,149 @@ EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
     if (any && !break_and_resolve(block)) return EngineStatus::final_failure;
   }
   return EngineStatus::ok;
+}
+
+// ------------------------------------------------------------------ bilinear law (003)
+
+namespace {
+bool same_bilinear_key(const LoadBlock& a, const LoadBlock& b) {
+  return a.p_max == b.p_max && a.alpha == b.alpha;  // R is not used by 003's envelope
+}
+}  // namespace
+
+EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block) {
+  if (failed_) return EngineStatus::final_failure;
+  if (block.count < 1) return EngineStatus::ok;
+  if (pending_cycles_ > 0 && !same_bilinear_key(pending_key_, block)) {
+    const std::int64_t dn = pending_cycles_;
+    pending_cycles_ = 0;
+    if (!bilinear_increment(pending_key_, dn)) return EngineStatus::final_failure;
+  }
+  pending_key_ = block;
+  pending_key_.count = 0;
+  total_cycles_ += block.count;
+  pending_cycles_ += block.count;
+  const std::int64_t dn = settings_.cycle_increment;
+  while (pending_cycles_ >= dn) {
+    pending_cycles_ -= dn;
+    if (!bilinear_increment(pending_key_, dn)) return EngineStatus::final_failure;
+  }
+  return EngineStatus::ok;
+}
+
+EngineStatus FatigueEngine::flush() {
+  if (!bilinear() || pending_cycles_ == 0) {
+    return failed_ ? EngineStatus::final_failure : EngineStatus::ok;
+  }
+  if (failed_) return EngineStatus::final_failure;
+  const std::int64_t dn = pending_cycles_;
+  pending_cycles_ = 0;
+  return bilinear_increment(pending_key_, dn) ? EngineStatus::ok : EngineStatus::final_failure;
+}
+
+EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
+                                             std::span<const std::int64_t> increments) {
+  if (!bilinear()) throw std::logic_error("apply_increments: bilinear law only");
+  std::int64_t sum = 0;
+  for (auto dn : increments) {
+    if (dn < 1) throw std::invalid_argument("apply_increments: increments must be >= 1");
+    sum += dn;
+  }
+  if (sum != block.count) {
+    throw std::invalid_argument("apply_increments: increments must sum to the block's count");
+  }
+  if (flush() != EngineStatus::ok) return EngineStatus::final_failure;
+  for (auto dn : increments) {
+    total_cycles_ += dn;
+    if (!bilinear_increment(block, dn)) return EngineStatus::final_failure;
+  }
+  return EngineStatus::ok;
+}
+
+bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
+  const auto& p = settings_.bilinear;
+  const auto nb = damage_.size();
+  const auto delta_n = static_cast<double>(dn);
+  // Events carry the cycle count at the end of the increment (pending cycles are not integrated).
+  const std::int64_t at_cycle = total_cycles_ - pending_cycles_;
+  std::vector<double> s_start, s, trial(nb);
+  solver_.stretch(key.p_max, key.alpha, s_start);  // s_N: current factors, this load
+  s = s_start;
+  std::vector<double> iterate = damage_;  // D' of the factors now in the solver
+  std::vector<BondIndex> changed_bonds;
+  std::vector<double> changed_factors;
+  bool converged = false;
+  for (int it = 0; it < settings_.softening_max_iterations; ++it) {
+    changed_bonds.clear();
+    changed_factors.clear();
+    double largest_change = 0.0;
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (!breakable_[b]) continue;
+      // 003 Eq. (50): static increment along the envelope (Eq. 46) + fatigue (Eq. 29)
+      double d = damage_[b] +
+                 fatigue::bilinear_static_damage_increment(max_stretch_[b], s[b], p.s0, p.sc) +
+                 fatigue::third_law_fatigue_damage_increment(s_start[b], s[b], delta_n, p);
+      d = std::clamp(d, damage_[b], 1.0);
+      // 003 Eq. (45): f = 1 − D below sc, 0 at or beyond sc or at D = 1 (broken)
+      const double f = fatigue::bilinear_force_factor(s[b], d, p.sc);
+      if (f == 0.0) d = 1.0;
+      trial[b] = d;
+      const double old_f = solver_.bond_factor(static_cast<BondIndex>(b));
+      if (f != old_f) {
+        changed_bonds.push_back(static_cast<BondIndex>(b));
+        changed_factors.push_back(f);
+        largest_change = std::max(largest_change, std::abs(f - old_f));
+      }
+    }
+    // Converged: the factors in the solver reproduce themselves within the tolerance (checked only
+    // after the increment's damage was applied once, so that small increments are never lost).
+    // A bond that would break is never left out. Bonds whose factor did not change take the new
+    // damage in any case (their factor 1 − D is what the solver has), the others keep the damage
+    // of the factors in the solver.
+    bool breaks = false;
+    for (double f : changed_factors) breaks = breaks || f == 0.0;
+    if (changed_bonds.empty() ||
+        (it > 0 && !breaks && largest_change <= settings_.softening_tolerance)) {
+      for (std::size_t b = 0; b < nb; ++b) {
+        if (breakable_[b] && fatigue::bilinear_force_factor(s[b], trial[b], p.sc) ==
+                                 solver_.bond_factor(static_cast<BondIndex>(b))) {
+          iterate[b] = trial[b];
+        }
+      }
+      converged = true;
+      break;
+    }
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (breakable_[b]) iterate[b] = trial[b];
+    }
+    for (std::size_t n = 0; n < changed_bonds.size(); ++n) {
+      const auto b = static_cast<std::size_t>(changed_bonds[n]);
+      if (changed_factors[n] == 0.0) {
+        breakable_[b] = 0;  // broken for good: the solver refuses to revive it
+        events_.push_back({at_cycle, changed_bonds[n],
+                           s[b] >= p.sc ? BreakCause::overload : BreakCause::fatigue});
+      }
+    }
+    const FactorReport r = solver_.set_bond_factors(changed_bonds, changed_factors);
+    ++solves_;
+    if (!r.ok()) {
+      failed_ = true;
+      failure_reason_ = "final failure at cycle " + std::to_string(at_cycle) + ": " + r.message;
+      damage_ = iterate;
+      update_phases();
+      return false;
+    }
+    solver_.stretch(key.p_max, key.alpha, s);
+  }
+  ++increments_;
+  if (!converged) ++unconverged_increments_;
+
+  damage_ = iterate;
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (solver_.intact()[b]) max_stretch_[b] = std::max(max_stretch_[b], s[b]);
+  }
+  update_phases();
+  return true;
 }
 
 bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
@@ -445,6 +618,10 @@ EngineState FatigueEngine::export_state() const {
   s.resolve_groups = resolve_groups_;
   s.failed = failed_;
   s.failure_reason = failure_reason_;
+  s.damage = damage_;
+  s.max_stretch = max_stretch_;
+  s.pending_cycles = pending_cycles_;
+  s.pending_key = pending_key_;
   return s;
 }
 
@@ -452,6 +629,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
     return false;
   }
+  if (bilinear()) return import_bilinear_state(s);
   cascade_checked_ = false;
   // The re-solves to replay: on a fresh engine, the recorded groups of events when they account
   // for every event (same updates, same factor bit for bit), else one group of every bond broken
@@ -498,6 +676,44 @@ bool FatigueEngine::import_state(const EngineState& s) {
   return true;
 }
 
+bool FatigueEngine::import_bilinear_state(const EngineState& s) {
+  const auto nb = damage_.size();
+  if (s.damage.size() != nb || s.max_stretch.size() != nb || s.pending_cycles < 0 ||
+      !events_.empty()) {
+    return false;
+  }
+  // The factor of every bond, as bilinear_increment set it: a refactorization depends only on
+  // them (and the broken set), so one call rebuilds the solver state bit for bit.
+  std::vector<BondIndex> bonds;
+  std::vector<double> factors;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const double f = s.intact[b] ? 1.0 - s.damage[b] : 0.0;
+    if (s.intact[b] && !(s.damage[b] < 1.0)) return false;
+    if (f != solver_.bond_factor(static_cast<BondIndex>(b))) {
+      bonds.push_back(static_cast<BondIndex>(b));
+      factors.push_back(f);
+    }
+  }
+  if (!bonds.empty() && !s.failed) {
+    const FactorReport r = solver_.set_bond_factors(bonds, factors);
+    ++solves_;
+    if (!r.ok()) return false;
+  }
+  for (std::size_t b = 0; b < nb; ++b) breakable_[b] = breakable_[b] && s.intact[b] ? 1 : 0;
+  anchor_life_ = s.anchor_life;
+  damage_ = s.damage;
+  max_stretch_ = s.max_stretch;
+  pending_cycles_ = s.pending_cycles;
+  pending_key_ = s.pending_key;
+  total_cycles_ = s.total_cycles;
+  events_ = s.events;
+  resolve_groups_ = s.resolve_groups;
+  failed_ = s.failed;
+  failure_reason_ = s.failure_reason;
+  update_phases();
+  return true;
+}
+
 std::uint64_t FatigueEngine::state_hash() const {
   std::uint64_t h = 1469598103934665603ULL;  // FNV-1a 64
   auto mix = [&h](const void* data, std::size_t bytes) {
@@ -512,6 +728,15 @@ std::uint64_t FatigueEngine::state_hash() const {
   mix(solver_.intact().data(), solver_.intact().size());
   mix(phase_.data(), phase_.size());
   mix(&total_cycles_, sizeof(total_cycles_));
+  if (bilinear()) {
+    mix(damage_.data(), damage_.size() * sizeof(double));
+    mix(max_stretch_.data(), max_stretch_.size() * sizeof(double));
+    mix(&pending_cycles_, sizeof(pending_cycles_));
+    if (pending_cycles_ > 0) {  // the key of no pending cycles does not matter
+      mix(&pending_key_.p_max, sizeof(double));
+      mix(&pending_key_.alpha, sizeof(double));
+    }
+  }
   return h;
 }
 

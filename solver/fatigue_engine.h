@@ -11,10 +11,37 @@
 //    absorbed in O(1) (DESIGN.md).
 //  - direct mode (every other law): λ_b −= d_b once per cycle, advanced k cycles at a time with
 //    fatigue::advance_life, which reproduces k subtractions bit for bit.
+// The bilinear law (003) is different: its damage D softens the bonds, so the stretches change
+// with every cycle and there is no exact jump. It advances in cycle increments ΔN (003 Sec. 5.1,
+// 6), see "bilinear mode" below.
+//
+// Bilinear mode (FatigueLaw::bilinear, bond-based models only; 003 Eq. 13-15, 27-30, 45-50):
+//  - Increments: a fixed ΔN = FatigueSettings::cycle_increment. Cycles at one load key (P_max, α)
+//    are collected; every time ΔN of them are pending, one increment of ΔN is integrated. When a
+//    block with another key arrives, the pending cycles of the old key are integrated first as one
+//    shorter increment. So the increment sequence depends only on the sequence of cycles, not on
+//    how a constant-load stretch is cut into blocks: apply() of any split equals one block, and
+//    equals apply_increments() given that sequence, bit for bit. Up to ΔN − 1 cycles may be
+//    pending: they count in total_cycles() but their damage is integrated later (or by flush()).
+//    R is not used: 003 Sec. 4 holds the load at its maximum (the envelope of Fig. 5).
+//  - One increment (003 Eq. 50): D' = D + [D14(s') − D14(s_max)]⁺ + A ΔN ((s_N + s')/(2 sc))^m,
+//    with s_N the stretch at the start, s' the stretch at equilibrium with the stiffness factors
+//    f = 1 − D' (Eq. 13, 45) and s_max the largest equilibrium stretch so far (the static damage
+//    of Eq. 14-15/46 follows the envelope and does not return on reloading). s' depends on D', so
+//    the increment is solved by a secant (fixed-point) iteration instead of 003's Newton-Raphson
+//    (Eq. 52-55): set the factors, re-solve the linear system K(D')u = F (Eq. 52), recompute D',
+//    until no factor changes by more than softening_tolerance (at the solution the out-of-balance
+//    force of Eq. 53 vanishes: K(D') is the secant stiffness). A bond breaks (f = 0, irreversibly)
+//    when D' reaches 1 or s' reaches sc (Eq. 45, third line). With ΔN → 0 the same iteration is
+//    the static softening solve at a new load.
+//  - Re-solves refactorize (StaticSolver::set_incremental(false)): every loaded bond softens in
+//    every increment, more columns than a rank update pays off for, and a refactorized factor
+//    depends only on the factors, which makes import_state bit-identical.
 // Units: SI (N, m); cycles are counted in int64.
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -36,7 +63,12 @@ struct LoadBlock {
 /// Empty when the block can be applied, else the reason (non-finite numbers, count < 1, R ≥ 1).
 std::string validate(const LoadBlock& block);
 
-enum class FatigueLaw { strain_range, energy, kinetic };
+enum class FatigueLaw {
+  strain_range,  ///< 000 Eq. (14)-(20)
+  energy,        ///< 000 Eq. (30)-(46)
+  kinetic,       ///< 004 Eq. (12)-(16)
+  bilinear,      ///< 003 bilinear bond with the third degradation law, Eq. (27)-(30), (45)-(50)
+};
 
 /// Phase III (static failure at P_max) criterion.
 enum class StaticFailure {
@@ -48,9 +80,20 @@ struct FatigueSettings {
   FatigueLaw law = FatigueLaw::strain_range;
   fatigue::StrainLawParams strain;  ///< laws strain_range and energy (000 Eq. 44-46 maps A, m)
   fatigue::KineticParams kinetic;   ///< law kinetic (004 Eq. 12-16)
+  /// law bilinear: s0, sc (003 Eq. 43-44), A, m of the third law (003 Eq. 27). Bond-based only.
+  fatigue::BilinearParams bilinear;
+  /// law bilinear: ΔN, cycles per damage increment (003 Sec. 5.1, 6.5-6.7: 100 to 50000); >= 1.
+  std::int64_t cycle_increment = 1000;
+  /// law bilinear: the secant iteration of an increment stops when no bond's stiffness factor
+  /// f = 1 − D changed by more than this in the last re-solve (absolute); > 0.
+  double softening_tolerance = 1e-6;
+  /// law bilinear: at most this many re-solves per increment (then the last iterate is kept and
+  /// counted in FatigueEngine::unconverged_increments()); >= 1.
+  int softening_max_iterations = 100;
   /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
   /// Phase III (000 Eq. 7-8, 20): bonds whose stretch at P_max reaches s_c break statically.
+  /// (Not used by the bilinear law, whose sc plays this role.)
   /// 0 = compute s_c from G_c = K_c²/E with 000 Eq. (8); < 0 = no static failure.
   double critical_stretch = 0.0;
   /// Which phase III criterion applies (the other one's value is ignored).
@@ -104,6 +147,12 @@ struct EngineState {
   std::vector<std::int64_t> resolve_groups;
   bool failed = false;
   std::string failure_reason;
+  /// Bilinear law only (empty otherwise): damage D per bond, largest equilibrium stretch per bond,
+  /// and the cycles collected at pending_key (P_max, α) but not yet integrated.
+  std::vector<double> damage;
+  std::vector<double> max_stretch;
+  std::int64_t pending_cycles = 0;
+  LoadBlock pending_key;
 };
 
 class FatigueEngine {
@@ -115,8 +164,15 @@ class FatigueEngine {
   bool initialize();
   /// Applies a block with exact next-break stepping. Stops early on final failure.
   EngineStatus apply(const LoadBlock& block);
-  /// The oracle: the same block cycle by cycle.
+  /// The oracle: the same block cycle by cycle. Bilinear law: flush(), then increments of one
+  /// cycle (ΔN = 1, the converged reference; not bit-equal to apply()).
   EngineStatus apply_per_cycle(const LoadBlock& block);
+  /// Bilinear law, the increment oracle: flush(), then integrate the block in exactly the given
+  /// increments (each >= 1, summing to block.count; std::invalid_argument otherwise), nothing left
+  /// pending. std::logic_error for the other laws.
+  EngineStatus apply_increments(const LoadBlock& block, std::span<const std::int64_t> increments);
+  /// Bilinear law: integrates the pending cycles now as one increment (no-op otherwise).
+  EngineStatus flush();
 
   [[nodiscard]] std::int64_t total_cycles() const { return total_cycles_; }
   [[nodiscard]] const std::vector<BreakEvent>& break_events() const { return events_; }
@@ -130,6 +186,13 @@ class FatigueEngine {
   [[nodiscard]] const StaticSolver& solver() const { return solver_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
+  /// Bilinear law: damage D per bond (empty otherwise), pending cycles, largest stretches.
+  [[nodiscard]] const std::vector<double>& damage() const { return damage_; }
+  [[nodiscard]] const std::vector<double>& max_stretch() const { return max_stretch_; }
+  [[nodiscard]] std::int64_t pending_cycles() const { return pending_cycles_; }
+  /// Bilinear law: increments integrated, and those that hit softening_max_iterations.
+  [[nodiscard]] std::int64_t increments() const { return increments_; }
+  [[nodiscard]] std::int64_t unconverged_increments() const { return unconverged_increments_; }
 
   [[nodiscard]] EngineState export_state() const;
   /// Restores a state exported from an engine built from the same model; false if it does not fit.
@@ -139,6 +202,11 @@ class FatigueEngine {
 
  private:
   [[nodiscard]] bool dose_mode() const;
+  [[nodiscard]] bool bilinear() const { return settings_.law == FatigueLaw::bilinear; }
+  /// One bilinear increment of dn >= 0 cycles at (P_max, α); false on final failure.
+  bool bilinear_increment(const LoadBlock& key, std::int64_t dn);
+  EngineStatus apply_bilinear(const LoadBlock& block);
+  bool import_bilinear_state(const EngineState& state);
   /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key).
   void prepare_rates(const LoadBlock& block);
   /// Recomputes rate_ (and the dose thresholds) for `block` without folding the dose.
@@ -188,6 +256,14 @@ class FatigueEngine {
   bool failed_ = false;
   std::string failure_reason_;
   int solves_ = 0;
+
+  // Bilinear law (003): see the file comment.
+  std::vector<double> damage_;       ///< D per bond, 003 Eq. (13), (50)
+  std::vector<double> max_stretch_;  ///< largest equilibrium stretch per bond (static envelope)
+  std::int64_t pending_cycles_ = 0;
+  LoadBlock pending_key_;
+  std::int64_t increments_ = 0;
+  std::int64_t unconverged_increments_ = 0;
 };
 
 }  // namespace peritwin

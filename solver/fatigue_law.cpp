@@ -471,6 +471,46 @@ double bilinear_bond_force(double c, double s, double damage, double sc) {
   return c * bilinear_force_factor(s, damage, sc) * s;  // 003 Eq. (45)
 }
 
+double third_law_cycles_constant_stretch(double s, const BilinearParams& p) {
+  const double rate = third_law_fatigue_rate(s, p.sc, p.A, p.m);  // 003 Eq. (27)
+  return rate > 0.0 ? 1.0 / rate : kInf;
+}
+
+double third_law_bar_cycles_to_failure(double s_elastic, const BilinearParams& p) {
+  if (!(s_elastic > 0.0)) return kInf;
+  if (s_elastic >= p.s0) return 0.0;
+  // 003 Eq. (27) with s = s_e/(1 − D) (Eq. 13), integrated from D = 0 to D = 1 − s_e/s0
+  return (1.0 - std::pow(s_elastic / p.s0, p.m + 1.0)) /
+         ((p.m + 1.0) * p.A * std::pow(s_elastic / p.sc, p.m));
+}
+
+double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const BilinearParams& p) {
+  if (!(s_elastic > 0.0)) return kInf;
+  if (s_elastic >= p.s0) return 0.0;
+  const double d_star = 1.0 - s_elastic / p.s0;  // where s reaches s0
+  double damage = 0.0, s = s_elastic, cycles = 0.0;
+  const double s_hist = s_elastic;  // below s0 until failure: no static damage (Eq. 46)
+  while (cycles < 1e300) {
+    double s_new = s, d_new = damage;
+    for (int it = 0; it < 1000; ++it) {  // implicit mid-point rule, 003 Eq. (29)-(30)
+      d_new = damage + bilinear_static_damage_increment(s_hist, s_new, p.s0, p.sc) +
+              third_law_fatigue_damage_increment(s, s_new, delta_n, p);
+      const double next = d_new < 1.0 ? s_elastic / (1.0 - d_new) : kInf;  // Eq. (13)
+      const bool done = std::abs(next - s_new) <= 1e-15 * next || next >= p.s0;
+      s_new = next;
+      if (done) break;
+    }
+    if (d_new >= d_star || s_new >= p.s0) {
+      // s reaches s0 inside this increment: D* = D + A δn ((s + s0)/(2 sc))^m (Eq. 29)
+      return cycles + (d_star - damage) / third_law_fatigue_damage_increment(s, p.s0, 1.0, p);
+    }
+    damage = d_new;
+    s = s_new;
+    cycles += delta_n;
+  }
+  return kInf;
+}
+
 // ============================ law 4: kinetic theory of fracture =================================
 
 std::string validate(const KineticParams& p) {

@@ -226,6 +226,22 @@ double third_law_update_damage(double damage, double s_old, double s_new, double
 double bilinear_force_factor(double s, double damage, double sc);
 /// 003 Eq. (45): bond force magnitude c·factor·s.
 double bilinear_bond_force(double c, double s, double damage, double sc);
+/// 003 Eq. (27) integrated at a constant stretch 0 < s <= s0 (no static damage): D goes from 0 to
+/// 1 in N = 1/(A (s/sc)^m) cycles; +inf for s <= 0.
+double third_law_cycles_constant_stretch(double s, const BilinearParams& p);
+/// One bond under a constant force F = c·s_e (load control; the PD analogue of one spring of 003's
+/// cylinder model, Sec. 2): equilibrium c(1 − D)s = F (Eq. 13/45) gives s = s_e/(1 − D), and
+/// Eq. (27) becomes dD/dN = A (s_e/((1 − D) sc))^m, i.e. (1 − (1 − D)^(m+1))/(m+1) = A (s_e/sc)^m
+/// N. The bond reaches s0 at D = 1 − s_e/s0; beyond s0 its force c(1 − D_f − D_s(s))s (Eq. 14, 16)
+/// falls with s (slope s_e/s0 − sc/(sc − s0) < 0), so it cannot carry F and fails at once. Cycles
+/// to failure N_f = (1 − (s_e/s0)^(m+1)) / ((m+1) A (s_e/sc)^m) for 0 < s_e < s0; 0 for s_e >= s0.
+double third_law_bar_cycles_to_failure(double s_elastic, const BilinearParams& p);
+/// The same bond integrated with 003 Eq. (50) in increments of ΔN cycles: per increment the
+/// implicit mid-point rule of Eq. (29), D' = D + static(Eq. 46) + A ΔN ((s + s')/(2 sc))^m with
+/// s' = s_e/(1 − D'), solved by fixed-point iteration; the crossing of s0 is located inside the
+/// last increment with the same rule (D* = 1 − s_e/s0). Converges to
+/// third_law_bar_cycles_to_failure as O(ΔN²).
+double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const BilinearParams& p);
 
 // ============================ law 4: kinetic theory of fracture (004) ============================
 

@@ -2,6 +2,7 @@
 #include "validation/b4_analytical.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -56,7 +57,27 @@ void critical_bond_energy_checks() {
   print("gc_mean_crossing_energy_at_sc_eq8_vs_eq12", sum / n, critical_bond_energy(al, 36.0));
 }
 
-void bilinear_checks() {}
+/// 003 third degradation law with the bilinear bond: (a) constant stretch s < s0, Eq. (27)
+/// integrated: D = 1 after N = 1/(A (s/sc)^m); Eq. (50) cycle by cycle must reach D >= 1 at
+/// ceil(N). (b) One bond under constant force (003's single spring, load control): the closed form
+/// N_f = (1 − (s_e/s0)^(m+1))/((m+1) A (s_e/sc)^m) against Eq. (29)-(30) in 10^4 increments.
+void bilinear_checks() {
+  using namespace fatigue;
+  const BilinearParams p{2e-3, 8e-3, 3.7e-3, 4.0};
+  const double s = 1.5e-3;
+  double damage = 0.0;
+  std::int64_t cycles = 0;
+  while (damage < 1.0 && cycles < 100000000) {
+    damage = third_law_update_damage(damage, s, s, 1.0, p);
+    ++cycles;
+  }
+  print("bilinear_constant_stretch_life_eq27", static_cast<double>(cycles),
+        std::ceil(third_law_cycles_constant_stretch(s, p)));
+  const double s_e = 1.2e-3;
+  const double exact = third_law_bar_cycles_to_failure(s_e, p);
+  print("bilinear_load_controlled_bond_life_eq29_30",
+        third_law_bar_cycles_numerical(s_e, exact / 1e4, p), exact);
+}
 
 }  // namespace
 
