@@ -23,7 +23,9 @@
 //    how a constant-load stretch is cut into blocks: apply() of any split equals one block, and
 //    equals apply_increments() given that sequence, bit for bit. Up to ΔN − 1 cycles may be
 //    pending: they count in total_cycles() but their damage is integrated later (or by flush()).
-//    R is not used: 003 Sec. 4 holds the load at its maximum (the envelope of Fig. 5).
+//    R is not used: 003 Sec. 4 holds the load at its maximum (the envelope of Fig. 5). A history
+//    whose every block has a new key (rainflow of a random series) costs one nonlinear solve per
+//    block.
 //  - One increment (003 Eq. 50): D' = D + [D14(s') − D14(s_max)]⁺ + A ΔN ((s_N + s')/(2 sc))^m,
 //    with s_N the stretch at the start, s' the stretch at equilibrium with the stiffness factors
 //    f = 1 − D' (Eq. 13, 45) and s_max the largest equilibrium stretch so far (the static damage
@@ -32,8 +34,10 @@
 //    (Eq. 52-55): set the factors, re-solve the linear system K(D')u = F (Eq. 52), recompute D',
 //    until no factor changes by more than softening_tolerance (at the solution the out-of-balance
 //    force of Eq. 53 vanishes: K(D') is the secant stiffness). A bond breaks (f = 0, irreversibly)
-//    when D' reaches 1 or s' reaches sc (Eq. 45, third line). With ΔN → 0 the same iteration is
-//    the static softening solve at a new load.
+//    when D' reaches 1 (BreakCause::fatigue) or s' reaches sc (Eq. 45, third line;
+//    BreakCause::overload); the phase III settings of 000 are not used. With ΔN → 0 the same
+//    iteration is the static softening solve at a new load. Bonds in no-fail zones neither soften
+//    nor break.
 //  - Re-solves refactorize (StaticSolver::set_incremental(false)): every loaded bond softens in
 //    every increment, more columns than a rank update pays off for, and a refactorized factor
 //    depends only on the factors, which makes import_state bit-identical.
