@@ -151,8 +151,35 @@ TEST(BilinearEngine, RejectsStateBasedModelsAndBadSettings) {
   f.cycle_increment = 0;
   EXPECT_THROW(FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f), std::invalid_argument);
   f.cycle_increment = 10;
+  FatigueEngine engine(bb.disc, bb.model, bb.supports, bb.loads, f);
+  ASSERT_TRUE(engine.initialize());
+  const std::vector<std::int64_t> wrong_sum{1, 2}, zero{0, 5};
+  EXPECT_THROW(engine.apply_increments({1.0, 0.0, 0.0, 5}, wrong_sum), std::invalid_argument);
+  EXPECT_THROW(engine.apply_increments({1.0, 0.0, 0.0, 5}, zero), std::invalid_argument);
   f.bilinear.sc = 0.5e-4;  // sc <= s0
   EXPECT_THROW(FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f), std::invalid_argument);
+  FatigueSettings strain;
+  FatigueEngine other(bb.disc, bb.model, bb.supports, bb.loads, strain);
+  ASSERT_TRUE(other.initialize());
+  EXPECT_THROW(other.apply_increments({1.0, 0.0, 0.0, 5}, wrong_sum), std::logic_error);
+}
+
+TEST(BilinearEngine, OverloadSeparatesThePlateIntoFinalFailure) {
+  // A load whose stretches exceed sc at the notch tip (003 Eq. 45, third line): the secant
+  // iteration breaks the tip bonds, the crack runs (static softening, no cycles needed) until the
+  // loaded part comes off the supported part: final failure, reported and sticky.
+  const auto plate = make_plate();
+  auto f = bilinear_settings(plate, 1000.0, 1e12, 1000);
+  f.softening_max_iterations = 1000;
+  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
+  ASSERT_TRUE(engine.initialize());
+  EXPECT_EQ(engine.apply({4000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
+  EXPECT_TRUE(engine.failed());
+  EXPECT_FALSE(engine.failure_reason().empty());
+  std::printf("[ measured ] %s after %zu breaks\n", engine.failure_reason().c_str(),
+              engine.break_events().size());
+  EXPECT_EQ(engine.break_events().front().cause, BreakCause::overload);
+  EXPECT_EQ(engine.apply({1000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
 }
 
 TEST(BilinearEngine, SmallDamageFollowsTheLawBondByBond) {
