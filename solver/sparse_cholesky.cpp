@@ -3,17 +3,330 @@
 #include <cholmod.h>
 
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <system_error>
+#include <thread>
 
 namespace peritwin {
+
+namespace {
+
+/// The columns of a simplicial LDLᵀ factor split into two sets of whole elimination subtrees
+/// (parts 1 and 2) and the rest (part 0, the "top": every ancestor of a part-1/2 column is in the
+/// top). Forward and backward solves of parts 1 and 2 touch disjoint rows apart from the top ones,
+/// so they run on two threads; the split depends only on the factor's pattern, never on the
+/// machine, so results are the same with one thread or two.
+struct SolveSchedule {
+  std::int64_t pattern_nnz = -1;  ///< Σ Lnz when built: updates that add fill change it
+  std::vector<int> parent;        ///< elimination tree of the pattern (−1 at a root)
+  /// Per part, ascending: chains (first column, length 1-4) of columns j, j+1, ... where column
+  /// j+1 has the pattern of column j below row j+1 (a supernode's columns), solved together so
+  /// that each row of the right-hand side is read once per chain.
+  std::array<std::vector<std::pair<int, int>>, 3> chains;
+  bool balanced = false;  ///< parts 1 and 2 are not empty (else all columns are in the top)
+};
+
+SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
+  SolveSchedule schedule;
+  schedule.pattern_nnz = pattern_nnz;
+  const auto n = static_cast<int>(l.n);
+  const auto* lp = static_cast<const int*>(l.p);
+  const auto* li = static_cast<const int*>(l.i);
+  const auto* lnz = static_cast<const int*>(l.nz);
+  // Elimination tree: the parent of j is the smallest row below the diagonal of column j.
+  std::vector<int> parent(static_cast<std::size_t>(n), -1);
+  std::vector<double> weight(static_cast<std::size_t>(n), 0.0);
+  for (int j = 0; j < n; ++j) {
+    int p = n;
+    for (int q = lp[j] + 1; q < lp[j] + lnz[j]; ++q) p = std::min(p, li[q]);
+    parent[static_cast<std::size_t>(j)] = p < n ? p : -1;
+    weight[static_cast<std::size_t>(j)] += lnz[j];
+    if (p < n) weight[static_cast<std::size_t>(p)] += weight[static_cast<std::size_t>(j)];
+  }
+  std::vector<int> child_start(static_cast<std::size_t>(n) + 1, 0), children;
+  for (int j = 0; j < n; ++j) {
+    if (parent[static_cast<std::size_t>(j)] >= 0)
+      ++child_start[static_cast<std::size_t>(parent[static_cast<std::size_t>(j)]) + 1];
+  }
+  for (int j = 0; j < n; ++j) {
+    child_start[static_cast<std::size_t>(j) + 1] += child_start[static_cast<std::size_t>(j)];
+  }
+  children.resize(static_cast<std::size_t>(child_start[static_cast<std::size_t>(n)]));
+  {
+    std::vector<int> next(child_start.begin(), child_start.end() - 1);
+    for (int j = 0; j < n; ++j) {
+      const int p = parent[static_cast<std::size_t>(j)];
+      if (p >= 0) children[static_cast<std::size_t>(next[static_cast<std::size_t>(p)]++)] = j;
+    }
+  }
+  // Split the heaviest candidate subtree (its root goes to the top) until the candidates pack
+  // into two bins within 2 % of each other (largest-first greedy packing).
+  std::vector<int> candidates;
+  for (int j = 0; j < n; ++j) {
+    if (parent[static_cast<std::size_t>(j)] < 0) candidates.push_back(j);
+  }
+  std::vector<std::uint8_t> part(static_cast<std::size_t>(n), 0);
+  std::vector<std::uint8_t> bin_of;
+  double total = 0.0;
+  for (int j : candidates) total += weight[static_cast<std::size_t>(j)];
+  const double all = total;
+  auto heavier = [&](int a, int b) {
+    const double wa = weight[static_cast<std::size_t>(a)];
+    const double wb = weight[static_cast<std::size_t>(b)];
+    return wa != wb ? wa > wb : a < b;
+  };
+  bool balanced = false;
+  for (int iteration = 0; iteration < 100000 && !candidates.empty() && candidates.size() < 4096;
+       ++iteration) {
+    std::sort(candidates.begin(), candidates.end(), heavier);
+    double bins[2] = {0.0, 0.0};
+    bin_of.assign(candidates.size(), 0);
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const std::uint8_t b = bins[0] <= bins[1] ? 0 : 1;
+      bin_of[c] = b;
+      bins[b] += weight[static_cast<std::size_t>(candidates[c])];
+    }
+    if (candidates.size() >= 2 && std::max(bins[0], bins[1]) <= 0.51 * total) {
+      balanced = true;
+      break;
+    }
+    // Too much left in the top: not worth splitting further.
+    if (total < 0.5 * all) break;
+    const int h = candidates.front();
+    candidates.erase(candidates.begin());
+    total -= weight[static_cast<std::size_t>(h)];
+    for (int q = child_start[static_cast<std::size_t>(h)];
+         q < child_start[static_cast<std::size_t>(h) + 1]; ++q) {
+      const int c = children[static_cast<std::size_t>(q)];
+      candidates.push_back(c);
+      total += weight[static_cast<std::size_t>(c)];
+    }
+  }
+  if (balanced) {
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      part[static_cast<std::size_t>(candidates[c])] = static_cast<std::uint8_t>(1 + bin_of[c]);
+    }
+    // A column belongs to the part of its parent unless it is a candidate root or in the top.
+    for (int j = n - 1; j >= 0; --j) {
+      const int p = parent[static_cast<std::size_t>(j)];
+      if (part[static_cast<std::size_t>(j)] == 0 && p >= 0) {
+        part[static_cast<std::size_t>(j)] = part[static_cast<std::size_t>(p)];
+      }
+    }
+  }
+  auto same_below = [&](int j, int t) {  // column j+t equals column j below row j+t
+    if (j + t >= n || part[static_cast<std::size_t>(j + t)] != part[static_cast<std::size_t>(j)])
+      return false;
+    const int a = lp[j], b = lp[j + t];
+    if (lnz[j + t] != lnz[j] - t || lnz[j] <= t || li[a + t] != j + t) return false;
+    for (int q = 0; q < lnz[j + t]; ++q) {
+      if (li[b + q] != li[a + t + q]) return false;
+    }
+    return true;
+  };
+  for (int j = 0; j < n;) {
+    int k = 1;
+    while (k < 4 && same_below(j, k)) ++k;
+    schedule.chains[part[static_cast<std::size_t>(j)]].emplace_back(j, k);
+    j += k;
+  }
+  schedule.balanced = balanced;
+  schedule.parent = std::move(parent);
+  return schedule;
+}
+
+/// Forward solve L·y = y (unit diagonal) with a chain of K columns j..j+K-1; y is n × R row-major.
+template <int R, int K>
+void forward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
+                   double* y) {
+  double v[K][R];
+  int p[K];
+  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
+  for (int t = 0; t < K; ++t) {
+    for (int r = 0; r < R; ++r) {
+      double a = y[static_cast<std::size_t>(j + t) * R + r];
+      for (int u = 0; u < t; ++u) a -= lx[p[u] + t - u] * v[u][r];
+      v[t][r] = a;
+      y[static_cast<std::size_t>(j + t) * R + r] = a;
+    }
+  }
+  const int len = lnz[j] - K;
+  const int* rows = li + p[0] + K;
+  for (int q = 0; q < len; ++q) {
+    double* yi = y + static_cast<std::size_t>(rows[q]) * R;
+    double l[K];
+    for (int t = 0; t < K; ++t) l[t] = lx[p[t] + K - t + q];
+    for (int r = 0; r < R; ++r) {
+      double a = 0.0;
+      for (int t = 0; t < K; ++t) a += l[t] * v[t][r];
+      yi[r] -= a;
+    }
+  }
+}
+
+/// Backward solve D·Lᵀ·x = y with a chain of K columns; x overwrites y.
+template <int R, int K>
+void backward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
+                    double* y) {
+  double v[K][R];
+  int p[K];
+  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
+  for (int t = 0; t < K; ++t) {
+    for (int r = 0; r < R; ++r) v[t][r] = y[static_cast<std::size_t>(j + t) * R + r] / lx[p[t]];
+  }
+  const int len = lnz[j] - K;
+  const int* rows = li + p[0] + K;
+  for (int q = 0; q < len; ++q) {
+    const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
+    for (int t = 0; t < K; ++t) {
+      const double l = lx[p[t] + K - t + q];
+      for (int r = 0; r < R; ++r) v[t][r] -= l * xi[r];
+    }
+  }
+  for (int t = K - 1; t >= 0; --t) {
+    for (int r = 0; r < R; ++r) {
+      double a = v[t][r];
+      for (int u = t + 1; u < K; ++u)
+        a -= lx[p[t] + u - t] * y[static_cast<std::size_t>(j + u) * R + r];
+      y[static_cast<std::size_t>(j + t) * R + r] = a;
+    }
+  }
+}
+
+template <int R>
+void forward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& chains, double* y) {
+  const auto* lp = static_cast<const int*>(l.p);
+  const auto* li = static_cast<const int*>(l.i);
+  const auto* lnz = static_cast<const int*>(l.nz);
+  const auto* lx = static_cast<const double*>(l.x);
+  for (const auto& [j, k] : chains) {
+    switch (k) {
+      case 1:
+        forward_chain<R, 1>(lp, li, lnz, lx, j, y);
+        break;
+      case 2:
+        forward_chain<R, 2>(lp, li, lnz, lx, j, y);
+        break;
+      case 3:
+        forward_chain<R, 3>(lp, li, lnz, lx, j, y);
+        break;
+      default:
+        forward_chain<R, 4>(lp, li, lnz, lx, j, y);
+        break;
+    }
+  }
+}
+
+template <int R>
+void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& chains, double* y) {
+  const auto* lp = static_cast<const int*>(l.p);
+  const auto* li = static_cast<const int*>(l.i);
+  const auto* lnz = static_cast<const int*>(l.nz);
+  const auto* lx = static_cast<const double*>(l.x);
+  for (auto it = chains.rbegin(); it != chains.rend(); ++it) {
+    switch (it->second) {
+      case 1:
+        backward_chain<R, 1>(lp, li, lnz, lx, it->first, y);
+        break;
+      case 2:
+        backward_chain<R, 2>(lp, li, lnz, lx, it->first, y);
+        break;
+      case 3:
+        backward_chain<R, 3>(lp, li, lnz, lx, it->first, y);
+        break;
+      default:
+        backward_chain<R, 4>(lp, li, lnz, lx, it->first, y);
+        break;
+    }
+  }
+}
+
+/// Runs part 1 on this thread and part 2 on a second one (or after part 1 when not threaded).
+template <class F>
+void run_parts(bool threaded, F&& work) {
+  if (threaded) {
+    std::thread second;
+    try {
+      second = std::thread([&] { work(2); });
+    } catch (const std::system_error&) {
+      work(1);
+      work(2);
+      return;
+    }
+    work(1);
+    second.join();
+    return;
+  }
+  work(1);
+  work(2);
+}
+
+/// L·D·Lᵀ·y = y for the simplicial factor, with the two subtree parts in parallel. The forward
+/// solve of part 2 accumulates into its own vector (its contributions to the top rows are added
+/// after both parts), the backward solves of the parts only read the top rows.
+template <int R>
+void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool threaded, double* y) {
+  const auto n = static_cast<std::size_t>(l.n);
+  std::vector<double> second(n * R, 0.0);
+  for (const auto& [j0, k] : schedule.chains[2]) {
+    for (int j = j0; j < j0 + k; ++j) {
+      for (int r = 0; r < R; ++r) second[static_cast<std::size_t>(j) * R + r] = y[j * R + r];
+    }
+  }
+  run_parts(threaded, [&](int part) {
+    forward<R>(l, schedule.chains[static_cast<std::size_t>(part)], part == 1 ? y : second.data());
+  });
+  for (const auto& [j0, k] : schedule.chains[2]) {
+    for (int j = j0; j < j0 + k; ++j) {
+      for (int r = 0; r < R; ++r) y[j * R + r] = second[static_cast<std::size_t>(j) * R + r];
+    }
+  }
+  for (const auto& [j0, k] : schedule.chains[0]) {
+    for (int j = j0; j < j0 + k; ++j) {
+      for (int r = 0; r < R; ++r) y[j * R + r] += second[static_cast<std::size_t>(j) * R + r];
+    }
+  }
+  forward<R>(l, schedule.chains[0], y);
+  backward<R>(l, schedule.chains[0], y);
+  run_parts(threaded,
+            [&](int part) { backward<R>(l, schedule.chains[static_cast<std::size_t>(part)], y); });
+}
+
+}  // namespace
 
 struct SparseCholesky::Impl {
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
   std::vector<int> inverse_perm;  ///< row -> position in the factor's ordering
+  SolveSchedule schedule;         ///< for the simplicial factor after modify()
+  std::vector<double> diagonal;   ///< D of the simplicial factor (refreshed along update paths)
+  std::vector<int> mark;          ///< per column: last modify() whose path reached it
+  int stamp = 0;
+  int solve_threads = 0;  ///< 0 automatic, 1, 2
+  /// Σ Lnz of the simplicial factor: grows when an update adds fill (the pattern changes).
+  [[nodiscard]] std::int64_t pattern_nnz() const {
+    const auto* lnz = static_cast<const int*>(factor->nz);
+    std::int64_t nnz = 0;
+    for (std::size_t j = 0; j < factor->n; ++j) nnz += lnz[j];
+    return nnz;
+  }
+  void ensure_schedule() {
+    const std::int64_t nnz = pattern_nnz();
+    if (schedule.pattern_nnz == nnz) return;
+    schedule = make_schedule(*factor, nnz);
+    const auto* lp = static_cast<const int*>(factor->p);
+    const auto* lx = static_cast<const double*>(factor->x);
+    diagonal.resize(factor->n);
+    for (std::size_t j = 0; j < factor->n; ++j) diagonal[j] = lx[lp[j]];
+    mark.assign(factor->n, 0);
+    stamp = 0;
+  }
+  std::vector<double> work;  ///< permuted right-hand sides, row-major
   Impl() {
     cholmod_start(&common);
     common.print = 0;
@@ -51,6 +364,8 @@ SparseCholesky::~SparseCholesky() = default;
 SparseCholesky::SparseCholesky(SparseCholesky&&) noexcept = default;
 SparseCholesky& SparseCholesky::operator=(SparseCholesky&&) noexcept = default;
 
+void SparseCholesky::set_solve_threads(int threads) { impl_->solve_threads = threads; }
+
 bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
 
 double SparseCholesky::factor_nonzeros() const {
@@ -84,6 +399,8 @@ FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
   if (!upper.isCompressed()) return {FactorStatus::failed, "matrix is not compressed"};
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   impl_->inverse_perm.clear();
+  impl_->schedule = {};
+  impl_->diagonal.clear();
   cholmod_sparse a = Impl::view(upper);
   if (permutation != nullptr) {
     const int saved_methods = impl_->common.nmethods;
@@ -109,6 +426,8 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
     if (auto r = analyze(upper); !r.ok()) return r;
   }
   cholmod_sparse a = Impl::view(upper);
+  impl_->schedule = {};
+  impl_->diagonal.clear();
   const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
     return {FactorStatus::not_positive_definite,
@@ -138,6 +457,7 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
       return {FactorStatus::failed, "cholmod_change_factor failed"};
     }
   }
+  impl_->ensure_schedule();
   const auto n = static_cast<std::size_t>(l->n);
   if (impl_->inverse_perm.size() != n) {
     impl_->inverse_perm.assign(n, 0);
@@ -154,6 +474,8 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   auto* ci = static_cast<int*>(c->i);
   auto* cx = static_cast<double*>(c->x);
   std::vector<std::pair<int, double>> entries;
+  std::vector<int> first_rows;
+  first_rows.reserve(columns.size());
   std::size_t pos = 0;
   for (std::size_t col = 0; col < columns.size(); ++col) {
     cp[col] = static_cast<int>(pos);
@@ -163,6 +485,7 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
                            columns[col].values[e]);
     }
     std::sort(entries.begin(), entries.end());
+    if (!entries.empty()) first_rows.push_back(entries.front().first);
     for (const auto& [row, value] : entries) {
       ci[pos] = row;
       cx[pos] = value;
@@ -176,18 +499,42 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
     return {FactorStatus::failed,
             "cholmod_updown failed (status " + std::to_string(common.status) + ")"};
   }
-  if (!add) {
-    // LDLᵀ: D is the first entry of every column.
-    const int* lp = static_cast<const int*>(l->p);
-    const double* lx = static_cast<const double*>(l->x);
-    for (std::size_t j = 0; j < n; ++j) {
-      if (!(lx[lp[j]] > 0.0)) {
-        return {FactorStatus::not_positive_definite,
-                "stiffness is not positive definite after breaking bonds: a part of the model has "
-                "come loose"};
+  // The update changed the columns on the elimination-tree paths from each column's first row
+  // to the root: refresh D there (all of it if the update added fill), then check the whole D.
+  auto& impl = *impl_;
+  const auto* lp = static_cast<const int*>(l->p);
+  const auto* lx = static_cast<const double*>(l->x);
+  if (impl.pattern_nnz() != impl.schedule.pattern_nnz) {
+    impl.ensure_schedule();
+  } else {
+    if (++impl.stamp == 0) {
+      std::fill(impl.mark.begin(), impl.mark.end(), 0);
+      impl.stamp = 1;
+    }
+    for (int j : first_rows) {
+      while (j >= 0 && impl.mark[static_cast<std::size_t>(j)] != impl.stamp) {
+        impl.mark[static_cast<std::size_t>(j)] = impl.stamp;
+        impl.diagonal[static_cast<std::size_t>(j)] = lx[lp[j]];
+        j = impl.schedule.parent[static_cast<std::size_t>(j)];
       }
     }
-    const double rcond = cholmod_rcond(l, &common);
+  }
+  if (!add) {
+    // LDLᵀ: D is the first entry of every column; rcond as cholmod_rcond: min(D) / max(D).
+    double d_min = impl.diagonal.empty() ? 0.0 : impl.diagonal.front();
+    double d_max = d_min;
+    bool positive = true;
+    for (const double d : impl.diagonal) {
+      positive = positive && d > 0.0;
+      d_min = std::min(d_min, d);
+      d_max = std::max(d_max, d);
+    }
+    if (!positive) {
+      return {FactorStatus::not_positive_definite,
+              "stiffness is not positive definite after breaking bonds: a part of the model has "
+              "come loose"};
+    }
+    const double rcond = d_min / d_max;
     if (!(rcond > 1e-14)) {
       return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
                                           std::to_string(rcond) +
@@ -198,6 +545,42 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
 }
 
 void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
+  const cholmod_factor* l = impl_->factor;
+  if (l == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
+  const auto cols = rhs.cols();
+  if (l->is_super || l->is_ll || l->xtype != CHOLMOD_REAL || cols < 1 || cols > 3) {
+    solve_with_cholmod(rhs);
+    return;
+  }
+  // Simplicial LDLᵀ (after modify): our own solve with the two subtree parts on two threads.
+  const auto n = static_cast<std::size_t>(l->n);
+  const auto* lnz = static_cast<const int*>(l->nz);
+  std::int64_t nnz = 0;
+  for (std::size_t j = 0; j < n; ++j) nnz += lnz[j];
+  auto& impl = *impl_;
+  if (impl.schedule.pattern_nnz != nnz) impl.ensure_schedule();
+  const int* perm = static_cast<const int*>(l->Perm);
+  const auto r = static_cast<std::size_t>(cols);
+  impl.work.resize(n * r);
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t c = 0; c < r; ++c) {
+      impl.work[k * r + c] = rhs(perm[k], static_cast<Eigen::Index>(c));
+    }
+  }
+  const bool threaded = impl.schedule.balanced &&
+                        (impl.solve_threads == 2 || (impl.solve_threads == 0 && nnz > 2'000'000 &&
+                                                     std::thread::hardware_concurrency() > 1));
+  if (r == 1) ldl_solve<1>(*l, impl.schedule, threaded, impl.work.data());
+  if (r == 2) ldl_solve<2>(*l, impl.schedule, threaded, impl.work.data());
+  if (r == 3) ldl_solve<3>(*l, impl.schedule, threaded, impl.work.data());
+  for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t c = 0; c < r; ++c) {
+      rhs(perm[k], static_cast<Eigen::Index>(c)) = impl.work[k * r + c];
+    }
+  }
+}
+
+void SparseCholesky::solve_with_cholmod(Eigen::MatrixXd& rhs) const {
   if (impl_->factor == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
   cholmod_dense b{};
   b.nrow = static_cast<size_t>(rhs.rows());

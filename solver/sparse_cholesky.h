@@ -47,8 +47,15 @@ class SparseCholesky {
   /// rank-k update/downdate (the factor becomes simplicial LDLᵀ on the first call). Reports a
   /// downdate that leaves the matrix not positive definite or numerically singular.
   FactorReport modify(const std::vector<Column>& columns, bool add);
-  /// Solves A·X = B in place for every column of B.
+  /// Solves A·X = B in place for every column of B. After modify() (simplicial LDLᵀ) with 1-3
+  /// columns this is peritwin's own triangular solve, whose two independent elimination subtrees
+  /// run on two threads (same arithmetic with one); otherwise CHOLMOD's.
   void solve(Eigen::MatrixXd& rhs) const;
+  /// CHOLMOD's cholmod_solve, always (the reference for the own solve).
+  void solve_with_cholmod(Eigen::MatrixXd& rhs) const;
+  /// Threads of the own solve: 0 automatic (two for factors above 2M nonzeros on a machine with
+  /// two cores or more), 1 or 2. The arithmetic, hence the result, is the same for all.
+  void set_solve_threads(int threads);
 
   [[nodiscard]] bool analyzed() const;
   [[nodiscard]] double factor_nonzeros() const;

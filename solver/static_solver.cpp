@@ -262,8 +262,10 @@ void StaticSolver::solve_bases() {
       for (std::size_t dof = 0; dof < u.size(); ++dof) {
         if (free_index_[dof] >= 0) u[dof] = rhs(free_index_[dof], c);
       }
+      bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
+    } else {
+      s_[static_cast<std::size_t>(basis)].assign(static_cast<std::size_t>(disc_.num_bonds()), 0.0);
     }
-    bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
   }
   basis_solve_s_ += seconds_since(t0);
 }
@@ -335,27 +337,37 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
       }
     }
     if (mixed_) {
-      // The bond's entries q/ξ·g in the (u, w_i) and (u, w_j) blocks go too:
-      // −c(x·yᵀ + y·xᵀ) = (c/2)(x − y)(x − y)ᵀ − (c/2)(x + y)(x + y)ᵀ, x = g, y = e_wi + e_wj.
+      // The bond's entries c·g (c = q/ξ) in the (u, w_i) and (u, w_j) blocks go too. With the
+      // pair term, the change is [g y]·S·[g y]ᵀ, g the unit bond gradient, y = e_wi + e_wj,
+      // S = [[−k, −c], [−c, 0]]: one eigenvalue λ₊ = 2c²/(k + √(k² + 4c²)) > 0 with eigenvector
+      // (c, −(k + λ₊)), one λ₋ = −(k + λ₊) < 0 with eigenvector (c, λ₊). So the bond is one
+      // update column √λ₊·v₊ and one downdate column √−λ₋·v₋ (instead of three columns).
+      const double k = model_.bond_stiffness[b] * factor_[b];
       const double c = model_.dilatation_weight[b] / disc_.bond_length[b];
-      const double r = std::sqrt(0.5 * c);
-      SparseCholesky::Column plus, minus;
-      for (const auto& [f, v] : bond_gradient(b, r)) {
-        if (f >= 0) {
-          plus.rows.push_back(f);
-          plus.values.push_back(v);
-        }
-      }
-      minus = plus;
-      for (const NodeIndex k : {disc_.bond_i[b], disc_.bond_j[b]}) {
-        plus.rows.push_back(num_free_ + k);
-        plus.values.push_back(r);
-        minus.rows.push_back(num_free_ + k);
-        minus.values.push_back(-r);
-      }
       if (c > 0.0) {
-        added.push_back(std::move(minus));
-        removed.push_back(std::move(plus));
+        const double lambda = 2.0 * c * c / (k + std::sqrt(k * k + 4.0 * c * c));
+        const double norm_plus = std::hypot(c, k + lambda);
+        const double norm_minus = std::hypot(c, lambda);
+        const double sp = std::sqrt(lambda) / norm_plus;  // update: √λ₊ · (c, −(k + λ₊))/‖·‖
+        const double sm = std::sqrt(k + lambda) / norm_minus;  // downdate: √−λ₋ · (c, λ₊)/‖·‖
+        SparseCholesky::Column up, down;
+        for (const auto& [f, v] : bond_gradient(b, 1.0)) {
+          if (f >= 0) {
+            up.rows.push_back(f);
+            up.values.push_back(sp * c * v);
+            down.rows.push_back(f);
+            down.values.push_back(sm * c * v);
+          }
+        }
+        for (const NodeIndex node : {disc_.bond_i[b], disc_.bond_j[b]}) {
+          up.rows.push_back(num_free_ + node);
+          up.values.push_back(-sp * (k + lambda));
+          down.rows.push_back(num_free_ + node);
+          down.values.push_back(sm * lambda);
+        }
+        added.push_back(std::move(up));
+        removed.push_back(std::move(down));
+        g.rows.clear();  // the pair term is in the two columns
       }
     }
     if (!g.rows.empty() && w > 0.0) removed.push_back(std::move(g));

@@ -163,6 +163,46 @@ TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   EXPECT_EQ(solver.factorizations(), 2);
 }
 
+TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
+  // The simplicial LDLᵀ solve after modify() is peritwin's own (two elimination subtrees on two
+  // threads): equal to CHOLMOD's solve to round-off, and bit-identical on one or two threads.
+  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
+                                           0.01, 0.0005, 1e6);
+  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(solver.solve().ok());
+  const SparseMatrix& upper = solver.stiffness_upper();
+  SparseCholesky cholesky;
+  ASSERT_TRUE(cholesky.factorize(upper).ok());
+  // Columns within the matrix's pattern (no fill): scaled copies of some of its columns.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::vector<SparseCholesky::Column> columns;
+  for (int c = 0; c < upper.cols(); c += 97) {
+    SparseCholesky::Column col;
+    const double d = std::sqrt(std::abs(upper.coeff(c, c)));
+    for (SparseMatrix::InnerIterator it(upper, c); it; ++it) {
+      col.rows.push_back(static_cast<int>(it.row()));
+      col.values.push_back(0.3 * d * uni(rng));
+    }
+    columns.push_back(std::move(col));
+  }
+  ASSERT_GT(columns.size(), 9u);
+  ASSERT_TRUE(cholesky.modify(columns, true).ok());
+  columns.resize(columns.size() / 2);
+  ASSERT_TRUE(cholesky.modify(columns, false).ok());
+  for (int nrhs = 1; nrhs <= 3; ++nrhs) {
+    const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), nrhs);
+    Eigen::MatrixXd reference = b, one = b, two = b;
+    cholesky.solve_with_cholmod(reference);
+    cholesky.set_solve_threads(1);
+    cholesky.solve(one);
+    cholesky.set_solve_threads(2);
+    cholesky.solve(two);
+    EXPECT_TRUE(one == two) << nrhs;
+    EXPECT_LT((one - reference).cwiseAbs().maxCoeff(), 1e-10 * reference.cwiseAbs().maxCoeff());
+  }
+}
+
 // Bond stiffness factors (bilinear softening, 003): bond-based model only.
 class BondFactors : public ::testing::Test {
  protected:
