@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -29,6 +30,15 @@ struct SolveSchedule {
   /// that each row of the right-hand side is read once per chain.
   std::array<std::vector<std::pair<int, int>>, 3> chains;
   bool balanced = false;  ///< parts 1 and 2 are not empty (else all columns are in the top)
+  /// The top's chains (part 0) in blocks of about 64 columns, for a pipelined two-thread solve of
+  /// the top: the rows of a chain below its own columns are split into [0, lo) (inside the
+  /// block: thread 0, in order), [lo, mid) (thread 0) and [mid, end) (thread 1), where mid is
+  /// a row split m_b >= the last column of the next block.
+  struct TopChain {
+    int j, k, lo, mid;
+  };
+  std::vector<TopChain> top_chains;
+  std::vector<int> top_block_start;  ///< block b is top_chains[start[b], start[b + 1])
 };
 
 SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
@@ -136,6 +146,63 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
     j += k;
   }
   schedule.balanced = balanced;
+  // Top blocks. Rows must be sorted in the top's columns (they are in CHOLMOD's simplicial
+  // factors); otherwise one block with everything inside it (thread 0 alone).
+  bool sorted = true;
+  for (const auto& [j0, k] : schedule.chains[0]) {
+    for (int q = lp[j0] + 1; q < lp[j0] + lnz[j0]; ++q) sorted = sorted && li[q] > li[q - 1];
+  }
+  constexpr int block_columns = 64;
+  for (std::size_t c = 0; c < schedule.chains[0].size();) {
+    schedule.top_block_start.push_back(static_cast<int>(schedule.top_chains.size()));
+    int columns = 0;
+    while (c < schedule.chains[0].size() && (columns < block_columns || !sorted)) {
+      const auto [j, k] = schedule.chains[0][c++];
+      schedule.top_chains.push_back({j, k, 0, 0});
+      columns += k;
+    }
+  }
+  schedule.top_block_start.push_back(static_cast<int>(schedule.top_chains.size()));
+  const std::size_t blocks = schedule.top_block_start.size() - 1;
+  auto last_column = [&](std::size_t b) {
+    const auto& t =
+        schedule.top_chains[static_cast<std::size_t>(schedule.top_block_start[b + 1]) - 1];
+    return t.j + t.k - 1;
+  };
+  std::vector<std::pair<int, int>> below;  // (row, weight) of the block's rows below it
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const int last = sorted ? last_column(b) : n;
+    const int floor_m = b + 1 < blocks ? last_column(b + 1) : n;
+    below.clear();
+    double inside = 0.0, outside = 0.0;
+    for (int c = schedule.top_block_start[b]; c < schedule.top_block_start[b + 1]; ++c) {
+      auto& t = schedule.top_chains[static_cast<std::size_t>(c)];
+      const int* rows = li + lp[t.j] + t.k;
+      const int len = lnz[t.j] - t.k;
+      t.lo = static_cast<int>(std::upper_bound(rows, rows + len, last) - rows);
+      inside += static_cast<double>(t.lo) * t.k;
+      for (int q = t.lo; q < len; ++q) below.emplace_back(rows[q], t.k);
+      outside += static_cast<double>(len - t.lo) * t.k;
+    }
+    // Thread 0 also solves the next block's inside: give it less of the rows below.
+    std::sort(below.begin(), below.end());
+    const double target = std::max(0.0, 0.5 * (outside - inside));
+    int m = floor_m;
+    double sum = 0.0;
+    for (const auto& [row, w] : below) {
+      if (sum >= target) break;
+      sum += w;
+      m = std::max(m, row);
+    }
+    if (!sorted) m = n;
+    for (int c = schedule.top_block_start[b]; c < schedule.top_block_start[b + 1]; ++c) {
+      auto& t = schedule.top_chains[static_cast<std::size_t>(c)];
+      const int* rows = li + lp[t.j] + t.k;
+      const int len = lnz[t.j] - t.k;
+      t.mid = sorted ? static_cast<int>(std::upper_bound(rows, rows + len, m) - rows) : len;
+      if (!sorted) t.lo = len;
+    }
+  }
   schedule.parent = std::move(parent);
   return schedule;
 }
@@ -198,6 +265,129 @@ void backward_chain(const int* lp, const int* li, const int* lnz, const double* 
   }
 }
 
+inline int lnz_of(const cholmod_factor& l, int j) { return static_cast<const int*>(l.nz)[j]; }
+
+/// The top's forward solve, chain by chain: solve the chain's own columns (in_chain) and scatter
+/// rows [from, to) of its shared rows below.
+template <int R, int K>
+void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bool in_chain,
+                       int from, int to, double* y) {
+  double v[K][R];
+  int p[K];
+  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
+  for (int t = 0; t < K; ++t) {
+    for (int r = 0; r < R; ++r) {
+      double a = y[static_cast<std::size_t>(j + t) * R + r];
+      if (in_chain) {
+        for (int u = 0; u < t; ++u) a -= lx[p[u] + t - u] * v[u][r];
+        y[static_cast<std::size_t>(j + t) * R + r] = a;
+      }
+      v[t][r] = a;
+    }
+  }
+  const int* rows = li + p[0] + K;
+  for (int q = from; q < to; ++q) {
+    double* yi = y + static_cast<std::size_t>(rows[q]) * R;
+    double l[K];
+    for (int t = 0; t < K; ++t) l[t] = lx[p[t] + K - t + q];
+    for (int r = 0; r < R; ++r) {
+      double a = 0.0;
+      for (int t = 0; t < K; ++t) a += l[t] * v[t][r];
+      yi[r] -= a;
+    }
+  }
+}
+
+/// The top's backward solve: partial sums Σ L(i, j+t)·x_i over rows [from, to) of the chain's
+/// shared rows into s[K][R].
+template <int R, int K>
+void top_backward_partial(const int* lp, const int* li, const double* lx, int j, int from, int to,
+                          const double* y, double* s) {
+  int p[K];
+  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
+  double v[K][R] = {};
+  const int* rows = li + p[0] + K;
+  for (int q = from; q < to; ++q) {
+    const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
+    for (int t = 0; t < K; ++t) {
+      const double l = lx[p[t] + K - t + q];
+      for (int r = 0; r < R; ++r) v[t][r] += l * xi[r];
+    }
+  }
+  for (int t = 0; t < K; ++t) {
+    for (int r = 0; r < R; ++r) s[t * R + r] = v[t][r];
+  }
+}
+
+/// The top's backward solve of a chain's own columns given the two partial sums of its rows
+/// below the block; rows [0, lo) (inside the block) are summed here.
+template <int R, int K>
+void top_backward_finish(const int* lp, const int* li, const double* lx, int j, int lo,
+                         const double* s0, const double* s1, double* y) {
+  int p[K];
+  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
+  double v[K][R];
+  for (int t = 0; t < K; ++t) {
+    for (int r = 0; r < R; ++r) {
+      v[t][r] =
+          y[static_cast<std::size_t>(j + t) * R + r] / lx[p[t]] - s0[t * R + r] - s1[t * R + r];
+    }
+  }
+  const int* rows = li + p[0] + K;
+  for (int q = 0; q < lo; ++q) {
+    const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
+    for (int t = 0; t < K; ++t) {
+      const double l = lx[p[t] + K - t + q];
+      for (int r = 0; r < R; ++r) v[t][r] -= l * xi[r];
+    }
+  }
+  for (int t = K - 1; t >= 0; --t) {
+    for (int r = 0; r < R; ++r) {
+      double a = v[t][r];
+      for (int u = t + 1; u < K; ++u) {
+        a -= lx[p[t] + u - t] * y[static_cast<std::size_t>(j + u) * R + r];
+      }
+      y[static_cast<std::size_t>(j + t) * R + r] = a;
+    }
+  }
+}
+
+#define PERITWIN_CHAIN_SWITCH(k, call) \
+  switch (k) {                         \
+    case 1:                            \
+      call(1);                         \
+      break;                           \
+    case 2:                            \
+      call(2);                         \
+      break;                           \
+    case 3:                            \
+      call(3);                         \
+      break;                           \
+    default:                           \
+      call(4);                         \
+      break;                           \
+  }
+
+/// Two threads meeting between pipeline steps (spin, then yield).
+class PairBarrier {
+ public:
+  void wait() {
+    const int phase = phase_.load(std::memory_order_acquire);
+    if (count_.fetch_add(1, std::memory_order_acq_rel) == 1) {
+      count_.store(0, std::memory_order_relaxed);
+      phase_.store(phase + 1, std::memory_order_release);
+      return;
+    }
+    for (int spins = 0; phase_.load(std::memory_order_acquire) == phase; ++spins) {
+      if (spins > 2000) std::this_thread::yield();
+    }
+  }
+
+ private:
+  std::atomic<int> count_{0};
+  std::atomic<int> phase_{0};
+};
+
 template <int R>
 void forward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& chains, double* y) {
   const auto* lp = static_cast<const int*>(l.p);
@@ -246,55 +436,152 @@ void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& c
   }
 }
 
-/// Runs part 1 on this thread and part 2 on a second one (or after part 1 when not threaded).
-template <class F>
-void run_parts(bool threaded, F&& work) {
-  if (threaded) {
-    std::thread second;
-    try {
-      second = std::thread([&] { work(2); });
-    } catch (const std::system_error&) {
-      work(1);
-      work(2);
-      return;
-    }
-    work(1);
-    second.join();
-    return;
-  }
-  work(1);
-  work(2);
-}
-
-/// L·D·Lᵀ·y = y for the simplicial factor, with the two subtree parts in parallel. The forward
-/// solve of part 2 accumulates into its own vector (its contributions to the top rows are added
-/// after both parts), the backward solves of the parts only read the top rows.
+/// L·D·Lᵀ·y = y for the simplicial factor. Parts 1 and 2 (disjoint subtrees) run on the two
+/// threads; part 2's forward solve accumulates into its own vector (its contributions to the top
+/// rows are added after both parts). The top is solved block by block in a pipeline: thread 0
+/// solves a block's own columns and the rows just below, thread 1 the rows further down, with one
+/// barrier per block. On one thread the same steps run in the same order, so the results are
+/// bit-identical.
 template <int R>
 void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool threaded, double* y) {
   const auto n = static_cast<std::size_t>(l.n);
+  const auto* lp = static_cast<const int*>(l.p);
+  const auto* li = static_cast<const int*>(l.i);
+  const auto* lx = static_cast<const double*>(l.x);
   std::vector<double> second(n * R, 0.0);
   for (const auto& [j0, k] : schedule.chains[2]) {
     for (int j = j0; j < j0 + k; ++j) {
       for (int r = 0; r < R; ++r) second[static_cast<std::size_t>(j) * R + r] = y[j * R + r];
     }
   }
-  run_parts(threaded, [&](int part) {
-    forward<R>(l, schedule.chains[static_cast<std::size_t>(part)], part == 1 ? y : second.data());
-  });
-  for (const auto& [j0, k] : schedule.chains[2]) {
-    for (int j = j0; j < j0 + k; ++j) {
-      for (int r = 0; r < R; ++r) y[j * R + r] = second[static_cast<std::size_t>(j) * R + r];
-    }
+  const auto& top = schedule.top_chains;
+  const auto& start = schedule.top_block_start;
+  const int blocks = static_cast<int>(start.size()) - 1;
+  std::size_t widest = 0;
+  for (int b = 0; b < blocks; ++b) {
+    widest = std::max(widest, static_cast<std::size_t>(start[static_cast<std::size_t>(b) + 1] -
+                                                       start[static_cast<std::size_t>(b)]));
   }
-  for (const auto& [j0, k] : schedule.chains[0]) {
-    for (int j = j0; j < j0 + k; ++j) {
-      for (int r = 0; r < R; ++r) y[j * R + r] += second[static_cast<std::size_t>(j) * R + r];
+  // Partial sums of the backward solve: [buffer (block parity)][thread][chain][4][R].
+  std::vector<double> partial(2 * 2 * widest * 4 * R, 0.0);
+  auto partial_at = [&](int b, int thread, int c) {
+    const auto chain = static_cast<std::size_t>(c - start[static_cast<std::size_t>(b)]);
+    return partial.data() +
+           ((static_cast<std::size_t>(b & 1) * 2 + static_cast<std::size_t>(thread)) * widest +
+            chain) *
+               4 * R;
+  };
+  auto chains_of = [&](int b) {
+    return std::pair(start[static_cast<std::size_t>(b)], start[static_cast<std::size_t>(b) + 1]);
+  };
+  // Forward, block b: A = own columns + rows inside the block (thread 0); B(me) = rows below.
+  auto forward_a = [&](int b) {
+    const auto [c0, c1] = chains_of(b);
+    for (int c = c0; c < c1; ++c) {
+      const auto& t = top[static_cast<std::size_t>(c)];
+#define PERITWIN_CALL(K) top_forward_chain<R, K>(lp, li, lx, t.j, true, 0, t.lo, y)
+      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
+#undef PERITWIN_CALL
     }
+  };
+  auto forward_b = [&](int b, int me) {
+    const auto [c0, c1] = chains_of(b);
+    for (int c = c0; c < c1; ++c) {
+      const auto& t = top[static_cast<std::size_t>(c)];
+      const int from = me == 0 ? t.lo : t.mid;
+      const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
+#define PERITWIN_CALL(K) top_forward_chain<R, K>(lp, li, lx, t.j, false, from, to, y)
+      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
+#undef PERITWIN_CALL
+    }
+  };
+  // Backward, block b: B'(me) = partial sums over the rows below; A' = the block's columns.
+  auto backward_b = [&](int b, int me) {
+    const auto [c0, c1] = chains_of(b);
+    for (int c = c0; c < c1; ++c) {
+      const auto& t = top[static_cast<std::size_t>(c)];
+      const int from = me == 0 ? t.lo : t.mid;
+      const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
+      double* s = partial_at(b, me, c);
+#define PERITWIN_CALL(K) top_backward_partial<R, K>(lp, li, lx, t.j, from, to, y, s)
+      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
+#undef PERITWIN_CALL
+    }
+  };
+  auto backward_a = [&](int b) {
+    const auto [c0, c1] = chains_of(b);
+    for (int c = c1 - 1; c >= c0; --c) {
+      const auto& t = top[static_cast<std::size_t>(c)];
+      const double* s0 = partial_at(b, 0, c);
+      const double* s1 = partial_at(b, 1, c);
+#define PERITWIN_CALL(K) top_backward_finish<R, K>(lp, li, lx, t.j, t.lo, s0, s1, y)
+      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
+#undef PERITWIN_CALL
+    }
+  };
+  auto combine = [&] {
+    for (const auto& [j0, k] : schedule.chains[2]) {
+      for (int j = j0; j < j0 + k; ++j) {
+        for (int r = 0; r < R; ++r) y[j * R + r] = second[static_cast<std::size_t>(j) * R + r];
+      }
+    }
+    for (const auto& [j0, k] : schedule.chains[0]) {
+      for (int j = j0; j < j0 + k; ++j) {
+        for (int r = 0; r < R; ++r) y[j * R + r] += second[static_cast<std::size_t>(j) * R + r];
+      }
+    }
+  };
+  if (!threaded) {
+    forward<R>(l, schedule.chains[1], y);
+    forward<R>(l, schedule.chains[2], second.data());
+    combine();
+    for (int b = 0; b < blocks; ++b) {
+      forward_a(b);
+      forward_b(b, 0);
+      forward_b(b, 1);
+    }
+    for (int b = blocks - 1; b >= 0; --b) {
+      backward_b(b, 0);
+      backward_b(b, 1);
+      backward_a(b);
+    }
+    backward<R>(l, schedule.chains[1], y);
+    backward<R>(l, schedule.chains[2], y);
+    return;
   }
-  forward<R>(l, schedule.chains[0], y);
-  backward<R>(l, schedule.chains[0], y);
-  run_parts(threaded,
-            [&](int part) { backward<R>(l, schedule.chains[static_cast<std::size_t>(part)], y); });
+  PairBarrier barrier;
+  auto worker = [&](int me) {
+    forward<R>(l, schedule.chains[static_cast<std::size_t>(me) + 1], me == 0 ? y : second.data());
+    barrier.wait();
+    if (me == 0) combine();
+    barrier.wait();
+    // Forward pipeline: thread 0 does A(b), meets thread 1, then B(b, 0) and A(b + 1) while
+    // thread 1 does B(b, 1) (its rows lie below the next block: m_b >= last column of b + 1).
+    for (int b = 0; b < blocks; ++b) {
+      if (me == 0) forward_a(b);
+      barrier.wait();
+      forward_b(b, me);
+    }
+    barrier.wait();
+    // Backward pipeline: B'(b, me), meet, then thread 0 finishes block b while thread 1 already
+    // sums block b − 1's rows below m_{b−1} (all final: they lie below block b).
+    for (int b = blocks - 1; b >= 0; --b) {
+      backward_b(b, me);
+      barrier.wait();
+      if (me == 0) backward_a(b);
+    }
+    barrier.wait();
+    backward<R>(l, schedule.chains[static_cast<std::size_t>(me) + 1], y);
+  };
+  std::thread helper;
+  try {
+    helper = std::thread(worker, 1);
+  } catch (const std::system_error&) {
+    ldl_solve<R>(l, schedule, false, y);
+    return;
+  }
+  worker(0);
+  helper.join();
 }
 
 }  // namespace
