@@ -45,6 +45,13 @@
 //                        A2·(1 ± s); R with and only with "a2_scatter"), every_batches 10 (>= 0,
 //                        0 = never: in deterministic mode an estimate is computed synchronously
 //                        whenever state_seq is a multiple of it, state 0 included)
+//   [detail.stress_intensity]
+//                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
+//                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
+//                        for a CT detail: K_I from P_max and the crack length from the load line,
+//                        K_II = 0), width (W, m, > 0) and load_line [x, y] (m; a point on the load
+//                        line, the crack length is measured from it along the notch) R with and
+//                        only with "compact_tension"
 //   [detail.checkpoint]  every_batches 100 (>= 0, 0 = off), every_seconds 300 (s, >= 0, 0 = off;
 //                        wall clock: it decides when a checkpoint is written, never a number)
 //
@@ -155,6 +162,15 @@ struct LifeConfig {
   [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }
 };
 
+enum class StressIntensityMethod { extrapolation, compact_tension };
+
+/// How K_I and K_II at the main crack tip are reported (STATE, results).
+struct StressIntensityConfig {
+  StressIntensityMethod method = StressIntensityMethod::extrapolation;
+  double width = 0.0;  ///< W (m), compact_tension only
+  Point load_line;     ///< a point on the load line (m), compact_tension only
+};
+
 struct CheckpointConfig {
   std::int64_t every_batches = 100;  ///< 0 = off
   double every_seconds = 300.0;      ///< wall-clock period, 0 = off
@@ -174,6 +190,7 @@ struct DetailConfig {
   std::vector<SupportSpec> supports;
   OutputConfig output;
   LifeConfig life;
+  StressIntensityConfig stress_intensity;
   CheckpointConfig checkpoint;
   SourceRef where;  ///< the [[detail]] table
 

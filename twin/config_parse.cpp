@@ -398,6 +398,27 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, Life
   r.finish();
 }
 
+void read_stress_intensity(Context& ctx, const toml::table& t, const std::string& path,
+                           StressIntensityConfig& k) {
+  TableReader r(ctx, t, path);
+  const auto method =
+      r.choice<StressIntensityMethod>("method",
+                                      {{"extrapolation", StressIntensityMethod::extrapolation},
+                                       {"compact_tension", StressIntensityMethod::compact_tension}},
+                                      k.method);
+  k.method = method.value_or(k.method);
+  if (method == StressIntensityMethod::compact_tension) {
+    k.width = req(r, "width", Bound::positive).value_or(0.0);
+    if (const auto p = r.point("load_line")) k.load_line = *p;
+  } else {
+    for (const char* key : {"width", "load_line"}) {
+      r.node(key, false);
+      r.check(key, !method || !r.has(key), "only used with method = \"compact_tension\"");
+    }
+  }
+  r.finish();
+}
+
 void read_checkpoint(Context& ctx, const toml::table& t, const std::string& path,
                      CheckpointConfig& c) {
   TableReader r(ctx, t, path);
@@ -450,6 +471,9 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
   d.output.directory = "results/" + d.id;
   if (const auto* o = r.table("output", false)) read_output(ctx, *o, r.path_of("output"), d.output);
   if (const auto* l = r.table("life", false)) read_life(ctx, *l, r.path_of("life"), d.life);
+  if (const auto* k = r.table("stress_intensity", false)) {
+    read_stress_intensity(ctx, *k, r.path_of("stress_intensity"), d.stress_intensity);
+  }
   if (const auto* c = r.table("checkpoint", false)) {
     read_checkpoint(ctx, *c, r.path_of("checkpoint"), d.checkpoint);
   }

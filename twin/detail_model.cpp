@@ -168,6 +168,20 @@ CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine
   const double c = std::cos(main.kink_angle), s = std::sin(main.kink_angle);
   const double nx = (notch.b.x - notch.a.x) / len, ny = (notch.b.y - notch.a.y) / len;
   const Point direction{c * nx - s * ny, s * nx + c * ny};
+  const StressIntensityConfig& method = model.config().stress_intensity;
+  if (method.method == StressIntensityMethod::compact_tension) {
+    // 000 Eq. (A2) at P_max: crack length from the load line along the notch, K_II = 0. ASTM
+    // E647 gives the formula for 0.2 <= a/W < 1; outside it the value is not reported (NaN).
+    const double q =
+        (main.tip.x - method.load_line.x) * nx + (main.tip.y - method.load_line.y) * ny;
+    const double ratio = q / method.width;
+    if (ratio >= 0.2 && ratio < 1.0) {
+      report.k_i = compact_tension_delta_k(last_block->p_max, model.config().geometry.thickness,
+                                           method.width, q);
+      report.k_ii = 0.0;
+    }
+    return report;
+  }
   std::vector<double> u;
   engine.solver().displacement(last_block->p_max, last_block->alpha, u);
   const auto& pd = model.pd();

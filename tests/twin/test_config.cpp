@@ -145,6 +145,9 @@ TEST(Config, B1Example) {
   ASSERT_EQ(g.notches.size(), 1u);
   EXPECT_EQ(xy(g.notches[0].a), XY(-0.001, 0.0));
   EXPECT_EQ(xy(g.notches[0].b), XY(0.0275, 0.0));
+  EXPECT_EQ(d.stress_intensity.method, StressIntensityMethod::compact_tension);
+  EXPECT_EQ(d.stress_intensity.width, 0.050);
+  EXPECT_EQ(xy(d.stress_intensity.load_line), XY(0.0125, 0.0));
   ASSERT_EQ(g.rigid_regions.size(), 2u);
   for (int k = 0; k < 2; ++k) {
     const Region& pin = g.rigid_regions[k];
@@ -625,6 +628,22 @@ TEST(ConfigErrors, LifeSettings) {
   EXPECT_EQ(r.errors[2].path, "detail[0].life.reference_spectrum[0].r");
   EXPECT_EQ(r.errors[3].path, "detail[0].life.reference_spectrum[0].count");
   EXPECT_EQ(r.errors[3].line, 27u);
+}
+
+TEST(ConfigErrors, StressIntensitySettings) {
+  Doc doc = plate();
+  doc.lines.push_back("[detail.stress_intensity]");      // 24
+  doc.lines.push_back(R"(method = "compact_tension")");  // 25
+  doc.lines.push_back("load_line = [0.0, 0.0]");         // 26
+  ConfigResult r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
+  EXPECT_EQ(r.errors[0].path, "detail[0].stress_intensity.width");  // missing: table line
+  EXPECT_EQ(r.errors[0].line, 24u);
+  doc.lines[doc.lines.size() - 2] = R"(method = "extrapolation")";
+  r = parse(doc);
+  ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
+  EXPECT_EQ(r.errors[0].path, "detail[0].stress_intensity.load_line");
+  EXPECT_EQ(r.errors[0].line, 26u);
 }
 
 TEST(ConfigErrors, FileAndDocumentLevel) {
