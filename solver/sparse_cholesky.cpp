@@ -30,6 +30,10 @@ struct SolveSchedule {
   /// that each row of the right-hand side is read once per chain.
   std::array<std::vector<std::pair<int, int>>, 3> chains;
   bool balanced = false;  ///< parts 1 and 2 are not empty (else all columns are in the top)
+  bool sorted = false;    ///< row indices ascending in every column
+  /// Every column's rows below its parent are rows of the parent (the pattern is an elimination
+  /// tree's: an update along a path then never needs an entry that is not stored).
+  bool nested = false;
   /// The top's chains (part 0) in blocks of about 64 columns, for a pipelined two-thread solve of
   /// the top: the rows of a chain below its own columns are split into [0, lo) (inside the
   /// block: thread 0, in order), [lo, mid) (thread 0) and [mid, end) (thread 1), where mid is
@@ -146,6 +150,24 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
     j += k;
   }
   schedule.balanced = balanced;
+  schedule.sorted = true;
+  for (int j = 0; j < n && schedule.sorted; ++j) {
+    for (int q = lp[j] + 1; q < lp[j] + lnz[j]; ++q) {
+      schedule.sorted = schedule.sorted && li[q] > li[q - 1];
+    }
+  }
+  schedule.nested = schedule.sorted;
+  for (int j = 0; j < n && schedule.nested; ++j) {
+    const int p = parent[static_cast<std::size_t>(j)];
+    if (p < 0) continue;
+    // Rows of j after p (sorted, p is the first below the diagonal) must be among p's rows.
+    int q = lp[p] + 1;
+    const int q_end = lp[p] + lnz[p];
+    for (int e = lp[j] + 2; e < lp[j] + lnz[j] && schedule.nested; ++e) {
+      while (q < q_end && li[q] < li[e]) ++q;
+      schedule.nested = q < q_end && li[q] == li[e];
+    }
+  }
   // Top blocks. Rows must be sorted in the top's columns (they are in CHOLMOD's simplicial
   // factors); otherwise one block with everything inside it (thread 0 alone).
   bool sorted = true;
@@ -595,6 +617,7 @@ struct SparseCholesky::Impl {
   std::vector<int> mark;          ///< per column: last modify() whose path reached it
   int stamp = 0;
   int solve_threads = 0;  ///< 0 automatic, 1, 2
+  std::vector<double> w;  ///< n × kGroup workspace of the fused update (zero between calls)
   /// Σ Lnz of the simplicial factor: grows when an update adds fill (the pattern changes).
   [[nodiscard]] std::int64_t pattern_nnz() const {
     const auto* lnz = static_cast<const int*>(factor->nz);
@@ -808,6 +831,270 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   }
   if (!add) {
     // LDLᵀ: D is the first entry of every column; rcond as cholmod_rcond: min(D) / max(D).
+    double d_min = impl.diagonal.empty() ? 0.0 : impl.diagonal.front();
+    double d_max = d_min;
+    bool positive = true;
+    for (const double d : impl.diagonal) {
+      positive = positive && d > 0.0;
+      d_min = std::min(d_min, d);
+      d_max = std::max(d_max, d);
+    }
+    if (!positive) {
+      return {FactorStatus::not_positive_definite,
+              "stiffness is not positive definite after breaking bonds: a part of the model has "
+              "come loose"};
+    }
+    const double rcond = d_min / d_max;
+    if (!(rcond > 1e-14)) {
+      return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
+                                          std::to_string(rcond) +
+                                          "): a part of the model has come loose"};
+    }
+  }
+  return {};
+}
+
+namespace {
+
+constexpr int kGroup = 16;  ///< ranks per sweep of the fused update
+
+struct RankScalars {
+  int rank;
+  double p, beta;
+};
+
+/// Entries q in [from, to) of column j: w_i −= p·l_ij, l_ij += β·w_i for each active rank.
+inline void apply_column(const int* li, double* lx, double* w, int from, int to,
+                         const RankScalars* active, int count) {
+  for (int q = from; q < to; ++q) {
+    double* wi = w + static_cast<std::size_t>(li[q]) * kGroup;
+    double l = lx[q];
+    for (int a = 0; a < count; ++a) {
+      double& x = wi[active[a].rank];
+      x -= active[a].p * l;
+      l += active[a].beta * x;
+    }
+    lx[q] = l;
+  }
+}
+
+/// The scalars of column j (method C1 of Gill, Golub, Murray and Saunders, rank by rank in
+/// order): p = w_j, d̄ = d + α·p², β = α·p/d̄, α ← α·d/d̄; row j of W is cleared. Returns the number
+/// of active ranks (p ≠ 0: a rank whose path does not reach j has w_j = 0 and leaves it alone).
+inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks, double* alpha,
+                          RankScalars* active) {
+  double d = lx[lp[j]];
+  double* wj = w + static_cast<std::size_t>(j) * kGroup;
+  int count = 0;
+  for (int r = 0; r < ranks; ++r) {
+    const double p = wj[r];
+    if (p == 0.0) continue;
+    wj[r] = 0.0;
+    const double dbar = d + alpha[r] * p * p;
+    const double beta = alpha[r] * p / dbar;
+    alpha[r] *= d / dbar;
+    d = dbar;
+    active[count++] = {r, p, beta};
+  }
+  lx[lp[j]] = d;
+  return count;
+}
+
+}  // namespace
+
+FactorReport SparseCholesky::modify(const std::vector<Column>& added,
+                                    const std::vector<Column>& removed) {
+  if (added.empty() && removed.empty()) return {};
+  cholmod_factor* l = impl_->factor;
+  if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
+  auto& impl = *impl_;
+  auto& common = impl.common;
+  if (l->is_super || l->is_ll) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
+      return {FactorStatus::failed, "cholmod_change_factor failed"};
+    }
+  }
+  impl.ensure_schedule();
+  const auto n = static_cast<std::size_t>(l->n);
+  if (impl.inverse_perm.size() != n) {
+    impl.inverse_perm.assign(n, 0);
+    const int* perm = static_cast<const int*>(l->Perm);
+    for (std::size_t k = 0; k < n; ++k)
+      impl.inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
+  }
+  const auto* lp = static_cast<const int*>(l->p);
+  const auto* li = static_cast<const int*>(l->i);
+  const auto* lnz = static_cast<const int*>(l->nz);
+  auto* lx = static_cast<double*>(l->x);
+  // Permuted, sorted columns with their signs, updates first. The fused sweep needs the rows of
+  // each column below its first one to be in that column of L (no fill; true for the bond
+  // vectors, whose pairs are all in the matrix's pattern); otherwise CHOLMOD does it.
+  struct Rank {
+    std::vector<std::pair<int, double>> entries;
+    double sign;
+  };
+  std::vector<Rank> ranks;
+  bool fits = impl.schedule.sorted && impl.schedule.nested;
+  for (int pass = 0; pass < 2 && fits; ++pass) {
+    for (const auto& c : pass == 0 ? added : removed) {
+      Rank rank{{}, pass == 0 ? 1.0 : -1.0};
+      for (std::size_t e = 0; e < c.rows.size(); ++e) {
+        rank.entries.emplace_back(impl.inverse_perm[static_cast<std::size_t>(c.rows[e])],
+                                  c.values[e]);
+      }
+      std::sort(rank.entries.begin(), rank.entries.end());
+      if (rank.entries.empty()) continue;
+      const int first = rank.entries.front().first;
+      const int* rows = li + lp[first] + 1;
+      const int* end = li + lp[first] + lnz[first];
+      for (std::size_t e = 1; e < rank.entries.size() && fits; ++e) {
+        fits = rank.entries[e].first != rank.entries[e - 1].first &&
+               std::binary_search(rows, end, rank.entries[e].first);
+      }
+      ranks.push_back(std::move(rank));
+    }
+  }
+  if (!fits) {
+    FactorReport r = modify(added, true);
+    if (r.ok()) r = modify(removed, false);
+    return r;
+  }
+  if (impl.w.size() != n * kGroup) impl.w.assign(n * kGroup, 0.0);
+  double* w = impl.w.data();
+  if (++impl.stamp == 0) {
+    std::fill(impl.mark.begin(), impl.mark.end(), 0);
+    impl.stamp = 1;
+  }
+  const int all_stamp = impl.stamp;  // columns touched by any group, for the D refresh
+  std::vector<int> touched;
+  std::vector<int> path;
+  std::vector<int> group_mark(n, 0);
+  std::vector<RankScalars> scalars;
+  std::vector<int> counts;
+  for (std::size_t g0 = 0; g0 < ranks.size(); g0 += kGroup) {
+    const int group = static_cast<int>(std::min<std::size_t>(kGroup, ranks.size() - g0));
+    double alpha[kGroup];
+    path.clear();
+    const int gstamp = static_cast<int>(g0 / kGroup) + 1;
+    for (int r = 0; r < group; ++r) {
+      const Rank& rank = ranks[g0 + static_cast<std::size_t>(r)];
+      alpha[r] = rank.sign;
+      for (const auto& [row, value] : rank.entries) {
+        w[static_cast<std::size_t>(row) * kGroup + static_cast<std::size_t>(r)] = value;
+      }
+      for (int j = rank.entries.front().first;
+           j >= 0 && group_mark[static_cast<std::size_t>(j)] != gstamp;
+           j = impl.schedule.parent[static_cast<std::size_t>(j)]) {
+        group_mark[static_cast<std::size_t>(j)] = gstamp;
+        path.push_back(j);
+        if (impl.mark[static_cast<std::size_t>(j)] != all_stamp) {
+          impl.mark[static_cast<std::size_t>(j)] = all_stamp;
+          touched.push_back(j);
+        }
+      }
+    }
+    std::sort(path.begin(), path.end());
+    const int columns = static_cast<int>(path.size());
+    double entries = 0.0;
+    for (int j : path) entries += lnz[j];
+    const bool threaded =
+        impl.solve_threads == 2 ||
+        (impl.solve_threads == 0 && entries > 200'000 && std::thread::hardware_concurrency() > 1);
+    if (!threaded) {
+      RankScalars active[kGroup];
+      for (int j : path) {
+        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
+        if (count > 0) apply_column(li, lx, w, lp[j] + 1, lp[j] + lnz[j], active, count);
+      }
+      continue;
+    }
+    // Two threads: rows below the split row S belong to thread 0, the others to thread 1. For the
+    // path's columns below S, thread 0 computes the scalars (it owns w_j) and publishes them;
+    // thread 1 follows with its rows. Columns from S on are thread 1's alone. Every entry gets
+    // the same operations as on one thread. S balances the entries (rows assumed spread evenly
+    // between a column's first and last row).
+    auto below = [&](int split) {
+      double count = 0.0;
+      for (int j : path) {
+        if (j >= split) break;
+        const int len = lnz[j] - 1;
+        if (len <= 0) continue;
+        const int first = li[lp[j] + 1];
+        const int last = li[lp[j] + lnz[j] - 1];
+        const double f = last > first ? static_cast<double>(split - first) / (last - first + 1)
+                                      : (split > first ? 1.0 : 0.0);
+        count += len * std::clamp(f, 0.0, 1.0);
+      }
+      return count;
+    };
+    int lo_split = path.front(), hi_split = static_cast<int>(n);
+    while (hi_split - lo_split > 1) {
+      const int mid = lo_split + (hi_split - lo_split) / 2;
+      (below(mid) < 0.5 * entries ? lo_split : hi_split) = mid;
+    }
+    const int split = hi_split;
+    const int k0 =
+        static_cast<int>(std::lower_bound(path.begin(), path.end(), split) - path.begin());
+    scalars.resize(static_cast<std::size_t>(columns) * kGroup);
+    counts.assign(static_cast<std::size_t>(columns), 0);
+    std::atomic<int> ready{0};
+    auto thread0 = [&] {
+      for (int k = 0; k < k0; ++k) {
+        const int j = path[static_cast<std::size_t>(k)];
+        RankScalars* active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
+        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
+        counts[static_cast<std::size_t>(k)] = count;
+        ready.store(k + 1, std::memory_order_release);
+        if (count == 0) continue;
+        const int* rows = li + lp[j] + 1;
+        const int end = lp[j] + lnz[j];
+        const int cut = static_cast<int>(std::lower_bound(rows, li + end, split) - li);
+        apply_column(li, lx, w, lp[j] + 1, cut, active, count);
+      }
+    };
+    auto thread1 = [&] {
+      for (int k = 0; k < columns; ++k) {
+        const int j = path[static_cast<std::size_t>(k)];
+        const RankScalars* active;
+        int count;
+        int from;
+        RankScalars own[kGroup];
+        if (k < k0) {
+          for (int spins = 0; ready.load(std::memory_order_acquire) <= k; ++spins) {
+            if (spins > 2000) std::this_thread::yield();
+          }
+          active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
+          count = counts[static_cast<std::size_t>(k)];
+          const int* rows = li + lp[j] + 1;
+          from = static_cast<int>(std::lower_bound(rows, li + lp[j] + lnz[j], split) - li);
+        } else {
+          if (k == k0) {  // thread 0 is done with α (it published column k0 − 1 last)
+            for (int spins = 0; ready.load(std::memory_order_acquire) < k0; ++spins) {
+              if (spins > 2000) std::this_thread::yield();
+            }
+          }
+          count = column_scalars(lp, lx, w, j, group, alpha, own);
+          active = own;
+          from = lp[j] + 1;
+        }
+        if (count > 0) apply_column(li, lx, w, from, lp[j] + lnz[j], active, count);
+      }
+    };
+    std::thread helper;
+    try {
+      helper = std::thread(thread1);
+    } catch (const std::system_error&) {
+      thread0();
+      thread1();
+      continue;
+    }
+    thread0();
+    helper.join();
+  }
+  for (int j : touched) {
+    impl.diagonal[static_cast<std::size_t>(j)] = lx[lp[j]];
+  }
+  if (!removed.empty()) {
     double d_min = impl.diagonal.empty() ? 0.0 : impl.diagonal.front();
     double d_max = d_min;
     bool positive = true;

@@ -47,6 +47,12 @@ class SparseCholesky {
   /// rank-k update/downdate (the factor becomes simplicial LDLᵀ on the first call). Reports a
   /// downdate that leaves the matrix not positive definite or numerically singular.
   FactorReport modify(const std::vector<Column>& columns, bool add);
+  /// A ← A + Σ a·aᵀ − Σ r·rᵀ in one sweep over the factor (peritwin's own multiple-rank update,
+  /// method C1 rank by rank, the updates before the downdates, 16 ranks per sweep, the rows split
+  /// between two threads on large paths; same arithmetic on one thread). Requires the rows of
+  /// each column to be in the factor's column of its first row (no fill), else falls back to
+  /// modify(added, true) then modify(removed, false). Reports like modify().
+  FactorReport modify(const std::vector<Column>& added, const std::vector<Column>& removed);
   /// Solves A·X = B in place for every column of B. After modify() (simplicial LDLᵀ) with 1-3
   /// columns this is peritwin's own triangular solve, whose two independent elimination subtrees
   /// run on two threads (same arithmetic with one); otherwise CHOLMOD's.

@@ -203,6 +203,58 @@ TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
   }
 }
 
+TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
+  // modify(added, removed): peritwin's one-sweep multiple-rank update equals CHOLMOD's update
+  // then downdate to round-off, and is bit-identical on one or two threads.
+  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
+                                           0.01, 0.0005, 1e6);
+  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(solver.solve().ok());
+  const SparseMatrix& upper = solver.stiffness_upper();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::vector<SparseCholesky::Column> added;  // bond vectors (pairs in the pattern: no fill)
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += 37) {
+    SparseCholesky::Column col;
+    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
+      for (std::size_t c = 0; c < 2; ++c) {
+        const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
+        if (f < 0) continue;
+        col.rows.push_back(f);
+        col.values.push_back(0.3 * std::sqrt(upper.coeff(f, f)) * uni(rng));
+      }
+    }
+    if (!col.rows.empty()) added.push_back(std::move(col));
+  }
+  ASSERT_GT(added.size(), 40u);  // more than one sweep of 16 ranks
+  const std::vector<SparseCholesky::Column> removed(added.begin(),
+                                                    added.begin() + added.size() / 2);
+  SparseCholesky reference, one, two;
+  for (SparseCholesky* c : {&reference, &one, &two}) ASSERT_TRUE(c->factorize(upper).ok());
+  ASSERT_TRUE(reference.modify(added, true).ok());
+  ASSERT_TRUE(reference.modify(removed, false).ok());
+  one.set_solve_threads(1);
+  two.set_solve_threads(2);
+  ASSERT_TRUE(one.modify(added, removed).ok());
+  ASSERT_TRUE(two.modify(added, removed).ok());
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
+  Eigen::MatrixXd x_ref = b, x_one = b, x_two = b;
+  reference.solve_with_cholmod(x_ref);
+  one.solve(x_one);
+  two.solve(x_two);
+  EXPECT_TRUE(x_one == x_two);
+  EXPECT_LT((x_one - x_ref).cwiseAbs().maxCoeff(), 1e-10 * x_ref.cwiseAbs().maxCoeff());
+  // Removing what is left returns to the original matrix.
+  const std::vector<SparseCholesky::Column> rest(added.begin() + added.size() / 2, added.end());
+  ASSERT_TRUE(two.modify({}, rest).ok());
+  SparseCholesky fresh;
+  ASSERT_TRUE(fresh.factorize(upper).ok());
+  Eigen::MatrixXd x_fresh = b, x_back = b;
+  fresh.solve_with_cholmod(x_fresh);
+  two.solve(x_back);
+  EXPECT_LT((x_back - x_fresh).cwiseAbs().maxCoeff(), 1e-10 * x_fresh.cwiseAbs().maxCoeff());
+}
+
 // Bond stiffness factors (bilinear softening, 003): bond-based model only.
 class BondFactors : public ::testing::Test {
  protected:
