@@ -22,8 +22,12 @@
 //                        phi0 0.398 (phase-switch / crack damage index, 0 < φ0 < 1);
 //                        strain_range, energy: A1 R, m1 R, A2 R, m2 R (> 0), eps_inf 0,
 //                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams)
-//                        bilinear: s0 R (> 0), sc R (> s0), A R (> 0), m 4 (> 0)
-//                                                                (fatigue::BilinearParams)
+//                        bilinear (model.kind = "bond_based" only): s0 R (> 0), sc R (> s0),
+//                          A R (> 0), m 4 (> 0) (fatigue::BilinearParams), cycle_increment 1000
+//                          (ΔN, >= 1), softening_tolerance 1e-6 (> 0),
+//                          softening_max_iterations 100 (>= 1)
+//                        strain_range, energy, kinetic: static_failure "critical_stretch"
+//                          (000 Eq. 7-8) | "critical_bond_energy" (000 Eq. 9-12, g_c = G_c/N_c)
 //                        kinetic: U R (J, > 0), gamma R (m^3, > 0), lambda 9 (> 0), n0 1.771
 //                          (> 1), temperature 293 (K, > 0), frequency 0.56 (Hz, > 0)
 //                                                                (fatigue::KineticParams)
@@ -69,6 +73,7 @@
 #include <vector>
 
 #include "solver/discretization.h"
+#include "solver/fatigue_engine.h"
 #include "solver/fatigue_law.h"
 #include "solver/geometry.h"
 #include "solver/pd_model.h"
@@ -129,7 +134,12 @@ struct FatigueConfig {
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
   fatigue::StrainLawParams strain;  ///< strain_range and energy (000 Eq. 44-46 maps it)
   fatigue::BilinearParams bilinear;
+  std::int64_t cycle_increment = 1000;  ///< bilinear: ΔN (FatigueSettings::cycle_increment)
+  double softening_tolerance = 1e-6;    ///< bilinear
+  int softening_max_iterations = 100;   ///< bilinear
   fatigue::KineticParams kinetic;
+  /// Phase III criterion of the other laws (the bilinear law breaks bonds at sc).
+  StaticFailure static_failure = StaticFailure::critical_stretch;
 };
 
 struct OutputConfig {

@@ -231,6 +231,14 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, F
   const auto set = [&r](double& field, std::string_view key) {
     if (const auto v = req(r, key, Bound::positive)) field = *v;
   };
+  if (*law != FatigueLaw::bilinear) {
+    f.static_failure =
+        r.choice<StaticFailure>("static_failure",
+                                {{"critical_stretch", StaticFailure::critical_stretch},
+                                 {"critical_bond_energy", StaticFailure::critical_bond_energy}},
+                                f.static_failure)
+            .value_or(f.static_failure);
+  }
   switch (*law) {
     case FatigueLaw::strain_range:
     case FatigueLaw::energy:
@@ -249,6 +257,12 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, F
       if (f.bilinear.s0 > 0 && r.has("sc")) {
         r.check("sc", f.bilinear.sc > f.bilinear.s0, "must be > s0");
       }
+      f.cycle_increment = r.integer("cycle_increment", f.cycle_increment);
+      r.check("cycle_increment", f.cycle_increment >= 1, "must be >= 1");
+      f.softening_tolerance = opt(r, "softening_tolerance", f.softening_tolerance, Bound::positive);
+      f.softening_max_iterations =
+          static_cast<int>(r.integer("softening_max_iterations", f.softening_max_iterations));
+      r.check("softening_max_iterations", f.softening_max_iterations >= 1, "must be >= 1");
       break;
     case FatigueLaw::kinetic:
       set(f.kinetic.U, "U");
@@ -428,6 +442,12 @@ void read_checkpoint(Context& ctx, const toml::table& t, const std::string& path
   r.finish();
 }
 
+/// Source of `key` inside table `t` (the table's own source when absent).
+const toml::source_region& source_of(const toml::table& t, std::string_view key) {
+  const toml::node* n = t.get(key);
+  return n != nullptr ? n->source() : t.source();
+}
+
 DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& path) {
   DetailConfig d;
   d.where = ctx.ref(t, path);
@@ -460,6 +480,10 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
   }
   if (const auto* f = r.table("fatigue", true)) {
     read_fatigue(ctx, *f, r.path_of("fatigue"), d.fatigue);
+    if (d.fatigue.law == FatigueLaw::bilinear && d.model.kind != ModelKind::bond_based) {
+      ctx.error(source_of(*f, "law"), r.path_of("fatigue") + ".law",
+                "\"bilinear\" is a bond law (003): it needs model.kind = \"bond_based\"");
+    }
   }
   each_table(
       r, "load", true, "an array of tables ([[detail.load]])",
@@ -479,12 +503,6 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
   }
   r.finish();
   return d;
-}
-
-/// Source of `key` inside table `t` (the table's own source when absent).
-const toml::source_region& source_of(const toml::table& t, std::string_view key) {
-  const toml::node* n = t.get(key);
-  return n != nullptr ? n->source() : t.source();
 }
 
 }  // namespace

@@ -64,15 +64,21 @@ std::optional<FatigueSettings> solver_settings(const DetailConfig& detail, std::
       s.law = peritwin::FatigueLaw::kinetic;
       break;
     case FatigueLaw::bilinear:
-      if (error != nullptr) {
-        *error = detail.where.file + ": " + detail.where.path +
-                 ".fatigue.law: \"bilinear\" is not supported by the fatigue engine yet (use "
-                 "strain_range, energy or kinetic)";
+      s.law = peritwin::FatigueLaw::bilinear;
+      if (const std::string why = fatigue::validate(detail.fatigue.bilinear); !why.empty()) {
+        if (error != nullptr)
+          *error = detail.where.file + ": " + detail.where.path + ".fatigue: " + why;
+        return std::nullopt;
       }
-      return std::nullopt;
+      break;
   }
   s.strain = detail.fatigue.strain;
   s.kinetic = detail.fatigue.kinetic;
+  s.bilinear = detail.fatigue.bilinear;
+  s.cycle_increment = detail.fatigue.cycle_increment;
+  s.softening_tolerance = detail.fatigue.softening_tolerance;
+  s.softening_max_iterations = detail.fatigue.softening_max_iterations;
+  s.static_failure = detail.fatigue.static_failure;
   s.phase_switch_damage = detail.fatigue.phase_switch_damage;
   s.incremental = true;
   return s;
@@ -137,6 +143,13 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   h.value(m->settings_.kinetic);
   h.value(m->settings_.phase_switch_damage);
   h.value(m->settings_.critical_stretch);
+  h.value(m->settings_.bilinear);
+  h.value(m->settings_.cycle_increment);
+  h.value(m->settings_.softening_tolerance);
+  h.value(m->settings_.softening_max_iterations);
+  h.value(m->settings_.static_failure);
+  h.value(m->settings_.critical_bond_energy);
+  h.value(m->settings_.crack_interactions);
   h.value(config.material.fracture_toughness);
   m->signature_ = h.get();
   return m;

@@ -18,7 +18,7 @@
 namespace peritwin::twin {
 
 /// The solver's settings for a detail's fatigue config, or nullopt with `error` set when the
-/// engine cannot run the configured law (bilinear is not in the engine yet).
+/// engine cannot run the configured law's parameters (fatigue::validate).
 /// Re-solves are incremental (CHOLMOD rank updates); resume stays bit-identical because the
 /// engine replays its recorded re-solve groups on import (EngineState::resolve_groups).
 std::optional<FatigueSettings> solver_settings(const DetailConfig& detail, std::string* error);

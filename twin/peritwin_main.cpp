@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   }
   for (const auto& detail : loaded.config->details) {
     std::string why;
-    if (!peritwin::twin::solver_settings(detail, &why)) {  // e.g. a law the engine lacks
+    if (!peritwin::twin::solver_settings(detail, &why)) {  // e.g. bilinear parameters out of range
       spdlog::error("config: {}", why);
       return kExitUsage;
     }

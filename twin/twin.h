@@ -144,7 +144,7 @@ class Twin {
   void catch_up_life();
 
   /// Checkpoints -------------------------------------------------------------------------------
-  static constexpr std::int64_t kCheckpointFormat = 1;
+  static constexpr std::int64_t kCheckpointFormat = 2;  ///< 2: bilinear law state
   [[nodiscard]] CheckpointData to_checkpoint() const;
   /// Restores a checkpoint of the same model (signature checked). On failure (`error` set) the
   /// twin must be discarded.

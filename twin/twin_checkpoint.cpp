@@ -1,12 +1,14 @@
-// Twin <-> CheckpointData (twin/checkpoint_io.h), format_version Twin::kCheckpointFormat = 1:
+// Twin <-> CheckpointData (twin/checkpoint_io.h), format_version Twin::kCheckpointFormat = 2:
 //   strings      detail_id, failure_reason, last_source, life_source, sources (ids joined by
 //                '\n'; ids are printable ASCII without blanks)
 //   i64 scalars  signature (DetailModel::signature, bit pattern), state_seq, failure,
 //                total_cycles, failed, rates_valid, rate_key_count, last_seq, has_last_block,
-//                last_block_count, life_state_seq, life_seq
+//                last_block_count, life_state_seq, life_seq, pending_cycles, pending_count
 //   f64 scalars  dose0, dose1, rate_key_p_max, rate_key_r, rate_key_alpha, last_block_p_max,
-//                last_block_r, last_block_alpha, life_central, life_low, life_high
-//   f64 arrays   anchor_life, spectrum_p_max, spectrum_r, spectrum_alpha
+//                last_block_r, last_block_alpha, life_central, life_low, life_high,
+//                pending_p_max, pending_r, pending_alpha
+//   f64 arrays   anchor_life, spectrum_p_max, spectrum_r, spectrum_alpha, damage, max_stretch
+//                (the last two empty unless the law is bilinear)
 //   i64 arrays   event_cycle, event_bond, resolve_groups, source_seq, spectrum_count
 //   u8 arrays    intact, event_cause
 #include <bit>
@@ -47,6 +49,8 @@ CheckpointData Twin::to_checkpoint() const {
   i["last_block_count"] = last_block_ ? last_block_->count : 0;
   i["life_state_seq"] = life_.state_seq;
   i["life_seq"] = life_.seq;
+  i["pending_cycles"] = e.pending_cycles;
+  i["pending_count"] = e.pending_key.count;
 
   auto& f = d.f64_scalars;
   f["dose0"] = e.dose[0];
@@ -61,6 +65,11 @@ CheckpointData Twin::to_checkpoint() const {
   f["life_central"] = life_.central;
   f["life_low"] = life_.low;
   f["life_high"] = life_.high;
+  f["pending_p_max"] = e.pending_key.p_max;
+  f["pending_r"] = e.pending_key.r;
+  f["pending_alpha"] = e.pending_key.alpha;
+  d.f64_arrays["damage"] = e.damage;
+  d.f64_arrays["max_stretch"] = e.max_stretch;
 
   d.f64_arrays["anchor_life"] = e.anchor_life;
   d.u8_arrays["intact"] = e.intact;
@@ -130,13 +139,15 @@ bool Twin::restore(const CheckpointData& d, std::string* error) {
              *total = i("total_cycles"), *failed = i("failed"), *rates_valid = i("rates_valid"),
              *rk_count = i("rate_key_count"), *last_seq = i("last_seq"),
              *has_lb = i("has_last_block"), *lb_count = i("last_block_count"),
-             *life_state = i("life_state_seq"), *life_seq = i("life_seq");
+             *life_state = i("life_state_seq"), *life_seq = i("life_seq"),
+             *pending = i("pending_cycles"), *pending_count = i("pending_count");
   const auto *dose0 = f("dose0"), *dose1 = f("dose1"), *rk_p = f("rate_key_p_max"),
              *rk_r = f("rate_key_r"), *rk_a = f("rate_key_alpha"), *lb_p = f("last_block_p_max"),
              *lb_r = f("last_block_r"), *lb_a = f("last_block_alpha"), *life_c = f("life_central"),
-             *life_l = f("life_low"), *life_h = f("life_high");
+             *life_l = f("life_low"), *life_h = f("life_high"), *pending_p = f("pending_p_max"),
+             *pending_r = f("pending_r"), *pending_a = f("pending_alpha");
   const auto *anchor = fa("anchor_life"), *sp = fa("spectrum_p_max"), *sr = fa("spectrum_r"),
-             *sa = fa("spectrum_alpha");
+             *sa = fa("spectrum_alpha"), *damage = fa("damage"), *max_stretch = fa("max_stretch");
   const auto *ev_cycle = ia("event_cycle"), *ev_bond = ia("event_bond"),
              *groups = ia("resolve_groups"), *source_seq = ia("source_seq"),
              *sc = ia("spectrum_count");
@@ -170,6 +181,10 @@ bool Twin::restore(const CheckpointData& d, std::string* error) {
   e.resolve_groups = *groups;
   e.failed = *failed != 0;
   e.failure_reason = *reason;
+  e.damage = *damage;
+  e.max_stretch = *max_stretch;
+  e.pending_cycles = *pending;
+  e.pending_key = {*pending_p, *pending_r, *pending_a, *pending_count};
   if (!engine_->import_state(e)) return fail("the engine state does not fit the model");
 
   applied_.clear();

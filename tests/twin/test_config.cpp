@@ -2,6 +2,7 @@
 // line and key path, and resolve() binds supports and loads to the expected nodes.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -365,8 +366,12 @@ TEST(Config, ModelOptionsAndSeveralDetails) {
 }
 
 TEST(Config, FatigueLawsMapEveryField) {
-  const auto fatigue = [](std::vector<std::string> keys) {
+  const auto fatigue = [](std::vector<std::string> keys, bool bond_based = false) {
     Doc doc = plate();
+    if (bond_based) {
+      doc.lines.push_back("[detail.model]");
+      doc.lines.push_back(R"(kind = "bond_based")");
+    }
     const std::uint32_t at = doc.line_of("[detail.fatigue]");
     doc.lines.erase(doc.lines.begin() + at, doc.lines.begin() + at + 5);  // law, A1, m1, A2, m2
     doc.lines.insert(doc.lines.begin() + at, keys.begin(), keys.end());
@@ -386,13 +391,28 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(e.strain.eps_inf_prop, 2e-5);
   EXPECT_EQ(e.phase_switch_damage, 0.5);
 
-  const FatigueConfig b = fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"});
+  EXPECT_EQ(e.static_failure, StaticFailure::critical_stretch);
+  const FatigueConfig g = fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5",
+                                   "m2 = 4.5", R"(static_failure = "critical_bond_energy")"});
+  EXPECT_EQ(g.static_failure, StaticFailure::critical_bond_energy);
+
+  const FatigueConfig b =
+      fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"}, true);
   EXPECT_EQ(b.law, FatigueLaw::bilinear);
   EXPECT_EQ(b.bilinear.s0, 1e-3);
   EXPECT_EQ(b.bilinear.sc, 3e-3);
   EXPECT_EQ(b.bilinear.A, 2e8);
   EXPECT_EQ(b.bilinear.m, 4.0);
   EXPECT_EQ(b.phase_switch_damage, 0.398);
+  EXPECT_EQ(b.cycle_increment, 1000);
+  const FatigueConfig b2 = fatigue(
+      {R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8", "m = 3.0",
+       "cycle_increment = 250", "softening_tolerance = 1e-8", "softening_max_iterations = 7"},
+      true);
+  EXPECT_EQ(b2.bilinear.m, 3.0);
+  EXPECT_EQ(b2.cycle_increment, 250);
+  EXPECT_EQ(b2.softening_tolerance, 1e-8);
+  EXPECT_EQ(b2.softening_max_iterations, 7);
 
   const FatigueConfig k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
   EXPECT_EQ(k0.law, FatigueLaw::kinetic);
@@ -474,12 +494,18 @@ TEST(ConfigErrors, ParameterOfAnotherLaw) {
   Doc doc = plate();
   doc.insert_after("m2 = ", "U = 2e-19");
   expect_one_error(parse(doc), 19, "detail[0].fatigue.U",
-                   "unknown key \"U\" (known here: law, phi0, A1, m1, A2, m2, eps_inf, "
-                   "eps_inf_prop)");
+                   "unknown key \"U\" (known here: law, phi0, static_failure, A1, m1, A2, m2, "
+                   "eps_inf, eps_inf_prop)");
   doc = plate();
   doc.replace("law = ", R"(law = "bilinear")");
   const ConfigResult r = parse(doc);
-  ASSERT_EQ(r.errors.size(), 7u) << r.error_text();  // s0, sc, A missing; A1, m1, A2, m2 unknown
+  // s0, sc, A missing; A1, m1, A2, m2 unknown; the plate is state-based
+  ASSERT_EQ(r.errors.size(), 8u) << r.error_text();
+  const auto law = std::find_if(r.errors.begin(), r.errors.end(),
+                                [](const auto& e) { return e.path == "detail[0].fatigue.law"; });
+  ASSERT_NE(law, r.errors.end());
+  EXPECT_EQ(law->line, 14u);
+  EXPECT_NE(law->reason.find("bond_based"), std::string::npos);
 }
 
 TEST(ConfigErrors, HorizonRatioBelowOne) {

@@ -253,14 +253,51 @@ TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
   EXPECT_NE(error.find("event_bond"), std::string::npos) << error;
 }
 
-TEST(SolverSettings, BilinearIsRejectedClearly) {
-  const auto config = b1_config("every_batches = 0");
-  DetailConfig bilinear = config;
-  bilinear.fatigue.law = FatigueLaw::bilinear;
+TEST(BilinearTwin, CheckpointWithPendingCyclesResumesBitIdentically) {
+  // The B1 detail as a bond-based model with 003's bilinear bond and third degradation law
+  // (ΔN = 500): batches of 700 cycles leave cycles pending between increments, and the
+  // checkpoint taken then must carry damage, stretch envelope and pending cycles.
+  DetailConfig config = b1_config("every_batches = 0");
+  config.model.kind = ModelKind::bond_based;
+  config.fatigue.law = FatigueLaw::bilinear;
+  config.fatigue.bilinear = {0.0154, 0.0462, 5.0,
+                             4.0};  // s0 by 003 Eq. (43) from G0 = K_c²/E, sc = 3·s0
+  config.fatigue.cycle_increment = 500;
+  const auto model = b1_model(config);
+  ASSERT_NE(model, nullptr);
+  std::vector<Batch> history;
+  for (std::int64_t s = 1; s <= 8; ++s) history.push_back(batch(s, {{4000, 0.1, 0, 700}}));
+  auto straight = make_twin(model);
+  for (const auto& b : history) {
+    const auto o = straight->apply(b);
+    ASSERT_TRUE(o.applied()) << o.what << ": " << o.why;
+  }
+  EXPECT_GT(straight->broken_bonds(), 0);
+
+  auto first = make_twin(model);
+  for (std::size_t i = 0; i < 3; ++i) ASSERT_TRUE(first->apply(history[i]).applied());
+  ASSERT_EQ(first->engine().pending_cycles(), 100);  // 2100 = 4·500 + 100
+  const CheckpointData data = first->to_checkpoint();
+  auto resumed = make_twin(model);
   std::string error;
-  EXPECT_EQ(DetailModel::build(bilinear, &error), nullptr);
-  EXPECT_NE(error.find("bilinear"), std::string::npos) << error;
-  EXPECT_NE(error.find("detail[0].fatigue.law"), std::string::npos) << error;
+  ASSERT_TRUE(resumed->restore(data, &error)) << error;
+  EXPECT_EQ(resumed->state_hash(), first->state_hash());
+  EXPECT_EQ(resumed->engine().damage(), first->engine().damage());
+  for (std::size_t i = 3; i < history.size(); ++i) {
+    ASSERT_TRUE(resumed->apply(history[i]).applied());
+  }
+  EXPECT_EQ(resumed->state_hash(), straight->state_hash());
+  EXPECT_EQ(resumed->broken_bonds(), straight->broken_bonds());
+}
+
+TEST(SolverSettings, BilinearParametersAreValidated) {
+  DetailConfig config = b1_config("every_batches = 0");
+  config.model.kind = ModelKind::bond_based;
+  config.fatigue.law = FatigueLaw::bilinear;
+  config.fatigue.bilinear = {3e-3, 1e-3, 1.0, 4.0};  // sc < s0
+  std::string error;
+  EXPECT_EQ(DetailModel::build(config, &error), nullptr);
+  EXPECT_NE(error.find("detail[0].fatigue"), std::string::npos) << error;
 }
 
 }  // namespace
