@@ -465,7 +465,8 @@ void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& c
 /// barrier per block. On one thread the same steps run in the same order, so the results are
 /// bit-identical.
 template <int R>
-void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool threaded, double* y) {
+void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool threaded, double* y,
+               bool do_forward = true, bool do_backward = true) {
   const auto n = static_cast<std::size_t>(l.n);
   const auto* lp = static_cast<const int*>(l.p);
   const auto* li = static_cast<const int*>(l.i);
@@ -554,14 +555,17 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
     }
   };
   if (!threaded) {
-    forward<R>(l, schedule.chains[1], y);
-    forward<R>(l, schedule.chains[2], second.data());
-    combine();
-    for (int b = 0; b < blocks; ++b) {
-      forward_a(b);
-      forward_b(b, 0);
-      forward_b(b, 1);
+    if (do_forward) {
+      forward<R>(l, schedule.chains[1], y);
+      forward<R>(l, schedule.chains[2], second.data());
+      combine();
+      for (int b = 0; b < blocks; ++b) {
+        forward_a(b);
+        forward_b(b, 0);
+        forward_b(b, 1);
+      }
     }
+    if (!do_backward) return;
     for (int b = blocks - 1; b >= 0; --b) {
       backward_b(b, 0);
       backward_b(b, 1);
@@ -573,18 +577,21 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
   }
   PairBarrier barrier;
   auto worker = [&](int me) {
-    forward<R>(l, schedule.chains[static_cast<std::size_t>(me) + 1], me == 0 ? y : second.data());
-    barrier.wait();
-    if (me == 0) combine();
-    barrier.wait();
-    // Forward pipeline: thread 0 does A(b), meets thread 1, then B(b, 0) and A(b + 1) while
-    // thread 1 does B(b, 1) (its rows lie below the next block: m_b >= last column of b + 1).
-    for (int b = 0; b < blocks; ++b) {
-      if (me == 0) forward_a(b);
+    if (do_forward) {
+      forward<R>(l, schedule.chains[static_cast<std::size_t>(me) + 1], me == 0 ? y : second.data());
       barrier.wait();
-      forward_b(b, me);
+      if (me == 0) combine();
+      barrier.wait();
+      // Forward pipeline: thread 0 does A(b), meets thread 1, then B(b, 0) and A(b + 1) while
+      // thread 1 does B(b, 1) (its rows lie below the next block: m_b >= last column of b + 1).
+      for (int b = 0; b < blocks; ++b) {
+        if (me == 0) forward_a(b);
+        barrier.wait();
+        forward_b(b, me);
+      }
+      barrier.wait();
     }
-    barrier.wait();
+    if (!do_backward) return;
     // Backward pipeline: B'(b, me), meet, then thread 0 finishes block b while thread 1 already
     // sums block b − 1's rows below m_{b−1} (all final: they lie below block b).
     for (int b = blocks - 1; b >= 0; --b) {
@@ -599,7 +606,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
   try {
     helper = std::thread(worker, 1);
   } catch (const std::system_error&) {
-    ldl_solve<R>(l, schedule, false, y);
+    ldl_solve<R>(l, schedule, false, y, do_forward, do_backward);
     return;
   }
   worker(0);
@@ -618,6 +625,13 @@ struct SparseCholesky::Impl {
   int stamp = 0;
   int solve_threads = 0;  ///< 0 automatic, 1, 2
   std::vector<double> w;  ///< n × kGroup workspace of the fused update (zero between calls)
+  /// The forward solve y = L⁻¹·P·b of the last right-hand sides b solved with the simplicial
+  /// factor, kept up to date by the fused update (only the update paths' rows change), so that
+  /// solving the same b again is only the backward half.
+  Eigen::MatrixXd tracked_rhs;
+  std::vector<double> forward_y;  ///< n × columns of tracked_rhs, row-major, permuted
+  std::vector<double> delta;      ///< n × 3 workspace of the forward update (zero between calls)
+  bool forward_valid = false;
   /// Σ Lnz of the simplicial factor: grows when an update adds fill (the pattern changes).
   [[nodiscard]] std::int64_t pattern_nnz() const {
     const auto* lnz = static_cast<const int*>(factor->nz);
@@ -711,6 +725,7 @@ FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
   impl_->inverse_perm.clear();
   impl_->schedule = {};
   impl_->diagonal.clear();
+  impl_->forward_valid = false;
   cholmod_sparse a = Impl::view(upper);
   if (permutation != nullptr) {
     const int saved_methods = impl_->common.nmethods;
@@ -738,6 +753,7 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
   cholmod_sparse a = Impl::view(upper);
   impl_->schedule = {};
   impl_->diagonal.clear();
+  impl_->forward_valid = false;
   const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
     return {FactorStatus::not_positive_definite,
@@ -759,6 +775,7 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
 
 FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   if (columns.empty()) return {};
+  impl_->forward_valid = false;  // CHOLMOD's updown does not update our forward solve
   cholmod_factor* l = impl_->factor;
   if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
   auto& common = impl_->common;
@@ -863,19 +880,68 @@ struct RankScalars {
   double p, beta;
 };
 
-/// Entries q in [from, to) of column j: w_i −= p·l_ij, l_ij += β·w_i for each active rank.
-inline void apply_column(const int* li, double* lx, double* w, int from, int to,
-                         const RankScalars* active, int count) {
+/// Entries q in [from, to) of column j: w_i −= p·l_ij, l_ij += β·w_i for each active rank; with
+/// R tracked right-hand sides also δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
+template <int R>
+void apply_column(const int* li, double* lx, double* w, int from, int to, const RankScalars* active,
+                  int count, double* delta, const double* y_old, const double* y_new) {
   for (int q = from; q < to; ++q) {
-    double* wi = w + static_cast<std::size_t>(li[q]) * kGroup;
-    double l = lx[q];
+    const int i = li[q];
+    double* wi = w + static_cast<std::size_t>(i) * kGroup;
+    const double l_old = lx[q];
+    double l = l_old;
     for (int a = 0; a < count; ++a) {
       double& x = wi[active[a].rank];
       x -= active[a].p * l;
       l += active[a].beta * x;
     }
     lx[q] = l;
+    if constexpr (R > 0) {
+      double* di = delta + static_cast<std::size_t>(i) * 3;
+      for (int r = 0; r < R; ++r) {
+        di[r] += l_old * y_old[r];
+        di[r] -= l * y_new[r];
+      }
+    }
   }
+}
+
+inline void apply_column(int tracked, const int* li, double* lx, double* w, int from, int to,
+                         const RankScalars* active, int count, double* delta, const double* y_old,
+                         const double* y_new) {
+  switch (tracked) {
+    case 0:
+      apply_column<0>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 1:
+      apply_column<1>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 2:
+      apply_column<2>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    default:
+      apply_column<3>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+  }
+}
+
+/// The forward solve's value at row j: ȳ_j = y_j + δ_j (δ_j is complete once the path's earlier
+/// columns are done); δ_j is cleared. Returns whether it changed (the column must then be swept
+/// even without an active rank).
+inline bool forward_pivot(int tracked, int j, double* y, double* delta, double* y_old,
+                          double* y_new) {
+  bool moved = false;
+  for (int r = 0; r < tracked; ++r) {
+    double& yj = y[static_cast<std::size_t>(j) * static_cast<std::size_t>(tracked) +
+                   static_cast<std::size_t>(r)];
+    double& dj = delta[static_cast<std::size_t>(j) * 3 + static_cast<std::size_t>(r)];
+    y_old[r] = yj;
+    y_new[r] = yj + dj;
+    moved = moved || dj != 0.0;
+    dj = 0.0;
+    yj = y_new[r];
+  }
+  return moved;
 }
 
 /// The scalars of column j (method C1 of Gill, Golub, Murray and Saunders, rank by rank in
@@ -902,8 +968,8 @@ inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks
 
 }  // namespace
 
-FactorReport SparseCholesky::modify(const std::vector<Column>& added,
-                                    const std::vector<Column>& removed) {
+FactorReport SparseCholesky::modify_fused(const std::vector<Column>& added,
+                                          const std::vector<Column>& removed) {
   if (added.empty() && removed.empty()) return {};
   cholmod_factor* l = impl_->factor;
   if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
@@ -961,6 +1027,10 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
   }
   if (impl.w.size() != n * kGroup) impl.w.assign(n * kGroup, 0.0);
   double* w = impl.w.data();
+  const int tracked = impl.forward_valid ? static_cast<int>(impl.tracked_rhs.cols()) : 0;
+  if (impl.delta.size() != n * 3) impl.delta.assign(n * 3, 0.0);
+  double* delta = impl.delta.data();
+  double* fy = impl.forward_y.data();
   if (++impl.stamp == 0) {
     std::fill(impl.mark.begin(), impl.mark.end(), 0);
     impl.stamp = 1;
@@ -971,6 +1041,8 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
   std::vector<int> group_mark(n, 0);
   std::vector<RankScalars> scalars;
   std::vector<int> counts;
+  std::vector<double> pivots;
+  std::vector<std::uint8_t> moves;
   for (std::size_t g0 = 0; g0 < ranks.size(); g0 += kGroup) {
     const int group = static_cast<int>(std::min<std::size_t>(kGroup, ranks.size() - g0));
     double alpha[kGroup];
@@ -1002,9 +1074,14 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
         (impl.solve_threads == 0 && entries > 200'000 && std::thread::hardware_concurrency() > 1);
     if (!threaded) {
       RankScalars active[kGroup];
+      double y_old[3], y_new[3];
       for (int j : path) {
         const int count = column_scalars(lp, lx, w, j, group, alpha, active);
-        if (count > 0) apply_column(li, lx, w, lp[j] + 1, lp[j] + lnz[j], active, count);
+        const bool moved = forward_pivot(tracked, j, fy, delta, y_old, y_new);
+        if (count > 0 || moved) {
+          apply_column(tracked, li, lx, w, lp[j] + 1, lp[j] + lnz[j], active, count, delta, y_old,
+                       y_new);
+        }
       }
       continue;
     }
@@ -1037,19 +1114,24 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
         static_cast<int>(std::lower_bound(path.begin(), path.end(), split) - path.begin());
     scalars.resize(static_cast<std::size_t>(columns) * kGroup);
     counts.assign(static_cast<std::size_t>(columns), 0);
+    pivots.resize(static_cast<std::size_t>(columns) * 6);  // y_old[3], y_new[3] per column
+    moves.assign(static_cast<std::size_t>(columns), 0);
     std::atomic<int> ready{0};
     auto thread0 = [&] {
       for (int k = 0; k < k0; ++k) {
         const int j = path[static_cast<std::size_t>(k)];
         RankScalars* active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
         const int count = column_scalars(lp, lx, w, j, group, alpha, active);
+        double* piv = pivots.data() + static_cast<std::size_t>(k) * 6;
+        const bool moved = forward_pivot(tracked, j, fy, delta, piv, piv + 3);
         counts[static_cast<std::size_t>(k)] = count;
+        moves[static_cast<std::size_t>(k)] = moved ? 1 : 0;
         ready.store(k + 1, std::memory_order_release);
-        if (count == 0) continue;
+        if (count == 0 && !moved) continue;
         const int* rows = li + lp[j] + 1;
         const int end = lp[j] + lnz[j];
         const int cut = static_cast<int>(std::lower_bound(rows, li + end, split) - li);
-        apply_column(li, lx, w, lp[j] + 1, cut, active, count);
+        apply_column(tracked, li, lx, w, lp[j] + 1, cut, active, count, delta, piv, piv + 3);
       }
     };
     auto thread1 = [&] {
@@ -1058,13 +1140,18 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
         const RankScalars* active;
         int count;
         int from;
+        bool moved;
+        const double* piv;
         RankScalars own[kGroup];
+        double own_pivot[6];
         if (k < k0) {
           for (int spins = 0; ready.load(std::memory_order_acquire) <= k; ++spins) {
             if (spins > 2000) std::this_thread::yield();
           }
           active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
           count = counts[static_cast<std::size_t>(k)];
+          moved = moves[static_cast<std::size_t>(k)] != 0;
+          piv = pivots.data() + static_cast<std::size_t>(k) * 6;
           const int* rows = li + lp[j] + 1;
           from = static_cast<int>(std::lower_bound(rows, li + lp[j] + lnz[j], split) - li);
         } else {
@@ -1074,10 +1161,15 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& added,
             }
           }
           count = column_scalars(lp, lx, w, j, group, alpha, own);
+          moved = forward_pivot(tracked, j, fy, delta, own_pivot, own_pivot + 3);
+          piv = own_pivot;
           active = own;
           from = lp[j] + 1;
         }
-        if (count > 0) apply_column(li, lx, w, from, lp[j] + lnz[j], active, count);
+        if (count > 0 || moved) {
+          apply_column(tracked, li, lx, w, from, lp[j] + lnz[j], active, count, delta, piv,
+                       piv + 3);
+        }
       }
     };
     std::thread helper;
@@ -1135,18 +1227,31 @@ void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
   if (impl.schedule.pattern_nnz != nnz) impl.ensure_schedule();
   const int* perm = static_cast<const int*>(l->Perm);
   const auto r = static_cast<std::size_t>(cols);
-  impl.work.resize(n * r);
-  for (std::size_t k = 0; k < n; ++k) {
-    for (std::size_t c = 0; c < r; ++c) {
-      impl.work[k * r + c] = rhs(perm[k], static_cast<Eigen::Index>(c));
-    }
-  }
   const bool threaded = impl.schedule.balanced &&
                         (impl.solve_threads == 2 || (impl.solve_threads == 0 && nnz > 2'000'000 &&
                                                      std::thread::hardware_concurrency() > 1));
-  if (r == 1) ldl_solve<1>(*l, impl.schedule, threaded, impl.work.data());
-  if (r == 2) ldl_solve<2>(*l, impl.schedule, threaded, impl.work.data());
-  if (r == 3) ldl_solve<3>(*l, impl.schedule, threaded, impl.work.data());
+  auto run = [&](bool do_forward, bool do_backward) {
+    double* y = impl.work.data();
+    if (r == 1) ldl_solve<1>(*l, impl.schedule, threaded, y, do_forward, do_backward);
+    if (r == 2) ldl_solve<2>(*l, impl.schedule, threaded, y, do_forward, do_backward);
+    if (r == 3) ldl_solve<3>(*l, impl.schedule, threaded, y, do_forward, do_backward);
+  };
+  if (impl.forward_valid && impl.tracked_rhs.rows() == rhs.rows() &&
+      impl.tracked_rhs.cols() == cols && impl.tracked_rhs == rhs) {
+    impl.work = impl.forward_y;  // the same b: the forward solve is up to date
+  } else {
+    impl.work.resize(n * r);
+    for (std::size_t k = 0; k < n; ++k) {
+      for (std::size_t c = 0; c < r; ++c) {
+        impl.work[k * r + c] = rhs(perm[k], static_cast<Eigen::Index>(c));
+      }
+    }
+    run(true, false);
+    impl.forward_y = impl.work;
+    impl.tracked_rhs = rhs;
+    impl.forward_valid = true;
+  }
+  run(false, true);
   for (std::size_t k = 0; k < n; ++k) {
     for (std::size_t c = 0; c < r; ++c) {
       rhs(perm[k], static_cast<Eigen::Index>(c)) = impl.work[k * r + c];

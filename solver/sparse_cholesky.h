@@ -52,7 +52,7 @@ class SparseCholesky {
   /// between two threads on large paths; same arithmetic on one thread). Requires the rows of
   /// each column to be in the factor's column of its first row (no fill), else falls back to
   /// modify(added, true) then modify(removed, false). Reports like modify().
-  FactorReport modify(const std::vector<Column>& added, const std::vector<Column>& removed);
+  FactorReport modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
   /// Solves A·X = B in place for every column of B. After modify() (simplicial LDLᵀ) with 1-3
   /// columns this is peritwin's own triangular solve, whose two independent elimination subtrees
   /// run on two threads (same arithmetic with one); otherwise CHOLMOD's.

@@ -299,7 +299,7 @@ FactorReport StaticSolver::update_resolve(const std::vector<SparseCholesky::Colu
                                           const std::vector<SparseCholesky::Column>& removed,
                                           std::chrono::steady_clock::time_point t0) {
   modified_ = true;
-  FactorReport r = cholesky_.modify(added, removed);
+  FactorReport r = cholesky_.modify_fused(added, removed);
   ++updates_;
   if (!r.ok()) {
     update_s_ += seconds_since(t0);

@@ -204,7 +204,7 @@ TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
 }
 
 TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
-  // modify(added, removed): peritwin's one-sweep multiple-rank update equals CHOLMOD's update
+  // modify_fused(added, removed): peritwin's one-sweep multiple-rank update equals CHOLMOD's update
   // then downdate to round-off, and is bit-identical on one or two threads.
   auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
                                            0.01, 0.0005, 1e6);
@@ -231,13 +231,21 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
                                                     added.begin() + added.size() / 2);
   SparseCholesky reference, one, two;
   for (SparseCholesky* c : {&reference, &one, &two}) ASSERT_TRUE(c->factorize(upper).ok());
-  ASSERT_TRUE(reference.modify(added, true).ok());
-  ASSERT_TRUE(reference.modify(removed, false).ok());
+  // A first small update, then a solve: its forward half is kept up to date by the next update.
+  const std::vector<SparseCholesky::Column> first(added.begin(), added.begin() + 3);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
   one.set_solve_threads(1);
   two.set_solve_threads(2);
-  ASSERT_TRUE(one.modify(added, removed).ok());
-  ASSERT_TRUE(two.modify(added, removed).ok());
-  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
+  for (SparseCholesky* c : {&one, &two}) {
+    ASSERT_TRUE(c->modify_fused(first, {}).ok());
+    Eigen::MatrixXd x = b;
+    c->solve(x);
+  }
+  ASSERT_TRUE(reference.modify(first, true).ok());
+  ASSERT_TRUE(reference.modify(added, true).ok());
+  ASSERT_TRUE(reference.modify(removed, false).ok());
+  ASSERT_TRUE(one.modify_fused(added, removed).ok());
+  ASSERT_TRUE(two.modify_fused(added, removed).ok());
   Eigen::MatrixXd x_ref = b, x_one = b, x_two = b;
   reference.solve_with_cholmod(x_ref);
   one.solve(x_one);
@@ -245,8 +253,9 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   EXPECT_TRUE(x_one == x_two);
   EXPECT_LT((x_one - x_ref).cwiseAbs().maxCoeff(), 1e-10 * x_ref.cwiseAbs().maxCoeff());
   // Removing what is left returns to the original matrix.
-  const std::vector<SparseCholesky::Column> rest(added.begin() + added.size() / 2, added.end());
-  ASSERT_TRUE(two.modify({}, rest).ok());
+  std::vector<SparseCholesky::Column> rest(added.begin() + added.size() / 2, added.end());
+  rest.insert(rest.end(), first.begin(), first.end());  // `first` was added twice
+  ASSERT_TRUE(two.modify_fused({}, rest).ok());
   SparseCholesky fresh;
   ASSERT_TRUE(fresh.factorize(upper).ok());
   Eigen::MatrixXd x_fresh = b, x_back = b;
