@@ -66,7 +66,9 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
                              FatigueSettings settings)
     : disc_(disc),
       model_(model),
-      solver_(disc, model, std::move(supports), std::move(loads)),
+      supports_(std::move(supports)),
+      loads_(std::move(loads)),
+      solver_(std::make_unique<StaticSolver>(disc, model, supports_, loads_)),
       settings_(settings) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   if (settings_.law == FatigueLaw::bilinear) {
@@ -88,7 +90,7 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
     damage_.assign(nb, 0.0);
     max_stretch_.assign(nb, 0.0);
   }
-  solver_.set_incremental(settings_.incremental);
+  solver_->set_incremental(settings_.incremental);
   anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
   rate_.assign(nb, 0.0);
   phase_.assign(nb, 1);
@@ -114,14 +116,14 @@ bool FatigueEngine::dose_mode() const {
 }
 
 bool FatigueEngine::initialize() {
-  const FactorReport r = solver_.solve();
+  const FactorReport r = solver_->solve();
   ++solves_;
   if (!r.ok()) {
     failed_ = true;
     failure_reason_ = r.message;
     return false;
   }
-  const auto& intact = solver_.intact();
+  const auto& intact = solver_->intact();
   for (std::size_t b = 0; b < breakable_.size(); ++b) {
     const auto i = static_cast<std::size_t>(disc_.bond_i[b]);
     const auto j = static_cast<std::size_t>(disc_.bond_j[b]);
@@ -133,7 +135,7 @@ bool FatigueEngine::initialize() {
 
 std::int64_t FatigueEngine::broken_bonds() const {
   std::int64_t n = 0;
-  for (auto v : solver_.intact()) n += v ? 0 : 1;
+  for (auto v : solver_->intact()) n += v ? 0 : 1;
   return n;
 }
 
@@ -165,11 +167,11 @@ void FatigueEngine::prepare_rates(const LoadBlock& block) {
 void FatigueEngine::compute_rates(const LoadBlock& block) {
   const bool dose = dose_mode();
   const auto& p = settings_.strain;
-  const auto& intact = solver_.intact();
+  const auto& intact = solver_->intact();
   if (dose) {
-    solver_.stretch(1.0, block.alpha, stretch_);  // ŝ: stretch per unit load at α
+    solver_->stretch(1.0, block.alpha, stretch_);  // ŝ: stretch per unit load at α
   } else {
-    solver_.stretch(block.p_max, block.alpha, stretch_);  // s⁺ at P_max
+    solver_->stretch(block.p_max, block.alpha, stretch_);  // s⁺ at P_max
   }
   std::vector<double> g;
   if (settings_.law == FatigueLaw::energy) {
@@ -426,7 +428,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
   // Events carry the cycle count at the end of the increment (pending cycles are not integrated).
   const std::int64_t at_cycle = total_cycles_ - pending_cycles_;
   std::vector<double> s_start, s, trial(nb);
-  solver_.stretch(key.p_max, key.alpha, s_start);  // s_N: current factors, this load
+  solver_->stretch(key.p_max, key.alpha, s_start);  // s_N: current factors, this load
   s = s_start;
   std::vector<double> iterate = damage_;  // D' of the factors now in the solver
   std::vector<BondIndex> changed_bonds;
@@ -447,7 +449,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
       const double f = fatigue::bilinear_force_factor(s[b], d, p.sc);
       if (f == 0.0) d = 1.0;
       trial[b] = d;
-      const double old_f = solver_.bond_factor(static_cast<BondIndex>(b));
+      const double old_f = solver_->bond_factor(static_cast<BondIndex>(b));
       if (f != old_f) {
         changed_bonds.push_back(static_cast<BondIndex>(b));
         changed_factors.push_back(f);
@@ -465,7 +467,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
         (it > 0 && !breaks && largest_change <= settings_.softening_tolerance)) {
       for (std::size_t b = 0; b < nb; ++b) {
         if (breakable_[b] && fatigue::bilinear_force_factor(s[b], trial[b], p.sc) ==
-                                 solver_.bond_factor(static_cast<BondIndex>(b))) {
+                                 solver_->bond_factor(static_cast<BondIndex>(b))) {
           iterate[b] = trial[b];
         }
       }
@@ -483,7 +485,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
                            s[b] >= p.sc ? BreakCause::overload : BreakCause::fatigue});
       }
     }
-    const FactorReport r = solver_.set_bond_factors(changed_bonds, changed_factors);
+    const FactorReport r = solver_->set_bond_factors(changed_bonds, changed_factors);
     ++solves_;
     if (!r.ok()) {
       failed_ = true;
@@ -492,14 +494,14 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
       update_phases();
       return false;
     }
-    solver_.stretch(key.p_max, key.alpha, s);
+    solver_->stretch(key.p_max, key.alpha, s);
   }
   ++increments_;
   if (!converged) ++unconverged_increments_;
 
   damage_ = iterate;
   for (std::size_t b = 0; b < nb; ++b) {
-    if (solver_.intact()[b]) max_stretch_[b] = std::max(max_stretch_[b], s[b]);
+    if (solver_->intact()[b]) max_stretch_[b] = std::max(max_stretch_[b], s[b]);
   }
   update_phases();
   return true;
@@ -536,11 +538,11 @@ bool FatigueEngine::static_cascade(const LoadBlock& block) {
     if (energy) {
       // 000 Eq. (31): ḡ is a quadratic form in (s, θ), and s, θ are linear in P, so ḡ(P) =
       // P²·ḡ(1) exactly in real arithmetic; ḡ(1) from the unit-load stretches and dilatations.
-      solver_.stretch(1.0, block.alpha, s);
-      dilatations(disc_, model_, solver_.intact(), s, theta);
+      solver_->stretch(1.0, block.alpha, s);
+      dilatations(disc_, model_, solver_->intact(), s, theta);
       bond_energy_release_rates(disc_, model_, s, theta, g);
     } else {
-      solver_.stretch(block.p_max, block.alpha, s);
+      solver_->stretch(block.p_max, block.alpha, s);
     }
     std::vector<BondIndex> newly;
     for (std::size_t b = 0; b < s.size(); ++b) {
@@ -563,15 +565,38 @@ bool FatigueEngine::static_cascade(const LoadBlock& block) {
   }
 }
 
+bool FatigueEngine::rebuild_due(std::size_t resolves) const {
+  const auto every = settings_.refactor_every_resolves;
+  return settings_.incremental && every > 0 && resolves > 0 &&
+         static_cast<std::int64_t>(resolves) % every == 0;
+}
+
+FactorReport FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& intact) {
+  auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_);
+  FactorReport r = fresh->solve();
+  std::vector<BondIndex> broken;
+  for (std::size_t b = 0; b < intact.size(); ++b) {
+    if (!intact[b] && fresh->intact()[b]) broken.push_back(static_cast<BondIndex>(b));
+  }
+  if (r.ok() && !broken.empty()) {
+    fresh->set_incremental(false);
+    r = fresh->break_bonds(broken);
+  }
+  fresh->set_incremental(settings_.incremental);
+  solver_ = std::move(fresh);
+  return r;
+}
+
 bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
   for (BondIndex b : newly_broken) {
     breakable_[static_cast<std::size_t>(b)] = 0;
     rate_[static_cast<std::size_t>(b)] = 0.0;
   }
   cascade_checked_ = false;
-  const FactorReport r = solver_.break_bonds(newly_broken);
+  FactorReport r = solver_->break_bonds(newly_broken);
   ++solves_;
   resolve_groups_.push_back(static_cast<std::int64_t>(newly_broken.size()));
+  if (r.ok() && rebuild_due(resolve_groups_.size())) r = rebuild_solver(solver_->intact());
   rates_valid_ = false;
   if (!r.ok()) {
     failed_ = true;
@@ -583,7 +608,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
 }
 
 void FatigueEngine::update_phases() {
-  damage_index(disc_, solver_.intact(), node_damage_);
+  damage_index(disc_, solver_->intact(), node_damage_);
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   // 000 Sec. 4.4: node k is in phase II once k or any family member has φ ≥ φ0.
   std::vector<std::uint8_t> node_growth(nn, 0);
@@ -608,7 +633,7 @@ void FatigueEngine::update_phases() {
 EngineState FatigueEngine::export_state() const {
   EngineState s;
   s.anchor_life = anchor_life_;
-  s.intact = solver_.intact();
+  s.intact = solver_->intact();
   s.dose[0] = dose_[0];
   s.dose[1] = dose_[1];
   s.rates_valid = rates_valid_;
@@ -647,7 +672,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   } else {
     auto& group = groups.emplace_back();
     for (std::size_t b = 0; b < s.intact.size(); ++b) {
-      if (!s.intact[b] && solver_.intact()[b]) group.push_back(static_cast<BondIndex>(b));
+      if (!s.intact[b] && solver_->intact()[b]) group.push_back(static_cast<BondIndex>(b));
     }
   }
   anchor_life_ = s.anchor_life;
@@ -656,18 +681,41 @@ bool FatigueEngine::import_state(const EngineState& s) {
   resolve_groups_ = s.resolve_groups;
   failed_ = s.failed;
   failure_reason_ = s.failure_reason;
-  for (const auto& group : groups) {
-    for (BondIndex b : group) {
+  // With periodic rebuilds (resolve()), the factor after the last rebuild depends only on the
+  // bonds broken by then: break those in one refactorization, rebuild exactly as resolve() did,
+  // and replay only the groups after it.
+  std::size_t first = 0;
+  if (groups.size() == s.resolve_groups.size() && settings_.incremental) {
+    for (std::size_t k = groups.size(); k > 0; --k) {
+      if (rebuild_due(k)) {
+        first = k;
+        break;
+      }
+    }
+  }
+  for (std::size_t k = 0; k < groups.size(); ++k) {
+    for (BondIndex b : groups[k]) {
       breakable_[static_cast<std::size_t>(b)] = 0;
       rate_[static_cast<std::size_t>(b)] = 0.0;
     }
-    if (!group.empty() && !failed_) {
-      const FactorReport r = solver_.break_bonds(group);
+  }
+  if (first > 0 && !failed_) {
+    std::vector<std::uint8_t> intact = solver_->intact();
+    for (std::size_t k = 0; k < first; ++k) {
+      for (BondIndex b : groups[k]) intact[static_cast<std::size_t>(b)] = 0;
+    }
+    const FactorReport r = rebuild_solver(intact);
+    ++solves_;
+    if (!r.ok()) return false;
+  }
+  for (std::size_t k = first; k < groups.size(); ++k) {
+    if (!groups[k].empty() && !failed_) {
+      const FactorReport r = solver_->break_bonds(groups[k]);
       ++solves_;
       if (!r.ok()) return false;
     }
   }
-  if (solver_.intact() != s.intact && !failed_) return false;
+  if (solver_->intact() != s.intact && !failed_) return false;
   update_phases();
   dose_[0] = s.dose[0];
   dose_[1] = s.dose[1];
@@ -689,13 +737,13 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
   for (std::size_t b = 0; b < nb; ++b) {
     const double f = s.intact[b] ? 1.0 - s.damage[b] : 0.0;
     if (s.intact[b] && !(s.damage[b] < 1.0)) return false;
-    if (f != solver_.bond_factor(static_cast<BondIndex>(b))) {
+    if (f != solver_->bond_factor(static_cast<BondIndex>(b))) {
       bonds.push_back(static_cast<BondIndex>(b));
       factors.push_back(f);
     }
   }
   if (!bonds.empty() && !s.failed) {
-    const FactorReport r = solver_.set_bond_factors(bonds, factors);
+    const FactorReport r = solver_->set_bond_factors(bonds, factors);
     ++solves_;
     if (!r.ok()) return false;
   }
@@ -725,7 +773,7 @@ std::uint64_t FatigueEngine::state_hash() const {
   };
   const auto lives = remaining_life();
   mix(lives.data(), lives.size() * sizeof(double));
-  mix(solver_.intact().data(), solver_.intact().size());
+  mix(solver_->intact().data(), solver_->intact().size());
   mix(phase_.data(), phase_.size());
   mix(&total_cycles_, sizeof(total_cycles_));
   if (bilinear()) {

@@ -45,6 +45,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -111,6 +112,12 @@ struct FatigueSettings {
   double crack_interactions = 36.0;
   /// Re-solve after breaks by CHOLMOD rank updates (exact) instead of refactorizing.
   bool incremental = true;
+  /// Incremental only: after every this many re-solves the solver is rebuilt from scratch (a
+  /// fresh StaticSolver, one refactorization with the broken bonds) — at a fixed, history-counted
+  /// point and by the same operations on resume, so bit-identical runs stay bit-identical. It
+  /// bounds the round-off carried by long chains of updates and what import_state must replay on
+  /// resume (the re-solves since the last rebuild, not the whole history). 0 = never.
+  std::int64_t refactor_every_resolves = 1024;
 };
 
 /// 000 Eq. (8): s_c = sqrt(G_c / ((6μ/π + 16(κ − 2μ)/(9π²))·δ)), plane-stress κ, μ of the material.
@@ -187,7 +194,7 @@ class FatigueEngine {
   [[nodiscard]] const std::vector<double>& node_damage() const { return node_damage_; }
   [[nodiscard]] bool failed() const { return failed_; }
   [[nodiscard]] const std::string& failure_reason() const { return failure_reason_; }
-  [[nodiscard]] const StaticSolver& solver() const { return solver_; }
+  [[nodiscard]] const StaticSolver& solver() const { return *solver_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
   /// Bilinear law: damage D per bond (empty otherwise), pending cycles, largest stretches.
@@ -228,11 +235,18 @@ class FatigueEngine {
   /// Phase III cascade at the block's P_max; false on final failure.
   bool static_cascade(const LoadBlock& block);
   bool resolve(const std::vector<BondIndex>& newly_broken);
+  /// Whether resolve() rebuilds the factor after its `resolves`-th re-solve.
+  [[nodiscard]] bool rebuild_due(std::size_t resolves) const;
+  /// Replaces the solver by a fresh one with exactly the bonds not in `intact` broken (one
+  /// refactorization): the same operations whatever the previous solver went through.
+  FactorReport rebuild_solver(const std::vector<std::uint8_t>& intact);
   void update_phases();
 
   const Discretization& disc_;
   const PdModel& model_;
-  StaticSolver solver_;
+  std::vector<Support> supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
+  std::vector<LoadTerm> loads_;
+  std::unique_ptr<StaticSolver> solver_;
   FatigueSettings settings_;
   double critical_stretch_ = 0.0;
   double critical_bond_energy_ = 0.0;  ///< g_c, 000 Eq. (9), (12)

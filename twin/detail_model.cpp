@@ -150,6 +150,7 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   h.value(m->settings_.static_failure);
   h.value(m->settings_.critical_bond_energy);
   h.value(m->settings_.crack_interactions);
+  h.value(m->settings_.refactor_every_resolves);
   h.value(config.material.fracture_toughness);
   m->signature_ = h.get();
   return m;
