@@ -650,6 +650,15 @@ EngineState FatigueEngine::export_state() const {
   return s;
 }
 
+void FatigueEngine::restore_history(const EngineState& s) {
+  anchor_life_ = s.anchor_life;
+  total_cycles_ = s.total_cycles;
+  events_ = s.events;
+  resolve_groups_ = s.resolve_groups;
+  failed_ = s.failed;
+  failure_reason_ = s.failure_reason;
+}
+
 bool FatigueEngine::import_state(const EngineState& s) {
   if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
     return false;
@@ -675,12 +684,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
       if (!s.intact[b] && solver_->intact()[b]) group.push_back(static_cast<BondIndex>(b));
     }
   }
-  anchor_life_ = s.anchor_life;
-  total_cycles_ = s.total_cycles;
-  events_ = s.events;
-  resolve_groups_ = s.resolve_groups;
-  failed_ = s.failed;
-  failure_reason_ = s.failure_reason;
+  restore_history(s);
   // With periodic rebuilds (resolve()), the factor after the last rebuild depends only on the
   // bonds broken by then: break those in one refactorization, rebuild exactly as resolve() did,
   // and replay only the groups after it.
@@ -748,16 +752,11 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
     if (!r.ok()) return false;
   }
   for (std::size_t b = 0; b < nb; ++b) breakable_[b] = breakable_[b] && s.intact[b] ? 1 : 0;
-  anchor_life_ = s.anchor_life;
+  restore_history(s);
   damage_ = s.damage;
   max_stretch_ = s.max_stretch;
   pending_cycles_ = s.pending_cycles;
   pending_key_ = s.pending_key;
-  total_cycles_ = s.total_cycles;
-  events_ = s.events;
-  resolve_groups_ = s.resolve_groups;
-  failed_ = s.failed;
-  failure_reason_ = s.failure_reason;
   update_phases();
   return true;
 }

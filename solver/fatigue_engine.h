@@ -235,6 +235,8 @@ class FatigueEngine {
   /// Phase III cascade at the block's P_max; false on final failure.
   bool static_cascade(const LoadBlock& block);
   bool resolve(const std::vector<BondIndex>& newly_broken);
+  /// The fields of `s` every law restores as they are: lives, cycles, events, failure.
+  void restore_history(const EngineState& s);
   /// Whether resolve() rebuilds the factor after its `resolves`-th re-solve.
   [[nodiscard]] bool rebuild_due(std::size_t resolves) const;
   /// Replaces the solver by a fresh one with exactly the bonds not in `intact` broken (one

@@ -30,6 +30,28 @@ inline TensionPlate make_tension_plate(const Material& material, const ModelOpti
   return p;
 }
 
+/// A small edge-notched plate in tension (24 × 16 nodes at Δx = 1 mm by default), the
+/// peridynamic analogue of a fatigue coupon: the bottom edge layer clamped, an opening load P in
+/// +y on the top edge layer and a sin α part in x (to exercise the load basis). The engine tests
+/// only need something that cracks in a few hundred cycles.
+inline Specimen make_notched_plate(ModelKind kind, bool notched = true, int columns = 24,
+                                   int rows = 16, double poisson_ratio = 0.33) {
+  Specimen p;
+  const double dx = 0.001;
+  p.geometry.thickness = 0.005;
+  p.geometry.outline = {{0.0, -0.5 * rows * dx, columns * dx, 0.5 * rows * dx}};
+  if (notched) p.geometry.notches = {{{-dx, 0.0}, {0.25 * columns * dx, 0.0}}};
+  p.disc = discretize(p.geometry, dx, 3.015 * dx);
+  ModelOptions o;
+  o.kind = kind;
+  p.model = build_model(p.disc, Material{68e9, poisson_ratio, 0.0}, o, 200.0);
+  const double h = 0.5 * rows * dx;
+  p.supports.push_back({p.disc.nodes_in(Region::of(Rectangle{-1, -h, 1, -h + dx})), true, true});
+  p.loads.push_back(
+      {p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
+  return p;
+}
+
 /// Least-squares slope of values against coordinates.
 inline double slope(const std::vector<double>& x, const std::vector<double>& y) {
   double mx = 0, my = 0;

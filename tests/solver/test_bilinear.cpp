@@ -9,6 +9,7 @@
 
 #include "solver/fatigue_engine.h"
 #include "solver/specimens.h"
+#include "tests/solver/plates.h"
 
 namespace peritwin {
 namespace {
@@ -76,23 +77,9 @@ TEST(BilinearClosedForm, LoadControlledBondLifeConvergesAtSecondOrder) {
 
 using Plate = Specimen;
 
-/// Edge-notched bond-based plate in tension (as in test_fatigue_engine), 24 × 16 nodes.
+/// The engine tests' edge-notched plate (24 × 16 nodes), ν = 1/3 (the bond-based value).
 Plate make_plate(ModelKind kind = ModelKind::bond_based, bool notched = true) {
-  Plate p;
-  const double dx = 0.001;
-  const int columns = 24, rows = 16;
-  p.geometry.thickness = 0.005;
-  p.geometry.outline = {{0.0, -0.5 * rows * dx, columns * dx, 0.5 * rows * dx}};
-  if (notched) p.geometry.notches = {{{-dx, 0.0}, {0.25 * columns * dx, 0.0}}};
-  p.disc = discretize(p.geometry, dx, 3.015 * dx);
-  ModelOptions o;
-  o.kind = kind;
-  p.model = build_model(p.disc, Material{68e9, 1.0 / 3.0, 0.0}, o, 200.0);
-  const double h = 0.5 * rows * dx;
-  p.supports.push_back({p.disc.nodes_in(Region::of(Rectangle{-1, -h, 1, -h + dx})), true, true});
-  p.loads.push_back(
-      {p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
-  return p;
+  return testing::make_notched_plate(kind, notched, 24, 16, 1.0 / 3.0);
 }
 
 /// Largest stretch of an intact bond at load P (α = 0) on the undamaged plate.

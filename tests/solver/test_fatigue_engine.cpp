@@ -5,32 +5,13 @@
 
 #include "solver/fatigue_engine.h"
 #include "solver/specimens.h"
+#include "tests/solver/plates.h"
 
 namespace peritwin {
 namespace {
 
-/// A small edge-notched plate in tension (bond-based or state-based), the peridynamic analogue of
-/// a fatigue coupon; the engine tests only need something that cracks in a few hundred cycles.
-using NotchedPlate = Specimen;  // geometry, discretization, model, supports, loads
-
-NotchedPlate make_notched_plate(ModelKind kind, bool notched = true, int columns = 24,
-                                int rows = 16) {
-  NotchedPlate p;
-  const double dx = 0.001;
-  p.geometry.thickness = 0.005;
-  p.geometry.outline = {{0.0, -0.5 * rows * dx, columns * dx, 0.5 * rows * dx}};
-  if (notched) p.geometry.notches = {{{-dx, 0.0}, {0.25 * columns * dx, 0.0}}};
-  p.disc = discretize(p.geometry, dx, 3.015 * dx);
-  ModelOptions o;
-  o.kind = kind;
-  p.model = build_model(p.disc, Material{68e9, 0.33, 0.0}, o, 200.0);
-  const double h = 0.5 * rows * dx;
-  p.supports.push_back({p.disc.nodes_in(Region::of(Rectangle{-1, -h, 1, -h + dx})), true, true});
-  // Opening load on the top edge layer, in +y; a sin α part in x to exercise the basis.
-  p.loads.push_back(
-      {p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
-  return p;
-}
+using NotchedPlate = Specimen;
+using testing::make_notched_plate;
 
 /// Parameters scaled so that the most stretched bond fails after about `first_failure` cycles
 /// of P_max = p, R = r: A = 1/(N·ε^m) from 000 Eq. (21).
