@@ -46,7 +46,7 @@
 //                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count
 //                        (>= 1)}, ...] (repeated until the criterion is met), band "none" |
 //                        "a2_scatter", a2_relative_scatter (0 < s < 1, the life band from
-//                        A2·(1 ± s); R with and only with "a2_scatter"), every_batches 10 (>= 0,
+//                        A2·(1 ± s), for the bilinear law A·(1 ± s); R with and only with "a2_scatter"), every_batches 10 (>= 0,
 //                        0 = never: in deterministic mode an estimate is computed synchronously
 //                        whenever state_seq is a multiple of it, state 0 included)
 //   [detail.stress_intensity]

@@ -159,6 +159,7 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
 std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {
   FatigueSettings s = settings_;
   s.strain.A2 *= a2_factor;
+  s.bilinear.A *= a2_factor;  // the bilinear law's growth coefficient (003 Eq. 27) plays A2's role
   return std::make_unique<FatigueEngine>(disc_, pd_, supports_, loads_, s);
 }
 

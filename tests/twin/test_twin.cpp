@@ -290,6 +290,40 @@ TEST(BilinearTwin, CheckpointWithPendingCyclesResumesBitIdentically) {
   EXPECT_EQ(resumed->broken_bonds(), straight->broken_bonds());
 }
 
+TEST(BilinearTwin, TheLifeBandScalesTheGrowthCoefficient) {
+  // a2_scatter for the bilinear law scales A of 003 Eq. (27): with small damage D ≈ A·N·(s/sc)^m
+  // is linear in A, so one increment with A·1.2 gives 1.2 times the damage — to 1 % for the most
+  // damaged bond and for the total: softened bonds shed load to their neighbours, which shifts
+  // the small damages of those neighbours by a few per cent.
+  DetailConfig config = b1_config("every_batches = 0");
+  config.model.kind = ModelKind::bond_based;
+  config.fatigue.law = FatigueLaw::bilinear;
+  config.fatigue.bilinear = {0.0154, 0.0462, 5.0, 4.0};
+  config.fatigue.cycle_increment = 100;
+  const auto model = b1_model(config);
+  ASSERT_NE(model, nullptr);
+  auto central = model->make_engine(1.0);
+  auto high = model->make_engine(1.2);
+  for (auto* e : {central.get(), high.get()}) {
+    ASSERT_TRUE(e->initialize());
+    e->apply({4000.0, 0.1, 0.0, 100});
+  }
+  const auto& d1 = central->damage();
+  const auto& d2 = high->damage();
+  ASSERT_EQ(d1.size(), d2.size());
+  const auto top = static_cast<std::size_t>(std::max_element(d1.begin(), d1.end()) - d1.begin());
+  const double largest = d1[top];
+  EXPECT_NEAR(d2[top] / largest, 1.2, 0.012);
+  double sum1 = 0.0, sum2 = 0.0;
+  for (std::size_t b = 0; b < d1.size(); ++b) {
+    sum1 += d1[b];
+    sum2 += d2[b];
+  }
+  EXPECT_NEAR(sum2 / sum1, 1.2, 0.012);
+  EXPECT_GT(largest, 1e-6);
+  EXPECT_LT(largest, 0.1);  // small-damage regime
+}
+
 TEST(SolverSettings, BilinearParametersAreValidated) {
   DetailConfig config = b1_config("every_batches = 0");
   config.model.kind = ModelKind::bond_based;
