@@ -1,6 +1,7 @@
 #include "solver/fatigue_engine.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -571,7 +572,19 @@ bool FatigueEngine::rebuild_due(std::size_t resolves) const {
          static_cast<std::int64_t>(resolves) % every == 0;
 }
 
+double FatigueEngine::update_seconds() const {
+  return retired_update_s_ + solver_->update_seconds();
+}
+int FatigueEngine::updates() const { return retired_updates_ + solver_->updates(); }
+double FatigueEngine::basis_solve_seconds() const {
+  return retired_basis_solve_s_ + solver_->basis_solve_seconds();
+}
+
 FactorReport FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& intact) {
+  const auto t0 = std::chrono::steady_clock::now();
+  retired_update_s_ += solver_->update_seconds();
+  retired_updates_ += solver_->updates();
+  retired_basis_solve_s_ += solver_->basis_solve_seconds();
   auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_);
   FactorReport r = fresh->solve();
   std::vector<BondIndex> broken;
@@ -584,6 +597,8 @@ FactorReport FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& inta
   }
   fresh->set_incremental(settings_.incremental);
   solver_ = std::move(fresh);
+  ++rebuilds_;
+  rebuild_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }
 

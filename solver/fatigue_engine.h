@@ -197,6 +197,14 @@ class FatigueEngine {
   [[nodiscard]] const StaticSolver& solver() const { return *solver_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
+  /// Rank-update work over the engine's life, across solver rebuilds (refactor_every_resolves):
+  /// seconds in updates (incl. their re-solves), number of updates, seconds in basis solves.
+  [[nodiscard]] double update_seconds() const;
+  [[nodiscard]] int updates() const;
+  [[nodiscard]] double basis_solve_seconds() const;
+  /// Solver rebuilds done (refactor_every_resolves) and the seconds they took.
+  [[nodiscard]] int rebuilds() const { return rebuilds_; }
+  [[nodiscard]] double rebuild_seconds() const { return rebuild_s_; }
   /// Bilinear law: damage D per bond (empty otherwise), pending cycles, largest stretches.
   [[nodiscard]] const std::vector<double>& damage() const { return damage_; }
   [[nodiscard]] const std::vector<double>& max_stretch() const { return max_stretch_; }
@@ -249,6 +257,11 @@ class FatigueEngine {
   std::vector<Support> supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
   std::vector<LoadTerm> loads_;
   std::unique_ptr<StaticSolver> solver_;
+  double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
+  int retired_updates_ = 0;
+  double retired_basis_solve_s_ = 0.0;
+  int rebuilds_ = 0;
+  double rebuild_s_ = 0.0;
   FatigueSettings settings_;
   double critical_stretch_ = 0.0;
   double critical_bond_energy_ = 0.0;  ///< g_c, 000 Eq. (9), (12)
