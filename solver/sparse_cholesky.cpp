@@ -17,6 +17,31 @@ namespace peritwin {
 
 namespace {
 
+/// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
+/// min(D) / max(D), above 1e-14 — else the model has come loose.
+FactorReport check_after_downdate(const std::vector<double>& diagonal) {
+  double d_min = diagonal.empty() ? 0.0 : diagonal.front();
+  double d_max = d_min;
+  bool positive = true;
+  for (const double d : diagonal) {
+    positive = positive && d > 0.0;
+    d_min = std::min(d_min, d);
+    d_max = std::max(d_max, d);
+  }
+  if (!positive) {
+    return {FactorStatus::not_positive_definite,
+            "stiffness is not positive definite after breaking bonds: a part of the model has "
+            "come loose"};
+  }
+  const double rcond = d_min / d_max;
+  if (!(rcond > 1e-14)) {
+    return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
+                                        std::to_string(rcond) +
+                                        "): a part of the model has come loose"};
+  }
+  return {};
+}
+
 /// The columns of a simplicial LDLᵀ factor split into two sets of whole elimination subtrees
 /// (parts 1 and 2) and the rest (part 0, the "top": every ancestor of a part-1/2 column is in the
 /// top). Forward and backward solves of parts 1 and 2 touch disjoint rows apart from the top ones,
@@ -847,26 +872,8 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
     }
   }
   if (!add) {
-    // LDLᵀ: D is the first entry of every column; rcond as cholmod_rcond: min(D) / max(D).
-    double d_min = impl.diagonal.empty() ? 0.0 : impl.diagonal.front();
-    double d_max = d_min;
-    bool positive = true;
-    for (const double d : impl.diagonal) {
-      positive = positive && d > 0.0;
-      d_min = std::min(d_min, d);
-      d_max = std::max(d_max, d);
-    }
-    if (!positive) {
-      return {FactorStatus::not_positive_definite,
-              "stiffness is not positive definite after breaking bonds: a part of the model has "
-              "come loose"};
-    }
-    const double rcond = d_min / d_max;
-    if (!(rcond > 1e-14)) {
-      return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
-                                          std::to_string(rcond) +
-                                          "): a part of the model has come loose"};
-    }
+    // LDLᵀ: D is the first entry of every column.
+    if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
   }
   return {};
 }
@@ -1187,25 +1194,7 @@ FactorReport SparseCholesky::modify_fused(const std::vector<Column>& added,
     impl.diagonal[static_cast<std::size_t>(j)] = lx[lp[j]];
   }
   if (!removed.empty()) {
-    double d_min = impl.diagonal.empty() ? 0.0 : impl.diagonal.front();
-    double d_max = d_min;
-    bool positive = true;
-    for (const double d : impl.diagonal) {
-      positive = positive && d > 0.0;
-      d_min = std::min(d_min, d);
-      d_max = std::max(d_max, d);
-    }
-    if (!positive) {
-      return {FactorStatus::not_positive_definite,
-              "stiffness is not positive definite after breaking bonds: a part of the model has "
-              "come loose"};
-    }
-    const double rcond = d_min / d_max;
-    if (!(rcond > 1e-14)) {
-      return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
-                                          std::to_string(rcond) +
-                                          "): a part of the model has come loose"};
-    }
+    if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
   }
   return {};
 }
