@@ -245,7 +245,8 @@ std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std:
     m.num_nodes = std::min(per, total - m.first_node);
     m.damage.reserve(static_cast<std::size_t>(m.num_nodes));
     for (std::int32_t k = 0; k < m.num_nodes; ++k) {
-      m.damage.push_back(static_cast<float>(damage[static_cast<std::size_t>(m.first_node + k)]));
+      m.damage.push_back(static_cast<float>(
+          damage[static_cast<std::size_t>(m.first_node) + static_cast<std::size_t>(k)]));
     }
     out.push_back(std::move(m));
   }
