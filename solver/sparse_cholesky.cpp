@@ -254,24 +254,26 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
   return schedule;
 }
 
-/// Forward solve L·y = y (unit diagonal) with a chain of K columns j..j+K-1; y is n × R row-major.
+/// The top's forward solve, chain by chain: solve the chain's own columns (in_chain) and scatter
+/// rows [from, to) of its shared rows below.
 template <int R, int K>
-void forward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
-                   double* y) {
+void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bool in_chain,
+                       int from, int to, double* y) {
   double v[K][R];
   int p[K];
   for (int t = 0; t < K; ++t) p[t] = lp[j + t];
   for (int t = 0; t < K; ++t) {
     for (int r = 0; r < R; ++r) {
       double a = y[static_cast<std::size_t>(j + t) * R + r];
-      for (int u = 0; u < t; ++u) a -= lx[p[u] + t - u] * v[u][r];
+      if (in_chain) {
+        for (int u = 0; u < t; ++u) a -= lx[p[u] + t - u] * v[u][r];
+        y[static_cast<std::size_t>(j + t) * R + r] = a;
+      }
       v[t][r] = a;
-      y[static_cast<std::size_t>(j + t) * R + r] = a;
     }
   }
-  const int len = lnz[j] - K;
   const int* rows = li + p[0] + K;
-  for (int q = 0; q < len; ++q) {
+  for (int q = from; q < to; ++q) {
     double* yi = y + static_cast<std::size_t>(rows[q]) * R;
     double l[K];
     for (int t = 0; t < K; ++t) l[t] = lx[p[t] + K - t + q];
@@ -281,6 +283,14 @@ void forward_chain(const int* lp, const int* li, const int* lnz, const double* l
       yi[r] -= a;
     }
   }
+}
+
+/// Forward solve L·y = y (unit diagonal) with a chain of K columns j..j+K-1; y is n × R row-major:
+/// the whole chain, all of its shared rows.
+template <int R, int K>
+void forward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
+                   double* y) {
+  top_forward_chain<R, K>(lp, li, lx, j, true, 0, lnz[j] - K, y);
 }
 
 /// Backward solve D·Lᵀ·x = y with a chain of K columns; x overwrites y.
@@ -313,37 +323,6 @@ void backward_chain(const int* lp, const int* li, const int* lnz, const double* 
 }
 
 inline int lnz_of(const cholmod_factor& l, int j) { return static_cast<const int*>(l.nz)[j]; }
-
-/// The top's forward solve, chain by chain: solve the chain's own columns (in_chain) and scatter
-/// rows [from, to) of its shared rows below.
-template <int R, int K>
-void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bool in_chain,
-                       int from, int to, double* y) {
-  double v[K][R];
-  int p[K];
-  for (int t = 0; t < K; ++t) p[t] = lp[j + t];
-  for (int t = 0; t < K; ++t) {
-    for (int r = 0; r < R; ++r) {
-      double a = y[static_cast<std::size_t>(j + t) * R + r];
-      if (in_chain) {
-        for (int u = 0; u < t; ++u) a -= lx[p[u] + t - u] * v[u][r];
-        y[static_cast<std::size_t>(j + t) * R + r] = a;
-      }
-      v[t][r] = a;
-    }
-  }
-  const int* rows = li + p[0] + K;
-  for (int q = from; q < to; ++q) {
-    double* yi = y + static_cast<std::size_t>(rows[q]) * R;
-    double l[K];
-    for (int t = 0; t < K; ++t) l[t] = lx[p[t] + K - t + q];
-    for (int r = 0; r < R; ++r) {
-      double a = 0.0;
-      for (int t = 0; t < K; ++t) a += l[t] * v[t][r];
-      yi[r] -= a;
-    }
-  }
-}
 
 /// The top's backward solve: partial sums Σ L(i, j+t)·x_i over rows [from, to) of the chain's
 /// shared rows into s[K][R].
