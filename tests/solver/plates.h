@@ -1,10 +1,13 @@
 // Small analytical test problems shared by the solver tests.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <vector>
 
 #include "solver/discretization.h"
+#include "solver/fatigue_engine.h"
 #include "solver/pd_model.h"
 #include "solver/specimens.h"
 #include "solver/static_solver.h"
@@ -50,6 +53,17 @@ inline Specimen make_notched_plate(ModelKind kind, bool notched = true, int colu
   p.loads.push_back(
       {p.disc.nodes_in(Region::of(Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
   return p;
+}
+
+/// The same total cycles and the same break events (bond, cycle, cause), in order.
+inline void expect_same_breaks(const FatigueEngine& a, const FatigueEngine& b) {
+  ASSERT_EQ(a.total_cycles(), b.total_cycles());
+  ASSERT_EQ(a.break_events().size(), b.break_events().size());
+  for (std::size_t e = 0; e < a.break_events().size(); ++e) {
+    EXPECT_EQ(a.break_events()[e].bond, b.break_events()[e].bond) << "event " << e;
+    EXPECT_EQ(a.break_events()[e].cycle, b.break_events()[e].cycle) << "event " << e;
+    EXPECT_EQ(a.break_events()[e].cause, b.break_events()[e].cause) << "event " << e;
+  }
 }
 
 /// Least-squares slope of values against coordinates.

@@ -68,13 +68,7 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
 }
 
 void expect_same_state(const FatigueEngine& a, const FatigueEngine& b) {
-  ASSERT_EQ(a.total_cycles(), b.total_cycles());
-  ASSERT_EQ(a.break_events().size(), b.break_events().size());
-  for (std::size_t e = 0; e < a.break_events().size(); ++e) {
-    EXPECT_EQ(a.break_events()[e].bond, b.break_events()[e].bond) << "event " << e;
-    EXPECT_EQ(a.break_events()[e].cycle, b.break_events()[e].cycle) << "event " << e;
-    EXPECT_EQ(a.break_events()[e].cause, b.break_events()[e].cause) << "event " << e;
-  }
+  testing::expect_same_breaks(a, b);
   const auto la = a.remaining_life();
   const auto lb = b.remaining_life();
   for (std::size_t i = 0; i < la.size(); ++i) ASSERT_EQ(la[i], lb[i]) << "bond " << i;  // bitwise
@@ -225,11 +219,7 @@ TEST_P(IncrementalEqualsRefactor, SameBreakSequence) {
     refactor.apply(block);
     incremental.apply(block);
   }
-  ASSERT_EQ(refactor.break_events().size(), incremental.break_events().size());
-  for (std::size_t e = 0; e < refactor.break_events().size(); ++e) {
-    EXPECT_EQ(refactor.break_events()[e].bond, incremental.break_events()[e].bond);
-    EXPECT_EQ(refactor.break_events()[e].cycle, incremental.break_events()[e].cycle);
-  }
+  testing::expect_same_breaks(refactor, incremental);
   const auto a = refactor.remaining_life();
   const auto b = incremental.remaining_life();
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], b[i], 1e-9);
@@ -273,11 +263,7 @@ TEST_P(IncrementalEqualsRefactor, PeriodicRebuildsKeepResumeBitIdenticalAndShort
   expect_same_state(straight, resumed);
   EXPECT_EQ(straight.state_hash(), resumed.state_hash());
 
-  ASSERT_EQ(updates_only.break_events().size(), straight.break_events().size());
-  for (std::size_t e = 0; e < straight.break_events().size(); ++e) {
-    EXPECT_EQ(updates_only.break_events()[e].bond, straight.break_events()[e].bond);
-    EXPECT_EQ(updates_only.break_events()[e].cycle, straight.break_events()[e].cycle);
-  }
+  testing::expect_same_breaks(updates_only, straight);
   const auto la = updates_only.remaining_life();
   const auto lb = straight.remaining_life();
   for (std::size_t i = 0; i < la.size(); ++i) EXPECT_NEAR(la[i], lb[i], 1e-9);
