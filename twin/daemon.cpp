@@ -186,7 +186,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   }
   publish_state(d);
   if (options_.record_latency) {
-    // From LCM's receive time (wall clock, us): includes the wait in the subscription queue.
+    // From LCM's receive time (wall clock, us): includes the wait in the inbox.
     latencies_.push_back(1e-6 * static_cast<double>(now_utime() - r.recv_utime));
   }
   spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", twin.detail_id(),
