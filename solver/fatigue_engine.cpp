@@ -339,6 +339,15 @@ EngineStatus FatigueEngine::apply(const LoadBlock& block) {
   return EngineStatus::ok;
 }
 
+void FatigueEngine::set_propagation_limit(double eps_inf_prop) {
+  if (!std::isfinite(eps_inf_prop) || eps_inf_prop < 0.0) {
+    throw std::invalid_argument("set_propagation_limit: eps_inf_prop must be finite and >= 0");
+  }
+  materialize();  // fold the dose while the lives are still read in the old mode (dose_mode())
+  settings_.strain.eps_inf_prop = eps_inf_prop;
+  rates_valid_ = false;
+}
+
 EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
   if (bilinear()) {
     if (block.count < 0) throw std::invalid_argument("apply_per_cycle: count < 0");

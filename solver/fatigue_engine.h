@@ -184,6 +184,10 @@ class FatigueEngine {
   EngineStatus apply_increments(const LoadBlock& block, std::span<const std::int64_t> increments);
   /// Bilinear law: integrates the pending cycles now as one increment (no-op otherwise).
   EngineStatus flush();
+  /// Changes the propagation-phase limit ε̃∞ (002 Eq. 12) for the blocks applied from now on, e.g.
+  /// in proportion to the load (002 Sec. 7); the lives so far are kept. Not part of EngineState:
+  /// a resumed engine must be given the same limit. std::invalid_argument unless finite, >= 0.
+  void set_propagation_limit(double eps_inf_prop);
 
   [[nodiscard]] std::int64_t total_cycles() const { return total_cycles_; }
   [[nodiscard]] const std::vector<BreakEvent>& break_events() const { return events_; }

@@ -159,6 +159,42 @@ TEST(SingleBond, FirstFailureMatchesNguyenEq21) {
   EXPECT_EQ(engine.break_events().front().cause, BreakCause::fatigue);
 }
 
+TEST(PropagationLimit, SetBetweenBlocksFreezesPhaseTwoAndMatchesPerCycle) {
+  // 002 Sec. 7 raises ε̃∞ (002 Eq. 12) with the load between blocks. Starting without limits (dose
+  // mode), a limit above every strain range freezes the phase II lives while phase I keeps
+  // losing life; switching limits back and forth, blocks equal the per-cycle oracle bit for bit.
+  const auto plate = make_notched_plate(ModelKind::bond_based);
+  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  FatigueEngine block(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(block.initialize());
+  ASSERT_TRUE(oracle.initialize());
+  block.apply({1000.0, 0.1, 0.0, 40});
+  oracle.apply_per_cycle({1000.0, 0.1, 0.0, 40});
+  const auto before = block.remaining_life();
+  block.set_propagation_limit(1.0);
+  oracle.set_propagation_limit(1.0);
+  block.apply({1000.0, 0.1, 0.0, 30});
+  oracle.apply_per_cycle({1000.0, 0.1, 0.0, 30});
+  const auto after = block.remaining_life();
+  int phase_one_changed = 0;
+  for (std::size_t b = 0; b < after.size(); ++b) {
+    if (block.bond_phase()[b] == 2) {
+      EXPECT_EQ(after[b], before[b]) << "bond " << b;
+    }
+    if (block.bond_phase()[b] == 1 && after[b] < before[b]) ++phase_one_changed;
+  }
+  EXPECT_GT(phase_one_changed, 0);
+  block.set_propagation_limit(0.0);
+  oracle.set_propagation_limit(0.0);
+  block.apply({1000.0, 0.1, 0.0, 200});
+  oracle.apply_per_cycle({1000.0, 0.1, 0.0, 200});
+  expect_same_state(block, oracle);
+  EXPECT_GT(block.broken_bonds(), 5);
+  EXPECT_THROW(block.set_propagation_limit(-1e-4), std::invalid_argument);
+  EXPECT_THROW(block.set_propagation_limit(std::nan("")), std::invalid_argument);
+}
+
 TEST(LoadBlockValidation, RejectsWhatCannotBeApplied) {
   EXPECT_EQ(validate(LoadBlock{1000, 0.1, 0, 1}), "");
   EXPECT_NE(validate(LoadBlock{std::nan(""), 0.1, 0, 1}), "");
