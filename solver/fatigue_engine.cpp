@@ -87,9 +87,18 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
       throw std::invalid_argument(
           "FatigueEngine: softening_tolerance must be > 0 and softening_max_iterations >= 1");
     }
+    if (!(settings_.bilinear_solve_tolerance > 0.0) || settings_.bilinear_reference_step < 1 ||
+        settings_.bilinear_reference_step > 64) {
+      throw std::invalid_argument(
+          "FatigueEngine: bilinear_solve_tolerance must be > 0 and bilinear_reference_step in "
+          "[1, 64]");
+    }
     settings_.incremental = false;  // see the file comment
     damage_.assign(nb, 0.0);
     max_stretch_.assign(nb, 0.0);
+    solver_->set_preconditioned(!settings_.bilinear_refactor_every_iteration,
+                                settings_.bilinear_solve_tolerance,
+                                settings_.bilinear_reference_step);
   }
   solver_->set_incremental(settings_.incremental);
   anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0

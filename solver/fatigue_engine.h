@@ -38,9 +38,13 @@
 //    BreakCause::overload); the phase III settings of 000 are not used. With ΔN → 0 the same
 //    iteration is the static softening solve at a new load. Bonds in no-fail zones neither soften
 //    nor break.
-//  - Re-solves refactorize (StaticSolver::set_incremental(false)): every loaded bond softens in
-//    every increment, more columns than a rank update pays off for, and a refactorized factor
-//    depends only on the factors, which makes import_state bit-identical.
+//  - Re-solves are not rank updates (every loaded bond softens in every increment, more columns
+//    than an update pays off for) but preconditioned conjugate gradients on K(f), preconditioned
+//    by the factor of a reference K(f_ref) with every f_ref the next power of 2^step above f
+//    (StaticSolver::set_preconditioned): refactorized only when some bond's f_ref changes, at
+//    most 2^step·f so the iterations converge fast, and a function of the factors alone, so
+//    import_state stays bit-identical. bilinear_refactor_every_iteration = true refactorizes K(f)
+//    in every secant iteration instead (the oracle; the two agree to the solve tolerance).
 // Units: SI (N, m); cycles are counted in int64.
 #pragma once
 
@@ -95,6 +99,15 @@ struct FatigueSettings {
   /// law bilinear: at most this many re-solves per increment (then the last iterate is kept and
   /// counted in FatigueEngine::unconverged_increments()); >= 1.
   int softening_max_iterations = 100;
+  /// law bilinear: the oracle — refactorize K(f) in every secant iteration instead of solving by
+  /// preconditioned conjugate gradients (see the file comment).
+  bool bilinear_refactor_every_iteration = false;
+  /// law bilinear, preconditioned path: stop when sqrt(rᵀM⁻¹r / bᵀM⁻¹b) ≤ this (≈ the relative
+  /// error in the energy norm); > 0.
+  double bilinear_solve_tolerance = 1e-12;
+  /// law bilinear, preconditioned path: reference factors are powers of 2^this (1 to 64): larger
+  /// means fewer refactorizations and more iterations (spectrum in (2^−step, 1]).
+  int bilinear_reference_step = 1;
   /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
   /// Phase III (000 Eq. 7-8, 20): bonds whose stretch at P_max reaches s_c break statically.

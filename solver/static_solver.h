@@ -6,6 +6,7 @@
 
 #include <array>
 #include <chrono>
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -68,6 +69,36 @@ class StaticSolver {
   [[nodiscard]] const std::vector<double>& bond_factors() const { return factor_; }
   void set_incremental(bool incremental) { incremental_ = incremental; }
   [[nodiscard]] bool incremental() const { return incremental_; }
+  /// Non-incremental set_bond_factors by preconditioned conjugate gradients instead of a
+  /// refactorization per call (003's bilinear increments, see docs/solver.md): K(f)·u = F is
+  /// solved with the Cholesky factor of the reference stiffness K(f_ref) as the preconditioner,
+  /// f_ref = reference_factor(f, step) bond by bond (the next power of 2^step at or above f, 0 for
+  /// a broken bond), refactorized only when some bond's reference changes. Since
+  /// f ≤ f_ref < 2^step·f, the spectrum of K(f_ref)⁻¹·K(f) lies in (2^−step, 1], and the
+  /// iterations stop when sqrt(rᵀM⁻¹r / bᵀM⁻¹b) ≤ tolerance (M = K(f_ref), x0 = 0). The
+  /// reference and x0 depend only on the factors, so the result does too (import_state stays
+  /// bit-identical). More than max_iterations falls back to refactorizing K(f) (counted).
+  void set_preconditioned(bool on, double tolerance = 1e-12, int step = 1,
+                          int max_iterations = 200);
+  [[nodiscard]] bool preconditioned() const { return preconditioned_; }
+  /// f_ref of a stiffness factor f ∈ [0, 1]: 2^L with L the largest multiple of −step whose
+  /// power is ≥ f (1 for f ≥ 1, 0 for f = 0). Exact (frexp/ldexp).
+  [[nodiscard]] static double reference_factor(double f, int step);
+  /// Work of the preconditioned path: calls, block iterations (each one multiplication by K(f)
+  /// and one solve with the reference factor per loaded basis), refactorizations of the
+  /// reference, refactorizations of K(f) after max_iterations, seconds in the iterations.
+  struct PcgStats {
+    std::int64_t solves = 0;
+    std::int64_t iterations = 0;
+    int max_iterations = 0;  ///< the most any call needed
+    std::int64_t reference_factorizations = 0;
+    std::int64_t fallbacks = 0;
+    double seconds = 0.0;
+  };
+  [[nodiscard]] const PcgStats& pcg_stats() const { return pcg_; }
+  /// y = K(f)·x over the free DOFs with the given bond stiffness factors, bond by bond (plus the
+  /// ground springs of isolated nodes): the matrix of the preconditioned path, never assembled.
+  void multiply(const std::vector<double>& factors, const double* x, double* y) const;
   /// Seconds spent in low-rank updates and in refactorizations after the first solve.
   [[nodiscard]] double update_seconds() const { return update_s_; }
   [[nodiscard]] double refactor_seconds() const { return refactor_s_; }
@@ -104,7 +135,12 @@ class StaticSolver {
   [[nodiscard]] int factorizations() const { return factorizations_; }
 
  private:
-  void assemble();
+  /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference).
+  void assemble(const std::vector<double>& factors);
+  /// Preconditioned re-solve after factor_ changed (see set_preconditioned).
+  FactorReport preconditioned_resolve(bool broke, std::chrono::steady_clock::time_point t0);
+  /// PCG on the loaded bases with the current factor as M; false if max_iterations was hit.
+  bool pcg_solve_bases();
   void append_ground(std::vector<Eigen::Triplet<double, int>>& entries) const;
   [[nodiscard]] std::vector<int> dof_ordering() const;
   /// Solves the basis cases with the current factor; bases without load are zero.
@@ -145,6 +181,13 @@ class StaticSolver {
   int factorizations_ = 0;
   bool incremental_ = false;
   bool modified_ = false;  ///< the factor was updated in place (simplicial LDLᵀ now)
+  bool preconditioned_ = false;
+  double pcg_tolerance_ = 1e-12;
+  int pcg_step_ = 1;
+  int pcg_max_iterations_ = 200;
+  /// Bond factors of the matrix the factor was computed from (refactorizing paths: factor_).
+  std::vector<double> reference_;
+  PcgStats pcg_;
   double ground_stiffness_ = 0.0;
   std::vector<std::uint8_t> grounded_;
   double update_s_ = 0.0;

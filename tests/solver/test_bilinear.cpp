@@ -259,6 +259,154 @@ TEST(BilinearEngine, ExportImportResumesBitIdentically) {
   EXPECT_EQ(ua, ub);
 }
 
+// ------------------------------------------------------------------ preconditioned re-solves
+
+TEST(BilinearSolve, ReferenceFactorIsTheNextPowerOfTwoToTheStep) {
+  // f ≤ f_ref < 2^step·f, f_ref a power of 2^step; 1 and 0 are their own references.
+  EXPECT_EQ(StaticSolver::reference_factor(1.0, 1), 1.0);
+  EXPECT_EQ(StaticSolver::reference_factor(0.0, 3), 0.0);
+  EXPECT_EQ(StaticSolver::reference_factor(0.5, 1), 0.5);
+  EXPECT_EQ(StaticSolver::reference_factor(0.3, 1), 0.5);
+  EXPECT_EQ(StaticSolver::reference_factor(0.3, 2), 1.0);
+  EXPECT_EQ(StaticSolver::reference_factor(0.25, 2), 0.25);
+  EXPECT_EQ(StaticSolver::reference_factor(0.05, 2), 0.0625);
+  EXPECT_EQ(StaticSolver::reference_factor(1e-300, 1), std::ldexp(1.0, -996));
+  for (int step : {1, 2, 3, 5}) {
+    for (double f = 0.999; f > 1e-12; f *= 0.787) {
+      const double r = StaticSolver::reference_factor(f, step);
+      ASSERT_GE(r, f);
+      ASSERT_LT(r, std::ldexp(f, step));
+      int e = 0;
+      ASSERT_EQ(std::frexp(r, &e), 0.5);
+      ASSERT_EQ((e - 1) % step, 0) << f;
+    }
+  }
+}
+
+TEST(BilinearSolve, PreconditionedSolveMatchesTheRefactorizedOneAndRefactorsOnlyOnNewReferences) {
+  // Softened and broken bonds set on two solvers: the preconditioned one keeps its factor while
+  // every f_ref stays 1 (f > 1/2, step 1), refactorizes once when f_ref changes, once when a bond
+  // breaks; its displacements equal the refactorized solve's to 1e-10 relative (max norm), and
+  // are in equilibrium bond by bond (internal_force) to 1e-9 of the load.
+  const auto plate = make_plate();
+  StaticSolver oracle(plate.disc, plate.model, plate.supports, plate.loads);
+  StaticSolver fast(plate.disc, plate.model, plate.supports, plate.loads);
+  fast.set_preconditioned(true, 1e-12, 1);
+  ASSERT_TRUE(oracle.solve().ok());
+  ASSERT_TRUE(fast.solve().ok());
+  std::vector<double> s;
+  oracle.stretch(1.0, 0.0, s);
+  std::vector<BondIndex> loaded;  // the 40 most stretched bonds
+  for (std::size_t b = 0; b < s.size(); ++b) {
+    if (oracle.intact()[b]) loaded.push_back(static_cast<BondIndex>(b));
+  }
+  std::partial_sort(loaded.begin(), loaded.begin() + 40, loaded.end(),
+                    [&](BondIndex a, BondIndex b) {
+                      return s[static_cast<std::size_t>(a)] > s[static_cast<std::size_t>(b)];
+                    });
+  loaded.resize(40);
+  auto compare = [&](const char* what) {
+    std::vector<double> ua, ub;
+    oracle.displacement(1.0, 0.0, ua);
+    fast.displacement(1.0, 0.0, ub);
+    double umax = 0.0, diff = 0.0;
+    for (std::size_t i = 0; i < ua.size(); ++i) {
+      umax = std::max(umax, std::abs(ua[i]));
+      diff = std::max(diff, std::abs(ua[i] - ub[i]));
+    }
+    EXPECT_LT(diff, 1e-10 * umax) << what;
+    const auto f_int = fast.internal_force(ub);
+    const auto f_ext = fast.basis_force(basis_constant);
+    double fmax = 0.0, residual = 0.0;
+    for (std::size_t i = 0; i < f_ext.size(); ++i) {
+      fmax = std::max(fmax, std::abs(f_ext[i]));
+      if (fast.free_index()[i] >= 0) residual = std::max(residual, std::abs(f_int[i] - f_ext[i]));
+    }
+    EXPECT_LT(residual, 1e-9 * fmax) << what;
+    std::printf("[ measured ] %s: max |du| / max |u| = %.2e, %lld iterations so far\n", what,
+                diff / umax, static_cast<long long>(fast.pcg_stats().iterations));
+  };
+  const int factorizations = fast.factorizations();
+  std::vector<double> factors(loaded.size());
+  for (std::size_t n = 0; n < loaded.size(); ++n) factors[n] = 0.9 - 0.01 * static_cast<double>(n);
+  ASSERT_TRUE(oracle.set_bond_factors(loaded, factors).ok());
+  ASSERT_TRUE(fast.set_bond_factors(loaded, factors).ok());
+  EXPECT_EQ(fast.factorizations(), factorizations);  // every f_ref is still 1
+  compare("f in [0.51, 0.9]");
+  factors[3] = 0.3;  // f_ref 1/2
+  ASSERT_TRUE(oracle.set_bond_factors(loaded, factors).ok());
+  ASSERT_TRUE(fast.set_bond_factors(loaded, factors).ok());
+  EXPECT_EQ(fast.factorizations(), factorizations + 1);
+  compare("one f = 0.3");
+  factors[0] = 0.0;  // broken
+  ASSERT_TRUE(oracle.set_bond_factors(loaded, factors).ok());
+  ASSERT_TRUE(fast.set_bond_factors(loaded, factors).ok());
+  EXPECT_EQ(fast.factorizations(), factorizations + 2);
+  compare("one bond broken");
+  EXPECT_EQ(fast.pcg_stats().solves, 3);
+  EXPECT_EQ(fast.pcg_stats().fallbacks, 0);
+  EXPECT_LE(fast.pcg_stats().max_iterations, 20);
+}
+
+TEST(BilinearEngine, PreconditionedPathReproducesTheRefactorizingOracle) {
+  // The AnySplit history (static softening beyond s0, fatigue breaks, a change of load) on the
+  // preconditioned path (default) and with bilinear_refactor_every_iteration: the same bonds
+  // break at the same cycles for the same causes, and every bond's damage and largest stretch
+  // agree to 1e-8 relative (plus 1e-12 of the largest damage for barely loaded bonds).
+  const auto plate = make_plate();
+  const auto f = bilinear_settings(plate, 1000.0, 10000.0, 1000);
+  auto fo = f;
+  fo.bilinear_refactor_every_iteration = true;
+  FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
+  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
+  for (auto* e : {&fast, &oracle}) {
+    ASSERT_TRUE(e->initialize());
+    e->apply({1000.0, 0.1, 0.0, 10250});
+    e->apply({1150.0, 0.0, 0.1, 2000});
+    e->flush();
+  }
+  testing::expect_same_breaks(fast, oracle);
+  const auto precut = std::count(plate.disc.bond_precut.begin(), plate.disc.bond_precut.end(), 1);
+  EXPECT_GT(fast.broken_bonds() - precut, 5);
+  EXPECT_EQ(fast.solves(), oracle.solves());  // the same secant iterations
+  const double dmax = *std::max_element(oracle.damage().begin(), oracle.damage().end());
+  double worst = 0.0;
+  for (std::size_t b = 0; b < fast.damage().size(); ++b) {
+    const double d = oracle.damage()[b];
+    ASSERT_NEAR(fast.damage()[b], d, 1e-8 * d + 1e-12 * dmax) << "bond " << b;
+    const double sm = oracle.max_stretch()[b];
+    ASSERT_NEAR(fast.max_stretch()[b], sm, 1e-8 * std::abs(sm) + 1e-14) << "bond " << b;
+    if (d > 1e-6 * dmax) worst = std::max(worst, std::abs(fast.damage()[b] - d) / d);
+  }
+  const auto& pcg = fast.solver().pcg_stats();
+  EXPECT_EQ(pcg.fallbacks, 0);
+  EXPECT_EQ(oracle.solver().pcg_stats().solves, 0);
+  EXPECT_LT(fast.solver().factorizations(), oracle.solver().factorizations());
+  std::printf(
+      "[ measured ] %d secant iterations; oracle %d factorizations; preconditioned %d "
+      "factorizations, %lld iterations (max %d per solve); worst relative damage difference "
+      "%.2e\n",
+      fast.solves(), oracle.solver().factorizations(), fast.solver().factorizations(),
+      static_cast<long long>(pcg.iterations), pcg.max_iterations, worst);
+}
+
+TEST(BilinearEngine, OverloadFailsAlikeOnBothPaths) {
+  // The overload of OverloadSeparatesThePlateIntoFinalFailure with and without refactorizing every
+  // iteration: the same breaks (bond, cycle, cause) up to the same final failure.
+  const auto plate = make_plate();
+  auto f = bilinear_settings(plate, 1000.0, 1e12, 1000);
+  f.softening_max_iterations = 1000;
+  auto fo = f;
+  fo.bilinear_refactor_every_iteration = true;
+  FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
+  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
+  for (auto* e : {&fast, &oracle}) {
+    ASSERT_TRUE(e->initialize());
+    EXPECT_EQ(e->apply({4000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
+  }
+  testing::expect_same_breaks(fast, oracle);
+}
+
 TEST(BilinearEngine, IncrementsHalvedConvergeAtSecondOrderThenLifeAtFirst) {
   // 003 Sec. 5.1/6.5: results must settle as ΔN shrinks. (a) The largest damage after N = 6400
   // cycles (before any break: smooth) with ΔN = 3200, 1600, 800, 400: the mid-point rule of
