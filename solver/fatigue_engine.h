@@ -106,8 +106,9 @@ struct FatigueSettings {
   /// error in the energy norm); > 0.
   double bilinear_solve_tolerance = 1e-12;
   /// law bilinear, preconditioned path: reference factors are powers of 2^this (1 to 64): larger
-  /// means fewer refactorizations and more iterations (spectrum in (2^−step, 1]).
-  int bilinear_reference_step = 1;
+  /// means fewer refactorizations and more iterations (spectrum in (2^−step, 1]). With 8 a bond
+  /// moves the reference only when it breaks or passes D = 1 − 1/256 (docs/solver.md).
+  int bilinear_reference_step = 8;
   /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
   /// Phase III (000 Eq. 7-8, 20): bonds whose stretch at P_max reaches s_c break statically.

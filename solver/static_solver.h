@@ -126,6 +126,7 @@ class StaticSolver {
   /// unknowns are the free displacements followed by one w_k = α_k·θ_k per node.
   [[nodiscard]] bool mixed_form() const { return mixed_; }
   [[nodiscard]] std::int32_t num_unknowns() const { return num_unknowns_; }
+  /// The matrix of the current factor (upper triangle); on the preconditioned path K(f_ref).
   [[nodiscard]] const SparseMatrix& stiffness_upper() const { return upper_; }
   [[nodiscard]] const std::vector<std::int32_t>& free_index() const { return free_index_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
