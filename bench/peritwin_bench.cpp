@@ -1,13 +1,18 @@
 // peritwin-bench: performance figures as one JSON line per run.
 //   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
+//   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -109,6 +114,106 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   return 0;
 }
 
+struct BilinearRun {
+  double wall_s = 0.0;          ///< increments only (initialize excluded)
+  double first_k_s = 0.0;       ///< the first `k` increments
+  std::int64_t increments = 0;  ///< integrated
+  int secant_iterations = 0;    ///< re-solves in increments
+  int refactorizations = 0;     ///< numeric factorizations after the first solve
+  peritwin::StaticSolver::PcgStats pcg;
+  std::int64_t broken = 0;
+  std::int64_t unconverged = 0;
+  double max_damage = 0.0;
+  bool failed = false;
+};
+
+BilinearRun run_bilinear_engine(const peritwin::Specimen& s, peritwin::FatigueSettings settings,
+                                double load, std::int64_t increments, std::int64_t k) {
+  using namespace peritwin;
+  BilinearRun run;
+  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  if (!engine.initialize()) {
+    std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
+    std::exit(1);
+  }
+  const int solves0 = engine.solves();
+  const int factorizations0 = engine.solver().factorizations();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::int64_t i = 0; i < increments; ++i) {
+    const auto status = engine.apply({load, 0.1, 0.0, settings.cycle_increment});
+    if (i + 1 == k) {
+      run.first_k_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
+    if (status != EngineStatus::ok) break;
+  }
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (run.first_k_s == 0.0) run.first_k_s = run.wall_s;
+  run.increments = engine.increments();
+  run.secant_iterations = engine.solves() - solves0;
+  run.refactorizations = engine.solver().factorizations() - factorizations0;
+  run.pcg = engine.solver().pcg_stats();
+  run.broken = static_cast<std::int64_t>(engine.break_events().size());
+  run.unconverged = engine.unconverged_increments();
+  for (double d : engine.damage()) run.max_damage = std::max(run.max_damage, d);
+  run.failed = engine.failed();
+  return run;
+}
+
+int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t oracle_increments,
+                 double life, int step, double tolerance) {
+  // B1 as a bond-based model at 4 kN with 003's bilinear bond and third law, parameters as in
+  // tests/solver/test_bilinear.cpp: s0 = 1.3 × the largest stretch of the undamaged specimen at
+  // 4 kN, sc = 3·s0, m = 4, A such that the most stretched bond would reach D = 1 at constant
+  // stretch in `life` cycles (003 Eq. 27); ΔN = 500. The fast path runs `increments` increments
+  // (or to final failure), the refactorizing oracle the first `oracle_increments` of them.
+  using namespace peritwin;
+  ModelOptions options;
+  options.kind = ModelKind::bond_based;
+  const CompactTensionSpec spec;
+  const Specimen s =
+      make_compact_tension(spec, options, compact_tension_spacing(spec, target_nodes));
+  const double load = 4000.0;
+  double smax = 0.0;
+  {
+    StaticSolver probe(s.disc, s.model, s.supports, s.loads);
+    if (!probe.solve().ok()) return 1;
+    std::vector<double> stretch;
+    probe.stretch(load, 0.0, stretch);
+    for (std::size_t b = 0; b < stretch.size(); ++b) {
+      if (probe.intact()[b]) smax = std::max(smax, stretch[b]);
+    }
+  }
+  FatigueSettings settings;
+  settings.law = FatigueLaw::bilinear;
+  settings.bilinear.s0 = 1.3 * smax;
+  settings.bilinear.sc = 3.0 * settings.bilinear.s0;
+  settings.bilinear.m = 4.0;
+  settings.bilinear.A = 1.0 / (life * std::pow(smax / settings.bilinear.sc, settings.bilinear.m));
+  settings.cycle_increment = 500;
+  settings.bilinear_reference_step = step;
+  settings.bilinear_solve_tolerance = tolerance;
+  const std::int64_t k = std::min(oracle_increments, increments);
+  const BilinearRun fast = run_bilinear_engine(s, settings, load, increments, k);
+  settings.bilinear_refactor_every_iteration = true;
+  const BilinearRun oracle = run_bilinear_engine(s, settings, load, k, k);
+  std::printf(
+      "{\"bench\":\"bilinear\",\"nodes\":%d,\"bonds\":%d,\"increments\":%lld,"
+      "\"secant_iterations\":%d,\"refactorizations\":%d,\"pcg_iterations\":%lld,"
+      "\"pcg_max_iterations\":%d,\"pcg_fallbacks\":%lld,\"pcg_s\":%.2f,\"wall_s\":%.2f,"
+      "\"broken_bonds\":%lld,\"unconverged_increments\":%lld,\"max_damage\":%.4f,"
+      "\"final_failure\":%s,\"reference_step\":%d,\"tolerance\":%.0e,\"oracle_increments\":%lld,"
+      "\"oracle_secant_iterations\":%d,\"oracle_wall_s\":%.2f,\"fast_first_s\":%.2f,"
+      "\"fast_over_oracle\":%.1f,\"peak_rss_mb\":%.1f}\n",
+      s.disc.num_nodes(), s.disc.num_bonds(), static_cast<long long>(fast.increments),
+      fast.secant_iterations, fast.refactorizations, static_cast<long long>(fast.pcg.iterations),
+      fast.pcg.max_iterations, static_cast<long long>(fast.pcg.fallbacks), fast.pcg.seconds,
+      fast.wall_s, static_cast<long long>(fast.broken), static_cast<long long>(fast.unconverged),
+      fast.max_damage, fast.failed ? "true" : "false", step, tolerance, static_cast<long long>(k),
+      oracle.secant_iterations, oracle.wall_s, fast.first_k_s,
+      fast.first_k_s > 0 ? oracle.wall_s / fast.first_k_s : 0.0, peak_rss_mb());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -140,8 +245,32 @@ int main(int argc, char** argv) {
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)");
+  auto* bil =
+      app.add_subcommand("bilinear", "B1 bond-based with 003's bilinear law, fast vs oracle");
+  double bilinear_nodes = 15000;
+  std::int64_t bilinear_increments = 200;
+  std::int64_t oracle_increments = 20;
+  double bilinear_life = 20000;
+  int reference_step = peritwin::FatigueSettings{}.bilinear_reference_step;
+  double solve_tolerance = peritwin::FatigueSettings{}.bilinear_solve_tolerance;
+  bil->add_option("--nodes", bilinear_nodes, "approximate number of nodes")
+      ->check(CLI::Range(100.0, 1e7));
+  bil->add_option("--increments", bilinear_increments, "increments of 500 cycles (fast path)")
+      ->check(CLI::Range(1, 1000000));
+  bil->add_option("--oracle-increments", oracle_increments, "increments of the oracle run")
+      ->check(CLI::Range(1, 1000000));
+  bil->add_option("--life", bilinear_life, "cycles of the most stretched bond at constant stretch")
+      ->check(CLI::PositiveNumber);
+  bil->add_option("--step", reference_step, "reference factors are powers of 2^step")
+      ->check(CLI::Range(1, 64));
+  bil->add_option("--tolerance", solve_tolerance, "PCG tolerance (energy norm, relative)")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes);
   if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);
+  if (bil->parsed()) {
+    return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,
+                        reference_step, solve_tolerance);
+  }
   return 2;
 }
