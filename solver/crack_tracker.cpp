@@ -17,7 +17,9 @@ CrackTracker::CrackTracker(const Discretization& disc, std::vector<Segment> notc
 std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_damage) const {
   std::vector<CrackMetrics> cracks;
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
-  const double link = 1.5 * disc_.dx;  // path steps between neighbouring damaged nodes
+  // Path steps join neighbouring damaged nodes: the diagonal neighbour (√2Δx) on the regular grid,
+  // plus what a perturbed grid can add to a pair's distance (2√2·amplitude·Δx).
+  const double link = (1.5 + 2.0 * std::numbers::sqrt2 * disc_.perturbation.amplitude) * disc_.dx;
   for (std::size_t n = 0; n < notches_.size(); ++n) {
     const Segment& notch = notches_[n];
     const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
@@ -44,7 +46,7 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
         queue.emplace(d, k);
       }
     }
-    // Dijkstra over damaged nodes joined by bonds no longer than 1.5Δx.
+    // Dijkstra over damaged nodes joined by bonds no longer than `link`.
     while (!queue.empty()) {
       const auto [d, k] = queue.top();
       queue.pop();

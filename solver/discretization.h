@@ -1,5 +1,7 @@
 // Uniform-grid discretization of a detail: material points (nodes), their families (bonds within
 // the horizon, found with the grid itself as the cell list) and the partial-volume correction.
+// Optionally the nodes are moved off their grid points by a small deterministic perturbation, so
+// that cracks are not pulled towards the lattice directions (0°, 45°, 63.4°, ...).
 // Units: SI (m, m^3).
 #pragma once
 
@@ -17,6 +19,14 @@ using BondIndex = std::int32_t;
 /// 001 Eq. (36): fraction of node j's cell inside the horizon of a bond of length xi.
 double partial_volume_factor(double bond_length, double horizon, double dx);
 
+/// Irregular node arrangement: node (i, j) sits at its grid point plus amplitude·Δx·(u, v), with
+/// u, v uniform in [−1, 1) drawn from a hash of (i, j, seed), so the arrangement is reproducible
+/// and does not depend on the order nodes are visited. amplitude = 0: the regular grid.
+struct GridPerturbation {
+  double amplitude = 0.0;  ///< fraction of Δx, in [0, 0.25) (then a node stays nearest its cell)
+  std::uint64_t seed = 0;
+};
+
 /// Nodes and bonds of one detail. Every bond is stored once (i < j); per-node families are a CSR
 /// index into the bond list. All per-bond arrays have num_bonds() entries (structure of arrays).
 struct Discretization {
@@ -24,6 +34,7 @@ struct Discretization {
   double horizon = 0.0;    ///< δ (m)
   double thickness = 0.0;  ///< h (m)
   Rectangle box;  ///< grid origin: node (i, j) sits at (x_min + (i+½)Δx, y_min + (j+½)Δx)
+  GridPerturbation perturbation;  ///< node (i, j) is moved off that point by at most amplitude·Δx
 
   std::vector<Point> position;
   std::vector<double> volume;         ///< V = Δx²·h
@@ -53,8 +64,10 @@ struct Discretization {
   [[nodiscard]] std::vector<NodeIndex> nodes_in(const Region& region) const;
 };
 
-/// Builds nodes on the grid clipped to the geometry, families within δ weighted by the partial
-/// volumes of 001 Eq. (36), cuts bonds crossing the notches. horizon = δ in metres.
-Discretization discretize(const DetailGeometry& geometry, double dx, double horizon);
+/// Builds nodes on the grid (perturbed as asked) clipped to the geometry, families within δ
+/// weighted by the partial volumes of 001 Eq. (36), cuts bonds crossing the notches. horizon = δ in
+/// metres. Throws std::invalid_argument for a perturbation amplitude outside [0, 0.25).
+Discretization discretize(const DetailGeometry& geometry, double dx, double horizon,
+                          const GridPerturbation& perturbation = {});
 
 }  // namespace peritwin

@@ -19,11 +19,12 @@ namespace peritwin::testing {
 using TensionPlate = Specimen;  // geometry, discretization, model, supports, loads
 
 inline TensionPlate make_tension_plate(const Material& material, const ModelOptions& options,
-                                       double length, double height, double dx, double sigma) {
+                                       double length, double height, double dx, double sigma,
+                                       const GridPerturbation& grid = {}) {
   TensionPlate p;
   p.geometry.thickness = 0.002;
   p.geometry.outline = {{0.0, -0.5 * height, length, 0.5 * height}};
-  p.disc = discretize(p.geometry, dx, 3.015 * dx);
+  p.disc = discretize(p.geometry, dx, 3.015 * dx, grid);
   p.model = build_model(p.disc, material, options, p.geometry.rigid_factor);
   const Region left = Region::of(Rectangle{0.0, -height, dx, height});
   const Region right = Region::of(Rectangle{length - dx, -height, length, height});

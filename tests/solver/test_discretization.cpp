@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
+#include <stdexcept>
 #include <utility>
 
 #include "solver/discretization.h"
@@ -47,6 +49,61 @@ TEST(Discretization, BondsEqualBruteForcePairSearch) {
     EXPECT_NEAR(pi.x + d.bond_length[b] * d.bond_cos[b], pj.x, 1e-12);
     EXPECT_NEAR(pi.y + d.bond_length[b] * d.bond_sin[b], pj.y, 1e-12);
   }
+}
+
+TEST(Discretization, PerturbedGridKeepsTheBruteForceFamiliesAndIsReproducible) {
+  // An irregular arrangement (amplitude 0.2Δx): every node within 0.2Δx (per coordinate) of a
+  // grid point, the families equal the O(N²) search over the true distances, the weights are
+  // 001 Eq. (36) of the true length, and the same seed gives the same nodes bit for bit.
+  DetailGeometry g;
+  g.outline = {{0.0, 0.0, 0.02, 0.01}};
+  g.holes = {{{0.01, 0.005}, 0.002}};
+  const double dx = 0.0005;
+  const GridPerturbation grid{0.2, 42};
+  const Discretization d = discretize(g, dx, 3.015 * dx, grid);
+  const Discretization regular = discretize(g, dx, 3.015 * dx);
+  double largest = 0.0;
+  for (const Point p : d.position) {
+    const double fx = p.x / dx - 0.5 - std::round(p.x / dx - 0.5);
+    const double fy = p.y / dx - 0.5 - std::round(p.y / dx - 0.5);
+    largest = std::max({largest, std::abs(fx), std::abs(fy)});
+    EXPECT_FALSE(g.holes[0].contains(p));
+  }
+  EXPECT_LE(largest, 0.2);
+  EXPECT_GT(largest, 0.19);  // the offsets do fill the range
+  std::set<std::pair<int, int>> expected;
+  for (int a = 0; a < d.num_nodes(); ++a) {
+    for (int b = a + 1; b < d.num_nodes(); ++b) {
+      const double r =
+          std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
+      if (r <= d.horizon) expected.insert({a, b});
+    }
+  }
+  std::set<std::pair<int, int>> found;
+  for (int b = 0; b < d.num_bonds(); ++b) {
+    found.insert({d.bond_i[b], d.bond_j[b]});
+    const auto pi = d.position[d.bond_i[b]];
+    const auto pj = d.position[d.bond_j[b]];
+    const double r = std::hypot(pj.x - pi.x, pj.y - pi.y);
+    EXPECT_DOUBLE_EQ(d.bond_length[b], r);
+    EXPECT_DOUBLE_EQ(d.bond_volume_factor[b], partial_volume_factor(r, d.horizon, dx));
+  }
+  EXPECT_EQ(found, expected);
+  // Family sizes now vary around the regular grid's 28.
+  EXPECT_NE(d.num_bonds(), regular.num_bonds());
+  const Discretization again = discretize(g, dx, 3.015 * dx, grid);
+  ASSERT_EQ(again.num_nodes(), d.num_nodes());
+  for (int k = 0; k < d.num_nodes(); ++k) {
+    EXPECT_EQ(again.position[k].x, d.position[k].x);
+    EXPECT_EQ(again.position[k].y, d.position[k].y);
+  }
+  const Discretization other_seed = discretize(g, dx, 3.015 * dx, {0.2, 43});
+  EXPECT_NE(other_seed.position[0].x, d.position[0].x);
+  // Amplitude 0 is the regular grid exactly; an amplitude that could swap cells is refused.
+  const Discretization zero = discretize(g, dx, 3.015 * dx, {0.0, 42});
+  EXPECT_EQ(zero.bond_length, regular.bond_length);
+  EXPECT_THROW((void)discretize(g, dx, 3.015 * dx, {0.25, 1}), std::invalid_argument);
+  EXPECT_THROW((void)discretize(g, dx, 3.015 * dx, {-0.1, 1}), std::invalid_argument);
 }
 
 TEST(Discretization, PreCrackCutsExactlyTheCrossingBonds) {
