@@ -61,7 +61,7 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   }
   for (const auto& c : upper) s.geometry.rigid_regions.push_back(Region::of(c));
   for (const auto& c : lower) s.geometry.rigid_regions.push_back(Region::of(c));
-  s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
+  s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   const double ef = spec.hole_offset / spec.hole_spacing;
   s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});   // F1

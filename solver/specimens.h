@@ -63,6 +63,7 @@ struct CompactTensionShearSpec {
   /// point reflection of the upper forces (−F3 left, +P sin α middle, −F1 right) as the lower half
   /// of the loading device does, and only rigid-body motion is suppressed (two nodes).
   bool lower_holes_fixed = true;
+  GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };
 
 /// Grid spacing giving about `target_nodes` nodes, rounded so that y = 0 falls between rows.

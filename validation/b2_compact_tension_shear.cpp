@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <fstream>
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
@@ -13,16 +14,19 @@ double mts_kink_angle(double rho) {
   return 2.0 * std::atan((1.0 - std::sqrt(1.0 + 8.0 * rho * rho)) / (4.0 * rho));
 }
 
-KinkResult run_compact_tension_shear(double alpha, double dx, const fatigue::StrainLawParams& law,
-                                     double growth, bool lower_holes_fixed) {
+KinkResult run_compact_tension_shear(const KinkRun& run) {
   const auto t0 = std::chrono::steady_clock::now();
+  const double alpha = run.alpha;
+  const double growth = run.growth;
   CompactTensionShearSpec spec;
-  spec.lower_holes_fixed = lower_holes_fixed;
+  spec.lower_holes_fixed = run.lower_holes_fixed;
+  spec.grid = run.grid;
   ModelOptions options;
   options.kind = ModelKind::state_based;
-  const Specimen s = make_compact_tension_shear(spec, options, dx);
+  const Specimen s = make_compact_tension_shear(spec, options, run.dx);
   FatigueSettings settings;
-  settings.strain = law;
+  settings.law = run.fatigue_law;
+  settings.strain = run.law;
   settings.incremental = true;
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   KinkResult result;
@@ -46,6 +50,14 @@ KinkResult run_compact_tension_shear(double alpha, double dx, const fatigue::Str
     if (cracks.front().length >= growth || engine.total_cycles() > 10'000'000) break;
   }
   const auto cracks = tracker.measure(engine.node_damage());
+  if (!run.snapshot_csv.empty()) {
+    std::ofstream out(run.snapshot_csv);
+    out << "x_m,y_m,damage\n";
+    for (NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {
+      out << s.disc.position[n].x << ',' << s.disc.position[n].y << ','
+          << engine.node_damage()[static_cast<std::size_t>(n)] << '\n';
+    }
+  }
   result.beta = cracks.front().kink_angle;
   result.growth = cracks.front().length;
   result.cycles = engine.total_cycles();

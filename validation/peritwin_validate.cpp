@@ -73,20 +73,31 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
   return 0;
 }
 
-int run_b2(double dx, double alpha_deg, double a2_at_1mm, double growth, bool loaded_lower) {
-  auto law = fatigue::al6061_t6_strain_params();
+int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
+  run.law = fatigue::al6061_t6_strain_params();
   // A2 calibrated on B1 at Δx = 1 mm (peritwin-validate --case B1), scaled to this horizon by
   // 000 Eq. (29).
-  law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, law.m2);
+  run.law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * run.dx, run.law.m2);
   const double pi = std::numbers::pi;
-  const KinkResult r =
-      run_compact_tension_shear(alpha_deg * pi / 180, dx, law, growth, !loaded_lower);
+  run.alpha = alpha_deg * pi / 180;
+  char name[64];
+  std::snprintf(name, sizeof name, "b2_alpha%g.csv", alpha_deg);
+  run.snapshot_csv = (out_dir / name).string();
+  const KinkResult r = run_compact_tension_shear(run);
+  const bool loaded_lower = !run.lower_holes_fixed;
+  const GridPerturbation& grid = run.grid;
+  const double dx = run.dx;
+  const std::string& snapshot = run.snapshot_csv;
   std::printf(
-      "{\"case\":\"B2\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_"
+      "{\"case\":\"B2\",\"law\":\"%s\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,"
+      "\"kii_over_"
       "ki\":%.4f,"
-      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f}\n",
+      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
+      "\"grid_perturbation\":%.3f,\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
+      run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
       loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
-      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, r.wall_s);
+      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, grid.amplitude,
+      static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
   return 0;
 }
 
@@ -137,6 +148,15 @@ int main(int argc, char** argv) {
   app.add_flag("--loaded-lower-holes", loaded_lower,
                "B2: lower holes carry the mirrored forces instead of being fixed");
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)");
+  KinkRun b2;
+  std::string b2_law = "energy";
+  app.add_option("--law", b2_law, "B2: energy (000 Sec. 6.2) | strain_range")
+      ->check(CLI::IsMember({"energy", "strain_range"}));
+  GridPerturbation& grid = b2.grid;
+  app.add_option("--grid-perturbation", grid.amplitude,
+                 "B2: move each node off its grid point by up to this fraction of dx")
+      ->check(CLI::Range(0.0, 0.249));
+  app.add_option("--grid-seed", grid.seed, "B2: seed of the grid perturbation");
   app.add_option("--dx", dx, "grid spacing (m)")->check(CLI::Range(1e-5, 0.01));
   app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
   app.add_option("--iterations", iterations, "B1: calibration iterations")
@@ -145,7 +165,13 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
-  if (which == "B2") return run_b2(dx, alpha, a2_at_1mm, growth, loaded_lower);
+  if (which == "B2") {
+    b2.dx = dx;
+    b2.growth = growth;
+    b2.lower_holes_fixed = !loaded_lower;
+    b2.fatigue_law = b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+    return run_b2(b2, alpha, a2_at_1mm, out);
+  }
   if (which == "B3") return run_b3(dx, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
   return 2;
