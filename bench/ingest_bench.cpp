@@ -18,11 +18,9 @@
 // includes the wait in the daemon's inbox (p50/p99 of phase 1; saturated_* of phase 2, where it is
 // mostly the queue of `window` batches).
 #include <fcntl.h>
-#include <netinet/in.h>
 #include <signal.h>
 #include <spawn.h>
 #include <spdlog/spdlog.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -37,33 +35,11 @@
 
 #include "replay/replay_tool.h"
 #include "twin/daemon.h"
+#include "twin/loopback_port.h"
 
 extern char** environ;
 
 namespace {
-
-int free_port() {
-  const int s = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  bind(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-  socklen_t len = sizeof addr;
-  getsockname(s, reinterpret_cast<sockaddr*>(&addr), &len);
-  close(s);
-  return ntohs(addr.sin_port);
-}
-
-bool port_open(int port) {
-  const int s = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  addr.sin_port = htons(static_cast<std::uint16_t>(port));
-  const bool ok = connect(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0;
-  close(s);
-  return ok;
-}
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0.0;
@@ -122,7 +98,7 @@ int main(int argc, char** argv) {
 
   pid_t hub = -1;
   if (lcm_url.empty()) {
-    const int port = free_port();
+    const int port = twin::free_loopback_port();
     const std::string port_text = std::to_string(port);
     const char* args[] = {
         "java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", port_text.c_str(), nullptr};
@@ -135,8 +111,11 @@ int main(int argc, char** argv) {
       return 3;
     }
     posix_spawn_file_actions_destroy(&actions);
-    for (int i = 0; i < 300 && !port_open(port); ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (!twin::wait_for_loopback_port(port, 30.0)) {
+      std::cerr << "peritwin-bench-ingest: the LCM hub did not come up on port " << port << '\n';
+      kill(hub, SIGTERM);
+      waitpid(hub, nullptr, 0);
+      return 3;
     }
     lcm_url = "tcpq://127.0.0.1:" + port_text;
   }

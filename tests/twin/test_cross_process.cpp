@@ -15,9 +15,9 @@ namespace peritwin::twin {
 namespace {
 
 namespace fs = std::filesystem;
-using peritwin::testing::free_port;
+using peritwin::testing::free_loopback_port;
 using peritwin::testing::Process;
-using peritwin::testing::wait_for_port;
+using peritwin::testing::wait_for_loopback_port;
 
 constexpr const char* kLcmJar = "/usr/share/java/lcm.jar";
 
@@ -48,14 +48,14 @@ class CrossProcess : public ::testing::Test {
     dir_ = fs::temp_directory_path() / (std::string("peritwin_xproc_") + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    port_ = free_port();
+    port_ = free_loopback_port();
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
     hub_ = std::make_unique<Process>(
         std::vector<std::string>{java_, "-cp", kLcmJar, "lcm.lcm.TCPService",
                                  std::to_string(port_)},
         (dir_ / "hub.log").string());
     ASSERT_TRUE(hub_->started());
-    ASSERT_TRUE(wait_for_port(port_, 30.0)) << "the LCM hub did not come up on " << url_;
+    ASSERT_TRUE(wait_for_loopback_port(port_, 30.0)) << "the LCM hub did not come up on " << url_;
     // B1 on the demo grid; a 3 mm life criterion without band keeps the synchronous estimates
     // (states 0, 10, 20) to a few seconds; checkpoints every 4 batches.
     config_ = (dir_ / "b1.toml").string();
