@@ -48,6 +48,18 @@ StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
   ground_stiffness_ =
       model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
   grounded_.assign(static_cast<std::size_t>(disc.num_nodes()), 0);
+  if (mixed_ && disc.num_nodes() > 0) {
+    // −A⁻¹ is in m⁶-ish units per N, the stiffness in N/m: on B1 its diagonal is 1e-3..0.2 against
+    // 3e8..1e11 for u, and min/max of the pivots fell below the 1e-14 singularity threshold
+    // (cholmod_rcond) for a sound model (3,024 nodes; K's smallest eigenvalue was positive and
+    // 2.4e9 times below its largest). Solving for w' = w/s, s² = (mean bond stiffness · mean
+    // family size)/mean|1/α|, gives the w rows the stiffness's scale; u is unchanged.
+    double inverse_alpha = 0.0;
+    for (double a : model.dilatation_stiffness) inverse_alpha += 1.0 / std::abs(a);
+    inverse_alpha /= static_cast<double>(disc.num_nodes());
+    const double family = 2.0 * static_cast<double>(disc.num_bonds()) / disc.num_nodes();
+    w_scale_ = std::sqrt(ground_stiffness_ * std::max(family, 1.0) / inverse_alpha);
+  }
 }
 
 bool StaticSolver::isolated(NodeIndex k) const {
@@ -151,10 +163,14 @@ void StaticSolver::assemble(const std::vector<double>& factors) {
           if (it.row() <= it.col()) m.emplace_back(it.row(), it.col(), it.value());
         }
       }
-      for (const auto& t : b_entries) m.emplace_back(t.col(), num_free_ + t.row(), t.value());
+      // In w' = w/s: the Bᵀ block times s, −A⁻¹ times s².
+      for (const auto& t : b_entries) {
+        m.emplace_back(t.col(), num_free_ + t.row(), w_scale_ * t.value());
+      }
       for (NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
-        m.emplace_back(num_free_ + node, num_free_ + node,
-                       -1.0 / model_.dilatation_stiffness[static_cast<std::size_t>(node)]);
+        m.emplace_back(
+            num_free_ + node, num_free_ + node,
+            -w_scale_ * w_scale_ / model_.dilatation_stiffness[static_cast<std::size_t>(node)]);
       }
       append_ground(m);
       upper_.resize(num_unknowns_, num_unknowns_);
@@ -359,11 +375,11 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
             down.values.push_back(sm * c * v);
           }
         }
-        for (const NodeIndex node : {disc_.bond_i[b], disc_.bond_j[b]}) {
+        for (const NodeIndex node : {disc_.bond_i[b], disc_.bond_j[b]}) {  // y in w' = w/s: s·y
           up.rows.push_back(num_free_ + node);
-          up.values.push_back(-sp * (k + lambda));
+          up.values.push_back(-sp * (k + lambda) * w_scale_);
           down.rows.push_back(num_free_ + node);
-          down.values.push_back(sm * lambda);
+          down.values.push_back(sm * lambda * w_scale_);
         }
         added.push_back(std::move(up));
         removed.push_back(std::move(down));

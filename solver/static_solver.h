@@ -173,6 +173,9 @@ class StaticSolver {
   std::vector<std::int32_t> free_index_;  ///< DOF -> free index, -1 when supported
   std::int32_t num_free_ = 0;
   bool mixed_ = false;
+  /// Mixed form: the w unknowns are solved as w/w_scale_, which brings their diagonal (−A⁻¹, in
+  /// other units than the stiffness) to the size of a node's stiffness diagonal; see constructor.
+  double w_scale_ = 1.0;
   std::int32_t num_unknowns_ = 0;
   SparseMatrix upper_;
   SparseCholesky cholesky_;
