@@ -123,7 +123,7 @@ class StaticSolver {
   [[nodiscard]] const SolveTimings& timings() const { return timings_; }
   [[nodiscard]] std::int32_t num_free_dofs() const { return num_free_; }
   /// True when the state-based system is solved in its mixed form (see docs/solver.md): the
-  /// unknowns are the free displacements followed by one w_k = α_k·θ_k per node.
+  /// unknowns are the free displacements followed by one w_k = α_k·θ_k/s per node (s: w_scale_).
   [[nodiscard]] bool mixed_form() const { return mixed_; }
   [[nodiscard]] std::int32_t num_unknowns() const { return num_unknowns_; }
   /// The matrix of the current factor (upper triangle); on the preconditioned path K(f_ref).
