@@ -11,6 +11,19 @@
 namespace peritwin {
 namespace {
 
+/// The independent oracle for families: an O(N²) search over all node pairs within δ.
+std::set<std::pair<int, int>> pairs_within_horizon(const Discretization& d) {
+  std::set<std::pair<int, int>> pairs;
+  for (int a = 0; a < d.num_nodes(); ++a) {
+    for (int b = a + 1; b < d.num_nodes(); ++b) {
+      const double r =
+          std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
+      if (r <= d.horizon) pairs.insert({a, b});
+    }
+  }
+  return pairs;
+}
+
 TEST(PartialVolume, MatchesBouaraquiaEq36) {
   // 001 Eq. (36) with δ = 3, Δx = 1: full weight up to δ − Δx/2, linear to zero at δ + Δx/2.
   EXPECT_DOUBLE_EQ(partial_volume_factor(2.5, 3.0, 1.0), 1.0);
@@ -27,14 +40,7 @@ TEST(Discretization, BondsEqualBruteForcePairSearch) {
   g.holes = {{{0.01, 0.005}, 0.002}};
   const double dx = 0.0005;
   const Discretization d = discretize(g, dx, 3.015 * dx);
-  std::set<std::pair<int, int>> expected;
-  for (int a = 0; a < d.num_nodes(); ++a) {
-    for (int b = a + 1; b < d.num_nodes(); ++b) {
-      const double r =
-          std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
-      if (r <= d.horizon) expected.insert({a, b});
-    }
-  }
+  const auto expected = pairs_within_horizon(d);
   std::set<std::pair<int, int>> found;
   for (int b = 0; b < d.num_bonds(); ++b) found.insert({d.bond_i[b], d.bond_j[b]});
   EXPECT_EQ(found.size(), static_cast<std::size_t>(d.num_bonds()));  // no duplicates
@@ -71,14 +77,7 @@ TEST(Discretization, PerturbedGridKeepsTheBruteForceFamiliesAndIsReproducible) {
   }
   EXPECT_LE(largest, 0.2);
   EXPECT_GT(largest, 0.19);  // the offsets do fill the range
-  std::set<std::pair<int, int>> expected;
-  for (int a = 0; a < d.num_nodes(); ++a) {
-    for (int b = a + 1; b < d.num_nodes(); ++b) {
-      const double r =
-          std::hypot(d.position[b].x - d.position[a].x, d.position[b].y - d.position[a].y);
-      if (r <= d.horizon) expected.insert({a, b});
-    }
-  }
+  const auto expected = pairs_within_horizon(d);
   std::set<std::pair<int, int>> found;
   for (int b = 0; b < d.num_bonds(); ++b) {
     found.insert({d.bond_i[b], d.bond_j[b]});
