@@ -20,6 +20,7 @@
 #include "solver/fatigue_engine.h"
 #include "solver/specimens.h"
 #include "solver/static_solver.h"
+#include "tools/cli_checks.h"
 
 namespace {
 
@@ -236,15 +237,17 @@ int main(int argc, char** argv) {
   double nodes = 15000;
   stat->add_option("--model", model, "bb (bond-based) or osb (ordinary state-based)")
       ->check(CLI::IsMember({"bb", "osb"}));
-  stat->add_option("--nodes", nodes, "approximate number of nodes")->check(CLI::Range(100.0, 1e7));
+  stat->add_option("--nodes", nodes, "approximate number of nodes")
+      ->check(peritwin::cli::finite_in(100.0, 1e7));
   auto* fat = app.add_subcommand("fatigue", "B1 at 4 kN from a0 to final failure");
   double fatigue_nodes = 15000;
   double a2 = 1301;
   fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")
-      ->check(CLI::Range(100.0, 1e7));
+      ->check(peritwin::cli::finite_in(100.0, 1e7));
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
-  fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)");
+  fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)")
+      ->check(peritwin::cli::finite_positive());
   auto* bil =
       app.add_subcommand("bilinear", "B1 bond-based with 003's bilinear law, fast vs oracle");
   double bilinear_nodes = 15000;
@@ -254,17 +257,17 @@ int main(int argc, char** argv) {
   int reference_step = peritwin::FatigueSettings{}.bilinear_reference_step;
   double solve_tolerance = peritwin::FatigueSettings{}.bilinear_solve_tolerance;
   bil->add_option("--nodes", bilinear_nodes, "approximate number of nodes")
-      ->check(CLI::Range(100.0, 1e7));
+      ->check(peritwin::cli::finite_in(100.0, 1e7));
   bil->add_option("--increments", bilinear_increments, "increments of 500 cycles (fast path)")
       ->check(CLI::Range(1, 1000000));
   bil->add_option("--oracle-increments", oracle_increments, "increments of the oracle run")
       ->check(CLI::Range(1, 1000000));
   bil->add_option("--life", bilinear_life, "cycles of the most stretched bond at constant stretch")
-      ->check(CLI::PositiveNumber);
+      ->check(peritwin::cli::finite_positive());
   bil->add_option("--step", reference_step, "reference factors are powers of 2^step")
       ->check(CLI::Range(1, 64));
   bil->add_option("--tolerance", solve_tolerance, "PCG tolerance (energy norm, relative)")
-      ->check(CLI::PositiveNumber);
+      ->check(peritwin::cli::finite_positive());
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes);
   if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);

@@ -17,6 +17,7 @@
 #include <iostream>
 
 #include "replay/replay_tool.h"
+#include "tools/cli_checks.h"
 
 namespace {
 std::atomic<int> g_signal{0};
@@ -49,7 +50,8 @@ int main(int argc, char** argv) {
   app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
       ->check(CLI::PositiveNumber);
   app.add_option("--give-up-after", options.give_up_after_s,
-                 "seconds without progress before failing (default 120)");
+                 "seconds without progress before failing (default 120)")
+      ->check(peritwin::cli::finite_positive());
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
