@@ -76,10 +76,23 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
       crack.projected_length =
           (crack.tip.x - notch.b.x) * dir.x + (crack.tip.y - notch.b.y) * dir.y;
       const double at = std::min(options_.kink_distance, crack.length);
+      // β is measured on the branch that leads to the tip: where the crack branches (near-pure
+      // mode II grows one branch up and one down) the centroid of every node `at` along the path
+      // would average the branches to β ≈ 0. The anchor is the node on the tip's path nearest to
+      // path distance `at`; the centroid takes the band's nodes within a horizon of it.
+      std::size_t anchor = tip;
+      for (auto c = static_cast<std::int32_t>(tip); c >= 0;
+           c = parent[static_cast<std::size_t>(c)]) {
+        const auto cu = static_cast<std::size_t>(c);
+        if (std::abs(dist[cu] - at) < std::abs(dist[anchor] - at)) anchor = cu;
+      }
+      const Point a = disc_.position[anchor];
       double cx = 0, cy = 0;
       int count = 0;
       for (std::size_t k = 0; k < nn; ++k) {
-        if (std::isfinite(dist[k]) && std::abs(dist[k] - at) <= disc_.dx) {
+        const Point p = disc_.position[k];
+        if (std::isfinite(dist[k]) && std::abs(dist[k] - at) <= disc_.dx &&
+            std::hypot(p.x - a.x, p.y - a.y) <= disc_.horizon) {
           cx += disc_.position[k].x;
           cy += disc_.position[k].y;
           ++count;
@@ -126,6 +139,22 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
     return scale * (v1 * rb / std::sqrt(ra) - v2 * ra / std::sqrt(rb)) / (rb - ra);
   };
   return {extrapolate(un1, un2), extrapolate(ut1, ut2)};
+}
+
+double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
+                                 Point tip, double r1, double r2, double youngs_modulus) {
+  double sum = 0.0;
+  int count = 0;
+  for (double r = r1; r <= r2 + 1e-9 * disc.dx; r += disc.dx) {
+    for (const double side : {0.5, -0.5}) {
+      auto ux = [&](double x) {
+        return u[2 * static_cast<std::size_t>(disc.nearest_node({x, tip.y + side * disc.dx}))];
+      };
+      sum += (ux(tip.x - r + disc.dx) - ux(tip.x - r - disc.dx)) / (2 * disc.dx);
+      ++count;
+    }
+  }
+  return count > 0 ? youngs_modulus * sum / count : 0.0;
 }
 
 double kolosov_kappa(double poisson_ratio, PlaneCondition plane) {

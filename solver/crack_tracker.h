@@ -27,7 +27,9 @@ struct CrackMetrics {
 struct CrackTrackerOptions {
   double phase_switch_damage = 0.398;  ///< φ0 (000 Sec. 4.4)
   /// β is the direction from the notch tip to the centroid of the crack nodes whose path distance
-  /// lies within Δx of this distance (or of the crack length when the crack is shorter). 0 = 8δ/3.
+  /// lies within Δx of this distance (or of the crack length when the crack is shorter) and that
+  /// lie within a horizon of the tip's own path (a branched crack is measured on the branch that
+  /// leads to its tip). 0 = 8δ/3.
   double kink_distance = 0.0;
 };
 
@@ -55,6 +57,13 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
                                                   const std::vector<double>& u, Point tip,
                                                   Point direction, double r1, double r2, double mu,
                                                   double kappa);
+
+/// T-stress (Pa) at a crack tip on a straight crack along +x (the tip at `tip`): on a traction-free
+/// face the singular mode I σ_xx vanishes and mode II's has opposite signs on the two faces, so the
+/// mean of E·ε_xx over the face rows (y = tip.y ± Δx/2; plane stress, σ_yy = 0 on the face) is T.
+/// ε_xx by central differences along each row, averaged over r1 ≤ r ≤ r2 behind the tip.
+double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
+                                 Point tip, double r1, double r2, double youngs_modulus);
 
 /// Kolosov constant of 001 Eq. (59) and the shear modulus of the model's effective material.
 double kolosov_kappa(double poisson_ratio, PlaneCondition plane);
