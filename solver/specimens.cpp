@@ -1,6 +1,7 @@
 #include "solver/specimens.h"
 
 #include <cmath>
+#include <numbers>
 
 namespace peritwin {
 
@@ -79,6 +80,65 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
     s.supports.push_back({{s.disc.nearest_node(lower[1].centre)}, true, true});
     s.supports.push_back({{s.disc.nearest_node(lower[2].centre)}, false, true});
   }
+  return s;
+}
+
+namespace {
+
+struct PlaneStress {
+  double xx, yy, xy;
+};
+
+/// Williams near-tip stresses per unit K_I and per unit K_II at (r, θ), crack along θ = π
+/// (Anderson, Fracture Mechanics, Table 2.1).
+PlaneStress mode_i_stress(double r, double th) {
+  const double f = 1.0 / std::sqrt(2.0 * std::numbers::pi * r);
+  const double c = std::cos(th / 2), s = std::sin(th / 2);
+  const double c3 = std::cos(1.5 * th), s3 = std::sin(1.5 * th);
+  return {f * c * (1 - s * s3), f * c * (1 + s * s3), f * s * c * c3};
+}
+
+PlaneStress mode_ii_stress(double r, double th) {
+  const double f = 1.0 / std::sqrt(2.0 * std::numbers::pi * r);
+  const double c = std::cos(th / 2), s = std::sin(th / 2);
+  const double c3 = std::cos(1.5 * th), s3 = std::sin(1.5 * th);
+  return {-f * s * (2 + c * c3), f * s * c * c3, f * c * (1 - s * s3)};
+}
+
+Point traction(const PlaneStress& sigma, Point normal) {
+  return {sigma.xx * normal.x + sigma.xy * normal.y, sigma.xy * normal.x + sigma.yy * normal.y};
+}
+
+}  // namespace
+
+Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& options, double dx,
+                            double horizon_ratio) {
+  const double l = std::round(spec.half_size / dx) * dx;  // y = 0 falls between node rows
+  Specimen s;
+  s.name = "K-field plate";
+  s.material = spec.material;
+  s.geometry.thickness = spec.thickness;
+  s.geometry.outline.push_back({-l, -l, l, l});
+  s.initial_crack_tip = {0.0, 0.0};
+  s.geometry.notches.push_back({{-l - dx, 0.0}, s.initial_crack_tip});
+  s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
+  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  const double area = dx * spec.thickness;
+  for (NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {
+    const Point p = s.disc.position[n];
+    const Point normal{(p.x > l - dx ? 1.0 : 0.0) - (p.x < -l + dx ? 1.0 : 0.0),
+                       (p.y > l - dx ? 1.0 : 0.0) - (p.y < -l + dx ? 1.0 : 0.0)};
+    if (normal.x == 0.0 && normal.y == 0.0) continue;
+    const double r = std::hypot(p.x, p.y);
+    const double th = std::atan2(p.y, p.x);
+    PlaneStress mode_i = mode_i_stress(r, th);
+    mode_i.xx += spec.t_over_ki;
+    const Point f_i = traction(mode_i, normal);
+    const Point f_ii = traction(mode_ii_stress(r, th), normal);
+    s.loads.push_back({{n}, {}, {f_i.x * area, f_i.y * area}, {-f_ii.x * area, -f_ii.y * area}});
+  }
+  s.supports.push_back({{s.disc.nearest_node({l, 0.0})}, true, true});
+  s.supports.push_back({{s.disc.nearest_node({l, -0.5 * l})}, true, false});
   return s;
 }
 

@@ -73,4 +73,21 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
                                     const ModelOptions& options, double dx,
                                     double horizon_ratio = 3.015);
 
+/// A square plate [−L, L]² with a straight crack from its left edge to the centre (the tip at the
+/// origin), loaded on its outer edges by the tractions σ·n of the Williams near-tip field
+/// (Anderson, Fracture Mechanics, Table 2.1) plus a T-stress, each spread over an edge node's Δx·h.
+/// Per unit P at load angle α: K_I = P cos α, K_II = −P sin α (the sign of a crack that kinks
+/// upward, as the CTS's), T = t_over_ki·K_I. It isolates what the near-tip mixity and T do to a
+/// kink, without the rest of a specimen. Rigid-body motion: the node at (L, 0) is pinned, the one
+/// at (L, −L/2) holds x.
+struct KFieldPlateSpec {
+  double half_size = 0.030;  ///< L
+  double t_over_ki = 0.0;    ///< T/K_I (1/√m)
+  double thickness = 0.010;
+  Material material{68e9, 0.33, 48.7e6};
+};
+
+Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& options, double dx,
+                            double horizon_ratio = 3.015);
+
 }  // namespace peritwin

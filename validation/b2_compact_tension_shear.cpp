@@ -9,15 +9,82 @@
 
 namespace peritwin::validation {
 
-double mts_kink_angle(double rho) {
-  if (rho == 0.0) return 0.0;
-  return 2.0 * std::atan((1.0 - std::sqrt(1.0 + 8.0 * rho * rho)) / (4.0 * rho));
+double mts_kink_angle(double k_i, double k_ii) {
+  if (k_ii == 0.0) return 0.0;
+  // Written in K_I and K_II rather than their ratio: near α = 90° the extracted K_I can be slightly
+  // negative, and the ratio's sign would then turn the kink the wrong way (→ ∓70.5° by K_II alone).
+  return 2.0 * std::atan((k_i - std::sqrt(k_i * k_i + 8.0 * k_ii * k_ii)) / (4.0 * k_ii));
+}
+
+namespace {
+
+void write_damage_csv(const std::string& path, const Discretization& disc,
+                      const std::vector<double>& damage) {
+  if (path.empty()) return;
+  std::ofstream out(path);
+  out << "x_m,y_m,damage\n";
+  for (NodeIndex n = 0; n < disc.num_nodes(); ++n) {
+    out << disc.position[n].x << ',' << disc.position[n].y << ','
+        << damage[static_cast<std::size_t>(n)] << '\n';
+  }
+}
+
+/// Grows the crack under P_max = `p_max`, R = 0.1 at `alpha` until it is `growth` long; K at the
+/// initial tip from the elastic solution; β on the grown crack.
+KinkResult grow_and_measure(const Specimen& s, const FatigueSettings& settings, double p_max,
+                            double alpha, double growth, const std::string& snapshot_csv) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  KinkResult result;
+  result.alpha = alpha;
+  if (!engine.initialize()) return result;
+  std::vector<double> u;
+  engine.solver().displacement(1.0, alpha, u);
+  const double nu = s.material.poisson_ratio;
+  const double mu = s.material.youngs_modulus / (2 * (1 + nu));
+  const auto k = stress_intensity_by_extrapolation(s.disc, u, s.initial_crack_tip, {1.0, 0.0},
+                                                   3 * s.disc.horizon, 6 * s.disc.horizon, mu,
+                                                   kolosov_kappa(nu, PlaneCondition::plane_stress));
+  result.kii_over_ki = k.k_ii / k.k_i;
+  result.mts_beta = mts_kink_angle(k.k_i, k.k_ii);
+  result.t_over_ki = t_stress_from_crack_faces(s.disc, u, s.initial_crack_tip, 3 * s.disc.horizon,
+                                               6 * s.disc.horizon, s.material.youngs_modulus) /
+                     k.k_i;
+  CrackTrackerOptions o;
+  o.kink_distance = 0.5 * growth;
+  const CrackTracker tracker(s.disc, s.geometry.notches, o);
+  while (engine.apply({p_max, 0.1, alpha, 200}) == EngineStatus::ok) {
+    const auto cracks = tracker.measure(engine.node_damage());
+    if (cracks.front().length >= growth || engine.total_cycles() > 10'000'000) break;
+  }
+  const auto cracks = tracker.measure(engine.node_damage());
+  write_damage_csv(snapshot_csv, s.disc, engine.node_damage());
+  result.beta = cracks.front().kink_angle;
+  result.growth = cracks.front().length;
+  result.cycles = engine.total_cycles();
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace
+
+KinkResult run_k_field_plate(const KFieldRun& run) {
+  KFieldPlateSpec spec;
+  spec.half_size = run.half_size;
+  spec.t_over_ki = run.t_over_ki;
+  ModelOptions options;
+  options.kind = ModelKind::state_based;
+  const Specimen s = make_k_field_plate(spec, options, run.dx);
+  FatigueSettings settings;
+  settings.law = run.fatigue_law;
+  settings.strain = run.law;
+  settings.incremental = true;
+  const double alpha = std::atan(run.kii_over_ki);
+  return grow_and_measure(s, settings, run.k_i / std::cos(alpha), alpha, run.growth,
+                          run.snapshot_csv);
 }
 
 KinkResult run_compact_tension_shear(const KinkRun& run) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const double alpha = run.alpha;
-  const double growth = run.growth;
   CompactTensionShearSpec spec;
   spec.lower_holes_fixed = run.lower_holes_fixed;
   spec.grid = run.grid;
@@ -28,41 +95,7 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   settings.law = run.fatigue_law;
   settings.strain = run.law;
   settings.incremental = true;
-  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
-  KinkResult result;
-  result.alpha = alpha;
-  if (!engine.initialize()) return result;
-  // K_I, K_II at the initial tip from the elastic solution at P = 1 N.
-  std::vector<double> u;
-  engine.solver().displacement(1.0, alpha, u);
-  const double nu = s.material.poisson_ratio;
-  const double mu = s.material.youngs_modulus / (2 * (1 + nu));
-  const auto k = stress_intensity_by_extrapolation(s.disc, u, s.initial_crack_tip, {1.0, 0.0},
-                                                   3 * s.disc.horizon, 6 * s.disc.horizon, mu,
-                                                   kolosov_kappa(nu, PlaneCondition::plane_stress));
-  result.kii_over_ki = k.k_ii / k.k_i;
-  result.mts_beta = mts_kink_angle(result.kii_over_ki);
-  CrackTrackerOptions o;
-  o.kink_distance = 0.5 * growth;
-  const CrackTracker tracker(s.disc, s.geometry.notches, o);
-  while (engine.apply({16000.0, 0.1, alpha, 200}) == EngineStatus::ok) {
-    const auto cracks = tracker.measure(engine.node_damage());
-    if (cracks.front().length >= growth || engine.total_cycles() > 10'000'000) break;
-  }
-  const auto cracks = tracker.measure(engine.node_damage());
-  if (!run.snapshot_csv.empty()) {
-    std::ofstream out(run.snapshot_csv);
-    out << "x_m,y_m,damage\n";
-    for (NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {
-      out << s.disc.position[n].x << ',' << s.disc.position[n].y << ','
-          << engine.node_damage()[static_cast<std::size_t>(n)] << '\n';
-    }
-  }
-  result.beta = cracks.front().kink_angle;
-  result.growth = cracks.front().length;
-  result.cycles = engine.total_cycles();
-  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return result;
+  return grow_and_measure(s, settings, 16000.0, run.alpha, run.growth, run.snapshot_csv);
 }
 
 }  // namespace peritwin::validation

@@ -15,6 +15,7 @@ struct KinkResult {
   double beta = 0.0;         ///< kink angle measured on the grown crack (rad, CCW +)
   double kii_over_ki = 0.0;  ///< at the initial tip, 001 Eq. (62)-(63)
   double mts_beta = 0.0;     ///< maximum tangential stress prediction from that ratio (rad)
+  double t_over_ki = 0.0;    ///< T-stress over K_I at the initial tip (1/√m), from the faces
   double growth = 0.0;       ///< crack length grown when β was measured (m)
   std::int64_t cycles = 0;
   double wall_s = 0.0;
@@ -34,7 +35,26 @@ struct KinkRun {
 /// Runs B2 at α with P = 16 kN, R = 0.1 until the crack has grown `growth`.
 KinkResult run_compact_tension_shear(const KinkRun& run);
 
-/// Maximum tangential stress criterion: β = 2·atan((1 − √(1 + 8ρ²))/(4ρ)), ρ = K_II/K_I.
-double mts_kink_angle(double kii_over_ki);
+/// The CTS's tip loading without the specimen: a square plate of half-size `half_size` with a
+/// straight crack from its left edge to its centre, loaded on its outer edges by the tractions of
+/// the Williams near-tip field (K_I, K_II and a T-stress). It tells whether the PD crack's kink
+/// angle follows the mixity alone (MTS) or the specimen. K_II has the CTS's sign (the crack kinks
+/// upward), as in run_compact_tension_shear.
+struct KFieldRun {
+  double kii_over_ki = 0.466;  ///< |K_II|/K_I of the applied field
+  double t_over_ki = 0.0;      ///< T/K_I (1/√m)
+  double k_i = 13.3e6;         ///< K_I at P_max (Pa·√m): the CTS's at 16 kN, α = 45°
+  double half_size = 0.030;    ///< m
+  double dx = 0.0005;
+  fatigue::StrainLawParams law;
+  FatigueLaw fatigue_law = FatigueLaw::energy;
+  double growth = 0.010;
+  std::string snapshot_csv;
+};
+
+KinkResult run_k_field_plate(const KFieldRun& run);
+
+/// Maximum tangential stress criterion: β = 2·atan((K_I − √(K_I² + 8K_II²))/(4K_II)).
+double mts_kink_angle(double k_i, double k_ii);
 
 }  // namespace peritwin::validation

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <string>
 
+#include "tools/cli_checks.h"
 #include "validation/b1_compact_tension.h"
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
@@ -92,12 +93,29 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "{\"case\":\"B2\",\"law\":\"%s\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,\"beta_deg\":%.2f,"
       "\"kii_over_"
       "ki\":%.4f,"
-      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
+      "\"t_over_ki\":%.4g,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
       "\"grid_perturbation\":%.3f,\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
-      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
+      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki,
       r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, grid.amplitude,
       static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
+  return 0;
+}
+
+int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path& out_dir) {
+  run.law = fatigue::al6061_t6_strain_params();
+  run.law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * run.dx, run.law.m2);
+  char name[96];
+  std::snprintf(name, sizeof name, "b2_k_field_%g_t%g.csv", run.kii_over_ki, run.t_over_ki);
+  run.snapshot_csv = (out_dir / name).string();
+  const KinkResult r = run_k_field_plate(run);
+  const double deg = 180 / std::numbers::pi;
+  std::printf(
+      "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
+      "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,\"mts_beta_deg\":%.2f,"
+      "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
+      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.mts_beta * deg,
+      r.growth, static_cast<long long>(r.cycles), run.dx, r.wall_s, run.snapshot_csv.c_str());
   return 0;
 }
 
@@ -152,13 +170,15 @@ int main(int argc, char** argv) {
   bool no_limit = false;
   double max_cycles = 5e6;
   app.add_flag("--no-propagation-limit", no_limit, "B3: without 002 Eq. (12)");
-  app.add_option("--max-cycles", max_cycles, "B3: stop after this many cycles");
+  app.add_option("--max-cycles", max_cycles, "B3: stop after this many cycles")
+      ->check(peritwin::cli::finite_in(1.0, 1e12));
   double alpha = 45;
   double a2_at_1mm = 1301;
   double growth = 0.010;
   app.add_option("--alpha", alpha, "B2: load angle (degrees, 0 <= alpha < 90)")
-      ->check(CLI::Range(0.0, 89.999));
-  app.add_option("--a2", a2_at_1mm, "B2: A2 calibrated on B1 at dx = 1 mm");
+      ->check(peritwin::cli::finite_in(0.0, 89.999));
+  app.add_option("--a2", a2_at_1mm, "B2: A2 calibrated on B1 at dx = 1 mm")
+      ->check(peritwin::cli::finite_positive());
   // Default: the lower holes carry the point reflection of the upper forces, as Richard's device
   // does. Fixed lower holes (the benchmarks README) break the CTS's half-turn symmetry: at α = 0
   // they give K_II/K_I = −0.13 and β = 13.6° where the specimen is in pure mode I (loaded: 0.02,
@@ -169,7 +189,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"loaded", "fixed"}));
   app.add_flag_callback(
       "--loaded-lower-holes", [&] { lower_holes = "loaded"; }, "B2: same as --lower-holes loaded");
-  app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)");
+  app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)")
+      ->check(peritwin::cli::finite_in(1e-4, 0.04));
   KinkRun b2;
   std::string b2_law = "energy";
   app.add_option("--law", b2_law, "B2: energy (000 Sec. 6.2) | strain_range")
@@ -177,17 +198,32 @@ int main(int argc, char** argv) {
   GridPerturbation& grid = b2.grid;
   app.add_option("--grid-perturbation", grid.amplitude,
                  "B2: move each node off its grid point by up to this fraction of dx")
-      ->check(CLI::Range(0.0, 0.249));
+      ->check(peritwin::cli::finite_in(0.0, 0.249));
   app.add_option("--grid-seed", grid.seed, "B2: seed of the grid perturbation");
+  KFieldRun k_field;
+  auto* k_field_option =
+      app.add_option("--k-field", k_field.kii_over_ki,
+                     "B2: instead of the CTS, a square plate under the tractions of a pure "
+                     "near-tip field with this |K_II|/K_I")
+          ->check(peritwin::cli::finite_in(0.0, 10.0));
+  app.add_option("--t-over-ki", k_field.t_over_ki, "B2 --k-field: T-stress over K_I (1/sqrt(m))")
+      ->check(peritwin::cli::finite_in(-1e3, 1e3));
   auto* dx_option = app.add_option("--dx", dx, "grid spacing (m); default 1 mm, B3 0.25 mm")
-                        ->check(CLI::Range(1e-5, 0.01));
-  app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration");
+                        ->check(peritwin::cli::finite_in(1e-5, 0.01));
+  app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration")
+      ->check(peritwin::cli::finite_positive());
   app.add_option("--iterations", iterations, "B1: calibration iterations")
       ->check(CLI::Range(1, 10));
   app.add_option("--out", out, "directory for CSV output");
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
+  if (which == "B2" && k_field_option->count() > 0) {
+    k_field.dx = dx_option->count() > 0 ? dx : 0.0005;
+    k_field.growth = growth;
+    k_field.fatigue_law = b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+    return run_b2_k_field(k_field, a2_at_1mm, out);
+  }
   if (which == "B2") {
     b2.dx = dx;
     b2.growth = growth;
