@@ -121,7 +121,7 @@ Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& opt
   s.geometry.outline.push_back({-l, -l, l, l});
   s.initial_crack_tip = {0.0, 0.0};
   s.geometry.notches.push_back({{-l - dx, 0.0}, s.initial_crack_tip});
-  s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
+  s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   const double area = dx * spec.thickness;
   for (NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {

@@ -85,6 +85,7 @@ struct KFieldPlateSpec {
   double t_over_ki = 0.0;    ///< T/K_I (1/√m)
   double thickness = 0.010;
   Material material{68e9, 0.33, 48.7e6};
+  GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };
 
 Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& options, double dx,

@@ -72,6 +72,7 @@ KinkResult run_k_field_plate(const KFieldRun& run) {
   KFieldPlateSpec spec;
   spec.half_size = run.half_size;
   spec.t_over_ki = run.t_over_ki;
+  spec.grid = run.grid;
   ModelOptions options;
   options.kind = ModelKind::state_based;
   const Specimen s = make_k_field_plate(spec, options, run.dx);

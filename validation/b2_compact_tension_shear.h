@@ -49,6 +49,7 @@ struct KFieldRun {
   fatigue::StrainLawParams law;
   FatigueLaw fatigue_law = FatigueLaw::energy;
   double growth = 0.010;
+  GridPerturbation grid;  ///< irregular node arrangement
   std::string snapshot_csv;
 };
 

@@ -106,16 +106,19 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
   run.law = fatigue::al6061_t6_strain_params();
   run.law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * run.dx, run.law.m2);
   char name[96];
-  std::snprintf(name, sizeof name, "b2_k_field_%g_t%g.csv", run.kii_over_ki, run.t_over_ki);
+  std::snprintf(name, sizeof name, "b2_k_field_%g_t%g_p%g.csv", run.kii_over_ki, run.t_over_ki,
+                run.grid.amplitude);
   run.snapshot_csv = (out_dir / name).string();
   const KinkResult r = run_k_field_plate(run);
   const double deg = 180 / std::numbers::pi;
   std::printf(
       "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
       "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,\"mts_beta_deg\":%.2f,"
-      "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
+      "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"grid_perturbation\":%.3f,"
+      "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.mts_beta * deg,
-      r.growth, static_cast<long long>(r.cycles), run.dx, r.wall_s, run.snapshot_csv.c_str());
+      r.growth, static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
+      static_cast<unsigned long long>(run.grid.seed), r.wall_s, run.snapshot_csv.c_str());
   return 0;
 }
 
@@ -222,6 +225,7 @@ int main(int argc, char** argv) {
     k_field.dx = dx_option->count() > 0 ? dx : 0.0005;
     k_field.growth = growth;
     k_field.fatigue_law = b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+    k_field.grid = grid;
     return run_b2_k_field(k_field, a2_at_1mm, out);
   }
   if (which == "B2") {
