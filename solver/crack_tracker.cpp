@@ -145,7 +145,9 @@ double t_stress_from_crack_faces(const Discretization& disc, const std::vector<d
                                  Point tip, double r1, double r2, double youngs_modulus) {
   double sum = 0.0;
   int count = 0;
-  for (double r = r1; r <= r2 + 1e-9 * disc.dx; r += disc.dx) {
+  const auto steps = static_cast<int>(std::floor((r2 - r1) / disc.dx + 1e-9));
+  for (int i = 0; i <= steps; ++i) {
+    const double r = r1 + i * disc.dx;
     for (const double side : {0.5, -0.5}) {
       auto ux = [&](double x) {
         return u[2 * static_cast<std::size_t>(disc.nearest_node({x, tip.y + side * disc.dx}))];

@@ -31,9 +31,14 @@ void write_damage_csv(const std::string& path, const Discretization& disc,
 
 /// Grows the crack under P_max = `p_max`, R = 0.1 at `alpha` until it is `growth` long; K at the
 /// initial tip from the elastic solution; β on the grown crack.
-KinkResult grow_and_measure(const Specimen& s, const FatigueSettings& settings, double p_max,
-                            double alpha, double growth, const std::string& snapshot_csv) {
+KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
+                            const fatigue::StrainLawParams& params, double p_max, double alpha,
+                            double growth, const std::string& snapshot_csv) {
   const auto t0 = std::chrono::steady_clock::now();
+  FatigueSettings settings;
+  settings.law = law;
+  settings.strain = params;
+  settings.incremental = true;
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   KinkResult result;
   result.alpha = alpha;
@@ -76,12 +81,8 @@ KinkResult run_k_field_plate(const KFieldRun& run) {
   ModelOptions options;
   options.kind = ModelKind::state_based;
   const Specimen s = make_k_field_plate(spec, options, run.dx);
-  FatigueSettings settings;
-  settings.law = run.fatigue_law;
-  settings.strain = run.law;
-  settings.incremental = true;
   const double alpha = std::atan(run.kii_over_ki);
-  return grow_and_measure(s, settings, run.k_i / std::cos(alpha), alpha, run.growth,
+  return grow_and_measure(s, run.fatigue_law, run.law, run.k_i / std::cos(alpha), alpha, run.growth,
                           run.snapshot_csv);
 }
 
@@ -92,11 +93,8 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   ModelOptions options;
   options.kind = ModelKind::state_based;
   const Specimen s = make_compact_tension_shear(spec, options, run.dx);
-  FatigueSettings settings;
-  settings.law = run.fatigue_law;
-  settings.strain = run.law;
-  settings.incremental = true;
-  return grow_and_measure(s, settings, 16000.0, run.alpha, run.growth, run.snapshot_csv);
+  return grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
+                          run.snapshot_csv);
 }
 
 }  // namespace peritwin::validation
