@@ -43,8 +43,8 @@ KinkResult run_compact_tension_shear(const KinkRun& run);
 struct KFieldRun {
   double kii_over_ki = 0.466;  ///< |K_II|/K_I of the applied field
   double t_over_ki = 0.0;      ///< T/K_I (1/√m)
-  double k_i = 13.3e6;         ///< K_I at P_max (Pa·√m): the CTS's at 16 kN, α = 45°
-  double half_size = 0.030;    ///< m
+  double k_i = 13.3e6;       ///< K_I at P_max (Pa·√m): Richard's CTS formula at 16 kN, α = 45°
+  double half_size = 0.030;  ///< m
   double dx = 0.0005;
   fatigue::StrainLawParams law;
   FatigueLaw fatigue_law = FatigueLaw::energy;
