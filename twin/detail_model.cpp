@@ -92,12 +92,16 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   std::shared_ptr<DetailModel> m(new DetailModel());
   m->config_ = config;
   m->settings_ = *settings;
-  m->disc_ = discretize(config);
-  if (m->disc_.num_nodes() == 0) {
+  Specimen& sp = m->specimen_;
+  sp.name = config.id;
+  sp.geometry = config.geometry;
+  sp.material = config.material;
+  sp.disc = discretize(config);
+  if (sp.disc.num_nodes() == 0) {
     if (error != nullptr) *error = "detail " + config.id + ": the discretization has no nodes";
     return nullptr;
   }
-  const ResolvedBoundary boundary = resolve(config, m->disc_);
+  const ResolvedBoundary boundary = resolve(config, sp.disc);
   if (!boundary.ok()) {
     if (error != nullptr) {
       error->clear();
@@ -105,16 +109,16 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
     }
     return nullptr;
   }
-  m->supports_ = boundary.supports;
-  m->loads_ = boundary.loads;
-  m->pd_ = build_model(m->disc_, config.material, config.model, config.geometry.rigid_factor);
+  sp.supports = boundary.supports;
+  sp.loads = boundary.loads;
+  sp.model = build_model(sp.disc, config.material, config.model, config.geometry.rigid_factor);
   CrackTrackerOptions tracker_options;
   tracker_options.phase_switch_damage = config.fatigue.phase_switch_damage;
-  m->tracker_ = std::make_unique<CrackTracker>(m->disc_, config.geometry.notches, tracker_options);
-  for (auto c : m->disc_.bond_precut) m->precut_bonds_ += c ? 1 : 0;
+  m->tracker_ = std::make_unique<CrackTracker>(sp.disc, config.geometry.notches, tracker_options);
+  for (auto c : sp.disc.bond_precut) m->precut_bonds_ += c ? 1 : 0;
 
   Fnv h;
-  const auto& d = m->disc_;
+  const auto& d = sp.disc;
   h.value(d.dx);
   h.value(d.horizon);
   h.value(d.thickness);
@@ -125,14 +129,14 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   h.vec(d.bond_i);
   h.vec(d.bond_j);
   h.vec(d.bond_precut);
-  h.vec(m->pd_.bond_stiffness);
-  h.vec(m->pd_.dilatation_stiffness);
-  for (const auto& s : m->supports_) {
+  h.vec(sp.model.bond_stiffness);
+  h.vec(sp.model.dilatation_stiffness);
+  for (const auto& s : sp.supports) {
     h.vec(s.nodes);
     h.value(s.fix_x);
     h.value(s.fix_y);
   }
-  for (const auto& l : m->loads_) {
+  for (const auto& l : sp.loads) {
     h.vec(l.nodes);
     h.value(l.constant);
     h.value(l.per_cos);
@@ -160,7 +164,8 @@ std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const 
   FatigueSettings s = settings_;
   s.strain.A2 *= a2_factor;
   s.bilinear.A *= a2_factor;  // the bilinear law's growth coefficient (003 Eq. 27) plays A2's role
-  return std::make_unique<FatigueEngine>(disc_, pd_, supports_, loads_, s);
+  return std::make_unique<FatigueEngine>(specimen_.disc, specimen_.model, specimen_.supports,
+                                         specimen_.loads, s);
 }
 
 CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine,

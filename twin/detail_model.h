@@ -13,6 +13,7 @@
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
+#include "solver/specimens.h"
 #include "twin/config.h"
 
 namespace peritwin::twin {
@@ -34,8 +35,10 @@ class DetailModel {
   static std::shared_ptr<const DetailModel> build(const DetailConfig& config, std::string* error);
 
   [[nodiscard]] const DetailConfig& config() const { return config_; }
-  [[nodiscard]] const Discretization& disc() const { return disc_; }
-  [[nodiscard]] const PdModel& pd() const { return pd_; }
+  [[nodiscard]] const Discretization& disc() const { return specimen_.disc; }
+  [[nodiscard]] const PdModel& pd() const { return specimen_.model; }
+  /// Geometry, discretization, PD model, supports and load terms, as the benchmarks' specimens.
+  [[nodiscard]] const Specimen& specimen() const { return specimen_; }
   [[nodiscard]] const FatigueSettings& settings() const { return settings_; }
   [[nodiscard]] const CrackTracker& tracker() const { return *tracker_; }
   /// Bonds cut by notches at construction (not counted as broken in the published state).
@@ -51,10 +54,7 @@ class DetailModel {
  private:
   DetailModel() = default;
   DetailConfig config_;
-  Discretization disc_;
-  PdModel pd_;
-  std::vector<Support> supports_;
-  std::vector<LoadTerm> loads_;
+  Specimen specimen_;
   FatigueSettings settings_;
   std::unique_ptr<CrackTracker> tracker_;
   std::int64_t precut_bonds_ = 0;
