@@ -2,10 +2,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <fstream>
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
+#include "validation/damage_csv.h"
 
 namespace peritwin::validation {
 
@@ -17,17 +17,6 @@ double mts_kink_angle(double k_i, double k_ii) {
 }
 
 namespace {
-
-void write_damage_csv(const std::string& path, const Discretization& disc,
-                      const std::vector<double>& damage) {
-  if (path.empty()) return;
-  std::ofstream out(path);
-  out << "x_m,y_m,damage\n";
-  for (NodeIndex n = 0; n < disc.num_nodes(); ++n) {
-    out << disc.position[n].x << ',' << disc.position[n].y << ','
-        << damage[static_cast<std::size_t>(n)] << '\n';
-  }
-}
 
 /// Grows the crack under P_max = `p_max`, R = 0.1 at `alpha` until it is `growth` long; K at the
 /// initial tip from the elastic solution; β on the grown crack.
@@ -63,7 +52,7 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
     if (cracks.front().length >= growth || engine.total_cycles() > 10'000'000) break;
   }
   const auto cracks = tracker.measure(engine.node_damage());
-  write_damage_csv(snapshot_csv, s.disc, engine.node_damage());
+  if (!snapshot_csv.empty()) write_damage_csv(snapshot_csv, s.disc, engine.node_damage());
   result.beta = cracks.front().kink_angle;
   result.growth = cracks.front().length;
   result.cycles = engine.total_cycles();

@@ -4,12 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
 #include "validation/b1_compact_tension.h"
+#include "validation/damage_csv.h"
 
 namespace peritwin::validation {
 
@@ -34,12 +34,7 @@ double delta_k_at(double p_max, double a) {
 void write_snapshot(const std::string& path, const Discretization& d,
                     const std::vector<double>& damage) {
   if (path.empty() || path.front() == '_') return;  // no prefix: calibration run
-  std::ofstream out(path);
-  out << "x_m,y_m,damage\n";
-  for (NodeIndex k = 0; k < d.num_nodes(); ++k) {
-    out << d.position[k].x << ',' << d.position[k].y << ',' << damage[static_cast<std::size_t>(k)]
-        << '\n';
-  }
+  write_damage_csv(path, d, damage);
 }
 
 Point bond_midpoint(const Discretization& d, std::size_t b) {

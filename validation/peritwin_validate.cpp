@@ -74,11 +74,16 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
   return 0;
 }
 
+/// B2's fatigue parameters: B1's material with A2 calibrated on B1 at Δx = 1 mm
+/// (peritwin-validate --case B1), scaled to the horizon at `dx` by 000 Eq. (29).
+fatigue::StrainLawParams b2_law_params(double dx, double a2_at_1mm) {
+  auto law = fatigue::al6061_t6_strain_params();
+  law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, law.m2);
+  return law;
+}
+
 int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
-  run.law = fatigue::al6061_t6_strain_params();
-  // A2 calibrated on B1 at Δx = 1 mm (peritwin-validate --case B1), scaled to this horizon by
-  // 000 Eq. (29).
-  run.law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * run.dx, run.law.m2);
+  run.law = b2_law_params(run.dx, a2_at_1mm);
   const double pi = std::numbers::pi;
   run.alpha = alpha_deg * pi / 180;
   char name[64];
@@ -103,8 +108,7 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
 }
 
 int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path& out_dir) {
-  run.law = fatigue::al6061_t6_strain_params();
-  run.law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * run.dx, run.law.m2);
+  run.law = b2_law_params(run.dx, a2_at_1mm);
   char name[96];
   std::snprintf(name, sizeof name, "b2_k_field_%g_t%g_p%g.csv", run.kii_over_ki, run.t_over_ki,
                 run.grid.amplitude);
@@ -221,10 +225,12 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
+  const FatigueLaw b2_fatigue_law =
+      b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
   if (which == "B2" && k_field_option->count() > 0) {
     k_field.dx = dx_option->count() > 0 ? dx : 0.0005;
     k_field.growth = growth;
-    k_field.fatigue_law = b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+    k_field.fatigue_law = b2_fatigue_law;
     k_field.grid = grid;
     return run_b2_k_field(k_field, a2_at_1mm, out);
   }
@@ -232,7 +238,7 @@ int main(int argc, char** argv) {
     b2.dx = dx;
     b2.growth = growth;
     b2.lower_holes_fixed = lower_holes == "fixed";
-    b2.fatigue_law = b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+    b2.fatigue_law = b2_fatigue_law;
     return run_b2(b2, alpha, a2_at_1mm, out);
   }
   // B3's default is finer: at 0.5 mm the grid's step where the path turns into the hole leaves a
