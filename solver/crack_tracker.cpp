@@ -93,8 +93,8 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
         const Point p = disc_.position[k];
         if (std::isfinite(dist[k]) && std::abs(dist[k] - at) <= disc_.dx &&
             std::hypot(p.x - a.x, p.y - a.y) <= disc_.horizon) {
-          cx += disc_.position[k].x;
-          cy += disc_.position[k].y;
+          cx += p.x;
+          cy += p.y;
           ++count;
         }
       }

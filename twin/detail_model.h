@@ -37,8 +37,6 @@ class DetailModel {
   [[nodiscard]] const DetailConfig& config() const { return config_; }
   [[nodiscard]] const Discretization& disc() const { return specimen_.disc; }
   [[nodiscard]] const PdModel& pd() const { return specimen_.model; }
-  /// Geometry, discretization, PD model, supports and load terms, as the benchmarks' specimens.
-  [[nodiscard]] const Specimen& specimen() const { return specimen_; }
   [[nodiscard]] const FatigueSettings& settings() const { return settings_; }
   [[nodiscard]] const CrackTracker& tracker() const { return *tracker_; }
   /// Bonds cut by notches at construction (not counted as broken in the published state).
