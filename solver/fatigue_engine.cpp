@@ -207,11 +207,15 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
         }
         break;
       case FatigueLaw::energy: {  // 000 Eq. (30)-(39) with B_i, n_i from Eq. (44)-(46)
+        // Eq. (34a) and (35c) take |C0|: a bond whose dilatation term makes ḡ negative (a
+        // compressed bond in a dilated region, say) still fatigues, as 000 states ḡ is "always
+        // positive". With B_i from the same C1 (Eq. 44b) the decrement is then A_i·ε^m_i for
+        // every bond: the energy law equals the strain-range law up to rounding (tested).
         const double c0 = s != 0.0 ? g[b] / (s * s) : 0.0;
         const double range = fatigue::energy_release_rate_range_from_ratio(c0, s, block.r);
-        rate_[b] = c0 > 0.0 ? fatigue::energy_decrement(range, phase,
-                                                        fatigue::c1_coefficient(c0, block.r), p)
-                            : 0.0;
+        rate_[b] = c0 != 0.0 ? fatigue::energy_decrement(range, phase,
+                                                         fatigue::c1_coefficient(c0, block.r), p)
+                             : 0.0;
         break;
       }
       case FatigueLaw::bilinear:  // integrated by bilinear_increment, no per-cycle rate
