@@ -49,6 +49,10 @@ double critical_bond_energy(const Material& material, double crack_interactions)
   return material.critical_energy_release_rate() / crack_interactions;  // 000 Eq. (12)
 }
 
+double phase_switch_damage_for_horizon(double horizon_ratio) {
+  return std::floor(straight_crack_face_damage(horizon_ratio) * 1000.0) / 1000.0;
+}
+
 double crack_crossing_interactions(double horizon_over_dx) {
   // Family offsets (p, q) in grid units within δ (the discretization's rule, with its tolerance).
   const double r2 = horizon_over_dx * horizon_over_dx * (1 + 1e-12);

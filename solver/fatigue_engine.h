@@ -109,7 +109,8 @@ struct FatigueSettings {
   /// means fewer refactorizations and more iterations (spectrum in (2^−step, 1]). With 8 a bond
   /// moves the reference only when it breaks or passes D = 1 − 1/256 (docs/solver.md).
   int bilinear_reference_step = 8;
-  /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0.
+  /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0. The
+  /// default suits δ = 3.015Δx; other horizons: phase_switch_damage_for_horizon.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
   /// Phase III (000 Eq. 7-8, 20): bonds whose stretch at P_max reaches s_c break statically.
   /// (Not used by the bilinear law, whose sc plays this role.)
@@ -146,6 +147,12 @@ double critical_bond_energy(const Material& material, double crack_interactions)
 /// ḡ = ½(g_kj + g_jk) = E_b/(2Δx·h) (E_b the bond's strain energy, Eq. 10b-11): a crack of unit
 /// area then releases N_c·ḡ. 36 for δ = 3.015Δx (28 neighbours), the value of 000 Sec. 2.
 double crack_crossing_interactions(double horizon_over_dx);
+
+/// φ0 for δ = horizon_ratio·Δx (000 Sec. 4.4): the damage along a straight split
+/// (straight_crack_face_damage) truncated to 3 decimals, which gives 000's 0.398 at δ = 3.015Δx
+/// (face 0.3986). Any horizon then puts a crack's face nodes in phase II; a fixed 0.398 would not
+/// at δ = 2Δx (face 0.350), and the crack would grow on phase I lives alone.
+double phase_switch_damage_for_horizon(double horizon_ratio);
 
 enum class BreakCause : std::uint8_t { fatigue = 1, overload = 2 };
 

@@ -4,6 +4,7 @@
 #include <cassert>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 namespace peritwin {
 
@@ -266,6 +267,24 @@ void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& i
     }
     damage[k] = total > 0 ? 1.0 - alive / total : 0.0;  // 000 Eq. (13)
   }
+}
+
+double straight_crack_face_damage(double horizon_ratio) {
+  if (!(horizon_ratio >= 1.0) || !std::isfinite(horizon_ratio)) {
+    throw std::invalid_argument("straight_crack_face_damage: horizon_ratio must be >= 1");
+  }
+  // A square of unit cells wide enough that the middle node's family lies inside, cut along
+  // y = 0 (between two rows) from edge to edge.
+  const double half = std::ceil(horizon_ratio) + 2.0;
+  DetailGeometry plate;
+  plate.outline.push_back({-half, -half, half, half});
+  plate.notches.push_back({{-half - 1.0, 0.0}, {half + 1.0, 0.0}});
+  const Discretization disc = discretize(plate, 1.0, horizon_ratio);
+  std::vector<std::uint8_t> intact(disc.bond_precut.size());
+  for (std::size_t b = 0; b < intact.size(); ++b) intact[b] = disc.bond_precut[b] ? 0 : 1;
+  std::vector<double> damage;
+  damage_index(disc, intact, damage);
+  return damage[static_cast<std::size_t>(disc.nearest_node({0.5, 0.5}))];
 }
 
 }  // namespace peritwin

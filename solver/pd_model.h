@@ -100,6 +100,11 @@ void bond_energy_release_rates(const Discretization& disc, const PdModel& model,
                                const std::vector<double>& stretch,
                                const std::vector<double>& dilatation, std::vector<double>& g);
 
+/// Damage index (000 Eq. 13, weighted as damage_index does) of a node next to a long straight
+/// crack between two rows of the regular grid, for δ = horizon_ratio·Δx: the value along a split,
+/// which 000 Sec. 4.4 (Fig. 2) reads as 0.398 at δ = 3Δx. horizon_ratio >= 1.
+double straight_crack_face_damage(double horizon_ratio);
+
 /// Damage index φ_k = 1 − Σ ψ·β·V / Σ β·V over the family (000 Eq. 13).
 void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
                   std::vector<double>& damage);

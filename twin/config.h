@@ -19,7 +19,8 @@
 //                        "plane_strain", surface_correction true
 //   [detail.material] R  E R (Pa, > 0), nu R (-1 < ν < 0.5), K_c 0 (Pa·√m, >= 0; 0 = not given)
 //   [detail.fatigue] R   law R "strain_range" | "energy" | "bilinear" | "kinetic",
-//                        phi0 0.398 (phase-switch / crack damage index, 0 < φ0 < 1);
+//                        phi0 (phase-switch / crack damage index, 0 < φ0 < 1; default the
+//                          damage along a straight split at horizon_ratio, 0.398 at 3.015);
 //                        strain_range, energy: A1 R, m1 R, A2 R, m2 R (> 0), eps_inf 0,
 //                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams)
 //                        bilinear (model.kind = "bond_based" only): s0 R (> 0), sc R (> s0),
@@ -46,9 +47,10 @@
 //                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count
 //                        (>= 1)}, ...] (repeated until the criterion is met), band "none" |
 //                        "a2_scatter", a2_relative_scatter (0 < s < 1, the life band from
-//                        A2·(1 ± s), for the bilinear law A·(1 ± s); R with and only with "a2_scatter"), every_batches 10 (>= 0,
-//                        0 = never: in deterministic mode an estimate is computed synchronously
-//                        whenever state_seq is a multiple of it, state 0 included)
+//                        A2·(1 ± s), for the bilinear law A·(1 ± s); R with and only with
+//                        "a2_scatter"), every_batches 10 (>= 0, 0 = never: in deterministic mode an
+//                        estimate is computed synchronously whenever state_seq is a multiple of it,
+//                        state 0 included)
 //   [detail.stress_intensity]
 //                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
 //                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,

@@ -215,7 +215,8 @@ void read_material(Context& ctx, const toml::table& t, const std::string& path, 
   r.finish();
 }
 
-void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, FatigueConfig& f) {
+void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, double horizon_ratio,
+                  FatigueConfig& f) {
   TableReader r(ctx, t, path);
   const auto law = r.choice<FatigueLaw>("law",
                                         {{"strain_range", FatigueLaw::strain_range},
@@ -223,7 +224,12 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, F
                                          {"bilinear", FatigueLaw::bilinear},
                                          {"kinetic", FatigueLaw::kinetic}},
                                         std::nullopt);
-  f.phase_switch_damage = r.number("phi0", fatigue::kPhaseSwitchDamage2D);
+  // Default φ0: the damage along a straight split at this horizon (000 Sec. 4.4's 0.398 at
+  // δ = 3.015Δx); a bad horizon_ratio has its own error.
+  const double default_phi0 = horizon_ratio >= 1.0 && std::isfinite(horizon_ratio)
+                                  ? phase_switch_damage_for_horizon(horizon_ratio)
+                                  : fatigue::kPhaseSwitchDamage2D;
+  f.phase_switch_damage = r.number("phi0", default_phi0);
   r.check("phi0", f.phase_switch_damage > 0 && f.phase_switch_damage < 1,
           "must lie in (0, 1) (got " + format_number(f.phase_switch_damage) + ")");
   if (!law) return;  // the allowed keys depend on the law: no unknown-key check
@@ -479,7 +485,7 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     }
   }
   if (const auto* f = r.table("fatigue", true)) {
-    read_fatigue(ctx, *f, r.path_of("fatigue"), d.fatigue);
+    read_fatigue(ctx, *f, r.path_of("fatigue"), d.horizon_ratio, d.fatigue);
     if (d.fatigue.law == FatigueLaw::bilinear && d.model.kind != ModelKind::bond_based) {
       ctx.error(source_of(*f, "law"), r.path_of("fatigue") + ".law",
                 "\"bilinear\" is a bond law (003): it needs model.kind = \"bond_based\"");

@@ -46,6 +46,27 @@ TEST(CriticalBondEnergy, CrackCrossingCountIsThePapersThirtySix) {
   EXPECT_DOUBLE_EQ(critical_bond_energy(al, 36.0), 29e6 * 29e6 / 68.9e9 / 36.0);
 }
 
+TEST(PhaseSwitchDamage, IsTheDamageAlongAStraightSplitThePapersPointFourAtThreeDx) {
+  // Counted by hand with the 001 Eq. (36) weights (1 within δ − Δx/2, δ + Δx/2 − r beyond, none
+  // past δ) for a node in the row next to a cut between rows:
+  //  δ = 1.5Δx: axis 1, diagonal 2 − √2; cut 1 + 2(2 − √2) of 4 + 4(2 − √2).
+  //  δ = 2Δx: axis and diagonal 1, (2, 0) 0.5; cut 1 + 2 + 0.5 of 4 + 4 + 2 = 0.35.
+  const double w = 2.0 - std::sqrt(2.0);
+  EXPECT_NEAR(straight_crack_face_damage(1.5), (1 + 2 * w) / (4 + 4 * w), 1e-14);
+  EXPECT_NEAR(straight_crack_face_damage(2.0), 0.35, 1e-14);
+  // 000 Sec. 4.4 (Fig. 2): points along a crack have φ = 0.398 for δ = 3Δx, and φ0 = 0.398.
+  EXPECT_NEAR(straight_crack_face_damage(3.015), 0.3986, 5e-5);
+  EXPECT_EQ(phase_switch_damage_for_horizon(3.015), fatigue::kPhaseSwitchDamage2D);
+  EXPECT_EQ(phase_switch_damage_for_horizon(2.0), 0.35);
+  // φ0 never exceeds the face's damage, so a crack's faces are in phase II at any horizon.
+  for (const double m : {1.5, 2.0, 2.5, 3.015, 4.0, 5.015}) {
+    EXPECT_LE(phase_switch_damage_for_horizon(m), straight_crack_face_damage(m)) << m;
+    EXPECT_GT(phase_switch_damage_for_horizon(m), straight_crack_face_damage(m) - 1e-3) << m;
+  }
+  EXPECT_THROW(straight_crack_face_damage(0.9), std::invalid_argument);
+  EXPECT_THROW(straight_crack_face_damage(std::nan("")), std::invalid_argument);
+}
+
 /// Uniaxial tension plate, σ (Pa) per unit load P, bond-based (ν = 1/3) or state-based.
 testing::TensionPlate tension_plate(ModelKind kind, double nu) {
   ModelOptions o;

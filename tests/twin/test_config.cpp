@@ -129,6 +129,21 @@ TEST(Config, PlateParsesWithDefaults) {
   EXPECT_EQ(d.checkpoint.every_seconds, 300.0);
 }
 
+TEST(Config, PhiZeroDefaultsToTheSplitDamageOfTheHorizon) {
+  // With δ = 2Δx a straight crack's faces have φ = 0.35 (hand count in test_critical_bond_energy):
+  // 0.398 would keep them out of phase II, so the default follows the horizon; phi0 given wins.
+  Doc doc = plate();
+  doc.erase("horizon_ratio");
+  doc.insert_after("dx = ", "horizon_ratio = 2.0");
+  ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  EXPECT_EQ(r.config->details[0].fatigue.phase_switch_damage, 0.35);
+  doc.insert_after("law = ", "phi0 = 0.3");
+  r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  EXPECT_EQ(r.config->details[0].fatigue.phase_switch_damage, 0.3);
+}
+
 TEST(Config, B1Example) {
   const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
