@@ -28,9 +28,11 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
   settings.law = law;
   settings.strain = params;
   settings.incremental = true;
+  settings.phase_switch_damage = phase_switch_damage_for_horizon(s.disc.horizon / s.disc.dx);
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   KinkResult result;
   result.alpha = alpha;
+  result.phase_switch_damage = settings.phase_switch_damage;
   if (!engine.initialize()) return result;
   std::vector<double> u;
   engine.solver().displacement(1.0, alpha, u);
@@ -45,6 +47,7 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
                                                6 * s.disc.horizon, s.material.youngs_modulus) /
                      k.k_i;
   CrackTrackerOptions o;
+  o.phase_switch_damage = settings.phase_switch_damage;
   o.kink_distance = 0.5 * growth;
   const CrackTracker tracker(s.disc, s.geometry.notches, o);
   while (engine.apply({p_max, 0.1, alpha, 200}) == EngineStatus::ok) {
@@ -81,7 +84,7 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   spec.grid = run.grid;
   ModelOptions options;
   options.kind = ModelKind::state_based;
-  const Specimen s = make_compact_tension_shear(spec, options, run.dx);
+  const Specimen s = make_compact_tension_shear(spec, options, run.dx, run.horizon_ratio);
   return grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
                           run.snapshot_csv);
 }

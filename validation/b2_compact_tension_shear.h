@@ -17,6 +17,7 @@ struct KinkResult {
   double mts_beta = 0.0;     ///< maximum tangential stress prediction from that ratio (rad)
   double t_over_ki = 0.0;    ///< T-stress over K_I at the initial tip (1/√m), from the faces
   double growth = 0.0;       ///< crack length grown when β was measured (m)
+  double phase_switch_damage = 0.0;  ///< φ0 used (000 Sec. 4.4)
   std::int64_t cycles = 0;
   double wall_s = 0.0;
 };
@@ -24,6 +25,7 @@ struct KinkResult {
 struct KinkRun {
   double alpha = 0.0;  ///< load angle (rad)
   double dx = 0.001;
+  double horizon_ratio = 3.015;                 ///< δ/Δx (000 Fig. 15 compares 2, 3 and 4)
   fatigue::StrainLawParams law;                 ///< A, m (and the energy law's via 000 Eq. 44-46)
   FatigueLaw fatigue_law = FatigueLaw::energy;  ///< 000 Sec. 6.2 uses its energy-based law
   double growth = 0.010;                        ///< crack growth at which β is measured (m)

@@ -76,14 +76,14 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
 
 /// B2's fatigue parameters: B1's material with A2 calibrated on B1 at Δx = 1 mm
 /// (peritwin-validate --case B1), scaled to the horizon at `dx` by 000 Eq. (29).
-fatigue::StrainLawParams b2_law_params(double dx, double a2_at_1mm) {
+fatigue::StrainLawParams b2_law_params(double dx, double a2_at_1mm, double horizon_ratio = 3.015) {
   auto law = fatigue::al6061_t6_strain_params();
-  law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, law.m2);
+  law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, horizon_ratio * dx, law.m2);
   return law;
 }
 
 int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
-  run.law = b2_law_params(run.dx, a2_at_1mm);
+  run.law = b2_law_params(run.dx, a2_at_1mm, run.horizon_ratio);
   const double pi = std::numbers::pi;
   run.alpha = alpha_deg * pi / 180;
   char name[64];
@@ -99,11 +99,14 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "\"kii_over_"
       "ki\":%.4f,"
       "\"t_over_ki\":%.4g,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
-      "\"grid_perturbation\":%.3f,\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
+      "\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,\"grid_perturbation\":%.3f,\"grid_"
+      "seed\":%llu,\"wall_s\":%.1f,"
+      "\"snapshot\":\"%s\"}\n",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
       loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki,
-      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, grid.amplitude,
-      static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
+      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
+      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
+      snapshot.c_str());
   return 0;
 }
 
@@ -207,6 +210,9 @@ int main(int argc, char** argv) {
                  "B2: move each node off its grid point by up to this fraction of dx")
       ->check(peritwin::cli::finite_in(0.0, 0.249));
   app.add_option("--grid-seed", grid.seed, "B2: seed of the grid perturbation");
+  app.add_option("--horizon-ratio", b2.horizon_ratio,
+                 "B2: horizon over grid spacing (default 3.015; 000 Fig. 15 compares 2, 3, 4)")
+      ->check(peritwin::cli::finite_in(1.5, 6.0));
   KFieldRun k_field;
   auto* k_field_option =
       app.add_option("--k-field", k_field.kii_over_ki,
