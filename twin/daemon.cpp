@@ -7,12 +7,19 @@
 #include <deque>
 
 #include "messages/channels.h"
+#include "solver/blas_kernel.h"
 #include "twin/checkpoint_io.h"
 #include "twin/messages_io.h"
 
 namespace peritwin::twin {
 
 namespace {
+
+const std::string& blas_kernel() {
+  static const std::string name = blas_kernel_name();
+  return name;
+}
+
 constexpr std::string_view kCheckpointPrefix = "checkpoint";
 constexpr std::size_t kCheckpointsKept = 3;
 
@@ -64,6 +71,10 @@ void Daemon::fail(std::string why) {
 
 bool Daemon::start(std::string* error) {
   started_ = last_status_ = std::chrono::steady_clock::now();
+  spdlog::info(
+      "BLAS kernel: {} (states are bit-identical on the same kernel; "
+      "OPENBLAS_CORETYPE pins it)",
+      blas_kernel());
   const Twin::Options twin_options{
       options_.deterministic ? LifeMode::synchronous : LifeMode::external, true};
   for (const DetailConfig& config : config_.details) {
@@ -93,6 +104,14 @@ bool Daemon::start(std::string* error) {
         spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", config.id,
                      found->file.path.string(), d->twin->state_seq(),
                      d->twin->engine().total_cycles(), d->twin->state_hash_hex());
+        const auto written = found->data.strings.find("blas_kernel");
+        if (written != found->data.strings.end() && written->second != blas_kernel()) {
+          spdlog::warn(
+              "[{}] the checkpoint was written on BLAS kernel {}, this process runs {}: the run "
+              "goes on correctly, but its states now agree with an uninterrupted run only to "
+              "rounding, not bit for bit (set OPENBLAS_CORETYPE={} to match)",
+              config.id, written->second, blas_kernel(), written->second);
+        }
       } else {
         spdlog::info("[{}] no checkpoint in {}: starting from the virgin state", config.id,
                      d->state_dir.string());

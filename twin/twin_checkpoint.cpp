@@ -14,6 +14,7 @@
 #include <bit>
 #include <sstream>
 
+#include "solver/blas_kernel.h"
 #include "twin/twin.h"
 
 namespace peritwin::twin {
@@ -26,6 +27,8 @@ CheckpointData Twin::to_checkpoint() const {
   d.strings["failure_reason"] = e.failure_reason;
   d.strings["last_source"] = last_source_;
   d.strings["life_source"] = life_.source;
+  // Not restored: the daemon compares it on resume (the state's last bits depend on it).
+  d.strings["blas_kernel"] = blas_kernel_name();
   std::string sources;
   std::vector<std::int64_t> seqs;
   for (const auto& [source, seq] : applied_) {

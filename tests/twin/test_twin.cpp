@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "solver/blas_kernel.h"
 #include "tests/twin/twin_fixtures.h"
 #include "twin/messages_io.h"
 
@@ -241,6 +242,8 @@ TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
   auto twin = make_twin(model_);
   ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
   const CheckpointData data = twin->to_checkpoint();
+  // The daemon compares this on resume: the state's last bits depend on the BLAS kernel set.
+  EXPECT_EQ(data.strings.at("blas_kernel"), blas_kernel_name());
   auto other = b1_model(b1_config("every_batches = 0", {{"A2 = 1301.0", "A2 = 1000.0"}}));
   auto target = make_twin(other);
   std::string error;
