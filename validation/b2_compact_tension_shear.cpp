@@ -83,7 +83,7 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   spec.lower_holes_fixed = run.lower_holes_fixed;
   spec.grid = run.grid;
   ModelOptions options;
-  options.kind = ModelKind::state_based;
+  options.kind = run.model;
   const Specimen s = make_compact_tension_shear(spec, options, run.dx, run.horizon_ratio);
   return grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
                           run.snapshot_csv);
