@@ -22,13 +22,16 @@ namespace {
 /// initial tip from the elastic solution; β on the grown crack.
 KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
                             const fatigue::StrainLawParams& params, double p_max, double alpha,
-                            double growth, const std::string& snapshot_csv) {
+                            double growth, const std::string& snapshot_csv,
+                            double phase_switch_damage = 0.0) {
   const auto t0 = std::chrono::steady_clock::now();
   FatigueSettings settings;
   settings.law = law;
   settings.strain = params;
   settings.incremental = true;
-  settings.phase_switch_damage = phase_switch_damage_for_horizon(s.disc.horizon / s.disc.dx);
+  settings.phase_switch_damage = phase_switch_damage > 0.0
+                                     ? phase_switch_damage
+                                     : phase_switch_damage_for_horizon(s.disc.horizon / s.disc.dx);
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   KinkResult result;
   result.alpha = alpha;
@@ -86,7 +89,7 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   options.kind = run.model;
   const Specimen s = make_compact_tension_shear(spec, options, run.dx, run.horizon_ratio);
   return grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
-                          run.snapshot_csv);
+                          run.snapshot_csv, run.phase_switch_damage);
 }
 
 }  // namespace peritwin::validation

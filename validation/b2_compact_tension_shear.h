@@ -33,6 +33,8 @@ struct KinkRun {
   GridPerturbation grid;                        ///< irregular node arrangement
   /// 000 Sec. 6.2 is state-based; bond-based (ν = 1/3 instead of 0.33) runs about 6× faster.
   ModelKind model = ModelKind::state_based;
+  /// φ0 (000 Sec. 4.4); 0 = phase_switch_damage_for_horizon(horizon_ratio).
+  double phase_switch_damage = 0.0;
   std::string snapshot_csv;  ///< final node damage (x_m,y_m,damage) unless empty
 };
 

@@ -216,6 +216,9 @@ int main(int argc, char** argv) {
   app.add_option("--model", b2_model,
                  "B2: state_based (000 Sec. 6.2) | bond_based (nu = 1/3, about 6x faster)")
       ->check(CLI::IsMember({"state_based", "bond_based"}));
+  app.add_option("--phi0", b2.phase_switch_damage,
+                 "B2: phase-switch damage (default: a straight split's damage at the horizon)")
+      ->check(peritwin::cli::finite_in(0.01, 0.99));
   app.add_option("--horizon-ratio", b2.horizon_ratio,
                  "B2: horizon over grid spacing (default 3.015; 000 Fig. 15 compares 2, 3, 4)")
       ->check(peritwin::cli::finite_in(1.5, 6.0));
