@@ -10,7 +10,7 @@
 namespace peritwin {
 
 /// OpenBLAS's core name (openblas_get_corename, e.g. "Haswell"), or "unknown" when the BLAS in
-/// this process is not OpenBLAS.
-std::string blas_kernel_name();
+/// this process is not OpenBLAS. Looked up once per process.
+const std::string& blas_kernel_name();
 
 }  // namespace peritwin

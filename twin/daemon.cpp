@@ -15,11 +15,6 @@ namespace peritwin::twin {
 
 namespace {
 
-const std::string& blas_kernel() {
-  static const std::string name = blas_kernel_name();
-  return name;
-}
-
 constexpr std::string_view kCheckpointPrefix = "checkpoint";
 constexpr std::size_t kCheckpointsKept = 3;
 
@@ -74,7 +69,7 @@ bool Daemon::start(std::string* error) {
   spdlog::info(
       "BLAS kernel: {} (states are bit-identical on the same kernel; "
       "OPENBLAS_CORETYPE pins it)",
-      blas_kernel());
+      blas_kernel_name());
   const Twin::Options twin_options{
       options_.deterministic ? LifeMode::synchronous : LifeMode::external, true};
   for (const DetailConfig& config : config_.details) {
@@ -105,12 +100,12 @@ bool Daemon::start(std::string* error) {
                      found->file.path.string(), d->twin->state_seq(),
                      d->twin->engine().total_cycles(), d->twin->state_hash_hex());
         const auto written = found->data.strings.find("blas_kernel");
-        if (written != found->data.strings.end() && written->second != blas_kernel()) {
+        if (written != found->data.strings.end() && written->second != blas_kernel_name()) {
           spdlog::warn(
               "[{}] the checkpoint was written on BLAS kernel {}, this process runs {}: the run "
               "goes on correctly, but its states now agree with an uninterrupted run only to "
               "rounding, not bit for bit (set OPENBLAS_CORETYPE={} to match)",
-              config.id, written->second, blas_kernel(), written->second);
+              config.id, written->second, blas_kernel_name(), written->second);
         }
       } else {
         spdlog::info("[{}] no checkpoint in {}: starting from the virgin state", config.id,

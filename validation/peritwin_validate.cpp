@@ -95,14 +95,11 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
   const double dx = run.dx;
   const std::string& snapshot = run.snapshot_csv;
   std::printf(
-      "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\",\"alpha_deg\":%.2f,"
-      "\"beta_deg\":%.2f,"
-      "\"kii_over_"
-      "ki\":%.4f,"
-      "\"t_over_ki\":%.4g,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
-      "\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,\"grid_perturbation\":%.3f,\"grid_"
-      "seed\":%llu,\"wall_s\":%.1f,"
-      "\"snapshot\":\"%s\"}\n",
+      "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
+      "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
+      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
+      "\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,\"grid_perturbation\":%.3f,"
+      "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.model == ModelKind::bond_based ? "bond_based" : "state_based",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
       loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki,
