@@ -1,5 +1,6 @@
 #include "solver/crack_tracker.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -157,6 +158,57 @@ double t_stress_from_crack_faces(const Discretization& disc, const std::vector<d
     }
   }
   return count > 0 ? youngs_modulus * sum / count : 0.0;
+}
+
+WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
+                                Point direction, double r_in, double r_out, int terms, double mu,
+                                double kappa) {
+  const Point normal{-direction.y, direction.x};
+  std::vector<std::size_t> annulus;
+  for (std::size_t i = 0; i < disc.position.size(); ++i) {
+    const double dx = disc.position[i].x - tip.x, dy = disc.position[i].y - tip.y;
+    const double r = std::hypot(dx, dy);
+    if (r >= r_in && r <= r_out) annulus.push_back(i);
+  }
+  WilliamsFit fit;
+  fit.nodes = static_cast<int>(annulus.size());
+  const int unknowns = 2 * terms + 2;  // aₙ, bₙ, rigid translation (t, n)
+  if (fit.nodes * 2 < 2 * unknowns) return fit;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * fit.nodes, unknowns);
+  Eigen::VectorXd b(2 * fit.nodes);
+  for (int row = 0; row < fit.nodes; ++row) {
+    const std::size_t i = annulus[static_cast<std::size_t>(row)];
+    const double dx = disc.position[i].x - tip.x, dy = disc.position[i].y - tip.y;
+    const double xt = dx * direction.x + dy * direction.y;  // along the crack
+    const double yn = dx * normal.x + dy * normal.y;        // across it
+    const double r = std::hypot(xt, yn), theta = std::atan2(yn, xt);
+    const Eigen::Index rt = 2 * row, rn = 2 * row + 1;
+    b(rt) = u[2 * i] * direction.x + u[2 * i + 1] * direction.y;
+    b(rn) = u[2 * i] * normal.x + u[2 * i + 1] * normal.y;
+    for (int n = 1; n <= terms; ++n) {
+      const double h = 0.5 * n, sign = (n % 2 == 0) ? 1.0 : -1.0;
+      const double scale = std::pow(r, h) / (2 * mu);
+      const Eigen::Index ca = n - 1, cb = terms + n - 1;
+      a(rt, ca) =
+          scale * ((kappa + h + sign) * std::cos(h * theta) - h * std::cos((h - 2) * theta));
+      a(rn, ca) =
+          scale * ((kappa - h - sign) * std::sin(h * theta) + h * std::sin((h - 2) * theta));
+      a(rt, cb) =
+          scale * ((kappa + h - sign) * std::sin(h * theta) - h * std::sin((h - 2) * theta));
+      a(rn, cb) =
+          scale * (-(kappa - h + sign) * std::cos(h * theta) - h * std::cos((h - 2) * theta));
+    }
+    a(rt, 2 * terms) = 1.0;
+    a(rn, 2 * terms + 1) = 1.0;
+  }
+  // Columns scaled to unit norm: r^(n/2) spans orders of magnitude over the annulus.
+  const Eigen::VectorXd norms = a.colwise().norm().transpose();
+  const Eigen::VectorXd y =
+      (a * norms.cwiseInverse().asDiagonal()).colPivHouseholderQr().solve(b).cwiseQuotient(norms);
+  fit.k_i = std::sqrt(2 * std::numbers::pi) * y(0);
+  fit.k_ii = std::sqrt(2 * std::numbers::pi) * y(terms);
+  fit.t_stress = 4 * y(1);
+  return fit;
 }
 
 double kolosov_kappa(double poisson_ratio, PlaneCondition plane) {

@@ -65,6 +65,23 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
 double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
                                  Point tip, double r1, double r2, double youngs_modulus);
 
+/// K_I, K_II and T at a tip from a least-squares fit of the Williams series to the displacements of
+/// every node in the annulus r_in ≤ r ≤ r_out around it (the over-deterministic method): per mode
+/// the terms r^(n/2), n = 1…`terms`, plus a rigid translation (the mode II n = 2 term is the rigid
+/// turn). K_I = √(2π)·a₁, K_II = √(2π)·b₁ and T = 4·a₂ in the normalization
+///   u_x = Σ aₙ r^(n/2)/(2μ)·[(κ + n/2 + (−1)ⁿ) cos(nθ/2) − (n/2) cos((n/2 − 2)θ)] + mode II,
+/// which gives 001 Eq. (57)-(58) at n = 1 and the uniform σ_xx = T at n = 2. An independent check
+/// of the two-point extrapolation (its K) and of the crack-face T (which the r¹ term biases).
+struct WilliamsFit {
+  double k_i = 0.0;
+  double k_ii = 0.0;
+  double t_stress = 0.0;
+  int nodes = 0;  ///< nodes in the annulus
+};
+WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
+                                Point direction, double r_in, double r_out, int terms, double mu,
+                                double kappa);
+
 /// Kolosov constant of 001 Eq. (59) and the shear modulus of the model's effective material.
 double kolosov_kappa(double poisson_ratio, PlaneCondition plane);
 

@@ -1,7 +1,12 @@
 #include "solver/specimens.h"
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+
+#include "solver/static_solver.h"
 
 namespace peritwin {
 
@@ -43,6 +48,107 @@ double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double
   return spec.height / rows;
 }
 
+CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& spec, double p,
+                                                double alpha) {
+  const double a = spec.crack_length, w = spec.width, q = a / (w - a);
+  const double nominal = p * std::sqrt(std::numbers::pi * a) / (w * spec.thickness) / (1 - a / w);
+  return {
+      nominal * std::cos(alpha) * std::sqrt((0.26 + 2.65 * q) / (1 + 0.55 * q - 0.08 * q * q)),
+      nominal * std::sin(alpha) * std::sqrt((-0.23 + 1.40 * q) / (1 - 0.67 * q + 2.08 * q * q))};
+}
+
+namespace {
+
+/// A pin force per N of P: F = P·(cos α·per_cos + sin α·per_sin).
+struct PinForce {
+  Point per_cos;
+  Point per_sin;
+};
+
+/// Pin forces of rigid loading fixtures, each joined to three holes by frictionless pins (Richard's
+/// CTS loading device). The fixture is far stiffer than the specimen, so the three pin centres of
+/// one fixture move as one rigid body (translation U, turn θ): 2 compatibility equations per hole,
+/// u_h = U + θ·ẑ × (x_h − x_ref); and the fixture is in equilibrium with the load it carries, whose
+/// resultant and moment are those of `prescribed` (000 Eq. 51): 3 equations per fixture. With the
+/// specimen's flexibility C (hole-centre displacement per unit pin force, one unit solve per pin
+/// force component) that is 2n + 3F equations for the 2n pin forces and 3F fixture motions.
+/// Holes 3k…3k+2 belong to fixture k; its middle hole is the reference point. A hole's
+/// displacement is the mean over its (rigid) disc's nodes.
+std::vector<PinForce> rigid_fixture_pin_forces(const Specimen& s, const std::vector<Circle>& holes,
+                                               const std::vector<PinForce>& prescribed) {
+  const auto n = static_cast<Eigen::Index>(holes.size());
+  const Eigen::Index fixtures = n / 3;
+  std::vector<std::vector<NodeIndex>> hole_nodes;
+  for (const auto& c : holes) hole_nodes.push_back(s.disc.nodes_in(Region::of(c)));
+  auto disc_mean = [&](const std::vector<double>& u, Eigen::Index h, int component) {
+    double sum = 0.0;
+    const auto& nodes = hole_nodes[static_cast<std::size_t>(h)];
+    for (const NodeIndex k : nodes) sum += u[2 * static_cast<std::size_t>(k) + component];
+    return sum / static_cast<double>(nodes.size());
+  };
+  // C(2h + c, j): hole h's displacement component c under unit pin force component j (hole j/2,
+  // x if j even, y if odd); three unit cases per factorization (the solver's three bases).
+  Eigen::MatrixXd flexibility(2 * n, 2 * n);
+  for (Eigen::Index first = 0; first < 2 * n; first += 3) {
+    std::vector<LoadTerm> unit;
+    for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
+      LoadTerm t{hole_nodes[static_cast<std::size_t>(j / 2)], {}, {}, {}};
+      const Point f = (j % 2 == 0) ? Point{1.0, 0.0} : Point{0.0, 1.0};
+      (j - first == 0 ? t.constant : j - first == 1 ? t.per_cos : t.per_sin) = f;
+      unit.push_back(t);
+    }
+    StaticSolver solver(s.disc, s.model, s.supports, unit);
+    if (!solver.solve().ok()) throw std::runtime_error("CTS fixture: the unit pin solve failed");
+    for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
+      const auto& u = solver.basis_displacement(static_cast<Basis>(j - first));
+      for (Eigen::Index h = 0; h < n; ++h) {
+        flexibility(2 * h, j) = disc_mean(u, h, 0);
+        flexibility(2 * h + 1, j) = disc_mean(u, h, 1);
+      }
+    }
+  }
+  // Compatibility rows scaled to O(1) (C is of order 1e-9 m/N).
+  const double scale = 1.0 / flexibility.cwiseAbs().maxCoeff();
+  const Eigen::Index unknowns = 2 * n + 3 * fixtures;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(unknowns, unknowns);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(unknowns, 2);  // cos α and sin α parts
+  for (Eigen::Index h = 0; h < n; ++h) {
+    const Eigen::Index motion = 2 * n + 3 * (h / 3);  // U_x, U_y, θ of h's fixture
+    const Point ref = holes[static_cast<std::size_t>(3 * (h / 3) + 1)].centre;
+    const Point c = holes[static_cast<std::size_t>(h)].centre;
+    a.block(2 * h, 0, 2, 2 * n) = scale * flexibility.block(2 * h, 0, 2, 2 * n);
+    a(2 * h, motion) = -scale;
+    a(2 * h, motion + 2) = scale * (c.y - ref.y);
+    a(2 * h + 1, motion + 1) = -scale;
+    a(2 * h + 1, motion + 2) = -scale * (c.x - ref.x);
+  }
+  for (Eigen::Index h = 0; h < n; ++h) {
+    const Eigen::Index row = 2 * n + 3 * (h / 3);
+    const Point ref = holes[static_cast<std::size_t>(3 * (h / 3) + 1)].centre;
+    const Point arm{holes[static_cast<std::size_t>(h)].centre.x - ref.x,
+                    holes[static_cast<std::size_t>(h)].centre.y - ref.y};
+    a(row, 2 * h) = 1.0;
+    a(row + 1, 2 * h + 1) = 1.0;
+    a(row + 2, 2 * h) = -arm.y;
+    a(row + 2, 2 * h + 1) = arm.x;
+    const PinForce& f = prescribed[static_cast<std::size_t>(h)];
+    int part = 0;
+    for (const Point& p : {f.per_cos, f.per_sin}) {
+      rhs(row, part) += p.x;
+      rhs(row + 1, part) += p.y;
+      rhs(row + 2, part) += arm.x * p.y - arm.y * p.x;
+      ++part;
+    }
+  }
+  const Eigen::MatrixXd z = a.fullPivLu().solve(rhs);
+  std::vector<PinForce> forces;
+  for (Eigen::Index h = 0; h < n; ++h)
+    forces.push_back({{z(2 * h, 0), z(2 * h + 1, 0)}, {z(2 * h, 1), z(2 * h + 1, 1)}});
+  return forces;
+}
+
+}  // namespace
+
 Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
                                     const ModelOptions& options, double dx, double horizon_ratio) {
   Specimen s;
@@ -64,22 +170,28 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   for (const auto& c : lower) s.geometry.rigid_regions.push_back(Region::of(c));
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  // 000 Eq. (51): F1 (upper left, y), F2 (middle, x), F3 (upper right, y).
   const double ef = spec.hole_offset / spec.hole_spacing;
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[0])), {}, {0.0, 0.5}, {0.0, ef}});   // F1
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[1])), {}, {}, {-1.0, 0.0}});         // F2
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper[2])), {}, {0.0, 0.5}, {0.0, -ef}});  // F3
+  std::vector<Circle> loaded_holes = upper;
+  std::vector<PinForce> forces = {
+      {{0.0, 0.5}, {0.0, ef}}, {{}, {-1.0, 0.0}}, {{0.0, 0.5}, {0.0, -ef}}};
   if (spec.lower_holes_fixed) {
     for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
   } else {
     // The lower half of the device applies the point reflection of the upper forces (the CTS
     // loading is antisymmetric under a half turn): −F3 at the lower left, +P sin α in x at the
     // middle, −F1 at the lower right; each half is then in force and moment equilibrium.
-    s.loads.push_back({s.disc.nodes_in(Region::of(lower[0])), {}, {0.0, -0.5}, {0.0, ef}});
-    s.loads.push_back({s.disc.nodes_in(Region::of(lower[1])), {}, {}, {1.0, 0.0}});
-    s.loads.push_back({s.disc.nodes_in(Region::of(lower[2])), {}, {0.0, -0.5}, {0.0, -ef}});
+    loaded_holes.insert(loaded_holes.end(), lower.begin(), lower.end());
+    forces.push_back({{0.0, -0.5}, {0.0, ef}});
+    forces.push_back({{}, {1.0, 0.0}});
+    forces.push_back({{0.0, -0.5}, {0.0, -ef}});
     s.supports.push_back({{s.disc.nearest_node(lower[1].centre)}, true, true});
     s.supports.push_back({{s.disc.nearest_node(lower[2].centre)}, false, true});
   }
+  if (spec.rigid_fixtures) forces = rigid_fixture_pin_forces(s, loaded_holes, forces);
+  for (std::size_t h = 0; h < loaded_holes.size(); ++h)
+    s.loads.push_back(
+        {s.disc.nodes_in(Region::of(loaded_holes[h])), {}, forces[h].per_cos, forces[h].per_sin});
   return s;
 }
 

@@ -63,8 +63,26 @@ struct CompactTensionShearSpec {
   /// point reflection of the upper forces (−F3 left, +P sin α middle, −F1 right) as the lower half
   /// of the loading device does, and only rigid-body motion is suppressed (two nodes).
   bool lower_holes_fixed = true;
+  /// false: each pin carries its 000 Eq. (51) force (statically determinate, as 000 and Sajith et
+  /// al. load the model). true: the pins of each half belong to a rigid loading fixture (Richard's
+  /// device) that carries the same resultant and moment; the split between the pins then follows
+  /// from the specimen's flexibility at the initial crack (rigid_fixture_pin_forces).
+  bool rigid_fixtures = false;
   GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };
+
+/// Richard's K formulas for his CTS in its loading device (H. A. Richard, VDI-Forschungsheft 631,
+/// 1985, as quoted throughout the mixed-mode literature; stated accurate for 0.5 ≤ a/W ≤ 0.7):
+///   K_I  = P√(πa)/(W t)·cos α/(1 − a/W)·√[(0.26 + 2.65 q)/(1 + 0.55 q − 0.08 q²)]
+///   K_II = P√(πa)/(W t)·sin α/(1 − a/W)·√[(−0.23 + 1.40 q)/(1 − 0.67 q + 2.08 q²)],  q = a/(W −
+///   a).
+/// An independent calibration of the specimen: at a/W = 0.5 K_II/K_I = 0.495 tan α.
+struct CtsStressIntensity {
+  double k_i = 0.0;
+  double k_ii = 0.0;
+};
+CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& spec, double p,
+                                                double alpha);
 
 /// Grid spacing giving about `target_nodes` nodes, rounded so that y = 0 falls between rows.
 double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes);

@@ -23,7 +23,7 @@ namespace {
 KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
                             const fatigue::StrainLawParams& params, double p_max, double alpha,
                             double growth, const std::string& snapshot_csv,
-                            double phase_switch_damage = 0.0) {
+                            double williams_fit_outer_radius, double phase_switch_damage = 0.0) {
   const auto t0 = std::chrono::steady_clock::now();
   FatigueSettings settings;
   settings.law = law;
@@ -49,6 +49,13 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
   result.t_over_ki = t_stress_from_crack_faces(s.disc, u, s.initial_crack_tip, 3 * s.disc.horizon,
                                                6 * s.disc.horizon, s.material.youngs_modulus) /
                      k.k_i;
+  const auto fit = williams_series_fit(s.disc, u, s.initial_crack_tip, {1.0, 0.0},
+                                       3 * s.disc.horizon, williams_fit_outer_radius, 7, mu,
+                                       kolosov_kappa(nu, PlaneCondition::plane_stress));
+  result.kii_over_ki_fit = fit.k_ii / fit.k_i;
+  result.t_over_ki_fit = fit.t_stress / fit.k_i;
+  result.k_i_fit_per_newton = fit.k_i;
+  result.k_ii_fit_per_newton = fit.k_ii;
   CrackTrackerOptions o;
   o.phase_switch_damage = settings.phase_switch_damage;
   o.kink_distance = 0.5 * growth;
@@ -78,18 +85,25 @@ KinkResult run_k_field_plate(const KFieldRun& run) {
   const Specimen s = make_k_field_plate(spec, options, run.dx);
   const double alpha = std::atan(run.kii_over_ki);
   return grow_and_measure(s, run.fatigue_law, run.law, run.k_i / std::cos(alpha), alpha, run.growth,
-                          run.snapshot_csv);
+                          run.snapshot_csv, 0.6 * run.half_size);
 }
 
 KinkResult run_compact_tension_shear(const KinkRun& run) {
   CompactTensionShearSpec spec;
   spec.lower_holes_fixed = run.lower_holes_fixed;
   spec.grid = run.grid;
+  spec.rigid_fixtures = run.rigid_fixtures;
   ModelOptions options;
   options.kind = run.model;
   const Specimen s = make_compact_tension_shear(spec, options, run.dx, run.horizon_ratio);
-  return grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
-                          run.snapshot_csv, run.phase_switch_damage);
+  // The fit stays inside the ligament and clear of the middle pin hole 30 mm above the tip.
+  KinkResult result =
+      grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
+                       run.snapshot_csv, run.williams_fit_outer_radius, run.phase_switch_damage);
+  const auto richard = richard_cts_stress_intensity(spec, 1.0, run.alpha);
+  result.ki_over_richard = result.k_i_fit_per_newton / richard.k_i;
+  result.kii_over_richard = std::abs(result.k_ii_fit_per_newton) / richard.k_ii;
+  return result;
 }
 
 }  // namespace peritwin::validation

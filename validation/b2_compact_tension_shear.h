@@ -16,7 +16,16 @@ struct KinkResult {
   double kii_over_ki = 0.0;  ///< at the initial tip, 001 Eq. (62)-(63)
   double mts_beta = 0.0;     ///< maximum tangential stress prediction from that ratio (rad)
   double t_over_ki = 0.0;    ///< T-stress over K_I at the initial tip (1/√m), from the faces
-  double growth = 0.0;       ///< crack length grown when β was measured (m)
+  /// The same two from a Williams-series fit to the nodes 3δ to `williams_fit_outer_radius` from
+  /// the initial tip (williams_series_fit), an independent check of both.
+  double kii_over_ki_fit = 0.0;
+  double t_over_ki_fit = 0.0;
+  double k_i_fit_per_newton = 0.0;   ///< K_I of that fit per N of P (Pa·√m/N)
+  double k_ii_fit_per_newton = 0.0;  ///< K_II of that fit per N of P (Pa·√m/N)
+  /// CTS only: the fitted K_I and |K_II| over Richard's formulas (richard_cts_stress_intensity).
+  double ki_over_richard = 0.0;
+  double kii_over_richard = 0.0;
+  double growth = 0.0;               ///< crack length grown when β was measured (m)
   double phase_switch_damage = 0.0;  ///< φ0 used (000 Sec. 4.4)
   std::int64_t cycles = 0;
   double wall_s = 0.0;
@@ -30,12 +39,14 @@ struct KinkRun {
   FatigueLaw fatigue_law = FatigueLaw::energy;  ///< 000 Sec. 6.2 uses its energy-based law
   double growth = 0.010;                        ///< crack growth at which β is measured (m)
   bool lower_holes_fixed = true;                ///< see CompactTensionShearSpec
+  bool rigid_fixtures = false;                  ///< see CompactTensionShearSpec
   GridPerturbation grid;                        ///< irregular node arrangement
   /// 000 Sec. 6.2 is state-based; bond-based (ν = 1/3 instead of 0.33) runs about 6× faster.
   ModelKind model = ModelKind::state_based;
   /// φ0 (000 Sec. 4.4); 0 = phase_switch_damage_for_horizon(horizon_ratio).
   double phase_switch_damage = 0.0;
-  std::string snapshot_csv;  ///< final node damage (x_m,y_m,damage) unless empty
+  std::string snapshot_csv;                  ///< final node damage (x_m,y_m,damage) unless empty
+  double williams_fit_outer_radius = 0.015;  ///< outer radius of the K/T fit's annulus (m)
 };
 
 /// Runs B2 at α with P = 16 kN, R = 0.1 until the crack has grown `growth`.

@@ -96,16 +96,20 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
   const std::string& snapshot = run.snapshot_csv;
   std::printf(
       "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
+      "\"pin_forces\":\"%s\","
       "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
-      "\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,"
+      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%.4f,"
+      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%"
+      ".6g,"
       "\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.model == ModelKind::bond_based ? "bond_based" : "state_based",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
-      loaded_lower ? "loaded" : "fixed", alpha_deg, r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki,
-      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
-      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
-      snapshot.c_str());
+      loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51", alpha_deg,
+      r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit, r.t_over_ki_fit,
+      r.ki_over_richard, r.kii_over_richard, r.mts_beta * 180 / pi, r.growth,
+      static_cast<long long>(r.cycles), dx, run.horizon_ratio, r.phase_switch_damage,
+      grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
   return 0;
 }
 
@@ -119,11 +123,14 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
   const double deg = 180 / std::numbers::pi;
   std::printf(
       "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
-      "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,\"mts_beta_deg\":%.2f,"
+      "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,"
+      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%.4f,"
+      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,"
       "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
-      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.mts_beta * deg,
-      r.growth, static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
+      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit,
+      r.t_over_ki_fit, r.ki_over_richard, r.kii_over_richard, r.mts_beta * deg, r.growth,
+      static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
       static_cast<unsigned long long>(run.grid.seed), r.wall_s, run.snapshot_csv.c_str());
   return 0;
 }
@@ -198,6 +205,11 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"loaded", "fixed"}));
   app.add_flag_callback(
       "--loaded-lower-holes", [&] { lower_holes = "loaded"; }, "B2: same as --lower-holes loaded");
+  std::string pin_forces = "eq51";
+  app.add_option("--pin-forces", pin_forces,
+                 "B2: eq51 (each pin its 000 Eq. 51 force, default) | rigid-fixture (the pins of "
+                 "each half joined by a rigid loading fixture, as in Richard's device)")
+      ->check(CLI::IsMember({"eq51", "rigid-fixture"}));
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)")
       ->check(peritwin::cli::finite_in(1e-4, 0.04));
   KinkRun b2;
@@ -250,6 +262,7 @@ int main(int argc, char** argv) {
     b2.dx = dx;
     b2.growth = growth;
     b2.lower_holes_fixed = lower_holes == "fixed";
+    b2.rigid_fixtures = pin_forces == "rigid-fixture";
     b2.fatigue_law = b2_fatigue_law;
     b2.model = b2_model == "bond_based" ? ModelKind::bond_based : ModelKind::state_based;
     return run_b2(b2, alpha, a2_at_1mm, out);
