@@ -99,9 +99,9 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "\"pin_forces\":\"%s\","
       "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
       "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%.4f,"
-      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%"
-      ".6g,"
-      "\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,\"grid_perturbation\":%.3f,"
+      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
+      "\"dx_m\":%.6g,\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,"
+      "\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.model == ModelKind::bond_based ? "bond_based" : "state_based",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
