@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
@@ -101,8 +102,11 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
       grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
                        run.snapshot_csv, run.williams_fit_outer_radius, run.phase_switch_damage);
   const auto richard = richard_cts_stress_intensity(spec, 1.0, run.alpha);
-  result.ki_over_richard = result.k_i_fit_per_newton / richard.k_i;
-  result.kii_over_richard = std::abs(result.k_ii_fit_per_newton) / richard.k_ii;
+  // No ratio where Richard's K vanishes (K_II at α = 0): NaN, printed as null.
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  result.ki_over_richard = richard.k_i > 0 ? result.k_i_fit_per_newton / richard.k_i : none;
+  result.kii_over_richard =
+      richard.k_ii > 0 ? std::abs(result.k_ii_fit_per_newton) / richard.k_ii : none;
   return result;
 }
 

@@ -22,7 +22,8 @@ struct KinkResult {
   double t_over_ki_fit = 0.0;
   double k_i_fit_per_newton = 0.0;   ///< K_I of that fit per N of P (Pa·√m/N)
   double k_ii_fit_per_newton = 0.0;  ///< K_II of that fit per N of P (Pa·√m/N)
-  /// CTS only: the fitted K_I and |K_II| over Richard's formulas (richard_cts_stress_intensity).
+  /// CTS only: the fitted K_I and |K_II| over Richard's formulas (richard_cts_stress_intensity);
+  /// NaN where Richard's K is 0.
   double ki_over_richard = 0.0;
   double kii_over_richard = 0.0;
   double growth = 0.0;               ///< crack length grown when β was measured (m)

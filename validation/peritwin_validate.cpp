@@ -82,6 +82,14 @@ fatigue::StrainLawParams b2_law_params(double dx, double a2_at_1mm, double horiz
   return law;
 }
 
+/// A ratio with 4 decimals, or null when it is not a number (JSON has no NaN or infinity).
+std::string json_ratio(double value) {
+  if (!std::isfinite(value)) return "null";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4f", value);
+  return text;
+}
+
 int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
   run.law = b2_law_params(run.dx, a2_at_1mm, run.horizon_ratio);
   const double pi = std::numbers::pi;
@@ -98,8 +106,8 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
       "\"pin_forces\":\"%s\","
       "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
-      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%.4f,"
-      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
+      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%s,"
+      "\"kii_over_richard\":%s,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
       "\"dx_m\":%.6g,\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,"
       "\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
@@ -107,9 +115,10 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
       loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51", alpha_deg,
       r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit, r.t_over_ki_fit,
-      r.ki_over_richard, r.kii_over_richard, r.mts_beta * 180 / pi, r.growth,
-      static_cast<long long>(r.cycles), dx, run.horizon_ratio, r.phase_switch_damage,
-      grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
+      json_ratio(r.ki_over_richard).c_str(), json_ratio(r.kii_over_richard).c_str(),
+      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
+      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
+      snapshot.c_str());
   return 0;
 }
 
@@ -124,14 +133,13 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
   std::printf(
       "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
       "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,"
-      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%.4f,"
-      "\"kii_over_richard\":%.4f,\"mts_beta_deg\":%.2f,"
+      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"mts_beta_deg\":%.2f,"
       "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit,
-      r.t_over_ki_fit, r.ki_over_richard, r.kii_over_richard, r.mts_beta * deg, r.growth,
-      static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
-      static_cast<unsigned long long>(run.grid.seed), r.wall_s, run.snapshot_csv.c_str());
+      r.t_over_ki_fit, r.mts_beta * deg, r.growth, static_cast<long long>(r.cycles), run.dx,
+      run.grid.amplitude, static_cast<unsigned long long>(run.grid.seed), r.wall_s,
+      run.snapshot_csv.c_str());
   return 0;
 }
 
