@@ -200,6 +200,11 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
     }
     const auto phase = static_cast<fatigue::Phase>(phase_[b]);
     const double s = stretch_[b];
+    if (s < 0.0 && !settings_.compressed_bonds_fatigue &&
+        (settings_.law == FatigueLaw::strain_range || settings_.law == FatigueLaw::energy)) {
+      rate_[b] = 0.0;  // FatigueSettings::compressed_bonds_fatigue
+      continue;
+    }
     switch (settings_.law) {
       case FatigueLaw::strain_range:
         if (dose) {

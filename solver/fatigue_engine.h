@@ -109,6 +109,12 @@ struct FatigueSettings {
   /// means fewer refactorizations and more iterations (spectrum in (2^−step, 1]). With 8 a bond
   /// moves the reference only when it breaks or passes D = 1 − 1/256 (docs/solver.md).
   int bilinear_reference_step = 8;
+  /// Laws strain_range and energy: whether a bond compressed at P_max fatigues. 000 Eq. (15)
+  /// takes the absolute range |s⁺(1 − R)| and says stretches "can be either positive or negative"
+  /// (true, the default). false: only bonds in tension at P_max lose life (a closed crack face
+  /// carries the compression). Under near-pure mode II the default grows a second branch on the
+  /// compressed side of the tip, the mirror of the tensile one (docs/validation.md, B2).
+  bool compressed_bonds_fatigue = true;
   /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0. The
   /// default suits δ = 3.015Δx; other horizons: phase_switch_damage_for_horizon.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;

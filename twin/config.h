@@ -22,7 +22,9 @@
 //                        phi0 (phase-switch / crack damage index, 0 < φ0 < 1; default the
 //                          damage along a straight split at horizon_ratio, 0.398 at 3.015);
 //                        strain_range, energy: A1 R, m1 R, A2 R, m2 R (> 0), eps_inf 0,
-//                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams)
+//                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams),
+//                          compressed_bonds_fatigue true (false: only bonds in tension at P_max
+//                          lose life; FatigueSettings::compressed_bonds_fatigue)
 //                        bilinear (model.kind = "bond_based" only): s0 R (> 0), sc R (> s0),
 //                          A R (> 0), m 4 (> 0) (fatigue::BilinearParams), cycle_increment 1000
 //                          (ΔN, >= 1), softening_tolerance 1e-6 (> 0),
@@ -142,6 +144,8 @@ struct FatigueConfig {
   fatigue::KineticParams kinetic;
   /// Phase III criterion of the other laws (the bilinear law breaks bonds at sc).
   StaticFailure static_failure = StaticFailure::critical_stretch;
+  /// strain_range, energy: FatigueSettings::compressed_bonds_fatigue (000 Eq. 15's |s⁺(1 − R)|).
+  bool compressed_bonds_fatigue = true;
 };
 
 struct OutputConfig {

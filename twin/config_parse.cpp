@@ -254,6 +254,8 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, d
       set(f.strain.m2, "m2");
       f.strain.eps_inf = opt(r, "eps_inf", 0.0, Bound::non_negative);
       f.strain.eps_inf_prop = opt(r, "eps_inf_prop", 0.0, Bound::non_negative);
+      f.compressed_bonds_fatigue =
+          r.boolean("compressed_bonds_fatigue", f.compressed_bonds_fatigue);
       break;
     case FatigueLaw::bilinear:
       set(f.bilinear.s0, "s0");

@@ -80,6 +80,7 @@ std::optional<FatigueSettings> solver_settings(const DetailConfig& detail, std::
   s.softening_max_iterations = detail.fatigue.softening_max_iterations;
   s.static_failure = detail.fatigue.static_failure;
   s.phase_switch_damage = detail.fatigue.phase_switch_damage;
+  s.compressed_bonds_fatigue = detail.fatigue.compressed_bonds_fatigue;
   s.incremental = true;
   return s;
 }
@@ -156,6 +157,8 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   h.value(m->settings_.crack_interactions);
   h.value(m->settings_.refactor_every_resolves);
   h.value(config.material.fracture_toughness);
+  // Hashed only when off, so that checkpoints written before the option existed still resume.
+  if (!m->settings_.compressed_bonds_fatigue) h.value(m->settings_.compressed_bonds_fatigue);
   m->signature_ = h.get();
   return m;
 }

@@ -24,12 +24,14 @@ namespace {
 KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
                             const fatigue::StrainLawParams& params, double p_max, double alpha,
                             double growth, const std::string& snapshot_csv,
-                            double williams_fit_outer_radius, double phase_switch_damage = 0.0) {
+                            double williams_fit_outer_radius, double phase_switch_damage = 0.0,
+                            bool compressed_bonds_fatigue = true) {
   const auto t0 = std::chrono::steady_clock::now();
   FatigueSettings settings;
   settings.law = law;
   settings.strain = params;
   settings.incremental = true;
+  settings.compressed_bonds_fatigue = compressed_bonds_fatigue;
   settings.phase_switch_damage = phase_switch_damage > 0.0
                                      ? phase_switch_damage
                                      : phase_switch_damage_for_horizon(s.disc.horizon / s.disc.dx);
@@ -98,9 +100,9 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   options.kind = run.model;
   const Specimen s = make_compact_tension_shear(spec, options, run.dx, run.horizon_ratio);
   // The fit stays inside the ligament and clear of the middle pin hole 30 mm above the tip.
-  KinkResult result =
-      grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
-                       run.snapshot_csv, run.williams_fit_outer_radius, run.phase_switch_damage);
+  KinkResult result = grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
+                                       run.snapshot_csv, run.williams_fit_outer_radius,
+                                       run.phase_switch_damage, run.compressed_bonds_fatigue);
   const auto richard = richard_cts_stress_intensity(spec, 1.0, run.alpha);
   // No ratio where Richard's K vanishes (K_II at α = 0): NaN, printed as null.
   const double none = std::numeric_limits<double>::quiet_NaN();

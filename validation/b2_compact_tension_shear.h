@@ -41,6 +41,7 @@ struct KinkRun {
   double growth = 0.010;                        ///< crack growth at which β is measured (m)
   bool lower_holes_fixed = true;                ///< see CompactTensionShearSpec
   bool rigid_fixtures = false;                  ///< see CompactTensionShearSpec
+  bool compressed_bonds_fatigue = true;         ///< see FatigueSettings
   GridPerturbation grid;                        ///< irregular node arrangement
   /// 000 Sec. 6.2 is state-based; bond-based (ν = 1/3 instead of 0.33) runs about 6× faster.
   ModelKind model = ModelKind::state_based;

@@ -104,7 +104,7 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
   const std::string& snapshot = run.snapshot_csv;
   std::printf(
       "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
-      "\"pin_forces\":\"%s\","
+      "\"pin_forces\":\"%s\",\"compressed_bonds_fatigue\":%s,"
       "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
       "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%s,"
       "\"kii_over_richard\":%s,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
@@ -113,12 +113,12 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
       run.model == ModelKind::bond_based ? "bond_based" : "state_based",
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
-      loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51", alpha_deg,
-      r.beta * 180 / pi, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit, r.t_over_ki_fit,
-      json_ratio(r.ki_over_richard).c_str(), json_ratio(r.kii_over_richard).c_str(),
-      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
-      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
-      snapshot.c_str());
+      loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51",
+      run.compressed_bonds_fatigue ? "true" : "false", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
+      r.t_over_ki, r.kii_over_ki_fit, r.t_over_ki_fit, json_ratio(r.ki_over_richard).c_str(),
+      json_ratio(r.kii_over_richard).c_str(), r.mts_beta * 180 / pi, r.growth,
+      static_cast<long long>(r.cycles), dx, run.horizon_ratio, r.phase_switch_damage,
+      grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
   return 0;
 }
 
@@ -221,6 +221,9 @@ int main(int argc, char** argv) {
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)")
       ->check(peritwin::cli::finite_in(1e-4, 0.04));
   KinkRun b2;
+  app.add_flag_callback(
+      "--tension-only-fatigue", [&] { b2.compressed_bonds_fatigue = false; },
+      "B2: only bonds in tension at P_max fatigue (000 Eq. 15 takes |s|: compressed ones too)");
   std::string b2_law = "energy";
   app.add_option("--law", b2_law, "B2: energy (000 Sec. 6.2) | strain_range")
       ->check(CLI::IsMember({"energy", "strain_range"}));

@@ -82,6 +82,7 @@ struct LawCase {
   ModelKind kind;
   double eps_inf_fraction;
   StaticFailure static_failure = StaticFailure::critical_stretch;
+  bool compressed_bonds_fatigue = true;
 };
 
 class BlockEqualsPerCycle : public ::testing::TestWithParam<LawCase> {};
@@ -91,8 +92,9 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
   // states to cycle-by-cycle integration (the oracle), for a mixed sequence of blocks.
   const auto c = GetParam();
   const auto plate = make_notched_plate(c.kind);
-  const auto settings =
+  auto settings =
       settings_for(plate, c.law, 1000.0, 0.1, 150.0, c.eps_inf_fraction, c.static_failure);
+  settings.compressed_bonds_fatigue = c.compressed_bonds_fatigue;
   FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, settings);
   FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(fast.initialize());
@@ -128,7 +130,11 @@ INSTANTIATE_TEST_SUITE_P(
         LawCase{"strain_limit_osb_gc", FatigueLaw::strain_range, ModelKind::state_based, 0.3,
                 StaticFailure::critical_bond_energy},
         LawCase{"energy_osb_gc", FatigueLaw::energy, ModelKind::state_based, 0,
-                StaticFailure::critical_bond_energy}),
+                StaticFailure::critical_bond_energy},
+        LawCase{"strain_dose_bb_tension_only", FatigueLaw::strain_range, ModelKind::bond_based, 0,
+                StaticFailure::critical_stretch, false},
+        LawCase{"energy_osb_tension_only", FatigueLaw::energy, ModelKind::state_based, 0,
+                StaticFailure::critical_stretch, false}),
     [](const ::testing::TestParamInfo<LawCase>& p) { return std::string(p.param.name); });
 
 TEST(EnergyLaw, EqualsTheStrainRangeLawIncludingBondsWithNegativeEnergyReleaseRate) {
@@ -167,6 +173,44 @@ TEST(EnergyLaw, EqualsTheStrainRangeLawIncludingBondsWithNegativeEnergyReleaseRa
   double worst = 0.0;
   for (std::size_t k = 0; k < a.size(); ++k) worst = std::max(worst, std::abs(a[k] - b[k]));
   EXPECT_LT(worst, 1e-9);  // λ ∈ [0, 1]: absolute is relative to the initial life
+}
+
+TEST(CompressedBonds, FatigueBy000Eq15AndNotWhenTurnedOff) {
+  // 000 Eq. (15) takes |s⁺(1 − R)|: a bond compressed at P_max loses life like one stretched as
+  // much. With compressed_bonds_fatigue = false it keeps its full life; bonds in tension are
+  // unchanged bit for bit. 100 cycles, before the first break (about 150), in both the dose path
+  // (strain range) and the per-block path (energy law).
+  for (const FatigueLaw law : {FatigueLaw::strain_range, FatigueLaw::energy}) {
+    const auto plate = make_notched_plate(ModelKind::state_based);
+    StaticSolver probe(plate.disc, plate.model, plate.supports, plate.loads);
+    ASSERT_TRUE(probe.solve().ok());
+    std::vector<double> s;
+    probe.stretch(1000.0, 0.0, s);
+    auto run = [&plate](const FatigueSettings& settings) {
+      auto engine = std::make_unique<FatigueEngine>(plate.disc, plate.model, plate.supports,
+                                                    plate.loads, settings);
+      EXPECT_TRUE(engine->initialize());
+      engine->apply({1000.0, 0.1, 0.0, 100});
+      EXPECT_TRUE(engine->break_events().empty());  // no break yet (pre-cut bonds aside)
+      return engine->remaining_life();
+    };
+    auto settings = settings_for(plate, law, 1000.0, 0.1, 150.0);
+    const auto both = run(settings);
+    settings.compressed_bonds_fatigue = false;
+    const auto tension_only = run(settings);
+    int compressed = 0;
+    for (std::size_t b = 0; b < s.size(); ++b) {
+      if (plate.disc.bond_precut[b] || s[b] == 0.0) continue;
+      if (s[b] < 0.0) {
+        ++compressed;
+        EXPECT_LT(both[b], 1.0) << "bond " << b;
+        EXPECT_EQ(tension_only[b], 1.0) << "bond " << b;
+      } else {
+        EXPECT_EQ(tension_only[b], both[b]) << "bond " << b;
+      }
+    }
+    EXPECT_GT(compressed, 100);  // the plate's lateral bonds contract
+  }
 }
 
 TEST(BlockStepping, ManyOneCycleBlocksEqualOneLongBlock) {

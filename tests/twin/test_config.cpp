@@ -405,11 +405,14 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(e.strain.eps_inf, 1e-4);
   EXPECT_EQ(e.strain.eps_inf_prop, 2e-5);
   EXPECT_EQ(e.phase_switch_damage, 0.5);
+  EXPECT_TRUE(e.compressed_bonds_fatigue);  // 000 Eq. (15)'s absolute range
 
   EXPECT_EQ(e.static_failure, StaticFailure::critical_stretch);
-  const FatigueConfig g = fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5",
-                                   "m2 = 4.5", R"(static_failure = "critical_bond_energy")"});
+  const FatigueConfig g =
+      fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
+               R"(static_failure = "critical_bond_energy")", "compressed_bonds_fatigue = false"});
   EXPECT_EQ(g.static_failure, StaticFailure::critical_bond_energy);
+  EXPECT_FALSE(g.compressed_bonds_fatigue);
 
   const FatigueConfig b =
       fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"}, true);
@@ -483,6 +486,11 @@ TEST(ConfigErrors, WrongType) {
   doc.replace("point = ", "point = [0.010]");
   expect_one_error(parse(doc), 20, "detail[0].load[0].point", "expected an array [x, y]");
 
+  doc = plate();
+  doc.insert_after("m2 = ", "compressed_bonds_fatigue = 0");
+  expect_one_error(parse(doc), 19, "detail[0].fatigue.compressed_bonds_fatigue",
+                   "expected a boolean");
+
   doc = plate();  // [detail.load] instead of [[detail.load]]
   doc.replace("[[detail.load]]", "[detail.load]");
   expect_one_error(parse(doc), 19, "detail[0].load", "expected an array of tables");
@@ -510,7 +518,7 @@ TEST(ConfigErrors, ParameterOfAnotherLaw) {
   doc.insert_after("m2 = ", "U = 2e-19");
   expect_one_error(parse(doc), 19, "detail[0].fatigue.U",
                    "unknown key \"U\" (known here: law, phi0, static_failure, A1, m1, A2, m2, "
-                   "eps_inf, eps_inf_prop)");
+                   "eps_inf, eps_inf_prop, compressed_bonds_fatigue)");
   doc = plate();
   doc.replace("law = ", R"(law = "bilinear")");
   const ConfigResult r = parse(doc);

@@ -337,5 +337,21 @@ TEST(SolverSettings, BilinearParametersAreValidated) {
   EXPECT_NE(error.find("detail[0].fatigue"), std::string::npos) << error;
 }
 
+TEST(SolverSettings, TensionOnlyFatigueReachesTheEngineAndTheSignature) {
+  // compressed_bonds_fatigue = false must reach the engine's settings and change the model's
+  // signature (a checkpoint of the other setting must not resume). The default is not hashed, so
+  // checkpoints written before the option existed keep their signature.
+  DetailConfig config = b1_config("every_batches = 0");
+  std::string error;
+  const auto with_compressed = DetailModel::build(config, &error);
+  ASSERT_NE(with_compressed, nullptr) << error;
+  config.fatigue.compressed_bonds_fatigue = false;
+  const auto tension_only = DetailModel::build(config, &error);
+  ASSERT_NE(tension_only, nullptr) << error;
+  EXPECT_TRUE(with_compressed->settings().compressed_bonds_fatigue);
+  EXPECT_FALSE(tension_only->settings().compressed_bonds_fatigue);
+  EXPECT_NE(with_compressed->signature(), tension_only->signature());
+}
+
 }  // namespace
 }  // namespace peritwin::twin
