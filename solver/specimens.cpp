@@ -48,6 +48,13 @@ double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double
   return spec.height / rows;
 }
 
+double compact_tension_shear_grid_spacing(const CompactTensionShearSpec& spec, double dx) {
+  // Rows sit at y = −h/2 + (k + 1/2)·dx; one lies on y = 0 when h/(2dx) − 1/2 is an integer.
+  const double offset = 0.5 * spec.height / dx - 0.5;
+  if (std::abs(offset - std::round(offset)) > 0.25) return dx;
+  return spec.height / (2.0 * std::max(1.0, std::round(0.5 * spec.height / dx)));
+}
+
 CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& spec, double p,
                                                 double alpha) {
   const double a = spec.crack_length, w = spec.width, q = a / (w - a);

@@ -39,7 +39,10 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
   KinkResult result;
   result.alpha = alpha;
   result.phase_switch_damage = settings.phase_switch_damage;
-  if (!engine.initialize()) return result;
+  if (!engine.initialize()) {
+    result.failure = "the initial static solve failed: " + engine.failure_reason();
+    return result;
+  }
   std::vector<double> u;
   engine.solver().displacement(1.0, alpha, u);
   const double nu = s.material.poisson_ratio;
@@ -55,10 +58,13 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
   const auto fit = williams_series_fit(s.disc, u, s.initial_crack_tip, {1.0, 0.0},
                                        3 * s.disc.horizon, williams_fit_outer_radius, 7, mu,
                                        kolosov_kappa(nu, PlaneCondition::plane_stress));
-  result.kii_over_ki_fit = fit.k_ii / fit.k_i;
-  result.t_over_ki_fit = fit.t_stress / fit.k_i;
-  result.k_i_fit_per_newton = fit.k_i;
-  result.k_ii_fit_per_newton = fit.k_ii;
+  // Too few nodes in the annulus (3δ beyond the outer radius at a coarse --dx): no fit, NaN.
+  const bool fitted = fit.nodes >= 2 * 7 + 2 && fit.k_i != 0.0;
+  const double none = std::numeric_limits<double>::quiet_NaN();
+  result.kii_over_ki_fit = fitted ? fit.k_ii / fit.k_i : none;
+  result.t_over_ki_fit = fitted ? fit.t_stress / fit.k_i : none;
+  result.k_i_fit_per_newton = fitted ? fit.k_i : none;
+  result.k_ii_fit_per_newton = fitted ? fit.k_ii : none;
   CrackTrackerOptions o;
   o.phase_switch_damage = settings.phase_switch_damage;
   o.kink_distance = 0.5 * growth;
@@ -103,6 +109,7 @@ KinkResult run_compact_tension_shear(const KinkRun& run) {
   KinkResult result = grow_and_measure(s, run.fatigue_law, run.law, 16000.0, run.alpha, run.growth,
                                        run.snapshot_csv, run.williams_fit_outer_radius,
                                        run.phase_switch_damage, run.compressed_bonds_fatigue);
+  if (!result.failure.empty()) return result;
   const auto richard = richard_cts_stress_intensity(spec, 1.0, run.alpha);
   // No ratio where Richard's K vanishes (K_II at α = 0): NaN, printed as null.
   const double none = std::numeric_limits<double>::quiet_NaN();

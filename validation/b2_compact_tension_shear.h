@@ -17,7 +17,8 @@ struct KinkResult {
   double mts_beta = 0.0;     ///< maximum tangential stress prediction from that ratio (rad)
   double t_over_ki = 0.0;    ///< T-stress over K_I at the initial tip (1/√m), from the faces
   /// The same two from a Williams-series fit to the nodes 3δ to `williams_fit_outer_radius` from
-  /// the initial tip (williams_series_fit), an independent check of both.
+  /// the initial tip (williams_series_fit), an independent check of both; NaN when the annulus
+  /// holds too few nodes for the fit.
   double kii_over_ki_fit = 0.0;
   double t_over_ki_fit = 0.0;
   double k_i_fit_per_newton = 0.0;   ///< K_I of that fit per N of P (Pa·√m/N)
@@ -30,6 +31,8 @@ struct KinkResult {
   double phase_switch_damage = 0.0;  ///< φ0 used (000 Sec. 4.4)
   std::int64_t cycles = 0;
   double wall_s = 0.0;
+  /// Empty when the initial static solve succeeded; else why it failed (nothing was measured).
+  std::string failure;
 };
 
 struct KinkRun {

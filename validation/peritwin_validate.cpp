@@ -91,6 +91,7 @@ std::string json_ratio(double value) {
 }
 
 int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
+  run.dx = compact_tension_shear_grid_spacing(CompactTensionShearSpec{}, run.dx);  // printed
   run.law = b2_law_params(run.dx, a2_at_1mm, run.horizon_ratio);
   const double pi = std::numbers::pi;
   run.alpha = alpha_deg * pi / 180;
@@ -98,6 +99,10 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
   std::snprintf(name, sizeof name, "b2_alpha%g.csv", alpha_deg);
   run.snapshot_csv = (out_dir / name).string();
   const KinkResult r = run_compact_tension_shear(run);
+  if (!r.failure.empty()) {
+    std::fprintf(stderr, "B2 (dx = %g m): %s\n", run.dx, r.failure.c_str());
+    return 1;
+  }
   const bool loaded_lower = !run.lower_holes_fixed;
   const GridPerturbation& grid = run.grid;
   const double dx = run.dx;
@@ -106,7 +111,7 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
       "\"pin_forces\":\"%s\",\"compressed_bonds_fatigue\":%s,"
       "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
-      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"ki_over_richard\":%s,"
+      "\"kii_over_ki_fit\":%s,\"t_over_ki_fit\":%s,\"ki_over_richard\":%s,"
       "\"kii_over_richard\":%s,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
       "\"dx_m\":%.6g,\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,"
       "\"grid_perturbation\":%.3f,"
@@ -115,10 +120,11 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
       run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
       loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51",
       run.compressed_bonds_fatigue ? "true" : "false", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
-      r.t_over_ki, r.kii_over_ki_fit, r.t_over_ki_fit, json_ratio(r.ki_over_richard).c_str(),
-      json_ratio(r.kii_over_richard).c_str(), r.mts_beta * 180 / pi, r.growth,
-      static_cast<long long>(r.cycles), dx, run.horizon_ratio, r.phase_switch_damage,
-      grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s, snapshot.c_str());
+      r.t_over_ki, json_ratio(r.kii_over_ki_fit).c_str(), json_ratio(r.t_over_ki_fit).c_str(),
+      json_ratio(r.ki_over_richard).c_str(), json_ratio(r.kii_over_richard).c_str(),
+      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
+      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
+      snapshot.c_str());
   return 0;
 }
 
@@ -129,17 +135,21 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
                 run.grid.amplitude);
   run.snapshot_csv = (out_dir / name).string();
   const KinkResult r = run_k_field_plate(run);
+  if (!r.failure.empty()) {
+    std::fprintf(stderr, "B2 K field (dx = %g m): %s\n", run.dx, r.failure.c_str());
+    return 1;
+  }
   const double deg = 180 / std::numbers::pi;
   std::printf(
       "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
       "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,"
-      "\"kii_over_ki_fit\":%.4f,\"t_over_ki_fit\":%.4g,\"mts_beta_deg\":%.2f,"
+      "\"kii_over_ki_fit\":%s,\"t_over_ki_fit\":%s,\"mts_beta_deg\":%.2f,"
       "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"grid_perturbation\":%.3f,"
       "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
-      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki, r.kii_over_ki_fit,
-      r.t_over_ki_fit, r.mts_beta * deg, r.growth, static_cast<long long>(r.cycles), run.dx,
-      run.grid.amplitude, static_cast<unsigned long long>(run.grid.seed), r.wall_s,
-      run.snapshot_csv.c_str());
+      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki,
+      json_ratio(r.kii_over_ki_fit).c_str(), json_ratio(r.t_over_ki_fit).c_str(), r.mts_beta * deg,
+      r.growth, static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
+      static_cast<unsigned long long>(run.grid.seed), r.wall_s, run.snapshot_csv.c_str());
   return 0;
 }
 

@@ -219,6 +219,25 @@ TEST(CompactTensionShear, RigidFixturesGiveRichardsStressIntensity) {
   EXPECT_GT(pins.k_i / richard_cts_stress_intensity(spec, 1.0, 0.0).k_i, 1.10);
 }
 
+TEST(CompactTensionShear, GridSpacingKeepsNodeRowsOffTheCrackLine) {
+  // At Δx = 2 mm the 90 mm height holds 45 rows and one lies on the crack line y = 0: its nodes
+  // lose their bonds to both faces and the stiffness is singular. The spacing is moved to the
+  // nearest even row count (46 rows, 1.957 mm); spacings without a row on the line are kept.
+  const CompactTensionShearSpec spec;
+  EXPECT_EQ(compact_tension_shear_grid_spacing(spec, 0.001), 0.001);
+  EXPECT_EQ(compact_tension_shear_grid_spacing(spec, 0.0006), 0.0006);
+  EXPECT_EQ(compact_tension_shear_grid_spacing(spec, 0.00025), 0.00025);
+  const double dx = compact_tension_shear_grid_spacing(spec, 0.002);
+  EXPECT_DOUBLE_EQ(dx, 0.090 / 46);
+  ModelOptions o;
+  o.kind = ModelKind::bond_based;
+  for (const double spacing : {0.002, dx}) {
+    const Specimen s = make_compact_tension_shear(spec, o, spacing);
+    StaticSolver solver(s.disc, s.model, s.supports, s.loads);
+    EXPECT_EQ(solver.solve().ok(), spacing == dx) << "dx " << spacing;
+  }
+}
+
 TEST(Convergence, HorizonRatioAtFixedHorizon) {
   // m-convergence: δ fixed at 1.2 mm, Δx = δ/m for m = 2, 3, 4: the opening approaches the
   // elastic solution and the last step changes it less than the first.
