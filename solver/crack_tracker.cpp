@@ -173,7 +173,7 @@ WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<do
   WilliamsFit fit;
   fit.nodes = static_cast<int>(annulus.size());
   const int unknowns = 2 * terms + 2;  // aₙ, bₙ, rigid translation (t, n)
-  if (fit.nodes * 2 < 2 * unknowns) return fit;
+  if (fit.nodes < unknowns) return fit;
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * fit.nodes, unknowns);
   Eigen::VectorXd b(2 * fit.nodes);
   for (int row = 0; row < fit.nodes; ++row) {
@@ -208,6 +208,7 @@ WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<do
   fit.k_i = std::sqrt(2 * std::numbers::pi) * y(0);
   fit.k_ii = std::sqrt(2 * std::numbers::pi) * y(terms);
   fit.t_stress = 4 * y(1);
+  fit.fitted = true;
   return fit;
 }
 

@@ -76,7 +76,8 @@ struct WilliamsFit {
   double k_i = 0.0;
   double k_ii = 0.0;
   double t_stress = 0.0;
-  int nodes = 0;  ///< nodes in the annulus
+  int nodes = 0;        ///< nodes in the annulus
+  bool fitted = false;  ///< false: fewer nodes than unknowns, no fit (the values stay 0)
 };
 WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
                                 Point direction, double r_in, double r_out, int terms, double mu,

@@ -74,8 +74,8 @@ struct CompactTensionShearSpec {
 /// Richard's K formulas for his CTS in its loading device (H. A. Richard, VDI-Forschungsheft 631,
 /// 1985, as quoted throughout the mixed-mode literature; stated accurate for 0.5 ≤ a/W ≤ 0.7):
 ///   K_I  = P√(πa)/(W t)·cos α/(1 − a/W)·√[(0.26 + 2.65 q)/(1 + 0.55 q − 0.08 q²)]
-///   K_II = P√(πa)/(W t)·sin α/(1 − a/W)·√[(−0.23 + 1.40 q)/(1 − 0.67 q + 2.08 q²)],  q = a/(W −
-///   a).
+///   K_II = P√(πa)/(W t)·sin α/(1 − a/W)·√[(−0.23 + 1.40 q)/(1 − 0.67 q + 2.08 q²)]
+/// with q = a/(W − a).
 /// An independent calibration of the specimen: at a/W = 0.5 K_II/K_I = 0.495 tan α.
 struct CtsStressIntensity {
   double k_i = 0.0;

@@ -59,7 +59,7 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
                                        3 * s.disc.horizon, williams_fit_outer_radius, 7, mu,
                                        kolosov_kappa(nu, PlaneCondition::plane_stress));
   // Too few nodes in the annulus (3δ beyond the outer radius at a coarse --dx): no fit, NaN.
-  const bool fitted = fit.nodes >= 2 * 7 + 2 && fit.k_i != 0.0;
+  const bool fitted = fit.fitted && fit.k_i != 0.0;
   const double none = std::numeric_limits<double>::quiet_NaN();
   result.kii_over_ki_fit = fitted ? fit.k_ii / fit.k_i : none;
   result.t_over_ki_fit = fitted ? fit.t_stress / fit.k_i : none;

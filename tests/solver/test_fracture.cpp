@@ -146,6 +146,7 @@ TEST(KFieldPlate, ExtrapolationAndWilliamsFitRecoverTheAppliedKIKIIAndT) {
   const auto mode_i =
       williams_series_fit(p.disc, u_i, p.initial_crack_tip, {1, 0}, r1, 4 * r1, 7, mu, kappa);
   EXPECT_GT(mode_i.nodes, 1000);
+  EXPECT_TRUE(mode_i.fitted);
   EXPECT_NEAR(mode_i.k_i, 1.0, 0.05);
   EXPECT_NEAR(mode_i.k_ii, 0.0, 0.05);
   EXPECT_NEAR(mode_i.t_stress, 3.0, 0.1);
