@@ -68,12 +68,13 @@ double crack_crossing_interactions(double horizon_over_dx) {
 
 FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
                              std::vector<Support> supports, std::vector<LoadTerm> loads,
-                             FatigueSettings settings)
+                             FatigueSettings settings, std::vector<Tie> ties)
     : disc_(disc),
       model_(model),
       supports_(std::move(supports)),
       loads_(std::move(loads)),
-      solver_(std::make_unique<StaticSolver>(disc, model, supports_, loads_)),
+      ties_(std::move(ties)),
+      solver_(std::make_unique<StaticSolver>(disc, model, supports_, loads_, ties_)),
       settings_(settings) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   if (settings_.law == FatigueLaw::bilinear) {
@@ -616,7 +617,7 @@ FactorReport FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& inta
   retired_update_s_ += solver_->update_seconds();
   retired_updates_ += solver_->updates();
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
-  auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_);
+  auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_, ties_);
   FactorReport r = fresh->solve();
   std::vector<BondIndex> broken;
   for (std::size_t b = 0; b < intact.size(); ++b) {

@@ -195,8 +195,10 @@ struct EngineState {
 
 class FatigueEngine {
  public:
+  /// `ties`: constraints outside the bond families (a loading fixture, see Tie); part of the
+  /// stiffness in every solve, never broken.
   FatigueEngine(const Discretization& disc, const PdModel& model, std::vector<Support> supports,
-                std::vector<LoadTerm> loads, FatigueSettings settings);
+                std::vector<LoadTerm> loads, FatigueSettings settings, std::vector<Tie> ties = {});
 
   /// First static solve. Returns false (with failure_reason()) if the model is singular.
   bool initialize();
@@ -287,6 +289,7 @@ class FatigueEngine {
   const PdModel& model_;
   std::vector<Support> supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
   std::vector<LoadTerm> loads_;
+  std::vector<Tie> ties_;
   std::unique_ptr<StaticSolver> solver_;
   double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
   int retired_updates_ = 0;

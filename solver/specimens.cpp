@@ -64,47 +64,41 @@ CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& s
       nominal * std::sin(alpha) * std::sqrt((-0.23 + 1.40 * q) / (1 - 0.67 * q + 2.08 * q * q))};
 }
 
-namespace {
-
-/// A pin force per N of P: F = P·(cos α·per_cos + sin α·per_sin).
-struct PinForce {
-  Point per_cos;
-  Point per_sin;
-};
-
-/// Pin forces of rigid loading fixtures, each joined to three holes by frictionless pins (Richard's
-/// CTS loading device). The fixture is far stiffer than the specimen, so the three pin centres of
-/// one fixture move as one rigid body (translation U, turn θ): 2 compatibility equations per hole,
-/// u_h = U + θ·ẑ × (x_h − x_ref); and the fixture is in equilibrium with the load it carries, whose
-/// resultant and moment are those of `prescribed` (000 Eq. 51): 3 equations per fixture. With the
-/// specimen's flexibility C (hole-centre displacement per unit pin force, one unit solve per pin
-/// force component) that is 2n + 3F equations for the 2n pin forces and 3F fixture motions.
-/// Holes 3k…3k+2 belong to fixture k; its middle hole is the reference point. A hole's
-/// displacement is the mean over its (rigid) disc's nodes.
-std::vector<PinForce> rigid_fixture_pin_forces(const Specimen& s, const std::vector<Circle>& holes,
-                                               const std::vector<PinForce>& prescribed) {
-  const auto n = static_cast<Eigen::Index>(holes.size());
+std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
+  const auto n = static_cast<Eigen::Index>(s.loads.size());
+  if (n == 0 || n % 3 != 0) {
+    throw std::invalid_argument("rigid_fixture_loads_by_flexibility: three pin loads per fixture");
+  }
   const Eigen::Index fixtures = n / 3;
-  std::vector<std::vector<NodeIndex>> hole_nodes;
-  for (const auto& c : holes) hole_nodes.push_back(s.disc.nodes_in(Region::of(c)));
+  // Each pin's point: the centroid of the nodes its load is spread over (the resultant's point).
+  std::vector<Point> centre;
+  for (const LoadTerm& load : s.loads) {
+    Point c{};
+    for (const NodeIndex k : load.nodes) {
+      c.x += s.disc.position[static_cast<std::size_t>(k)].x;
+      c.y += s.disc.position[static_cast<std::size_t>(k)].y;
+    }
+    const auto count = static_cast<double>(load.nodes.size());
+    centre.push_back({c.x / count, c.y / count});
+  }
   auto disc_mean = [&](const std::vector<double>& u, Eigen::Index h, int component) {
     double sum = 0.0;
-    const auto& nodes = hole_nodes[static_cast<std::size_t>(h)];
+    const auto& nodes = s.loads[static_cast<std::size_t>(h)].nodes;
     for (const NodeIndex k : nodes) sum += u[2 * static_cast<std::size_t>(k) + component];
     return sum / static_cast<double>(nodes.size());
   };
-  // C(2h + c, j): hole h's displacement component c under unit pin force component j (hole j/2,
+  // C(2h + c, j): pin h's displacement component c under unit pin force component j (pin j/2,
   // x if j even, y if odd); three unit cases per factorization (the solver's three bases).
   Eigen::MatrixXd flexibility(2 * n, 2 * n);
   for (Eigen::Index first = 0; first < 2 * n; first += 3) {
     std::vector<LoadTerm> unit;
     for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
-      LoadTerm t{hole_nodes[static_cast<std::size_t>(j / 2)], {}, {}, {}};
+      LoadTerm t{s.loads[static_cast<std::size_t>(j / 2)].nodes, {}, {}, {}};
       const Point f = (j % 2 == 0) ? Point{1.0, 0.0} : Point{0.0, 1.0};
       (j - first == 0 ? t.constant : j - first == 1 ? t.per_cos : t.per_sin) = f;
       unit.push_back(t);
     }
-    StaticSolver solver(s.disc, s.model, s.supports, unit);
+    StaticSolver solver(s.disc, s.model, s.supports, unit, s.ties);
     if (!solver.solve().ok()) throw std::runtime_error("CTS fixture: the unit pin solve failed");
     for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
       const auto& u = solver.basis_displacement(static_cast<Basis>(j - first));
@@ -121,24 +115,20 @@ std::vector<PinForce> rigid_fixture_pin_forces(const Specimen& s, const std::vec
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(unknowns, 2);  // cos α and sin α parts
   for (Eigen::Index h = 0; h < n; ++h) {
     const Eigen::Index motion = 2 * n + 3 * (h / 3);  // U_x, U_y, θ of h's fixture
-    const Point ref = holes[static_cast<std::size_t>(3 * (h / 3) + 1)].centre;
-    const Point c = holes[static_cast<std::size_t>(h)].centre;
+    const Point ref = centre[static_cast<std::size_t>(3 * (h / 3) + 1)];
+    const Point arm{centre[static_cast<std::size_t>(h)].x - ref.x,
+                    centre[static_cast<std::size_t>(h)].y - ref.y};
     a.block(2 * h, 0, 2, 2 * n) = scale * flexibility.block(2 * h, 0, 2, 2 * n);
     a(2 * h, motion) = -scale;
-    a(2 * h, motion + 2) = scale * (c.y - ref.y);
+    a(2 * h, motion + 2) = scale * arm.y;
     a(2 * h + 1, motion + 1) = -scale;
-    a(2 * h + 1, motion + 2) = -scale * (c.x - ref.x);
-  }
-  for (Eigen::Index h = 0; h < n; ++h) {
-    const Eigen::Index row = 2 * n + 3 * (h / 3);
-    const Point ref = holes[static_cast<std::size_t>(3 * (h / 3) + 1)].centre;
-    const Point arm{holes[static_cast<std::size_t>(h)].centre.x - ref.x,
-                    holes[static_cast<std::size_t>(h)].centre.y - ref.y};
+    a(2 * h + 1, motion + 2) = -scale * arm.x;
+    const Eigen::Index row = motion;  // the fixture's equilibrium rows
     a(row, 2 * h) = 1.0;
     a(row + 1, 2 * h + 1) = 1.0;
     a(row + 2, 2 * h) = -arm.y;
     a(row + 2, 2 * h + 1) = arm.x;
-    const PinForce& f = prescribed[static_cast<std::size_t>(h)];
+    const LoadTerm& f = s.loads[static_cast<std::size_t>(h)];
     int part = 0;
     for (const Point& p : {f.per_cos, f.per_sin}) {
       rhs(row, part) += p.x;
@@ -148,10 +138,63 @@ std::vector<PinForce> rigid_fixture_pin_forces(const Specimen& s, const std::vec
     }
   }
   const Eigen::MatrixXd z = a.fullPivLu().solve(rhs);
-  std::vector<PinForce> forces;
-  for (Eigen::Index h = 0; h < n; ++h)
-    forces.push_back({{z(2 * h, 0), z(2 * h + 1, 0)}, {z(2 * h, 1), z(2 * h + 1, 1)}});
-  return forces;
+  std::vector<LoadTerm> loads = s.loads;
+  for (Eigen::Index h = 0; h < n; ++h) {
+    auto& load = loads[static_cast<std::size_t>(h)];
+    load.per_cos = {z(2 * h, 0), z(2 * h + 1, 0)};
+    load.per_sin = {z(2 * h, 1), z(2 * h + 1, 1)};
+  }
+  return loads;
+}
+
+namespace {
+
+/// Ties that hold the pins of one fixture to a rigid-body motion (small rotation). Pin h's point is
+/// the centroid of its node set and its displacement the mean over those nodes, as for a load
+/// spread over them (and as rigid_fixture_loads_by_flexibility reads it). The n pins' 2n mean
+/// displacements may only lie in the span of the three rigid modes (x, y, turn about the pins'
+/// centroid), so each of the 2n − 3 orthonormal directions g orthogonal to that span becomes a tie
+/// gᵀu = 0 of stiffness k. Their sum k·Σ g·gᵀ is k times the projector off the rigid modes: no
+/// energy for a rigid motion of the pins. Works for collinear pins (three on one line), where
+/// pairwise length ties would leave the middle one free to move across the line. A pin turns
+/// freely: only its mean displacement is tied, so it passes a force and no moment.
+std::vector<Tie> rigid_body_ties(const Discretization& disc,
+                                 const std::vector<std::vector<NodeIndex>>& pins, double k) {
+  const auto n = static_cast<Eigen::Index>(pins.size());
+  std::vector<Point> point;
+  Point centroid{};
+  for (const auto& nodes : pins) {
+    Point c{};
+    for (const NodeIndex node : nodes) {
+      c.x += disc.position[static_cast<std::size_t>(node)].x / static_cast<double>(nodes.size());
+      c.y += disc.position[static_cast<std::size_t>(node)].y / static_cast<double>(nodes.size());
+    }
+    point.push_back(c);
+    centroid = {centroid.x + c.x / static_cast<double>(n),
+                centroid.y + c.y / static_cast<double>(n)};
+  }
+  Eigen::MatrixXd modes = Eigen::MatrixXd::Zero(2 * n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Point p = point[static_cast<std::size_t>(i)];
+    modes(2 * i, 0) = 1.0;
+    modes(2 * i + 1, 1) = 1.0;
+    modes(2 * i, 2) = -(p.y - centroid.y);
+    modes(2 * i + 1, 2) = p.x - centroid.x;
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(modes);
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  std::vector<Tie> ties;
+  for (Eigen::Index c = 3; c < 2 * n; ++c) {  // Q's columns past the first three: the complement
+    Tie tie{{}, k};
+    for (Eigen::Index i = 0; i < 2 * n; ++i) {
+      const auto& nodes = pins[static_cast<std::size_t>(i / 2)];
+      const double share = q(i, c) / static_cast<double>(nodes.size());
+      for (const NodeIndex node : nodes)
+        tie.terms.push_back({node, static_cast<int>(i % 2), share});
+    }
+    ties.push_back(tie);
+  }
+  return ties;
 }
 
 }  // namespace
@@ -180,6 +223,10 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   // 000 Eq. (51): F1 (upper left, y), F2 (middle, x), F3 (upper right, y).
   const double ef = spec.hole_offset / spec.hole_spacing;
   std::vector<Circle> loaded_holes = upper;
+  struct PinForce {  // per N of P: F = P·(cos α·per_cos + sin α·per_sin)
+    Point per_cos;
+    Point per_sin;
+  };
   std::vector<PinForce> forces = {
       {{0.0, 0.5}, {0.0, ef}}, {{}, {-1.0, 0.0}}, {{0.0, 0.5}, {0.0, -ef}}};
   if (spec.lower_holes_fixed) {
@@ -195,10 +242,23 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
     s.supports.push_back({{s.disc.nearest_node(lower[1].centre)}, true, true});
     s.supports.push_back({{s.disc.nearest_node(lower[2].centre)}, false, true});
   }
-  if (spec.rigid_fixtures) forces = rigid_fixture_pin_forces(s, loaded_holes, forces);
   for (std::size_t h = 0; h < loaded_holes.size(); ++h)
     s.loads.push_back(
         {s.disc.nodes_in(Region::of(loaded_holes[h])), {}, forces[h].per_cos, forces[h].per_sin});
+  if (spec.rigid_fixtures) {
+    // Richard's loading device: the pin centres of each loaded half move as one rigid body, the
+    // holes turning freely on their pins (frictionless: a pin passes a force, no moment). The
+    // pins keep their Eq. (51) forces; the fixture shares them out by compatibility in every
+    // solve, so the split follows the crack as it grows. Tie stiffness: 10·rigid_factor·E·t,
+    // about 10³ times the specimen's stiffness at a pin (its flexibility there is ~1e-9 m/N).
+    const double k = 10.0 * s.geometry.rigid_factor * spec.material.youngs_modulus * spec.thickness;
+    for (std::size_t fixture = 0; fixture < loaded_holes.size() / 3; ++fixture) {
+      std::vector<std::vector<NodeIndex>> pins;
+      for (std::size_t h = 0; h < 3; ++h) pins.push_back(s.loads[3 * fixture + h].nodes);
+      const auto ties = rigid_body_ties(s.disc, pins, k);
+      s.ties.insert(s.ties.end(), ties.begin(), ties.end());
+    }
+  }
   return s;
 }
 

@@ -21,6 +21,7 @@ struct Specimen {
   PdModel model;
   std::vector<Support> supports;
   std::vector<LoadTerm> loads;
+  std::vector<Tie> ties;  ///< constraints outside the bond families (a loading fixture)
   Point initial_crack_tip;
 };
 
@@ -35,6 +36,17 @@ struct CompactTensionSpec {
   double initial_crack = 0.3 * 0.050;  ///< a0, measured from the load line
   Material material{68e9, 0.33, 48.7e6};
 };
+
+/// The oracle of the tied fixture (CompactTensionShearSpec::rigid_fixtures): the pin forces of
+/// rigid loading fixtures from the specimen's flexibility, for its current bonds. `s.loads` are the
+/// pins, three per fixture (its middle pin second); each fixture carries their resultant and
+/// moment. The three pin points of a fixture move as one rigid body (translation U, turn θ): u_h =
+/// U + θ·ẑ × (x_h − x_middle), 2 equations per pin, with u_h = Σ_j C_hj·F_j from unit solves (a
+/// pin's displacement is the mean over its load's nodes, its point their centroid); the fixture is
+/// in equilibrium, 3 equations per fixture: 2n + 3F equations for the 2n pin forces and 3F fixture
+/// motions. Returns s.loads with the per_cos and per_sin parts replaced by that split (constant
+/// parts kept). Costs ⌈2n/3⌉ factorizations.
+std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s);
 
 /// Grid spacing giving about `target_nodes` nodes on the CT outline, rounded so that the crack
 /// line y = 0 falls midway between two rows of nodes.
@@ -64,9 +76,11 @@ struct CompactTensionShearSpec {
   /// of the loading device does, and only rigid-body motion is suppressed (two nodes).
   bool lower_holes_fixed = true;
   /// false: each pin carries its 000 Eq. (51) force (statically determinate, as 000 and Sajith et
-  /// al. load the model). true: the pins of each half belong to a rigid loading fixture (Richard's
-  /// device) that carries the same resultant and moment; the split between the pins then follows
-  /// from the specimen's flexibility at the initial crack (rigid_fixture_pin_forces).
+  /// al. load the model). true: the pins of each loaded half belong to a rigid loading fixture
+  /// (Richard's device): stiff ties (Specimen::ties) hold the three pin centres of each half to a
+  /// rigid-body motion, the holes turning freely on their pins. The pins keep the Eq. (51) forces,
+  /// and the fixture shares them out by compatibility in every solve, so the split follows the
+  /// crack as it grows.
   bool rigid_fixtures = false;
   GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };

@@ -16,8 +16,24 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
-                           std::vector<Support> supports, std::vector<LoadTerm> loads)
-    : disc_(disc), model_(model), supports_(std::move(supports)), loads_(std::move(loads)) {
+                           std::vector<Support> supports, std::vector<LoadTerm> loads,
+                           std::vector<Tie> ties)
+    : disc_(disc),
+      model_(model),
+      supports_(std::move(supports)),
+      loads_(std::move(loads)),
+      ties_(std::move(ties)) {
+  for (const Tie& tie : ties_) {
+    const bool nodes_ok = std::all_of(tie.terms.begin(), tie.terms.end(), [&](const TieTerm& term) {
+      return term.node >= 0 && term.node < disc.num_nodes() &&
+             (term.component == 0 || term.component == 1) && std::isfinite(term.coefficient);
+    });
+    if (tie.terms.empty() || !nodes_ok || !(tie.stiffness > 0.0) || !std::isfinite(tie.stiffness)) {
+      throw std::invalid_argument(
+          "StaticSolver: a tie needs terms on nodes of the model (component 0 or 1, finite "
+          "coefficient) and a finite stiffness > 0");
+    }
+  }
   intact_.resize(static_cast<std::size_t>(disc.num_bonds()));
   factor_.resize(intact_.size());
   for (std::size_t b = 0; b < intact_.size(); ++b) {
@@ -81,6 +97,30 @@ std::array<std::pair<int, double>, 4> StaticSolver::bond_gradient(std::size_t b,
            {free_index_[i + 1], -s},
            {free_index_[j], c},
            {free_index_[j + 1], s}}};
+}
+
+std::vector<std::pair<int, double>> StaticSolver::tie_gradient(const Tie& tie) const {
+  std::vector<std::pair<int, double>> g;
+  g.reserve(tie.terms.size());
+  for (const TieTerm& term : tie.terms) {
+    g.emplace_back(free_index_[2 * static_cast<std::size_t>(term.node) +
+                               static_cast<std::size_t>(term.component)],
+                   term.coefficient);
+  }
+  return g;
+}
+
+void StaticSolver::append_ties(std::vector<Eigen::Triplet<double, int>>& entries) const {
+  for (const Tie& tie : ties_) {
+    const auto g = tie_gradient(tie);
+    for (const auto& [row, g_row] : g) {
+      for (const auto& [col, g_col] : g) {
+        if (row >= 0 && col >= 0 && row <= col) {
+          entries.emplace_back(row, col, tie.stiffness * g_row * g_col);
+        }
+      }
+    }
+  }
 }
 
 SparseCholesky::Column StaticSolver::dilatation_row(NodeIndex k) const {
@@ -173,6 +213,7 @@ void StaticSolver::assemble(const std::vector<double>& factors) {
             -w_scale_ * w_scale_ / model_.dilatation_stiffness[static_cast<std::size_t>(node)]);
       }
       append_ground(m);
+      append_ties(m);
       upper_.resize(num_unknowns_, num_unknowns_);
       upper_.setFromTriplets(m.begin(), m.end());
       upper_.makeCompressed();
@@ -188,8 +229,10 @@ void StaticSolver::assemble(const std::vector<double>& factors) {
   }
   // Ground springs on isolated nodes; every free DOF is in the diagonal's pattern (zeros elsewhere)
   // so the pattern does not change when a node becomes isolated.
+  // The ties' upper triangle goes in with them (k is full; its upper part is kept below).
   std::vector<Eigen::Triplet<double, int>> diag;
   append_ground(diag);
+  append_ties(diag);
   SparseMatrix ground(num_free_, num_free_);
   ground.setFromTriplets(diag.begin(), diag.end());
   k += ground;
@@ -206,6 +249,16 @@ std::vector<int> StaticSolver::dof_ordering() const {
   for (NodeIndex k = 0; k < nn; ++k) links.emplace_back(k, k, 1.0);
   for (BondIndex b = 0; b < disc_.num_bonds(); ++b) {
     if (!disc_.bond_precut[b]) links.emplace_back(disc_.bond_i[b], disc_.bond_j[b], 1.0);
+  }
+  for (const Tie& tie : ties_) {  // a tie couples every pair of its nodes
+    std::vector<NodeIndex> nodes;
+    for (const TieTerm& term : tie.terms) nodes.push_back(term.node);
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (std::size_t p = 0; p < nodes.size(); ++p) {
+      for (std::size_t q = p + 1; q < nodes.size(); ++q)
+        links.emplace_back(nodes[p], nodes[q], 1.0);
+    }
   }
   SparseMatrix incidence(nn, nn);
   incidence.setFromTriplets(links.begin(), links.end());
@@ -533,6 +586,16 @@ void StaticSolver::multiply(const std::vector<double>& factors, const double* x,
       if (f >= 0) y[f] += ground_stiffness_ * x[f];
     }
   }
+  for (const Tie& tie : ties_) {
+    const auto g = tie_gradient(tie);
+    double t = 0.0;
+    for (const auto& [f, v] : g) {
+      if (f >= 0) t += v * x[f];
+    }
+    for (const auto& [f, v] : g) {
+      if (f >= 0) y[f] += v * tie.stiffness * t;
+    }
+  }
 }
 
 namespace {
@@ -738,6 +801,18 @@ std::vector<double> StaticSolver::internal_force(const std::vector<double>& u) c
     f[2 * i + 1] -= magnitude * disc_.bond_sin[b];
     f[2 * j] += magnitude * disc_.bond_cos[b];
     f[2 * j + 1] += magnitude * disc_.bond_sin[b];
+  }
+  for (const Tie& tie : ties_) {  // K·u of the penalty: k·c_i·(gᵀu) on DOF i
+    double violation = 0.0;
+    for (const TieTerm& term : tie.terms) {
+      violation +=
+          term.coefficient *
+          u[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)];
+    }
+    for (const TieTerm& term : tie.terms) {
+      f[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)] +=
+          tie.stiffness * term.coefficient * violation;
+    }
   }
   return f;
 }

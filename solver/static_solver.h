@@ -35,6 +35,23 @@ struct LoadTerm {
   Point per_sin;
 };
 
+/// One displacement component of a node, with its coefficient in a Tie.
+struct TieTerm {
+  NodeIndex node = 0;
+  int component = 0;  ///< 0: x, 1: y
+  double coefficient = 0.0;
+};
+
+/// A linear constraint between displacements outside the peridynamic bond families, held by a
+/// stiff penalty: Σ c_i·u_i = 0 with energy ½·k·(Σ c_i·u_i)², which adds k·g·gᵀ to the stiffness
+/// (g: the coefficients over the DOFs) and acts on DOF i with the force −k·c_i·(gᵀu). A loading
+/// fixture that ties pins together (B2's rigid CTS fixture) is three of them. Ties never break
+/// and carry no fatigue.
+struct Tie {
+  std::vector<TieTerm> terms;
+  double stiffness = 0.0;  ///< k (N/m when the coefficients are dimensionless)
+};
+
 /// Which basis solution: the load pattern's constant part, its cos α part, its sin α part.
 enum Basis : int { basis_constant = 0, basis_cos = 1, basis_sin = 2 };
 
@@ -48,7 +65,7 @@ struct SolveTimings {
 class StaticSolver {
  public:
   StaticSolver(const Discretization& disc, const PdModel& model, std::vector<Support> supports,
-               std::vector<LoadTerm> loads);
+               std::vector<LoadTerm> loads, std::vector<Tie> ties = {});
 
   /// Assembles, factorizes and solves the three basis cases for the current bond state.
   FactorReport solve();
@@ -116,8 +133,8 @@ class StaticSolver {
   void stretch(double p, double alpha, std::vector<double>& s) const;
   /// External force vector of the basis case (full DOFs).
   [[nodiscard]] std::vector<double> basis_force(Basis b) const;
-  /// Internal force f = K·u over the intact bonds, computed bond by bond (not from the matrix):
-  /// the independent check of equilibrium.
+  /// Internal force f = K·u over the intact bonds and the ties, computed bond by bond (not from
+  /// the matrix): the independent check of equilibrium.
   [[nodiscard]] std::vector<double> internal_force(const std::vector<double>& u) const;
 
   [[nodiscard]] const SolveTimings& timings() const { return timings_; }
@@ -150,6 +167,11 @@ class StaticSolver {
   /// have index −1.
   [[nodiscard]] std::array<std::pair<int, double>, 4> bond_gradient(std::size_t b,
                                                                     double scale) const;
+  /// The tie's g over the free DOFs as (free index, coefficient) pairs; supported DOFs have index
+  /// −1, like bond_gradient.
+  [[nodiscard]] std::vector<std::pair<int, double>> tie_gradient(const Tie& tie) const;
+  /// k·g·gᵀ of every tie, upper triangle, as triplets over the free DOFs.
+  void append_ties(std::vector<Eigen::Triplet<double, int>>& entries) const;
   /// Row of B (θ_k = B_k·u) of node k over the free DOFs, for the current bond state.
   [[nodiscard]] SparseCholesky::Column dilatation_row(NodeIndex k) const;
   /// Nodes with no intact bond get a ground spring (they would make K singular).
@@ -168,6 +190,7 @@ class StaticSolver {
   const PdModel& model_;
   std::vector<Support> supports_;
   std::vector<LoadTerm> loads_;
+  std::vector<Tie> ties_;
   std::vector<std::uint8_t> intact_;
   std::vector<double> factor_;  ///< stiffness factor of each bond's pair term (0 when broken)
   std::vector<std::int32_t> free_index_;  ///< DOF -> free index, -1 when supported

@@ -35,7 +35,7 @@ KinkResult grow_and_measure(const Specimen& s, FatigueLaw law,
   settings.phase_switch_damage = phase_switch_damage > 0.0
                                      ? phase_switch_damage
                                      : phase_switch_damage_for_horizon(s.disc.horizon / s.disc.dx);
-  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings, s.ties);
   KinkResult result;
   result.alpha = alpha;
   result.phase_switch_damage = settings.phase_switch_damage;

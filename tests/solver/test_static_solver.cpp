@@ -184,6 +184,88 @@ TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   EXPECT_EQ(solver.factorizations(), 2);
 }
 
+TEST_P(SolverModels, TiesHoldTheirConstraintInEquilibriumAndUnderUpdates) {
+  // A tie u_y(top right) − u_y(bottom right) = 0 stops the plate's Poisson contraction at its
+  // loaded end. Checked: the constraint holds to (tie force)/k; bond-by-bond internal forces plus
+  // the tie's penalty force balance the applied load at every free DOF; breaking a band of bonds
+  // by rank updates equals refactorizing (the ties stay in the factor); bond-based: multiply()
+  // (the PCG path's matrix-free product) equals the assembled matrix.
+  auto plate =
+      testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
+  const NodeIndex top = plate.disc.nearest_node({0.01, 0.003});
+  const NodeIndex bottom = plate.disc.nearest_node({0.01, -0.003});
+  const double k = 200.0 * aluminium.youngs_modulus * plate.geometry.thickness;
+  const std::vector<Tie> ties = {{{{top, 1, 1.0}, {bottom, 1, -1.0}}, k}};
+  StaticSolver free_plate(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(free_plate.solve().ok());
+  StaticSolver tied(plate.disc, plate.model, plate.supports, plate.loads, ties);
+  tied.set_incremental(true);
+  ASSERT_TRUE(tied.solve().ok());
+  auto gap = [&](const std::vector<double>& u) {
+    return u[2 * static_cast<std::size_t>(top) + 1] - u[2 * static_cast<std::size_t>(bottom) + 1];
+  };
+  const double contraction = gap(free_plate.basis_displacement(basis_constant));
+  ASSERT_LT(contraction, 0.0);  // the free plate narrows
+  const auto& u = tied.basis_displacement(basis_constant);
+  EXPECT_LT(std::abs(gap(u)), 1e-3 * std::abs(contraction));
+  const auto f_int = tied.internal_force(u);
+  const auto f_ext = tied.basis_force(basis_constant);
+  for (std::size_t dof = 0; dof < u.size(); ++dof) {
+    if (tied.free_index()[dof] >= 0) {
+      EXPECT_NEAR(f_int[dof], f_ext[dof], 1e-9 * max_abs(f_ext)) << "dof " << dof;
+    }
+  }
+  // The tie's force k·gap is what it takes to stop the contraction: nonzero, opposite on the two.
+  const double tie_force = k * gap(u);
+  EXPECT_GT(std::abs(tie_force), 1e-3 * max_abs(f_ext));
+
+  std::vector<BondIndex> cut;
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    if (segments_cross(plate.disc.position[plate.disc.bond_i[b]],
+                       plate.disc.position[plate.disc.bond_j[b]], {0.005, -0.001},
+                       {0.005, 0.0015})) {
+      cut.push_back(b);
+    }
+  }
+  ASSERT_GT(cut.size(), 10u);
+  StaticSolver refactored(plate.disc, plate.model, plate.supports, plate.loads, ties);
+  ASSERT_TRUE(refactored.solve().ok());
+  ASSERT_TRUE(refactored.break_bonds(cut).ok());
+  ASSERT_TRUE(tied.break_bonds(cut).ok());
+  EXPECT_EQ(tied.factorizations(), 1);
+  const auto& u_updated = tied.basis_displacement(basis_constant);
+  const auto& u_refactored = refactored.basis_displacement(basis_constant);
+  for (std::size_t i = 0; i < u_updated.size(); ++i) {
+    EXPECT_NEAR(u_updated[i], u_refactored[i], 1e-9 * max_abs(u_refactored));
+  }
+  if (GetParam() == ModelKind::bond_based) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const auto n = static_cast<std::size_t>(refactored.num_unknowns());
+    std::vector<double> x(n), y(n);
+    for (auto& v : x) v = uni(rng);
+    refactored.multiply(refactored.bond_factors(), x.data(), y.data());
+    const Eigen::Map<const Eigen::VectorXd> xv(x.data(), static_cast<Eigen::Index>(n));
+    const Eigen::VectorXd assembled =
+        refactored.stiffness_upper().selfadjointView<Eigen::Upper>() * xv;
+    for (std::size_t i = 0; i < n; ++i) {
+      EXPECT_NEAR(y[i], assembled[static_cast<Eigen::Index>(i)],
+                  1e-9 * assembled.cwiseAbs().maxCoeff());
+    }
+  }
+}
+
+TEST(Ties, MalformedTiesAreRejected) {
+  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::bond_based), 0.01,
+                                           0.006, 0.0005, 1e6);
+  const NodeIndex outside = plate.disc.num_nodes();
+  for (const Tie& bad : {Tie{{}, 1.0}, Tie{{{0, 1, 1.0}}, 0.0}, Tie{{{outside, 0, 1.0}}, 1.0},
+                         Tie{{{0, 2, 1.0}}, 1.0}, Tie{{{0, 0, std::nan("")}}, 1.0}}) {
+    EXPECT_THROW(StaticSolver(plate.disc, plate.model, plate.supports, plate.loads, {bad}),
+                 std::invalid_argument);
+  }
+}
+
 TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
   // The simplicial LDLᵀ solve after modify() is peritwin's own (two elimination subtrees on two
   // threads): equal to CHOLMOD's solve to round-off, and bit-identical on one or two threads.
