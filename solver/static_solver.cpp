@@ -15,6 +15,16 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
+double tie_violation(const Tie& tie, const std::vector<double>& u) {
+  double violation = 0.0;
+  for (const TieTerm& term : tie.terms) {
+    violation +=
+        term.coefficient *
+        u[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)];
+  }
+  return violation;
+}
+
 StaticSolver::StaticSolver(const Discretization& disc, const PdModel& model,
                            std::vector<Support> supports, std::vector<LoadTerm> loads,
                            std::vector<Tie> ties)
@@ -803,12 +813,7 @@ std::vector<double> StaticSolver::internal_force(const std::vector<double>& u) c
     f[2 * j + 1] += magnitude * disc_.bond_sin[b];
   }
   for (const Tie& tie : ties_) {  // K·u of the penalty: k·c_i·(gᵀu) on DOF i
-    double violation = 0.0;
-    for (const TieTerm& term : tie.terms) {
-      violation +=
-          term.coefficient *
-          u[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)];
-    }
+    const double violation = tie_violation(tie, u);
     for (const TieTerm& term : tie.terms) {
       f[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)] +=
           tie.stiffness * term.coefficient * violation;

@@ -52,6 +52,10 @@ struct Tie {
   double stiffness = 0.0;  ///< k (N/m when the coefficients are dimensionless)
 };
 
+/// gᵀu of a tie for a full DOF vector u ([u0, v0, u1, v1, ...]): 0 when the constraint holds; the
+/// tie then acts on DOF i with the force −k·c_i·gᵀu.
+double tie_violation(const Tie& tie, const std::vector<double>& u);
+
 /// Which basis solution: the load pattern's constant part, its cos α part, its sin α part.
 enum Basis : int { basis_constant = 0, basis_cos = 1, basis_sin = 2 };
 

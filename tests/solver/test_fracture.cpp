@@ -223,19 +223,14 @@ TEST(CompactTensionShear, RigidFixturesGiveRichardsStressIntensity) {
   const auto fixture_solver = solved(fixture);
   const auto oracle_solver = solved(oracle);
   // Force each pin passes to the specimen: its applied load minus what the ties take, −k·c_i·(gᵀu)
-  // on each DOF i of the pin's nodes (the tie's penalty force, written out here, not the solver's).
+  // on each DOF i of the pin's nodes.
   for (const Basis basis : {basis_cos, basis_sin}) {
     const auto& u = fixture_solver->basis_displacement(basis);
     for (std::size_t h = 0; h < fixture.loads.size(); ++h) {
       const auto& nodes = fixture.loads[h].nodes;
       Point f = basis == basis_cos ? fixture.loads[h].per_cos : fixture.loads[h].per_sin;
       for (const Tie& tie : fixture.ties) {
-        double violation = 0.0;
-        for (const TieTerm& term : tie.terms) {
-          violation +=
-              term.coefficient *
-              u[2 * static_cast<std::size_t>(term.node) + static_cast<std::size_t>(term.component)];
-        }
+        const double violation = tie_violation(tie, u);
         for (const TieTerm& term : tie.terms) {
           if (std::find(nodes.begin(), nodes.end(), term.node) == nodes.end()) continue;
           (term.component == 0 ? f.x : f.y) -= tie.stiffness * term.coefficient * violation;
