@@ -40,6 +40,16 @@ Point perturbation_offset(const GridPerturbation& p, std::int32_t i, std::int32_
 
 }  // namespace
 
+Point Discretization::centroid(std::span<const NodeIndex> nodes) const {
+  Point sum{};
+  for (const NodeIndex k : nodes) {
+    sum.x += position[static_cast<std::size_t>(k)].x;
+    sum.y += position[static_cast<std::size_t>(k)].y;
+  }
+  const auto count = static_cast<double>(nodes.size());
+  return {sum.x / count, sum.y / count};
+}
+
 NodeIndex Discretization::nearest_node(Point p) const {
   NodeIndex best = -1;
   double best_d2 = std::numeric_limits<double>::infinity();

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -62,6 +63,8 @@ struct Discretization {
   [[nodiscard]] NodeIndex nearest_node(Point p) const;
   /// All nodes inside a region, in index order.
   [[nodiscard]] std::vector<NodeIndex> nodes_in(const Region& region) const;
+  /// Mean position of the given nodes (NaN for none): where a load spread equally over them acts.
+  [[nodiscard]] Point centroid(std::span<const NodeIndex> nodes) const;
 };
 
 /// Builds nodes on the grid (perturbed as asked) clipped to the geometry, families within δ

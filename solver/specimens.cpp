@@ -72,15 +72,7 @@ std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
   const Eigen::Index fixtures = n / 3;
   // Each pin's point: the centroid of the nodes its load is spread over (the resultant's point).
   std::vector<Point> centre;
-  for (const LoadTerm& load : s.loads) {
-    Point c{};
-    for (const NodeIndex k : load.nodes) {
-      c.x += s.disc.position[static_cast<std::size_t>(k)].x;
-      c.y += s.disc.position[static_cast<std::size_t>(k)].y;
-    }
-    const auto count = static_cast<double>(load.nodes.size());
-    centre.push_back({c.x / count, c.y / count});
-  }
+  for (const LoadTerm& load : s.loads) centre.push_back(s.disc.centroid(load.nodes));
   auto disc_mean = [&](const std::vector<double>& u, Eigen::Index h, int component) {
     double sum = 0.0;
     const auto& nodes = s.loads[static_cast<std::size_t>(h)].nodes;
@@ -164,11 +156,7 @@ std::vector<Tie> rigid_body_ties(const Discretization& disc,
   std::vector<Point> point;
   Point centroid{};
   for (const auto& nodes : pins) {
-    Point c{};
-    for (const NodeIndex node : nodes) {
-      c.x += disc.position[static_cast<std::size_t>(node)].x / static_cast<double>(nodes.size());
-      c.y += disc.position[static_cast<std::size_t>(node)].y / static_cast<double>(nodes.size());
-    }
+    const Point c = disc.centroid(nodes);
     point.push_back(c);
     centroid = {centroid.x + c.x / static_cast<double>(n),
                 centroid.y + c.y / static_cast<double>(n)};

@@ -198,12 +198,7 @@ TEST(CompactTensionShear, RigidFixturesGiveRichardsStressIntensity) {
   double moment_cos = 0.0, moment_sin = 0.0;
   for (std::size_t h = 0; h < 3; ++h) {
     const auto& load = oracle.loads[h];
-    Point centre{};
-    const auto count = static_cast<double>(load.nodes.size());
-    for (const NodeIndex k : load.nodes) {
-      centre.x += oracle.disc.position[static_cast<std::size_t>(k)].x / count;
-      centre.y += oracle.disc.position[static_cast<std::size_t>(k)].y / count;
-    }
+    const Point centre = oracle.disc.centroid(load.nodes);
     sum_cos = {sum_cos.x + load.per_cos.x, sum_cos.y + load.per_cos.y};
     sum_sin = {sum_sin.x + load.per_sin.x, sum_sin.y + load.per_sin.y};
     const Point arm{centre.x - spec.crack_length, centre.y};
