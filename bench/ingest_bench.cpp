@@ -139,9 +139,9 @@ int main(int argc, char** argv) {
     options.results = !no_results;
     options.record_latency = true;
     twin::Daemon daemon(lcm, config, options);
-    std::string error;
-    if (!lcm.good() || !daemon.start(&error)) {
-      std::cerr << "peritwin-bench-ingest: daemon: " << error << "\n";
+    const Status started = lcm.good() ? daemon.start() : Status{failure("LCM is not good")};
+    if (!started) {
+      std::cerr << "peritwin-bench-ingest: daemon: " << started.error().message() << "\n";
       failed = true;
       ready = true;
       return;

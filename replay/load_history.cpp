@@ -175,9 +175,9 @@ std::optional<ParseError> scan_blocks(const fs::path& file, std::int64_t* repeat
         }
         auto count = parse_count(f[3], kNames[3]);
         if (count.index() != 0) return std::get<1>(std::move(count));
-        if (!(v[0] > 0.0)) return cat({"p_max_N must be > 0, got '", f[0], "'"});
-        if (!(v[1] <= 1.0)) return cat({"r must be <= 1, got '", f[1], "'"});
-        blocks.push_back(LoadBlock{v[0], v[1], v[2], std::get<0>(count)});
+        const LoadBlock block{v[0], v[1], v[2], std::get<0>(count)};
+        if (const Status valid = check_load_block(block); !valid) return valid.error().reason;
+        blocks.push_back(block);
         return std::nullopt;
       });
 }
@@ -264,7 +264,7 @@ std::vector<LoadBlock> expand(const Spectrum& spectrum) {
   return out;
 }
 
-Result<LoadSeries> read_series_csv(const std::filesystem::path& file) {
+ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file) {
   const std::string_view headers[] = {kSeriesHeader, kSeriesAngleHeader};
   constexpr std::string_view kNames[] = {"time_s", "load_N", "angle_rad"};
   LoadSeries series;
@@ -293,19 +293,19 @@ Result<LoadSeries> read_series_csv(const std::filesystem::path& file) {
   return series;
 }
 
-Result<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file) {
+ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file) {
   std::vector<LoadBlock> blocks;
   if (auto error = scan_blocks(file, nullptr, blocks)) return std::move(*error);
   return blocks;
 }
 
-Result<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
+ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
   Spectrum spectrum;
   if (auto error = scan_blocks(file, &spectrum.repeat, spectrum.blocks)) return std::move(*error);
   return spectrum;
 }
 
-Result<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
+ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
   switch (format) {
     case HistoryFormat::series: {
       auto series = read_series_csv(file);

@@ -30,7 +30,8 @@
 //              the very first line (line 1) means the whole list is applied N times (N >= 1,
 //              default 1). "# repeat" anywhere else, or in a series/cycles file, is an error.
 // Row checks: every number finite; exactly as many fields as the header; cycles/spectrum rows also
-// p_max_N > 0, r <= 1 and count an integer >= 1 (digits only). A file without data rows is an
+// count an integer (digits only) and the block valid by check_load_block
+// (solver/core/load_block.h: p_max_N > 0, -10 <= r < 1, count >= 1). A file without data rows is an
 // error. A UTF-8 byte-order mark is skipped. Every error names file:line and the reason.
 #pragma once
 
@@ -40,21 +41,15 @@
 #include <span>
 #include <string>
 #include <utility>
-#include <variant>
 #include <vector>
 
 #include "replay/rainflow.h"
+#include "solver/core/expected.h"
+#include "solver/core/load_block.h"
 
 namespace peritwin::replay {
 
-/// `count` identical load cycles. SI: p_max in N, r = P_min / P_max, alpha (load angle) in rad.
-struct LoadBlock {
-  double p_max;
-  double r;
-  double alpha;
-  std::int64_t count;
-  friend bool operator==(const LoadBlock&, const LoadBlock&) = default;
-};
+using peritwin::LoadBlock;
 
 /// A reader's failure: file, 1-based line (0 = the file as a whole), reason.
 struct ParseError {
@@ -65,24 +60,9 @@ struct ParseError {
   [[nodiscard]] std::string message() const;
 };
 
-/// Either a value or a ParseError (a minimal std::expected stand-in).
+/// A reader's result: the value or where and why the file is wrong.
 template <typename T>
-class Result {
- public:
-  Result(T value) : data_(std::move(value)) {}           // NOLINT(google-explicit-constructor)
-  Result(ParseError error) : data_(std::move(error)) {}  // NOLINT(google-explicit-constructor)
-  [[nodiscard]] bool ok() const { return data_.index() == 0; }
-  explicit operator bool() const { return ok(); }
-  /// Throws std::bad_variant_access when !ok().
-  [[nodiscard]] const T& value() const& { return std::get<0>(data_); }
-  [[nodiscard]] T& value() & { return std::get<0>(data_); }
-  [[nodiscard]] T&& value() && { return std::get<0>(std::move(data_)); }
-  /// Throws std::bad_variant_access when ok().
-  [[nodiscard]] const ParseError& error() const { return std::get<1>(data_); }
-
- private:
-  std::variant<T, ParseError> data_;
-};
+using ReadResult = Expected<T, ParseError>;
 
 struct ConversionStats {
   std::size_t reversals = 0;
@@ -127,15 +107,15 @@ struct Spectrum {
 /// Throws std::length_error when the result would not fit in memory limits of std::vector.
 [[nodiscard]] std::vector<LoadBlock> expand(const Spectrum& spectrum);
 
-[[nodiscard]] Result<LoadSeries> read_series_csv(const std::filesystem::path& file);
-[[nodiscard]] Result<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file);
-[[nodiscard]] Result<Spectrum> read_spectrum_csv(const std::filesystem::path& file);
+[[nodiscard]] ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file);
+[[nodiscard]] ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file);
+[[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file);
 
 enum class HistoryFormat { series, cycles, spectrum };
 
 /// Reads `file` in `format` and returns its blocks (series: converted; spectrum: expanded). The
 /// stats are those of series_to_blocks for a series and zero otherwise.
-[[nodiscard]] Result<BlockConversion> read_blocks(const std::filesystem::path& file,
+[[nodiscard]] ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file,
                                                   HistoryFormat format);
 
 /// Splits `blocks` into consecutive batches of at most `max_blocks` blocks (the last may be

@@ -79,13 +79,14 @@ int main(int argc, char** argv) {
                    : format == "spectrum" ? replay::InputFormat::spectrum
                    : format == "lcm-log"  ? replay::InputFormat::lcm_log
                                           : replay::InputFormat::cycles;
-  const auto history_blocks = replay::read_history(history, fmt, detail->id);
-  if (!history_blocks.error.empty()) {
-    std::cerr << "peritwin-replay: " << history_blocks.error << "\n";
+  const auto read = replay::read_history(history, fmt, detail->id);
+  if (!read) {
+    std::cerr << "peritwin-replay: " << read.error().message() << "\n";
     return kExitUsage;
   }
-  if (const auto bad = replay::check_blocks(history_blocks.blocks); !bad.empty()) {
-    std::cerr << "peritwin-replay: " << history << ": history " << bad
+  const replay::HistoryBlocks& history_blocks = *read;
+  if (const Status valid = replay::check_blocks(history_blocks.blocks); !valid) {
+    std::cerr << "peritwin-replay: " << history << ": history " << valid.error().message()
               << " (the daemon would reject it)\n";
     return kExitUsage;
   }

@@ -16,9 +16,7 @@ double since(std::chrono::steady_clock::time_point t) {
 }
 }  // namespace
 
-peritwin::LoadBlock to_engine(const LoadBlock& b) { return {b.p_max, b.r, b.alpha, b.count}; }
-
-HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format,
+Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
                            const std::string& detail_id) {
   HistoryBlocks out;
   if (format != InputFormat::lcm_log) {
@@ -26,11 +24,8 @@ HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format
                             : format == InputFormat::cycles ? HistoryFormat::cycles
                                                             : HistoryFormat::spectrum;
     const auto read = read_blocks(file, f);
-    if (!read.ok()) {
-      out.error = read.error().message();
-      return out;
-    }
-    for (const auto& b : read.value().blocks) out.blocks.push_back(to_engine(b));
+    if (!read.ok()) return failure(read.error().message());
+    out.blocks = read.value().blocks;
     if (format == InputFormat::series) {
       const auto& s = read.value().stats;
       out.note = "rainflow: " + std::to_string(s.reversals) + " reversals, " +
@@ -43,10 +38,7 @@ HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format
   }
   try {
     lcm::LogFile log(file.string(), "r");
-    if (!log.good()) {
-      out.error = file.string() + ": cannot open as an LCM log";
-      return out;
-    }
+    if (!log.good()) return failure(file.string() + ": cannot open as an LCM log");
     const std::string channel = messages::channel(detail_id, messages::Kind::kLoad);
     std::set<std::pair<std::string, std::int64_t>> seen;
     std::int64_t skipped = 0, events = 0;
@@ -63,14 +55,14 @@ HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format
     }
     out.note = "LCM log: " + std::to_string(events) + " events on " + channel + ", " +
                std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
-    if (out.blocks.empty()) out.error = file.string() + ": no load blocks on " + channel;
-  } catch (const std::exception& e) {
-    out.error = file.string() + ": " + e.what();
+    if (out.blocks.empty()) return failure(file.string() + ": no load blocks on " + channel);
+  } catch (const std::exception& e) {  // the edge of LCM's log reader
+    return failure(file.string() + ": " + e.what());
   }
   return out;
 }
 
-std::vector<twin::Batch> make_twin_batches(const std::vector<peritwin::LoadBlock>& blocks,
+std::vector<twin::Batch> make_twin_batches(const std::vector<LoadBlock>& blocks,
                                            const std::string& detail_id,
                                            const std::string& source_id,
                                            const BatchingOptions& options) {
@@ -91,10 +83,11 @@ std::vector<twin::Batch> make_twin_batches(const std::vector<peritwin::LoadBlock
   return out;
 }
 
-std::string check_blocks(const std::vector<peritwin::LoadBlock>& blocks) {
+Status check_blocks(std::span<const LoadBlock> blocks) {
   for (std::size_t i = 0; i < blocks.size(); ++i) {
-    const auto o = twin::check_block(blocks[i], i);
-    if (!o.applied()) return o.what + ": " + o.why;
+    if (Status s = check_load_block(blocks[i]); !s) {
+      return s.error().within("blocks[" + std::to_string(i) + "].");
+    }
   }
   return {};
 }
@@ -211,10 +204,17 @@ InProcessResult run_in_process(
     const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
     const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state) {
   InProcessResult result;
-  auto model = twin::DetailModel::build(detail, &result.error);
-  if (!model) return result;
-  auto t = twin::Twin::create(model, {twin::LifeMode::synchronous, true}, &result.error);
-  if (!t) return result;
+  auto model = twin::DetailModel::build(detail);
+  if (!model) {
+    result.error = model.error().message();
+    return result;
+  }
+  auto created = twin::Twin::create(*model, {twin::LifeMode::synchronous, true});
+  if (!created) {
+    result.error = created.error().message();
+    return result;
+  }
+  auto t = std::move(*created);
   t->catch_up_life();
   auto state = twin::state_message(*t, twin::now_utime());
   if (on_state) on_state(state);

@@ -32,17 +32,13 @@ namespace peritwin::replay {
 
 enum class InputFormat { series, cycles, spectrum, lcm_log };
 
-/// replay::LoadBlock (history readers) -> the engine's LoadBlock.
-peritwin::LoadBlock to_engine(const LoadBlock& block);
-
 /// The blocks of a history file. lcm-log: the load_batch_t events on `detail_id`'s LOAD channel
 /// in log order, each (source, seq) once, undecodable events skipped. Errors as "file: reason".
 struct HistoryBlocks {
-  std::vector<peritwin::LoadBlock> blocks;
-  std::string error;
+  std::vector<LoadBlock> blocks;
   std::string note;  ///< e.g. rainflow statistics, for the log
 };
-HistoryBlocks read_history(const std::filesystem::path& file, InputFormat format,
+Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
                            const std::string& detail_id);
 
 struct BatchingOptions {
@@ -52,13 +48,14 @@ struct BatchingOptions {
   std::int64_t max_cycles = 1000;
 };
 
-std::vector<twin::Batch> make_twin_batches(const std::vector<peritwin::LoadBlock>& blocks,
+std::vector<twin::Batch> make_twin_batches(const std::vector<LoadBlock>& blocks,
                                            const std::string& detail_id,
                                            const std::string& source_id,
                                            const BatchingOptions& options);
 
-/// First invalid block as "blocks[i]...: why" (the daemon's own check), or "".
-std::string check_blocks(const std::vector<peritwin::LoadBlock>& blocks);
+/// Every block of a history by check_load_block (the daemon's own rule); the error names the first
+/// invalid one as "blocks[i].<field>". (The per-batch cycle cap is the batches' business.)
+Status check_blocks(std::span<const LoadBlock> blocks);
 
 struct ReplayOptions {
   bool lockstep = false;

@@ -24,16 +24,6 @@ bool same_rate_key(const LoadBlock& a, const LoadBlock& b, bool dose_mode) {
 
 }  // namespace
 
-std::string validate(const LoadBlock& block) {
-  if (!std::isfinite(block.p_max)) return "p_max is not finite";
-  if (!std::isfinite(block.r)) return "r is not finite";
-  if (!std::isfinite(block.alpha)) return "alpha is not finite";
-  if (block.count < 1) return "count must be >= 1";
-  if (!(block.p_max > 0)) return "p_max must be > 0 (the peak load of a tensile cycle)";
-  if (!(block.r < 1.0)) return "r must be < 1 (R = P_min/P_max)";
-  return {};
-}
-
 double critical_stretch(const Material& material, double horizon) {
   const double e = material.youngs_modulus;
   const double nu = material.poisson_ratio;
@@ -83,8 +73,9 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
           "FatigueEngine: the bilinear law (003) needs a bond-based model (its damage scales a "
           "bond's pair stiffness, 003 Eq. 45)");
     }
-    const std::string msg = fatigue::validate(settings_.bilinear);
-    if (!msg.empty()) throw std::invalid_argument("FatigueEngine: bilinear law: " + msg);
+    if (const Status valid = fatigue::validate(settings_.bilinear); !valid) {
+      throw std::invalid_argument("FatigueEngine: bilinear law: " + valid.error().reason);
+    }
     if (settings_.cycle_increment < 1) {
       throw std::invalid_argument("FatigueEngine: cycle_increment must be >= 1");
     }
@@ -99,14 +90,14 @@ FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
           "[1, 64]");
     }
     settings_.incremental = false;  // see the file comment
-    damage_.assign(nb, 0.0);
-    max_stretch_.assign(nb, 0.0);
+    state_.damage.assign(nb, 0.0);
+    state_.max_stretch.assign(nb, 0.0);
     solver_->set_preconditioned(!settings_.bilinear_refactor_every_iteration,
                                 settings_.bilinear_solve_tolerance,
                                 settings_.bilinear_reference_step);
   }
   solver_->set_incremental(settings_.incremental);
-  anchor_life_.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
+  state_.anchor_life.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
   rate_.assign(nb, 0.0);
   phase_.assign(nb, 1);
   breakable_.assign(nb, 0);
@@ -134,8 +125,8 @@ bool FatigueEngine::initialize() {
   const FactorReport r = solver_->solve();
   ++solves_;
   if (!r.ok()) {
-    failed_ = true;
-    failure_reason_ = r.message;
+    state_.failed = true;
+    state_.failure_reason = r.message;
     return false;
   }
   const auto& intact = solver_->intact();
@@ -155,26 +146,26 @@ std::int64_t FatigueEngine::broken_bonds() const {
 }
 
 double FatigueEngine::life(std::size_t b) const {
-  if (bilinear()) return 1.0 - damage_[b];
-  if (!dose_mode()) return anchor_life_[b];
-  return anchor_life_[b] - rate_[b] * dose_[phase_[b] - 1];
+  if (bilinear()) return 1.0 - state_.damage[b];
+  if (!dose_mode()) return state_.anchor_life[b];
+  return state_.anchor_life[b] - rate_[b] * state_.dose[phase_[b] - 1];
 }
 
 std::vector<double> FatigueEngine::remaining_life() const {
-  std::vector<double> lives(anchor_life_.size());
+  std::vector<double> lives(state_.anchor_life.size());
   for (std::size_t b = 0; b < lives.size(); ++b) lives[b] = life(b);
   return lives;
 }
 
 void FatigueEngine::materialize() {
   if (!dose_mode()) return;
-  if (dose_[0] == 0.0 && dose_[1] == 0.0) return;
-  for (std::size_t b = 0; b < anchor_life_.size(); ++b) anchor_life_[b] = life(b);
-  dose_[0] = dose_[1] = 0.0;
+  if (state_.dose[0] == 0.0 && state_.dose[1] == 0.0) return;
+  for (std::size_t b = 0; b < state_.anchor_life.size(); ++b) state_.anchor_life[b] = life(b);
+  state_.dose[0] = state_.dose[1] = 0.0;
 }
 
 void FatigueEngine::prepare_rates(const LoadBlock& block) {
-  if (rates_valid_ && same_rate_key(rate_key_, block, dose_mode())) return;
+  if (state_.rates_valid && same_rate_key(state_.rate_key, block, dose_mode())) return;
   materialize();
   compute_rates(block);
 }
@@ -248,11 +239,11 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
     for (std::size_t b = 0; b < rate_.size(); ++b) {
       if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
       double& t = dose_threshold_[phase_[b] - 1];
-      t = std::min(t, anchor_life_[b] / rate_[b]);
+      t = std::min(t, state_.anchor_life[b] / rate_[b]);
     }
   }
-  rates_valid_ = true;
-  rate_key_ = block;
+  state_.rates_valid = true;
+  state_.rate_key = block;
 }
 
 std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::int64_t limit) const {
@@ -261,7 +252,7 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::in
     std::int64_t best = none;
     for (std::size_t b = 0; b < rate_.size(); ++b) {
       if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
-      best = std::min(best, fatigue::cycles_to_failure(anchor_life_[b], rate_[b]));
+      best = std::min(best, fatigue::cycles_to_failure(state_.anchor_life[b], rate_[b]));
     }
     return best;
   }
@@ -271,14 +262,14 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::in
   // Exact predicate of the per-cycle path: bond b has failed after k cycles of this block.
   auto failed_after = [&](std::size_t b, std::int64_t k) {
     const int ph = phase_[b] - 1;
-    return anchor_life_[b] - rate_[b] * advance_sum(dose_[ph], increment[ph], k) <= 0.0;
+    return state_.anchor_life[b] - rate_[b] * advance_sum(state_.dose[ph], increment[ph], k) <= 0.0;
   };
   // O(1) absorption: if neither phase's dose reaches its smallest threshold within the block (with
   // a margin far above round-off), no bond can fail in it.
   bool may_break = false;
   for (int ph = 0; ph < 2; ++ph) {
     if (increment[ph] > 0.0 &&
-        advance_sum(dose_[ph], increment[ph], limit) >= dose_threshold_[ph] * (1 - 1e-9)) {
+        advance_sum(state_.dose[ph], increment[ph], limit) >= dose_threshold_[ph] * (1 - 1e-9)) {
       may_break = true;
     }
   }
@@ -291,7 +282,7 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::in
     if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
     const int ph = phase_[b] - 1;
     if (!(increment[ph] > 0.0)) continue;
-    const double k = (anchor_life_[b] / rate_[b] - dose_[ph]) / increment[ph];
+    const double k = (state_.anchor_life[b] / rate_[b] - state_.dose[ph]) / increment[ph];
     if (k > static_cast<double>(limit) * (1 + 1e-9) + 4) continue;
     estimates.emplace_back(k, b);
     min_estimate = std::min(min_estimate, k);
@@ -333,29 +324,29 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::in
 void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
   if (dose_mode()) {
     const auto& p = settings_.strain;
-    dose_[0] = advance_sum(dose_[0], fatigue::load_dose(block.p_max, block.r, p.m1), k);
-    dose_[1] = advance_sum(dose_[1], fatigue::load_dose(block.p_max, block.r, p.m2), k);
+    state_.dose[0] = advance_sum(state_.dose[0], fatigue::load_dose(block.p_max, block.r, p.m1), k);
+    state_.dose[1] = advance_sum(state_.dose[1], fatigue::load_dose(block.p_max, block.r, p.m2), k);
     return;
   }
   for (std::size_t b = 0; b < rate_.size(); ++b) {
-    if (rate_[b] > 0.0) anchor_life_[b] = fatigue::advance_life(anchor_life_[b], rate_[b], k);
+    if (rate_[b] > 0.0) state_.anchor_life[b] = fatigue::advance_life(state_.anchor_life[b], rate_[b], k);
   }
 }
 
 EngineStatus FatigueEngine::apply(const LoadBlock& block) {
   if (bilinear()) return apply_bilinear(block);
-  if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
+  if (state_.failed || !static_cascade(block)) return EngineStatus::final_failure;
   std::int64_t remaining = block.count;
   while (remaining > 0) {
     prepare_rates(block);
     const std::int64_t k = cycles_to_next_break(block, remaining);
     if (k > remaining) {
       advance(block, remaining);
-      total_cycles_ += remaining;
+      state_.total_cycles += remaining;
       break;
     }
     advance(block, k);
-    total_cycles_ += k;
+    state_.total_cycles += k;
     remaining -= k;
     if (!break_and_resolve(block)) return EngineStatus::final_failure;
   }
@@ -368,7 +359,7 @@ void FatigueEngine::set_propagation_limit(double eps_inf_prop) {
   }
   materialize();  // fold the dose while the lives are still read in the old mode (dose_mode())
   settings_.strain.eps_inf_prop = eps_inf_prop;
-  rates_valid_ = false;
+  state_.rates_valid = false;
 }
 
 EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
@@ -377,19 +368,19 @@ EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
     const std::vector<std::int64_t> ones(static_cast<std::size_t>(block.count), 1);
     return apply_increments(block, ones);
   }
-  if (failed_ || !static_cascade(block)) return EngineStatus::final_failure;
+  if (state_.failed || !static_cascade(block)) return EngineStatus::final_failure;
   const auto& p = settings_.strain;
   for (std::int64_t c = 0; c < block.count; ++c) {
     prepare_rates(block);
     if (dose_mode()) {
-      dose_[0] += fatigue::load_dose(block.p_max, block.r, p.m1);
-      dose_[1] += fatigue::load_dose(block.p_max, block.r, p.m2);
+      state_.dose[0] += fatigue::load_dose(block.p_max, block.r, p.m1);
+      state_.dose[1] += fatigue::load_dose(block.p_max, block.r, p.m2);
     } else {
       for (std::size_t b = 0; b < rate_.size(); ++b) {
-        if (rate_[b] > 0.0) anchor_life_[b] = fatigue::step_life(anchor_life_[b], rate_[b]);
+        if (rate_[b] > 0.0) state_.anchor_life[b] = fatigue::step_life(state_.anchor_life[b], rate_[b]);
       }
     }
-    ++total_cycles_;
+    ++state_.total_cycles;
     bool any = false;
     for (std::size_t b = 0; b < rate_.size() && !any; ++b) any = breakable_[b] && life(b) <= 0.0;
     if (any && !break_and_resolve(block)) return EngineStatus::final_failure;
@@ -406,33 +397,33 @@ bool same_bilinear_key(const LoadBlock& a, const LoadBlock& b) {
 }  // namespace
 
 EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block) {
-  if (failed_) return EngineStatus::final_failure;
+  if (state_.failed) return EngineStatus::final_failure;
   if (block.count < 1) return EngineStatus::ok;
-  if (pending_cycles_ > 0 && !same_bilinear_key(pending_key_, block)) {
-    const std::int64_t dn = pending_cycles_;
-    pending_cycles_ = 0;
-    if (!bilinear_increment(pending_key_, dn)) return EngineStatus::final_failure;
+  if (state_.pending_cycles > 0 && !same_bilinear_key(state_.pending_key, block)) {
+    const std::int64_t dn = state_.pending_cycles;
+    state_.pending_cycles = 0;
+    if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
   }
-  pending_key_ = block;
-  pending_key_.count = 0;
-  total_cycles_ += block.count;
-  pending_cycles_ += block.count;
+  state_.pending_key = block;
+  state_.pending_key.count = 0;
+  state_.total_cycles += block.count;
+  state_.pending_cycles += block.count;
   const std::int64_t dn = settings_.cycle_increment;
-  while (pending_cycles_ >= dn) {
-    pending_cycles_ -= dn;
-    if (!bilinear_increment(pending_key_, dn)) return EngineStatus::final_failure;
+  while (state_.pending_cycles >= dn) {
+    state_.pending_cycles -= dn;
+    if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
   }
   return EngineStatus::ok;
 }
 
 EngineStatus FatigueEngine::flush() {
-  if (!bilinear() || pending_cycles_ == 0) {
-    return failed_ ? EngineStatus::final_failure : EngineStatus::ok;
+  if (!bilinear() || state_.pending_cycles == 0) {
+    return state_.failed ? EngineStatus::final_failure : EngineStatus::ok;
   }
-  if (failed_) return EngineStatus::final_failure;
-  const std::int64_t dn = pending_cycles_;
-  pending_cycles_ = 0;
-  return bilinear_increment(pending_key_, dn) ? EngineStatus::ok : EngineStatus::final_failure;
+  if (state_.failed) return EngineStatus::final_failure;
+  const std::int64_t dn = state_.pending_cycles;
+  state_.pending_cycles = 0;
+  return bilinear_increment(state_.pending_key, dn) ? EngineStatus::ok : EngineStatus::final_failure;
 }
 
 EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
@@ -448,7 +439,7 @@ EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
   }
   if (flush() != EngineStatus::ok) return EngineStatus::final_failure;
   for (auto dn : increments) {
-    total_cycles_ += dn;
+    state_.total_cycles += dn;
     if (!bilinear_increment(block, dn)) return EngineStatus::final_failure;
   }
   return EngineStatus::ok;
@@ -456,14 +447,14 @@ EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
 
 bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
   const auto& p = settings_.bilinear;
-  const auto nb = damage_.size();
+  const auto nb = state_.damage.size();
   const auto delta_n = static_cast<double>(dn);
   // Events carry the cycle count at the end of the increment (pending cycles are not integrated).
-  const std::int64_t at_cycle = total_cycles_ - pending_cycles_;
+  const std::int64_t at_cycle = state_.total_cycles - state_.pending_cycles;
   std::vector<double> s_start, s, trial(nb);
   solver_->stretch(key.p_max, key.alpha, s_start);  // s_N: current factors, this load
   s = s_start;
-  std::vector<double> iterate = damage_;  // D' of the factors now in the solver
+  std::vector<double> iterate = state_.damage;  // D' of the factors now in the solver
   std::vector<BondIndex> changed_bonds;
   std::vector<double> changed_factors;
   bool converged = false;
@@ -474,10 +465,10 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
     for (std::size_t b = 0; b < nb; ++b) {
       if (!breakable_[b]) continue;
       // 003 Eq. (50): static increment along the envelope (Eq. 46) + fatigue (Eq. 29)
-      double d = damage_[b] +
-                 fatigue::bilinear_static_damage_increment(max_stretch_[b], s[b], p.s0, p.sc) +
+      double d = state_.damage[b] +
+                 fatigue::bilinear_static_damage_increment(state_.max_stretch[b], s[b], p.s0, p.sc) +
                  fatigue::third_law_fatigue_damage_increment(s_start[b], s[b], delta_n, p);
-      d = std::clamp(d, damage_[b], 1.0);
+      d = std::clamp(d, state_.damage[b], 1.0);
       // 003 Eq. (45): f = 1 − D below sc, 0 at or beyond sc or at D = 1 (broken)
       const double f = fatigue::bilinear_force_factor(s[b], d, p.sc);
       if (f == 0.0) d = 1.0;
@@ -514,16 +505,16 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
       const auto b = static_cast<std::size_t>(changed_bonds[n]);
       if (changed_factors[n] == 0.0) {
         breakable_[b] = 0;  // broken for good: the solver refuses to revive it
-        events_.push_back({at_cycle, changed_bonds[n],
+        state_.events.push_back({at_cycle, changed_bonds[n],
                            s[b] >= p.sc ? BreakCause::overload : BreakCause::fatigue});
       }
     }
     const FactorReport r = solver_->set_bond_factors(changed_bonds, changed_factors);
     ++solves_;
     if (!r.ok()) {
-      failed_ = true;
-      failure_reason_ = "final failure at cycle " + std::to_string(at_cycle) + ": " + r.message;
-      damage_ = iterate;
+      state_.failed = true;
+      state_.failure_reason = "final failure at cycle " + std::to_string(at_cycle) + ": " + r.message;
+      state_.damage = iterate;
       update_phases();
       return false;
     }
@@ -532,9 +523,9 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
   ++increments_;
   if (!converged) ++unconverged_increments_;
 
-  damage_ = iterate;
+  state_.damage = iterate;
   for (std::size_t b = 0; b < nb; ++b) {
-    if (solver_->intact()[b]) max_stretch_[b] = std::max(max_stretch_[b], s[b]);
+    if (solver_->intact()[b]) state_.max_stretch[b] = std::max(state_.max_stretch[b], s[b]);
   }
   update_phases();
   return true;
@@ -543,10 +534,10 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
 bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
   materialize();
   std::vector<BondIndex> newly;
-  for (std::size_t b = 0; b < anchor_life_.size(); ++b) {
-    if (breakable_[b] && anchor_life_[b] <= 0.0) {  // 000 Eq. (20)
+  for (std::size_t b = 0; b < state_.anchor_life.size(); ++b) {
+    if (breakable_[b] && state_.anchor_life[b] <= 0.0) {  // 000 Eq. (20)
       newly.push_back(static_cast<BondIndex>(b));
-      events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::fatigue});
+      state_.events.push_back({state_.total_cycles, static_cast<BondIndex>(b), BreakCause::fatigue});
     }
   }
   if (!newly.empty() && !resolve(newly)) return false;
@@ -584,7 +575,7 @@ bool FatigueEngine::static_cascade(const LoadBlock& block) {
       const bool breaks = energy ? p2 * g[b] >= limit : s[b] >= limit;
       if (breaks) {
         newly.push_back(static_cast<BondIndex>(b));
-        events_.push_back({total_cycles_, static_cast<BondIndex>(b), BreakCause::overload});
+        state_.events.push_back({state_.total_cycles, static_cast<BondIndex>(b), BreakCause::overload});
       }
     }
     if (newly.empty()) {
@@ -642,12 +633,12 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
   cascade_checked_ = false;
   FactorReport r = solver_->break_bonds(newly_broken);
   ++solves_;
-  resolve_groups_.push_back(static_cast<std::int64_t>(newly_broken.size()));
-  if (r.ok() && rebuild_due(resolve_groups_.size())) r = rebuild_solver(solver_->intact());
-  rates_valid_ = false;
+  state_.resolve_groups.push_back(static_cast<std::int64_t>(newly_broken.size()));
+  if (r.ok() && rebuild_due(state_.resolve_groups.size())) r = rebuild_solver(solver_->intact());
+  state_.rates_valid = false;
   if (!r.ok()) {
-    failed_ = true;
-    failure_reason_ = "final failure at cycle " + std::to_string(total_cycles_) + ": " + r.message;
+    state_.failed = true;
+    state_.failure_reason = "final failure at cycle " + std::to_string(state_.total_cycles) + ": " + r.message;
     return false;
   }
   update_phases();
@@ -678,36 +669,25 @@ void FatigueEngine::update_phases() {
 }
 
 EngineState FatigueEngine::export_state() const {
-  EngineState s;
-  s.anchor_life = anchor_life_;
+  EngineState s = state_;
   s.intact = solver_->intact();
-  s.dose[0] = dose_[0];
-  s.dose[1] = dose_[1];
-  s.rates_valid = rates_valid_;
-  s.rate_key = rate_key_;
-  s.total_cycles = total_cycles_;
-  s.events = events_;
-  s.resolve_groups = resolve_groups_;
-  s.failed = failed_;
-  s.failure_reason = failure_reason_;
-  s.damage = damage_;
-  s.max_stretch = max_stretch_;
-  s.pending_cycles = pending_cycles_;
-  s.pending_key = pending_key_;
+  // Bilinear law: the key of no pending cycles is never used; exported as {} so that states that
+  // differ only there export (and hash) equal.
+  if (s.pending_cycles == 0) s.pending_key = LoadBlock{};
   return s;
 }
 
 void FatigueEngine::restore_history(const EngineState& s) {
-  anchor_life_ = s.anchor_life;
-  total_cycles_ = s.total_cycles;
-  events_ = s.events;
-  resolve_groups_ = s.resolve_groups;
-  failed_ = s.failed;
-  failure_reason_ = s.failure_reason;
+  state_.anchor_life = s.anchor_life;
+  state_.total_cycles = s.total_cycles;
+  state_.events = s.events;
+  state_.resolve_groups = s.resolve_groups;
+  state_.failed = s.failed;
+  state_.failure_reason = s.failure_reason;
 }
 
 bool FatigueEngine::import_state(const EngineState& s) {
-  if (s.anchor_life.size() != anchor_life_.size() || s.intact.size() != anchor_life_.size()) {
+  if (s.anchor_life.size() != state_.anchor_life.size() || s.intact.size() != state_.anchor_life.size()) {
     return false;
   }
   if (bilinear()) return import_bilinear_state(s);
@@ -718,7 +698,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   std::vector<std::vector<BondIndex>> groups;
   std::int64_t grouped = 0;
   for (auto g : s.resolve_groups) grouped += g;
-  if (events_.empty() && !s.resolve_groups.empty() &&
+  if (state_.events.empty() && !s.resolve_groups.empty() &&
       grouped == static_cast<std::int64_t>(s.events.size())) {
     std::size_t e = 0;
     for (auto g : s.resolve_groups) {
@@ -750,7 +730,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
       rate_[static_cast<std::size_t>(b)] = 0.0;
     }
   }
-  if (first > 0 && !failed_) {
+  if (first > 0 && !state_.failed) {
     std::vector<std::uint8_t> intact = solver_->intact();
     for (std::size_t k = 0; k < first; ++k) {
       for (BondIndex b : groups[k]) intact[static_cast<std::size_t>(b)] = 0;
@@ -760,25 +740,25 @@ bool FatigueEngine::import_state(const EngineState& s) {
     if (!r.ok()) return false;
   }
   for (std::size_t k = first; k < groups.size(); ++k) {
-    if (!groups[k].empty() && !failed_) {
+    if (!groups[k].empty() && !state_.failed) {
       const FactorReport r = solver_->break_bonds(groups[k]);
       ++solves_;
       if (!r.ok()) return false;
     }
   }
-  if (solver_->intact() != s.intact && !failed_) return false;
+  if (solver_->intact() != s.intact && !state_.failed) return false;
   update_phases();
-  dose_[0] = s.dose[0];
-  dose_[1] = s.dose[1];
-  rates_valid_ = false;
-  if (s.rates_valid && !failed_) compute_rates(s.rate_key);
+  state_.dose[0] = s.dose[0];
+  state_.dose[1] = s.dose[1];
+  state_.rates_valid = false;
+  if (s.rates_valid && !state_.failed) compute_rates(s.rate_key);
   return true;
 }
 
 bool FatigueEngine::import_bilinear_state(const EngineState& s) {
-  const auto nb = damage_.size();
+  const auto nb = state_.damage.size();
   if (s.damage.size() != nb || s.max_stretch.size() != nb || s.pending_cycles < 0 ||
-      !events_.empty()) {
+      !state_.events.empty()) {
     return false;
   }
   // The factor of every bond, as bilinear_increment set it: a refactorization depends only on
@@ -800,38 +780,36 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
   }
   for (std::size_t b = 0; b < nb; ++b) breakable_[b] = breakable_[b] && s.intact[b] ? 1 : 0;
   restore_history(s);
-  damage_ = s.damage;
-  max_stretch_ = s.max_stretch;
-  pending_cycles_ = s.pending_cycles;
-  pending_key_ = s.pending_key;
+  state_.damage = s.damage;
+  state_.max_stretch = s.max_stretch;
+  state_.pending_cycles = s.pending_cycles;
+  state_.pending_key = s.pending_key;
   update_phases();
   return true;
 }
 
+void hash_field(Fnv1a64& h, double v) { h.real(v); }
+void hash_field(Fnv1a64& h, std::int64_t v) { h.integer(v); }
+void hash_field(Fnv1a64& h, bool v) { h.integer(v ? 1 : 0); }
+void hash_field(Fnv1a64& h, const std::string& v) { h.packed(v); }
+void hash_field(Fnv1a64& h, const std::vector<std::uint8_t>& v) { h.packed(v.data(), v.size()); }
+void hash_field(Fnv1a64& h, const LoadBlock& v) {
+  h.real(v.p_max);
+  h.real(v.r);
+  h.real(v.alpha);
+  h.integer(v.count);
+}
+void hash_field(Fnv1a64& h, const BreakEvent& v) {
+  h.integer(v.cycle);
+  h.integer(v.bond);
+  h.integer(static_cast<std::int64_t>(v.cause));
+}
+
 std::uint64_t FatigueEngine::state_hash() const {
-  std::uint64_t h = 1469598103934665603ULL;  // FNV-1a 64
-  auto mix = [&h](const void* data, std::size_t bytes) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < bytes; ++i) {
-      h ^= p[i];
-      h *= 1099511628211ULL;
-    }
-  };
-  const auto lives = remaining_life();
-  mix(lives.data(), lives.size() * sizeof(double));
-  mix(solver_->intact().data(), solver_->intact().size());
-  mix(phase_.data(), phase_.size());
-  mix(&total_cycles_, sizeof(total_cycles_));
-  if (bilinear()) {
-    mix(damage_.data(), damage_.size() * sizeof(double));
-    mix(max_stretch_.data(), max_stretch_.size() * sizeof(double));
-    mix(&pending_cycles_, sizeof(pending_cycles_));
-    if (pending_cycles_ > 0) {  // the key of no pending cycles does not matter
-      mix(&pending_key_.p_max, sizeof(double));
-      mix(&pending_key_.alpha, sizeof(double));
-    }
-  }
-  return h;
+  Fnv1a64 h;
+  const EngineState state = export_state();
+  for_each_field(state, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+  return h.get();
 }
 
 }  // namespace peritwin

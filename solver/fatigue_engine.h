@@ -54,23 +54,14 @@
 #include <string>
 #include <vector>
 
+#include "solver/core/fnv1a.h"
+#include "solver/core/load_block.h"
 #include "solver/discretization.h"
 #include "solver/fatigue_law.h"
 #include "solver/pd_model.h"
 #include "solver/static_solver.h"
 
 namespace peritwin {
-
-/// One block of identical load cycles: P_max (N), R = P_min/P_max, load angle α (rad), count.
-struct LoadBlock {
-  double p_max = 0.0;
-  double r = 0.0;
-  double alpha = 0.0;
-  std::int64_t count = 0;
-};
-
-/// Empty when the block can be applied, else the reason (non-finite numbers, count < 1, R ≥ 1).
-std::string validate(const LoadBlock& block);
 
 enum class FatigueLaw {
   strain_range,  ///< 000 Eq. (14)-(20)
@@ -170,12 +161,17 @@ struct BreakEvent {
 
 enum class EngineStatus { ok, final_failure };
 
-/// Everything needed to resume an engine bit-identically (checkpoints). The stiffness state is
-/// rebuilt from `intact` by one solve; rates are recomputed for the saved key without folding.
+/// Everything needed to resume an engine bit-identically (checkpoints), and what the engine keeps
+/// of its history: the engine holds one (FatigueEngine::state_) and works on it. The stiffness
+/// state is rebuilt from `intact` by one solve; rates are recomputed for the saved key without
+/// folding. for_each_field below is its field table: add a field there and the checkpoint keys
+/// and the state hash follow.
 struct EngineState {
-  std::vector<double> anchor_life;
+  std::vector<double> anchor_life;  ///< λ0 (dose mode) or λ (direct mode) per bond
+  /// Intact flag per bond. Filled by export_state from the solver, which owns the broken set
+  /// while the engine runs (the engine's own copy is not kept up to date).
   std::vector<std::uint8_t> intact;
-  double dose[2] = {0.0, 0.0};
+  double dose[2] = {0.0, 0.0};  ///< D for phase I and phase II (dose mode)
   bool rates_valid = false;
   LoadBlock rate_key;
   std::int64_t total_cycles = 0;
@@ -185,13 +181,51 @@ struct EngineState {
   std::vector<std::int64_t> resolve_groups;
   bool failed = false;
   std::string failure_reason;
-  /// Bilinear law only (empty otherwise): damage D per bond, largest equilibrium stretch per bond,
-  /// and the cycles collected at pending_key (P_max, α) but not yet integrated.
+  /// Bilinear law only (empty otherwise): damage D per bond (003 Eq. 13, 50), largest equilibrium
+  /// stretch per bond (the static envelope), and the cycles collected at pending_key (P_max, α)
+  /// but not yet integrated.
   std::vector<double> damage;
   std::vector<double> max_stretch;
   std::int64_t pending_cycles = 0;
   LoadBlock pending_key;
 };
+
+/// The field table of EngineState: every field once, with its checkpoint key, in hash order.
+/// `visit(key, field)` is called with the field's type (double, bool, int64, string, LoadBlock,
+/// and vectors of double, uint8, int64, BreakEvent); State is EngineState or const EngineState.
+template <class State, class Visit>
+void for_each_field(State& s, Visit&& visit) {
+  visit("anchor_life", s.anchor_life);
+  visit("intact", s.intact);
+  visit("dose0", s.dose[0]);
+  visit("dose1", s.dose[1]);
+  visit("rates_valid", s.rates_valid);
+  visit("rate_key", s.rate_key);
+  visit("total_cycles", s.total_cycles);
+  visit("event", s.events);
+  visit("resolve_groups", s.resolve_groups);
+  visit("failed", s.failed);
+  visit("failure_reason", s.failure_reason);
+  visit("damage", s.damage);
+  visit("max_stretch", s.max_stretch);
+  visit("pending_cycles", s.pending_cycles);
+  visit("pending_key", s.pending_key);
+}
+
+/// Adds a state field to a word-wise FNV-1a 64 hash (solver/core/fnv1a.h): numbers by their bits,
+/// strings and byte arrays packed, vectors with their length first.
+void hash_field(Fnv1a64& h, double v);
+void hash_field(Fnv1a64& h, std::int64_t v);
+void hash_field(Fnv1a64& h, bool v);
+void hash_field(Fnv1a64& h, const std::string& v);
+void hash_field(Fnv1a64& h, const LoadBlock& v);
+void hash_field(Fnv1a64& h, const BreakEvent& v);
+void hash_field(Fnv1a64& h, const std::vector<std::uint8_t>& v);
+template <class T>
+void hash_field(Fnv1a64& h, const std::vector<T>& v) {
+  h.integer(static_cast<std::int64_t>(v.size()));
+  for (const T& x : v) hash_field(h, x);
+}
 
 class FatigueEngine {
  public:
@@ -218,15 +252,15 @@ class FatigueEngine {
   /// a resumed engine must be given the same limit. std::invalid_argument unless finite, >= 0.
   void set_propagation_limit(double eps_inf_prop);
 
-  [[nodiscard]] std::int64_t total_cycles() const { return total_cycles_; }
-  [[nodiscard]] const std::vector<BreakEvent>& break_events() const { return events_; }
+  [[nodiscard]] std::int64_t total_cycles() const { return state_.total_cycles; }
+  [[nodiscard]] const std::vector<BreakEvent>& break_events() const { return state_.events; }
   [[nodiscard]] std::int64_t broken_bonds() const;
   /// λ of every bond now (1 = fresh, ≤ 0 = failed by fatigue).
   [[nodiscard]] std::vector<double> remaining_life() const;
   [[nodiscard]] const std::vector<std::uint8_t>& bond_phase() const { return phase_; }
   [[nodiscard]] const std::vector<double>& node_damage() const { return node_damage_; }
-  [[nodiscard]] bool failed() const { return failed_; }
-  [[nodiscard]] const std::string& failure_reason() const { return failure_reason_; }
+  [[nodiscard]] bool failed() const { return state_.failed; }
+  [[nodiscard]] const std::string& failure_reason() const { return state_.failure_reason; }
   [[nodiscard]] const StaticSolver& solver() const { return *solver_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
@@ -239,9 +273,9 @@ class FatigueEngine {
   [[nodiscard]] int rebuilds() const { return rebuilds_; }
   [[nodiscard]] double rebuild_seconds() const { return rebuild_s_; }
   /// Bilinear law: damage D per bond (empty otherwise), pending cycles, largest stretches.
-  [[nodiscard]] const std::vector<double>& damage() const { return damage_; }
-  [[nodiscard]] const std::vector<double>& max_stretch() const { return max_stretch_; }
-  [[nodiscard]] std::int64_t pending_cycles() const { return pending_cycles_; }
+  [[nodiscard]] const std::vector<double>& damage() const { return state_.damage; }
+  [[nodiscard]] const std::vector<double>& max_stretch() const { return state_.max_stretch; }
+  [[nodiscard]] std::int64_t pending_cycles() const { return state_.pending_cycles; }
   /// Bilinear law: increments integrated, and those that hit softening_max_iterations.
   [[nodiscard]] std::int64_t increments() const { return increments_; }
   [[nodiscard]] std::int64_t unconverged_increments() const { return unconverged_increments_; }
@@ -249,7 +283,7 @@ class FatigueEngine {
   [[nodiscard]] EngineState export_state() const;
   /// Restores a state exported from an engine built from the same model; false if it does not fit.
   bool import_state(const EngineState& state);
-  /// FNV-1a 64 over the bits of every number that defines the state (lives, doses, bonds, cycles).
+  /// Word-wise FNV-1a 64 over export_state(), field by field in for_each_field's order.
   [[nodiscard]] std::uint64_t state_hash() const;
 
  private:
@@ -300,16 +334,16 @@ class FatigueEngine {
   double critical_stretch_ = 0.0;
   double critical_bond_energy_ = 0.0;  ///< g_c, 000 Eq. (9), (12)
 
-  std::vector<double> anchor_life_;      ///< λ0 (dose mode) or λ (direct mode)
+  /// The history: lives, doses, rate key, cycles, break events, failure, bilinear damage
+  /// (EngineState; its `intact` is the solver's, see there).
+  EngineState state_;
+
   std::vector<double> rate_;             ///< F_b (dose mode) or d_b (direct mode)
   std::vector<std::uint8_t> phase_;      ///< 1 or 2 per bond
   std::vector<std::uint8_t> breakable_;  ///< intact and outside no-fail zones
   std::vector<double> node_damage_;
-  double dose_[2] = {0.0, 0.0};  ///< D for phase I and phase II (dose mode)
   /// min over breakable bonds of λ0/F per phase (dose mode): no bond can fail before D reaches it.
   double dose_threshold_[2] = {0.0, 0.0};
-  bool rates_valid_ = false;
-  LoadBlock rate_key_;
   std::vector<double> stretch_;  ///< stretch at the rate key's (P_max, α)
 
   /// The phase III scan found nothing at (cascade_p_max_, cascade_alpha_) since the last re-solve.
@@ -317,18 +351,9 @@ class FatigueEngine {
   double cascade_p_max_ = 0.0;
   double cascade_alpha_ = 0.0;
 
-  std::int64_t total_cycles_ = 0;
-  std::vector<BreakEvent> events_;
-  std::vector<std::int64_t> resolve_groups_;  ///< events per resolve() call (EngineState)
-  bool failed_ = false;
-  std::string failure_reason_;
   int solves_ = 0;
 
   // Bilinear law (003): see the file comment.
-  std::vector<double> damage_;       ///< D per bond, 003 Eq. (13), (50)
-  std::vector<double> max_stretch_;  ///< largest equilibrium stretch per bond (static envelope)
-  std::int64_t pending_cycles_ = 0;
-  LoadBlock pending_key_;
   std::int64_t increments_ = 0;
   std::int64_t unconverged_increments_ = 0;
 };

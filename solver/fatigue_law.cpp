@@ -226,7 +226,7 @@ StrainLawParams sae1020_strain_params() {
   return p;
 }
 
-std::string validate(const StrainLawParams& p) {
+Status validate(const StrainLawParams& p) {
   std::string msg;
   require(msg, positive(p.A1), "A1 must be finite and > 0 (000 Eq. 14a)");
   require(msg, positive(p.m1), "m1 must be finite and > 0 (000 Eq. 14a)");
@@ -234,7 +234,7 @@ std::string validate(const StrainLawParams& p) {
   require(msg, positive(p.A2), "A2 must be finite and > 0 (000 Eq. 14b)");
   require(msg, positive(p.m2), "m2 must be finite and > 0 (000 Eq. 14b)");
   require(msg, non_negative(p.eps_inf_prop), "eps_inf_prop must be finite and >= 0 (002 Eq. 12)");
-  return msg;
+  return msg.empty() ? Status{} : Status{failure(msg)};
 }
 
 double strain_range(double s_max_load, double s_min_load) {
@@ -404,13 +404,13 @@ double energy_bond_factor(double B, double n, double c1, double stretch_per_unit
 
 // ============================ law 3: bilinear bond with damage ==================================
 
-std::string validate(const BilinearParams& p) {
+Status validate(const BilinearParams& p) {
   std::string msg;
   require(msg, positive(p.s0), "s0 must be finite and > 0 (003 Eq. 43)");
   require(msg, std::isfinite(p.sc) && p.sc > p.s0, "sc must be finite and > s0 (003 Eq. 44)");
   require(msg, positive(p.A), "A must be finite and > 0 (003 Eq. 27)");
   require(msg, positive(p.m), "m must be finite and > 0 (003 Eq. 27)");
-  return msg;
+  return msg.empty() ? Status{} : Status{failure(msg)};
 }
 
 double bilinear_s0_plane_stress(double g0, double youngs_modulus, double horizon) {
@@ -513,7 +513,7 @@ double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const Bi
 
 // ============================ law 4: kinetic theory of fracture =================================
 
-std::string validate(const KineticParams& p) {
+Status validate(const KineticParams& p) {
   std::string msg;
   require(msg, positive(p.U), "U must be finite and > 0 (004 Eq. 14)");
   require(msg, positive(p.gamma), "gamma must be finite and > 0 (004 Eq. 14)");
@@ -521,7 +521,7 @@ std::string validate(const KineticParams& p) {
   require(msg, std::isfinite(p.n0) && p.n0 > 1.0, "n0 must be finite and > 1 (004 Eq. 12)");
   require(msg, positive(p.temperature), "temperature must be finite and > 0 K (004 Eq. 14)");
   require(msg, positive(p.frequency), "frequency must be finite and > 0 Hz (004 Eq. 15)");
-  return msg;
+  return msg.empty() ? Status{} : Status{failure(msg)};
 }
 
 double kt_thermal_energy(double temperature) { return kBoltzmann * temperature; }

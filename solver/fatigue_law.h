@@ -27,6 +27,8 @@
 // iterates).
 #pragma once
 
+#include "solver/core/expected.h"
+
 #include <cstdint>
 #include <limits>
 #include <span>
@@ -90,8 +92,8 @@ struct StrainLawParams {
 StrainLawParams al6061_t6_strain_params();
 /// B3: SAE 1020 steel (002 Table 2): A1 1.32e15, p1 9, ε∞ 1e-3, A2 7.76e6, p2 2.1, ε̃∞ 1e-4.
 StrainLawParams sae1020_strain_params();
-/// "" when valid, otherwise a message naming every bad field (A_i, m_i > 0, limits >= 0, finite).
-std::string validate(const StrainLawParams& p);
+/// OK, or a message naming every bad field (A_i, m_i > 0, limits >= 0, finite).
+Status validate(const StrainLawParams& p);
 
 /// 000 Eq. (15): ε = |s⁺ − s⁻| from the stretches at P_max and P_min (002 Eq. 6 likewise).
 double strain_range(double s_max_load, double s_min_load);
@@ -193,7 +195,7 @@ struct BilinearParams {
   double A = 0.0;
   double m = 4.0;  ///< third-law exponent, 003 Eq. (27); 4.0 in 003 Sec. 6.6-6.7
 };
-std::string validate(const BilinearParams& p);
+Status validate(const BilinearParams& p);
 
 /// 003 Eq. (43), plane stress: s0 = sqrt(4π G0 / (9 E δ)).
 double bilinear_s0_plane_stress(double g0, double youngs_modulus, double horizon);
@@ -253,7 +255,7 @@ struct KineticParams {
   double temperature = 293.0;  ///< T (K), 004 test temperature 20 °C
   double frequency = 0.56;     ///< f (Hz), 004 test frequency
 };
-std::string validate(const KineticParams& p);
+Status validate(const KineticParams& p);
 
 /// k T (J): the thermal energy of 004 Eq. (14)-(15).
 double kt_thermal_energy(double temperature);

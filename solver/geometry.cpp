@@ -51,27 +51,27 @@ Rectangle DetailGeometry::bounding_box() const {
   return box;
 }
 
-std::string DetailGeometry::validate() const {
-  if (outline.empty()) return "outline: at least one rectangle is required";
+Status DetailGeometry::validate() const {
+  if (outline.empty()) return failure("outline: at least one rectangle is required");
   for (std::size_t i = 0; i < outline.size(); ++i) {
     const auto& r = outline[i];
     if (!(r.x_max > r.x_min && r.y_max > r.y_min)) {
-      return "outline[" + std::to_string(i) + "]: x_max > x_min and y_max > y_min are required";
+      return failure("outline[" + std::to_string(i) + "]: x_max > x_min and y_max > y_min are required");
     }
   }
   const Rectangle box = bounding_box();
   for (std::size_t i = 0; i < holes.size(); ++i) {
     const auto& c = holes[i];
-    if (!(c.radius > 0)) return "holes[" + std::to_string(i) + "]: radius must be > 0";
+    if (!(c.radius > 0)) return failure("holes[" + std::to_string(i) + "]: radius must be > 0");
     const Rectangle hole_box{c.centre.x - c.radius, c.centre.y - c.radius, c.centre.x + c.radius,
                              c.centre.y + c.radius};
     if (hole_box.x_max < box.x_min || hole_box.x_min > box.x_max || hole_box.y_max < box.y_min ||
         hole_box.y_min > box.y_max) {
-      return "holes[" + std::to_string(i) + "]: the hole lies outside the body";
+      return failure("holes[" + std::to_string(i) + "]: the hole lies outside the body");
     }
   }
-  if (!(thickness > 0)) return "thickness must be > 0";
-  if (!(rigid_factor >= 1)) return "rigid_factor must be >= 1";
+  if (!(thickness > 0)) return failure("thickness must be > 0");
+  if (!(rigid_factor >= 1)) return failure("rigid_factor must be >= 1");
   return {};
 }
 

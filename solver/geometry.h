@@ -3,6 +3,8 @@
 // Units: SI (m) throughout.
 #pragma once
 
+#include "solver/core/expected.h"
+
 #include <string>
 #include <vector>
 
@@ -66,8 +68,8 @@ struct DetailGeometry {
 
   [[nodiscard]] bool is_material(Point p) const;
   [[nodiscard]] Rectangle bounding_box() const;
-  /// Empty when valid, else a message naming what is wrong.
-  [[nodiscard]] std::string validate() const;
+  /// OK, or a message naming what is wrong.
+  [[nodiscard]] Status validate() const;
 };
 
 }  // namespace peritwin

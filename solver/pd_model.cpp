@@ -19,17 +19,17 @@ double isotropic_energy_coefficient(double e, double nu, PlaneCondition plane) {
 
 }  // namespace
 
-std::string validate(const Material& material, const ModelOptions& options) {
-  if (!(material.youngs_modulus > 0)) return "material.youngs_modulus must be > 0";
+Status validate(const Material& material, const ModelOptions& options) {
+  if (!(material.youngs_modulus > 0)) return failure("material.youngs_modulus must be > 0");
   if (options.kind == ModelKind::state_based) {
     if (!(material.poisson_ratio > -1.0 && material.poisson_ratio < 0.5)) {
-      return "material.poisson_ratio must lie in (-1, 0.5)";
+      return failure("material.poisson_ratio must lie in (-1, 0.5)");
     }
     if (options.kernel != Kernel::constant) {
-      return "model.kernel: the state-based constants of 000 Eq. (4) assume the constant kernel";
+      return failure("model.kernel: the state-based constants of 000 Eq. (4) assume the constant kernel");
     }
   }
-  if (material.fracture_toughness < 0) return "material.fracture_toughness must be >= 0";
+  if (material.fracture_toughness < 0) return failure("material.fracture_toughness must be >= 0");
   return {};
 }
 

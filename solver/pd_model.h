@@ -5,6 +5,8 @@
 // which are per unit area of the plate, times the node's area Δx² (= V/h).
 #pragma once
 
+#include "solver/core/expected.h"
+
 #include <string>
 #include <vector>
 
@@ -35,8 +37,8 @@ struct ModelOptions {
   bool surface_correction = true;
 };
 
-/// Empty when valid, else a message naming the offending field.
-std::string validate(const Material& material, const ModelOptions& options);
+/// OK, or a message naming the offending field.
+Status validate(const Material& material, const ModelOptions& options);
 
 /// Poisson's ratio the model actually represents: bond-based 2D fixes ν = 1/3 in plane stress and
 /// ν = 1/4 in plane strain; state-based represents the material's ν.

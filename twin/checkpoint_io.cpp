@@ -12,6 +12,7 @@
 #include <system_error>
 #include <utility>
 
+#include "solver/core/fnv1a.h"
 #include "twin/h5_file.h"
 
 namespace peritwin {
@@ -21,49 +22,35 @@ namespace {
 constexpr const char* kFormat = "peritwin-checkpoint";
 constexpr std::int64_t kLayoutVersion = 1;
 
-// --- FNV-1a 64 -------------------------------------------------------------------------------
+// --- the checksum: byte-wise FNV-1a 64 (solver/core/fnv1a.h) over a canonical serialization ---
 
-class Fnv1a64 {
+class ChecksumWriter {
  public:
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    std::uint64_t h = hash_;
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= p[i];
-      h *= 1099511628211ULL;
-    }
-    hash_ = h;
-  }
   void u64(std::uint64_t v) {
     unsigned char le[8];
     for (int i = 0; i < 8; ++i) le[i] = static_cast<unsigned char>(v >> (8 * i));
-    bytes(le, 8);
+    h_.bytes(le, 8);
   }
   void name(std::string_view s) {
-    bytes(s.data(), s.size());
+    h_.bytes(s);
     const unsigned char nul = 0;
-    bytes(&nul, 1);
+    h_.bytes(&nul, 1);
   }
   template <class T>
   void array(const std::vector<T>& values) {
     u64(values.size());
     if constexpr (std::endian::native == std::endian::little || sizeof(T) == 1) {
-      bytes(values.data(), values.size() * sizeof(T));
+      h_.bytes(values.data(), values.size() * sizeof(T));
     } else {
       for (const T& v : values) u64(std::bit_cast<std::uint64_t>(v));
     }
   }
-  [[nodiscard]] std::uint64_t value() const { return hash_; }
+  void bytes(const void* data, std::size_t n) { h_.bytes(data, n); }
+  [[nodiscard]] std::uint64_t value() const { return h_.get(); }
 
  private:
-  std::uint64_t hash_ = 14695981039346656037ULL;
+  Fnv1a64 h_;
 };
-
-std::string hex64(std::uint64_t v) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
 
 void check_name(const std::string& name) {
   if (name.empty() || name == "." || name == ".." || name.find('/') != std::string::npos) {
@@ -151,7 +138,7 @@ CheckpointError::CheckpointError(const std::filesystem::path& path, const std::s
     : std::runtime_error("checkpoint '" + path.string() + "': " + reason), path_(path) {}
 
 std::uint64_t checkpoint_checksum(const CheckpointData& data) {
-  Fnv1a64 h;
+  ChecksumWriter h;
   h.u64(static_cast<std::uint64_t>(data.format_version));
   auto arrays = [&h](const char* section, const auto& map) {
     h.name(section);

@@ -76,6 +76,7 @@
 #include <string_view>
 #include <vector>
 
+#include "solver/core/load_block.h"
 #include "solver/discretization.h"
 #include "solver/fatigue_engine.h"
 #include "solver/fatigue_law.h"
@@ -130,24 +131,6 @@ struct SupportSpec {
   SourceRef where;
 };
 
-enum class FatigueLaw { strain_range, energy, bilinear, kinetic };
-
-struct FatigueConfig {
-  FatigueLaw law = FatigueLaw::strain_range;
-  /// φ0: the damage index switching a node's bonds to phase II and delimiting the crack.
-  double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
-  fatigue::StrainLawParams strain;  ///< strain_range and energy (000 Eq. 44-46 maps it)
-  fatigue::BilinearParams bilinear;
-  std::int64_t cycle_increment = 1000;  ///< bilinear: ΔN (FatigueSettings::cycle_increment)
-  double softening_tolerance = 1e-6;    ///< bilinear
-  int softening_max_iterations = 100;   ///< bilinear
-  fatigue::KineticParams kinetic;
-  /// Phase III criterion of the other laws (the bilinear law breaks bonds at sc).
-  StaticFailure static_failure = StaticFailure::critical_stretch;
-  /// strain_range, energy: FatigueSettings::compressed_bonds_fatigue (000 Eq. 15's |s⁺(1 − R)|).
-  bool compressed_bonds_fatigue = true;
-};
-
 struct OutputConfig {
   std::string directory;                  ///< default "results/<id>"
   std::int64_t field_every_batches = 10;  ///< damage-field snapshot period, 0 = never
@@ -157,20 +140,11 @@ struct OutputConfig {
 enum class LifeCriterion { crack_length, phase3, connectivity };
 enum class BandSource { none, a2_scatter };
 
-/// One block of a reference spectrum (fields as in messages/load_block_t.lcm).
-struct SpectrumBlock {
-  double p_max = 0.0;  ///< N
-  double r = 0.0;      ///< P_min / P_max
-  double alpha = 0.0;  ///< rad
-  std::int64_t count = 0;
-  friend bool operator==(const SpectrumBlock&, const SpectrumBlock&) = default;
-};
-
 struct LifeConfig {
   LifeCriterion criterion = LifeCriterion::phase3;
   double critical_crack_length = 0.0;  ///< m, crack_length only
   /// Empty = the rolling empirical spectrum of the received cycles ("empirical").
-  std::vector<SpectrumBlock> reference_spectrum;
+  std::vector<LoadBlock> reference_spectrum;  ///< each valid by check_load_block
   BandSource band = BandSource::none;
   double a2_relative_scatter = 0.0;  ///< a2_scatter only
   /// Deterministic mode: estimate at every state_seq that is a multiple of this (0 = never).
@@ -201,7 +175,9 @@ struct DetailConfig {
   double horizon_ratio = 3.015;  ///< δ/Δx
   Material material;
   ModelOptions model;
-  FatigueConfig fatigue;
+  /// [detail.fatigue]: the engine's own settings (law, parameters, φ0, phase III); the daemon
+  /// keeps the engine defaults for the keys the schema does not expose.
+  FatigueSettings fatigue;
   std::vector<LoadSpec> loads;
   std::vector<SupportSpec> supports;
   OutputConfig output;

@@ -64,7 +64,7 @@ void Daemon::fail(std::string why) {
   if (error_.empty()) error_ = std::move(why);
 }
 
-bool Daemon::start(std::string* error) {
+Status Daemon::start() {
   started_ = last_status_ = std::chrono::steady_clock::now();
   spdlog::info(
       "BLAS kernel: {} (states are bit-identical on the same kernel; "
@@ -74,14 +74,17 @@ bool Daemon::start(std::string* error) {
       options_.deterministic ? LifeMode::synchronous : LifeMode::external, true};
   for (const DetailConfig& config : config_.details) {
     auto d = std::make_unique<Detail>();
-    std::string why;
     const auto t0 = std::chrono::steady_clock::now();
-    auto model = DetailModel::build(config, &why);
-    if (model) d->twin = Twin::create(model, twin_options, &why);
-    if (!d->twin) {
-      *error = why;
-      return false;
+    auto built = DetailModel::build(config);
+    if (!built) {
+      return failure(built.error().message());
     }
+    const std::shared_ptr<const DetailModel> model = *built;
+    auto twin = Twin::create(model, twin_options);
+    if (!twin) {
+      return failure(twin.error().message());
+    }
+    d->twin = std::move(*twin);
     spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
                  model->disc().num_nodes(), model->disc().num_bonds(),
                  seconds(std::chrono::steady_clock::now() - t0));
@@ -91,9 +94,8 @@ bool Daemon::start(std::string* error) {
       auto found = newest_valid_checkpoint(d->state_dir, kCheckpointPrefix, &skipped);
       for (const auto& s : skipped) spdlog::warn("[{}] skipping checkpoint {}", config.id, s);
       if (found) {
-        if (!d->twin->restore(found->data, &why)) {
-          *error = found->file.path.string() + ": " + why;
-          return false;
+        if (const Status restored = d->twin->restore(found->data); !restored) {
+          return failure(found->file.path.string() + ": " + restored.error().message());
         }
         d->checkpoint_seq = d->twin->state_seq();
         spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", config.id,
@@ -130,8 +132,7 @@ bool Daemon::start(std::string* error) {
         },
         d.get());
     if (d->subscription == nullptr) {
-      *error = "cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad);
-      return false;
+      return failure("cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad));
     }
     d->subscription->setQueueCapacity(options_.queue_capacity);
     details_.push_back(std::move(d));
@@ -142,7 +143,7 @@ bool Daemon::start(std::string* error) {
     publish_fields(*d);
     publish_status(*d, "ok");
   }
-  return true;
+  return {};
 }
 
 void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {

@@ -53,9 +53,9 @@ class Daemon {
   Daemon& operator=(const Daemon&) = delete;
 
   /// Builds every detail's model and twin, resumes from checkpoints, opens results, subscribes,
-  /// publishes the initial states. False with `error` (config-like problems such as an
-  /// unsupported law are reported the same way; the caller decides the exit code).
-  bool start(std::string* error);
+  /// publishes the initial states; or why not (config-like problems such as an unsupported law
+  /// are reported the same way; the caller decides the exit code).
+  Status start();
   /// Handles LCM messages for up to `timeout_ms` and does the periodic chores (status, timed
   /// checkpoints, finished life estimates). Returns false after a runtime failure (see error()).
   bool poll(int timeout_ms);

@@ -1,5 +1,7 @@
 #include "twin/detail_model.h"
 
+#include "solver/core/fnv1a.h"
+
 #include <dlfcn.h>
 
 #include <algorithm>
@@ -12,28 +14,18 @@ namespace peritwin::twin {
 
 namespace {
 
-class Fnv {
- public:
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) {
-      h_ ^= p[i];
-      h_ *= 1099511628211ULL;
-    }
-  }
+/// The model signature's hash: byte-wise FNV-1a 64 over values and vectors (with their sizes).
+struct SignatureHash {
+  Fnv1a64 h;
   template <class T>
   void value(const T& v) {
-    bytes(&v, sizeof v);
+    h.bytes(&v, sizeof v);
   }
   template <class T>
   void vec(const std::vector<T>& v) {
     value(v.size());
-    if (!v.empty()) bytes(v.data(), v.size() * sizeof(T));
+    if (!v.empty()) h.bytes(v.data(), v.size() * sizeof(T));
   }
-  [[nodiscard]] std::uint64_t get() const { return h_; }
-
- private:
-  std::uint64_t h_ = 1469598103934665603ULL;
 };
 
 }  // namespace
@@ -51,44 +43,21 @@ void use_single_threaded_blas() {
   });
 }
 
-std::optional<FatigueSettings> solver_settings(const DetailConfig& detail, std::string* error) {
-  FatigueSettings s;
-  switch (detail.fatigue.law) {
-    case FatigueLaw::strain_range:
-      s.law = peritwin::FatigueLaw::strain_range;
-      break;
-    case FatigueLaw::energy:
-      s.law = peritwin::FatigueLaw::energy;
-      break;
-    case FatigueLaw::kinetic:
-      s.law = peritwin::FatigueLaw::kinetic;
-      break;
-    case FatigueLaw::bilinear:
-      s.law = peritwin::FatigueLaw::bilinear;
-      if (const std::string why = fatigue::validate(detail.fatigue.bilinear); !why.empty()) {
-        if (error != nullptr)
-          *error = detail.where.file + ": " + detail.where.path + ".fatigue: " + why;
-        return std::nullopt;
-      }
-      break;
+Expected<FatigueSettings> solver_settings(const DetailConfig& detail) {
+  FatigueSettings s = detail.fatigue;
+  if (s.law == FatigueLaw::bilinear) {
+    if (const Status valid = fatigue::validate(s.bilinear); !valid) {
+      return failure(detail.where.file + ": " + detail.where.path +
+                     ".fatigue: " + valid.error().reason);
+    }
   }
-  s.strain = detail.fatigue.strain;
-  s.kinetic = detail.fatigue.kinetic;
-  s.bilinear = detail.fatigue.bilinear;
-  s.cycle_increment = detail.fatigue.cycle_increment;
-  s.softening_tolerance = detail.fatigue.softening_tolerance;
-  s.softening_max_iterations = detail.fatigue.softening_max_iterations;
-  s.static_failure = detail.fatigue.static_failure;
-  s.phase_switch_damage = detail.fatigue.phase_switch_damage;
-  s.compressed_bonds_fatigue = detail.fatigue.compressed_bonds_fatigue;
   s.incremental = true;
   return s;
 }
 
-std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config,
-                                                      std::string* error) {
-  const auto settings = solver_settings(config, error);
-  if (!settings) return nullptr;
+Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConfig& config) {
+  const auto settings = solver_settings(config);
+  if (!settings) return settings.error();
   use_single_threaded_blas();
   std::shared_ptr<DetailModel> m(new DetailModel());
   m->config_ = config;
@@ -98,17 +67,12 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   sp.geometry = config.geometry;
   sp.material = config.material;
   sp.disc = discretize(config);
-  if (sp.disc.num_nodes() == 0) {
-    if (error != nullptr) *error = "detail " + config.id + ": the discretization has no nodes";
-    return nullptr;
-  }
+  if (sp.disc.num_nodes() == 0) return failure("detail " + config.id + ": the discretization has no nodes");
   const ResolvedBoundary boundary = resolve(config, sp.disc);
   if (!boundary.ok()) {
-    if (error != nullptr) {
-      error->clear();
-      for (const auto& e : boundary.errors) *error += e.message() + "\n";
-    }
-    return nullptr;
+    std::string reasons;
+    for (const auto& e : boundary.errors) reasons += e.message() + "\n";
+    return failure(reasons);
   }
   sp.supports = boundary.supports;
   sp.loads = boundary.loads;
@@ -118,7 +82,7 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   m->tracker_ = std::make_unique<CrackTracker>(sp.disc, config.geometry.notches, tracker_options);
   for (auto c : sp.disc.bond_precut) m->precut_bonds_ += c ? 1 : 0;
 
-  Fnv h;
+  SignatureHash h;
   const auto& d = sp.disc;
   h.value(d.dx);
   h.value(d.horizon);
@@ -157,10 +121,9 @@ std::shared_ptr<const DetailModel> DetailModel::build(const DetailConfig& config
   h.value(m->settings_.crack_interactions);
   h.value(m->settings_.refactor_every_resolves);
   h.value(config.material.fracture_toughness);
-  // Hashed only when off, so that checkpoints written before the option existed still resume.
-  if (!m->settings_.compressed_bonds_fatigue) h.value(m->settings_.compressed_bonds_fatigue);
-  m->signature_ = h.get();
-  return m;
+  h.value(m->settings_.compressed_bonds_fatigue);
+  m->signature_ = h.h.get();
+  return std::shared_ptr<const DetailModel>(std::move(m));
 }
 
 std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {

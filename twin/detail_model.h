@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/core/expected.h"
 #include "solver/crack_tracker.h"
 #include "solver/fatigue_engine.h"
 #include "solver/specimens.h"
@@ -18,11 +19,11 @@
 
 namespace peritwin::twin {
 
-/// The solver's settings for a detail's fatigue config, or nullopt with `error` set when the
-/// engine cannot run the configured law's parameters (fatigue::validate).
+/// The solver's settings for a detail's fatigue config, or why the engine cannot run the
+/// configured law's parameters (fatigue::validate).
 /// Re-solves are incremental (CHOLMOD rank updates); resume stays bit-identical because the
 /// engine replays its recorded re-solve groups on import (EngineState::resolve_groups).
-std::optional<FatigueSettings> solver_settings(const DetailConfig& detail, std::string* error);
+Expected<FatigueSettings> solver_settings(const DetailConfig& detail);
 
 /// Limits OpenBLAS (when it is the BLAS in use) to one thread, once per process. Called by
 /// DetailModel::build: the twin parallelizes over forward simulations instead, and one BLAS
@@ -31,8 +32,8 @@ void use_single_threaded_blas();
 
 class DetailModel {
  public:
-  /// Discretizes, binds supports and loads, builds the PD model. nullptr with `error` on failure.
-  static std::shared_ptr<const DetailModel> build(const DetailConfig& config, std::string* error);
+  /// Discretizes, binds supports and loads, builds the PD model; or why it cannot.
+  static Expected<std::shared_ptr<const DetailModel>> build(const DetailConfig& config);
 
   [[nodiscard]] const DetailConfig& config() const { return config_; }
   [[nodiscard]] const Discretization& disc() const { return specimen_.disc; }
@@ -41,7 +42,7 @@ class DetailModel {
   [[nodiscard]] const CrackTracker& tracker() const { return *tracker_; }
   /// Bonds cut by notches at construction (not counted as broken in the published state).
   [[nodiscard]] std::int64_t precut_bonds() const { return precut_bonds_; }
-  /// FNV-1a 64 over everything that defines the model's numbers (nodes, bonds, boundary,
+  /// Byte-wise FNV-1a 64 (solver/core/fnv1a.h) over everything that defines the model's numbers (nodes, bonds, boundary,
   /// material, model, fatigue settings): a checkpoint only resumes on an equal signature.
   [[nodiscard]] std::uint64_t signature() const { return signature_; }
 

@@ -95,9 +95,7 @@ std::vector<LoadBlock> reference_spectrum(const DetailModel& model,
                                           const RollingSpectrum& empirical) {
   const LifeConfig& life = model.config().life;
   if (life.empirical_spectrum()) return empirical.reference();
-  std::vector<LoadBlock> out;
-  for (const auto& b : life.reference_spectrum) out.push_back({b.p_max, b.r, b.alpha, b.count});
-  return out;
+  return life.reference_spectrum;
 }
 
 double simulate_life(const DetailModel& model, const EngineState& state,

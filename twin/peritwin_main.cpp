@@ -61,9 +61,9 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   for (const auto& detail : loaded.config->details) {
-    std::string why;
-    if (!peritwin::twin::solver_settings(detail, &why)) {  // e.g. bilinear parameters out of range
-      spdlog::error("config: {}", why);
+    // e.g. bilinear parameters out of range
+    if (const auto settings = peritwin::twin::solver_settings(detail); !settings) {
+      spdlog::error("config: {}", settings.error().message());
       return kExitUsage;
     }
   }
@@ -92,9 +92,8 @@ int main(int argc, char** argv) {
                  loaded.config->details.size(), config_file,
                  lcm_url.empty() ? "(LCM default)" : lcm_url, state_dir,
                  deterministic ? "deterministic" : "asynchronous-life");
-    std::string error;
-    if (!daemon.start(&error)) {
-      spdlog::critical("start-up failed: {}", error);
+    if (const peritwin::Status started = daemon.start(); !started) {
+      spdlog::critical("start-up failed: {}", started.error().message());
       return kExitRuntime;
     }
     spdlog::info("ready");

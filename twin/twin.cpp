@@ -1,19 +1,12 @@
 #include "twin/twin.h"
 
-#include <bit>
-#include <charconv>
-#include <cmath>
-#include <cstring>
+#include <string_view>
+
+#include "solver/core/fnv1a.h"
 
 namespace peritwin::twin {
 
 namespace {
-
-std::string number(double v) {
-  char buf[64];
-  const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
-  return ec == std::errc{} ? std::string(buf, end) : std::string("?");
-}
 
 Outcome invalid(std::string what, std::string why) {
   return {Verdict::invalid, std::move(what), std::move(why)};
@@ -27,34 +20,6 @@ bool printable_ascii(std::string_view s) {
 }
 
 }  // namespace
-
-std::string hex64(std::uint64_t value) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string out(16, '0');
-  for (int i = 15; i >= 0; --i) {
-    out[static_cast<std::size_t>(i)] = kDigits[value & 0xF];
-    value >>= 4;
-  }
-  return out;
-}
-
-Outcome check_block(const LoadBlock& b, std::size_t index) {
-  const std::string at = "blocks[" + std::to_string(index) + "].";
-  if (!std::isfinite(b.p_max))
-    return invalid(at + "p_max", "p_max = " + number(b.p_max) + " is not finite");
-  if (!(b.p_max > 0)) return invalid(at + "p_max", "p_max = " + number(b.p_max) + " must be > 0");
-  if (!std::isfinite(b.r)) return invalid(at + "r", "r = " + number(b.r) + " is not finite");
-  if (!(b.r < 1.0)) return invalid(at + "r", "r = " + number(b.r) + " must be < 1");
-  if (!(b.r >= kMinLoadRatio)) {
-    return invalid(at + "r", "r = " + number(b.r) + " must be >= " + number(kMinLoadRatio));
-  }
-  if (!std::isfinite(b.alpha))
-    return invalid(at + "alpha", "alpha = " + number(b.alpha) + " is not finite");
-  if (b.count < 1)
-    return invalid(at + "count", "count = " + std::to_string(b.count) + " must be >= 1");
-  if (!validate(b).empty()) return invalid(at + "block", validate(b));  // the engine's own check
-  return {};
-}
 
 Outcome check_batch(const Batch& batch, std::string_view detail_id) {
   if (batch.detail_id != detail_id) {
@@ -73,15 +38,9 @@ Outcome check_batch(const Batch& batch, std::string_view detail_id) {
     return invalid("num_blocks", "num_blocks = " + std::to_string(batch.blocks.size()) +
                                      " must be <= " + std::to_string(kMaxBlocksPerBatch));
   }
-  std::int64_t cycles = 0;
-  for (std::size_t i = 0; i < batch.blocks.size(); ++i) {
-    Outcome o = check_block(batch.blocks[i], i);
-    if (!o.applied()) return o;
-    cycles += std::min(batch.blocks[i].count, kMaxBatchCycles);
-    if (cycles > kMaxBatchCycles) {
-      return invalid("blocks[" + std::to_string(i) + "].count",
-                     "the batch's cycle count exceeds " + std::to_string(kMaxBatchCycles));
-    }
+  // The one rule for load blocks and their cycle total (solver/core/load_block.h).
+  if (const Status valid = check_load_blocks(batch.blocks); !valid) {
+    return invalid(valid.error().field, valid.error().reason);
   }
   return {};
 }
@@ -89,16 +48,13 @@ Outcome check_batch(const Batch& batch, std::string_view detail_id) {
 Twin::Twin(std::shared_ptr<const DetailModel> model, Options options)
     : model_(std::move(model)), options_(options) {}
 
-std::unique_ptr<Twin> Twin::create(std::shared_ptr<const DetailModel> model, Options options,
-                                   std::string* error) {
+Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailModel> model,
+                                             Options options) {
   std::unique_ptr<Twin> twin(new Twin(std::move(model), options));
   twin->engine_ = twin->model_->make_engine();
   if (!twin->engine_->initialize()) {
-    if (error != nullptr) {
-      *error = "detail " + twin->detail_id() +
-               ": the virgin model cannot be solved: " + twin->engine_->failure_reason();
-    }
-    return nullptr;
+    return peritwin::failure("detail " + twin->detail_id() +
+                   ": the virgin model cannot be solved: " + twin->engine_->failure_reason());
   }
   twin->refresh();
   return twin;
@@ -167,66 +123,34 @@ Outcome Twin::apply(const Batch& batch) {
 
 namespace {
 
-/// FNV-1a 64 over 64-bit words (one xor-multiply per word, not per byte): the state hash runs
-/// after every batch over every bond, byte-wise FNV cost a quarter of the ingest time.
-class WordHash {
- public:
-  void word(std::uint64_t w) {
-    h_ ^= w;
-    h_ *= 1099511628211ULL;
+void hash_field(Fnv1a64& h, const std::map<std::string, std::int64_t>& applied) {
+  h.integer(static_cast<std::int64_t>(applied.size()));
+  for (const auto& [source, seq] : applied) {
+    h.packed(source);
+    h.integer(seq);
   }
-  void real(double v) { word(std::bit_cast<std::uint64_t>(v)); }
-  void integer(std::int64_t v) { word(static_cast<std::uint64_t>(v)); }
-  /// Bytes packed little-endian 8 to a word, then the length.
-  void bytes(const std::uint8_t* p, std::size_t n) {
-    std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-      std::uint64_t w;
-      std::memcpy(&w, p + i, 8);
-      word(w);
-    }
-    std::uint64_t tail = 0;
-    for (std::size_t k = 0; i + k < n; ++k) tail |= std::uint64_t{p[i + k]} << (8 * k);
-    word(tail);
-    word(n);
-  }
-  void text(const std::string& s) {
-    bytes(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
-  }
-  void block(const LoadBlock& b) {
-    real(b.p_max);
-    real(b.r);
-    real(b.alpha);
-    integer(b.count);
-  }
-  [[nodiscard]] std::uint64_t get() const { return h_; }
-
- private:
-  std::uint64_t h_ = 1469598103934665603ULL;
-};
+}
+void hash_field(Fnv1a64& h, const std::optional<LoadBlock>& block) {
+  h.integer(block ? 1 : 0);
+  if (block) peritwin::hash_field(h, *block);
+}
+void hash_field(Fnv1a64& h, Failure failure) { h.integer(static_cast<std::int64_t>(failure)); }
+void hash_field(Fnv1a64& h, const RollingSpectrum& spectrum) {
+  h.integer(static_cast<std::int64_t>(spectrum.blocks().size()));
+  for (const auto& b : spectrum.blocks()) peritwin::hash_field(h, b);
+}
+using peritwin::hash_field;
 
 }  // namespace
 
 std::uint64_t Twin::state_hash() const {
-  // The model: every bond's remaining life (bits), intact flag and phase, the cycle count; then
-  // the bookkeeping. Equal hashes <=> bit-identical states (up to 64-bit collisions).
-  WordHash h;
-  for (const double life : engine_->remaining_life()) h.real(life);
-  const auto& intact = engine_->solver().intact();
-  h.bytes(intact.data(), intact.size());
-  const auto& phase = engine_->bond_phase();
-  h.bytes(phase.data(), phase.size());
-  h.integer(engine_->total_cycles());
-  h.integer(state_seq_);
-  for (const auto& [source, seq] : applied_) {
-    h.text(source);
-    h.integer(seq);
-  }
-  h.integer(static_cast<std::int64_t>(failure_));
-  h.integer(last_block_ ? 1 : 0);
-  if (last_block_) h.block(*last_block_);
-  h.integer(static_cast<std::int64_t>(spectrum_.blocks().size()));
-  for (const auto& b : spectrum_.blocks()) h.block(b);
+  // Equal hashes <=> bit-identical states (up to 64-bit collisions).
+  Fnv1a64 h;
+  for_each_own_field(*this, [&h](std::string_view, const auto& field, Hashed hashed) {
+    if (hashed == Hashed::yes) hash_field(h, field);
+  });
+  const EngineState engine = engine_->export_state();
+  for_each_field(engine, [&h](std::string_view, const auto& field) { hash_field(h, field); });
   return h.get();
 }
 

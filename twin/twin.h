@@ -61,14 +61,11 @@ struct Outcome {
   [[nodiscard]] bool applied() const { return verdict == Verdict::applied; }
 };
 
-// Accepted domain of a batch (reject_t INVALID outside it).
+// Accepted domain of a batch (reject_t INVALID outside it); each block and the batch's cycle total
+// by check_load_blocks (solver/core/load_block.h: kMinLoadRatio, kMaxBatchCycles).
 inline constexpr std::size_t kMaxBlocksPerBatch = 100'000;
 inline constexpr std::size_t kMaxSourceIdLength = 64;
-inline constexpr double kMinLoadRatio = -10.0;                          ///< R >= -10 (and R < 1)
-inline constexpr std::int64_t kMaxBatchCycles = std::int64_t{1} << 50;  ///< Σ count per batch
 
-/// Checks one block; `what` is prefixed with "blocks[<index>].".
-Outcome check_block(const LoadBlock& block, std::size_t index);
 /// Everything about a batch that needs no bookkeeping: WRONG_DETAIL or INVALID, else applied.
 Outcome check_batch(const Batch& batch, std::string_view detail_id);
 
@@ -99,9 +96,9 @@ class Twin {
     bool parallel_band = true;  ///< the three band simulations on three threads
   };
 
-  /// Builds the engine on `model` and solves the virgin state. nullptr with `error` on failure.
-  static std::unique_ptr<Twin> create(std::shared_ptr<const DetailModel> model, Options options,
-                                      std::string* error);
+  /// Builds the engine on `model` and solves the virgin state; or why it cannot.
+  static Expected<std::unique_ptr<Twin>> create(std::shared_ptr<const DetailModel> model,
+                                                Options options);
 
   Outcome apply(const Batch& batch);
 
@@ -126,9 +123,10 @@ class Twin {
   [[nodiscard]] const TwinCounters& counters() const { return counters_; }
   /// Broken bonds since the virgin state (notch-cut bonds not counted).
   [[nodiscard]] std::int64_t broken_bonds() const;
-  /// FNV-1a 64 over 64-bit words of every bond's remaining life, intact flag and phase, the
-  /// cycle count, state_seq, the applied seq per source, the failure code, the last block and
-  /// the rolling spectrum (twin.cpp). Not over the life estimate.
+  /// Word-wise FNV-1a 64 (solver/core/fnv1a.h) over the twin's hashed fields (for_each_field:
+  /// state_seq, the applied seq per source, the last batch, the last block, the failure code, the
+  /// rolling spectrum) and then the engine's state (EngineState's field table: lives, doses,
+  /// intact bonds, cycles, break events, bilinear damage). Not over the life estimate.
   [[nodiscard]] std::uint64_t state_hash() const;
   [[nodiscard]] std::string state_hash_hex() const;
 
@@ -144,11 +142,35 @@ class Twin {
   void catch_up_life();
 
   /// Checkpoints -------------------------------------------------------------------------------
-  static constexpr std::int64_t kCheckpointFormat = 2;  ///< 2: bilinear law state
+  /// 2: bilinear law state. 3: keys from the field tables (Twin::for_each_own_field,
+  /// peritwin::for_each_field of EngineState) and the real FNV-1a 64 offset basis in every hash
+  /// (the model signature changed with it). An older checkpoint is refused with both versions.
+  static constexpr std::int64_t kCheckpointFormat = 3;
   [[nodiscard]] CheckpointData to_checkpoint() const;
-  /// Restores a checkpoint of the same model (signature checked). On failure (`error` set) the
-  /// twin must be discarded.
-  bool restore(const CheckpointData& data, std::string* error);
+  /// Restores a checkpoint of the same model (signature checked). On failure the twin must be
+  /// discarded.
+  Status restore(const CheckpointData& data);
+
+  /// Whether a field of the twin's table enters state_hash().
+  enum class Hashed : bool { no = false, yes = true };
+  /// The field table of the twin's own state (the engine's is EngineState's): every field once,
+  /// with its checkpoint key. `visit(key, field, hashed)`; Self is Twin or const Twin.
+  template <class Self, class Visit>
+  static void for_each_own_field(Self& self, Visit&& visit) {
+    visit("state_seq", self.state_seq_, Hashed::yes);
+    visit("source", self.applied_, Hashed::yes);
+    visit("last_source", self.last_source_, Hashed::yes);
+    visit("last_seq", self.last_seq_, Hashed::yes);
+    visit("last_block", self.last_block_, Hashed::yes);
+    visit("failure", self.failure_, Hashed::yes);
+    visit("spectrum", self.spectrum_, Hashed::yes);
+    visit("life_central", self.life_.central, Hashed::no);
+    visit("life_low", self.life_.low, Hashed::no);
+    visit("life_high", self.life_.high, Hashed::no);
+    visit("life_state_seq", self.life_.state_seq, Hashed::no);
+    visit("life_seq", self.life_.seq, Hashed::no);
+    visit("life_source", self.life_.source, Hashed::no);
+  }
 
  private:
   Twin(std::shared_ptr<const DetailModel> model, Options options);
@@ -168,8 +190,5 @@ class Twin {
   RollingSpectrum spectrum_;
   TwinCounters counters_;
 };
-
-/// 16 lower-case hex digits.
-std::string hex64(std::uint64_t value);
 
 }  // namespace peritwin::twin

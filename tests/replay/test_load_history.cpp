@@ -381,8 +381,11 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
       {HistoryFormat::cycles, blocks + "1,0,0,-3\n", 2, "'count' must be an integer >= 1"},
       {HistoryFormat::cycles, blocks + "1,0,0,99999999999999999999\n", 2, "out of range"},
       {HistoryFormat::cycles, blocks + "1,0,nan,1\n", 2, "non-finite value 'nan' in 'angle_rad'"},
-      {HistoryFormat::cycles, blocks + "0,0,0,1\n", 2, "p_max_N must be > 0"},
-      {HistoryFormat::cycles, blocks + "1,1.5,0,1\n", 2, "r must be <= 1"},
+      // The rows follow check_load_block, the daemon's own rule (R = 1 is no cycle, R >= -10).
+      {HistoryFormat::cycles, blocks + "0,0,0,1\n", 2, "p_max = 0 must be > 0"},
+      {HistoryFormat::cycles, blocks + "1,1.5,0,1\n", 2, "r = 1.5 must be < 1"},
+      {HistoryFormat::cycles, blocks + "1,1,0,1\n", 2, "r = 1 must be < 1"},
+      {HistoryFormat::cycles, blocks + "1,-11,0,1\n", 2, "r = -11 must be >= -10"},
       {HistoryFormat::cycles, blocks + "1,0,0\n", 2, "expected 4 fields, got 3"},
       {HistoryFormat::spectrum, blocks + "# repeat 2\n1,0,0,1\n", 2, "must be the first line"},
       {HistoryFormat::spectrum, "# repeat 0\n" + blocks + "1,0,0,1\n", 1, "'repeat' must be"},

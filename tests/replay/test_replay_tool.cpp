@@ -30,28 +30,35 @@ TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
 }
 
 TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
-  EXPECT_EQ(check_blocks({{4000, 0.1, 0, 1}}), "");
-  const std::string bad = check_blocks({{4000, 0.1, 0, 1}, {4000, 1.0, 0, 1}});
-  EXPECT_EQ(bad.rfind("blocks[1].r: ", 0), 0u) << bad;
+  const std::vector<LoadBlock> good{{4000, 0.1, 0, 1}};
+  EXPECT_TRUE(check_blocks(good).ok());
+  const std::vector<LoadBlock> blocks{{4000, 0.1, 0, 1}, {4000, 1.0, 0, 1}};
+  const Status bad = check_blocks(blocks);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.error().field, "blocks[1].r") << bad.error().message();
 }
 
 TEST(ReplayHistory, ExampleFilesInEveryFormat) {
   const fs::path examples = PERITWIN_EXAMPLES_DIR;
-  const auto cycles = read_history(examples / "b1-cycles.csv", InputFormat::cycles, "b1-ct");
-  ASSERT_TRUE(cycles.error.empty()) << cycles.error;
+  const auto cycles_read = read_history(examples / "b1-cycles.csv", InputFormat::cycles, "b1-ct");
+  ASSERT_TRUE(cycles_read.ok()) << cycles_read.error().message();
+  const HistoryBlocks& cycles = *cycles_read;
   EXPECT_EQ(cycles.blocks.size(), 64u);
-  const auto spectrum = read_history(examples / "b1-spectrum.csv", InputFormat::spectrum, "b1-ct");
-  ASSERT_TRUE(spectrum.error.empty()) << spectrum.error;
+  const auto spectrum_read =
+      read_history(examples / "b1-spectrum.csv", InputFormat::spectrum, "b1-ct");
+  ASSERT_TRUE(spectrum_read.ok()) << spectrum_read.error().message();
+  const HistoryBlocks& spectrum = *spectrum_read;
   std::int64_t total = 0;
   for (const auto& b : spectrum.blocks) total += b.count;
   EXPECT_EQ(total, 60000);
-  const auto series = read_history(examples / "b1-series.csv", InputFormat::series, "b1-ct");
-  ASSERT_TRUE(series.error.empty()) << series.error;
+  const auto series_read = read_history(examples / "b1-series.csv", InputFormat::series, "b1-ct");
+  ASSERT_TRUE(series_read.ok()) << series_read.error().message();
+  const HistoryBlocks& series = *series_read;
   EXPECT_GT(series.blocks.size(), 10u);
   EXPECT_NE(series.note.find("rainflow"), std::string::npos);
-  for (const auto* h : {&cycles, &spectrum, &series}) EXPECT_EQ(check_blocks(h->blocks), "");
+  for (const auto* h : {&cycles, &spectrum, &series}) EXPECT_TRUE(check_blocks(h->blocks).ok());
   const auto missing = read_history(examples / "none.csv", InputFormat::cycles, "b1-ct");
-  EXPECT_FALSE(missing.error.empty());
+  EXPECT_FALSE(missing.ok());
 }
 
 TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
@@ -83,14 +90,15 @@ TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
     write("OTHER", batch("b1-ct", 9, 9000));  // another channel
     write(load, batch("b1-ct", 3, 3000));
   }
-  const auto h = read_history(path, InputFormat::lcm_log, "b1-ct");
-  ASSERT_TRUE(h.error.empty()) << h.error;
+  const auto read = read_history(path, InputFormat::lcm_log, "b1-ct");
+  ASSERT_TRUE(read.ok()) << read.error().message();
+  const HistoryBlocks& h = *read;
   ASSERT_EQ(h.blocks.size(), 3u);
   EXPECT_EQ(h.blocks[0].p_max, 1000);
   EXPECT_EQ(h.blocks[1].p_max, 2000);
   EXPECT_EQ(h.blocks[2].p_max, 3000);
   EXPECT_NE(h.note.find("2 skipped"), std::string::npos) << h.note;
-  EXPECT_FALSE(read_history(path, InputFormat::lcm_log, "b2-cts").blocks.empty());
+  EXPECT_FALSE(read_history(path, InputFormat::lcm_log, "b2-cts")->blocks.empty());
   fs::remove(path);
 }
 

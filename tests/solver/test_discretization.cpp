@@ -124,12 +124,12 @@ TEST(Discretization, PreCrackCutsExactlyTheCrossingBonds) {
 
 TEST(Geometry, ValidationNamesTheProblem) {
   DetailGeometry g;
-  EXPECT_NE(g.validate().find("outline"), std::string::npos);
+  EXPECT_NE(message_of(g.validate()).find("outline"), std::string::npos);
   g.outline = {{0.0, 0.0, 1.0, 1.0}};
   g.holes = {{{5.0, 5.0}, 0.1}};
-  EXPECT_NE(g.validate().find("outside"), std::string::npos);
+  EXPECT_NE(message_of(g.validate()).find("outside"), std::string::npos);
   g.holes = {{{0.5, 0.5}, 0.1}};
-  EXPECT_EQ(g.validate(), "");
+  EXPECT_EQ(message_of(g.validate()), "");
 }
 
 }  // namespace

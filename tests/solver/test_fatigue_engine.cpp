@@ -279,11 +279,19 @@ TEST(PropagationLimit, SetBetweenBlocksFreezesPhaseTwoAndMatchesPerCycle) {
 }
 
 TEST(LoadBlockValidation, RejectsWhatCannotBeApplied) {
-  EXPECT_EQ(validate(LoadBlock{1000, 0.1, 0, 1}), "");
-  EXPECT_NE(validate(LoadBlock{std::nan(""), 0.1, 0, 1}), "");
-  EXPECT_NE(validate(LoadBlock{1000, 1.0, 0, 1}), "");
-  EXPECT_NE(validate(LoadBlock{1000, 0.1, 0, 0}), "");
-  EXPECT_NE(validate(LoadBlock{-5, 0.1, 0, 1}), "");
+  EXPECT_TRUE(check_load_block(LoadBlock{1000, 0.1, 0, 1}).ok());
+  EXPECT_EQ(check_load_block(LoadBlock{std::nan(""), 0.1, 0, 1}).error().field, "p_max");
+  EXPECT_EQ(check_load_block(LoadBlock{1000, 1.0, 0, 1}).error().field, "r");
+  EXPECT_EQ(check_load_block(LoadBlock{1000, -10.5, 0, 1}).error().field, "r");
+  EXPECT_TRUE(check_load_block(LoadBlock{1000, -10.0, 0, 1}).ok());
+  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, 0, 0}).error().field, "count");
+  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, 0, kMaxBatchCycles + 1}).error().field, "count");
+  EXPECT_EQ(check_load_block(LoadBlock{-5, 0.1, 0, 1}).error().field, "p_max");
+  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, std::nan(""), 1}).error().field, "alpha");
+  // The batch total: two blocks of 2^49 + 1 pass alone and fail together, at the second.
+  const LoadBlock half{1000, 0.1, 0, kMaxBatchCycles / 2 + 1};
+  EXPECT_TRUE(check_load_blocks(std::vector<LoadBlock>{half}).ok());
+  EXPECT_EQ(check_load_blocks(std::vector<LoadBlock>{half, half}).error().field, "blocks[1].count");
 }
 
 }  // namespace

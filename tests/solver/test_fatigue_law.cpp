@@ -223,19 +223,19 @@ TEST(StrainLaw, FitPhase1RecoversGeneratingParameters) {
 }
 
 TEST(StrainLaw, Validation) {
-  EXPECT_EQ(validate(StrainLawParams{}), "");
-  EXPECT_EQ(validate(sae1020_strain_params()), "");
+  EXPECT_EQ(message_of(validate(StrainLawParams{})), "");
+  EXPECT_EQ(message_of(validate(sae1020_strain_params())), "");
   StrainLawParams p;
   p.A1 = 0.0;
   p.m1 = -1.0;
   p.eps_inf_prop = -1e-4;
-  const std::string msg = validate(p);
+  const std::string msg = message_of(validate(p));
   EXPECT_NE(msg.find("A1"), std::string::npos);
   EXPECT_NE(msg.find("m1"), std::string::npos);
   EXPECT_NE(msg.find("eps_inf_prop"), std::string::npos);
   p = StrainLawParams{};
   p.A2 = std::nan("");
-  EXPECT_NE(validate(p).find("A2"), std::string::npos);
+  EXPECT_NE(message_of(validate(p)).find("A2"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- law 2: energy based
@@ -368,7 +368,7 @@ TEST(BilinearLaw, ThirdLawConstantStretchLifeEq27) {
   // A = 0.25, m = 4, s/sc = 1/2 the rate is 2^-6 (exact in binary), so D(32) = 0.5 and the bond
   // fails (D = 1) at N = 1/(A (s/sc)^m) = 64 cycles.
   const BilinearParams p{2.5e-3, 4e-3, 0.25, 4.0};
-  ASSERT_EQ(validate(p), "");
+  ASSERT_EQ(message_of(validate(p)), "");
   double damage = 0.0;
   int cycles = 0;
   while (damage < 1.0 && cycles < 1000) {
@@ -430,9 +430,9 @@ TEST(BilinearLaw, PlaneStressS0MatchesFractureEnergyIntegral) {
 }
 
 TEST(BilinearLaw, Validation) {
-  EXPECT_NE(validate(BilinearParams{}).find("A must"), std::string::npos);  // A has no default
+  EXPECT_NE(message_of(validate(BilinearParams{})).find("A must"), std::string::npos);  // A has no default
   BilinearParams p{2e-3, 1e-3, 1.0, 4.0};
-  EXPECT_NE(validate(p).find("sc must"), std::string::npos);
+  EXPECT_NE(message_of(validate(p)).find("sc must"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- law 4: kinetic theory (004)
@@ -483,7 +483,7 @@ TEST(KineticLaw, B4ClosedFormEq15MatchesRk4OfEq12) {
   // Tolerance 1e-9 absolute on n (RK4 error here is ~1e-12; see the step-halving check).
   const double theta = kt_thermal_energy(293.0);
   const KineticParams p = test_kinetic_params(theta);
-  ASSERT_EQ(validate(p), "");
+  ASSERT_EQ(message_of(validate(p)), "");
   for (double r : {-1.0, 0.1}) {
     const double dose = kt_cycle_dose(200e6, r, p.frequency, p.U, p.gamma, theta);
     const double n_life = kt_remaining_life(0.0, p.lambda, p.n0) / dose;  // real cycles to n = 1
@@ -575,14 +575,14 @@ TEST(KineticLaw, TemperatureEq17AndValidation) {
   EXPECT_DOUBLE_EQ(kt_temperature_with_losses(293.0, 1e-16, 200e6, 0.0, 0.5),
                    293.0 + 1e-16 * 1e16 / 2.0);
   KineticParams p;
-  const std::string msg = validate(p);  // U and γ have no defaults
+  const std::string msg = message_of(validate(p));  // U and γ have no defaults
   EXPECT_NE(msg.find("U must"), std::string::npos);
   EXPECT_NE(msg.find("gamma must"), std::string::npos);
   p.U = 1e-19;
   p.gamma = 1e-28;
-  EXPECT_EQ(validate(p), "");
+  EXPECT_EQ(message_of(validate(p)), "");
   p.n0 = 1.0;
-  EXPECT_NE(validate(p).find("n0"), std::string::npos);
+  EXPECT_NE(message_of(validate(p)).find("n0"), std::string::npos);
 }
 
 }  // namespace

@@ -68,12 +68,12 @@ TEST(StateBased, ConstantsAreNguyenEq4) {
 
 TEST(ModelValidation, RejectsImpossibleValues) {
   ModelOptions o;
-  EXPECT_NE(validate(Material{0.0, 0.3, 0.0}, o).find("youngs_modulus"), std::string::npos);
-  EXPECT_NE(validate(Material{1e9, 0.5, 0.0}, o).find("poisson_ratio"), std::string::npos);
+  EXPECT_NE(message_of(validate(Material{0.0, 0.3, 0.0}, o)).find("youngs_modulus"), std::string::npos);
+  EXPECT_NE(message_of(validate(Material{1e9, 0.5, 0.0}, o)).find("poisson_ratio"), std::string::npos);
   o.kernel = Kernel::gaussian;
-  EXPECT_NE(validate(Material{1e9, 0.3, 0.0}, o).find("kernel"), std::string::npos);
+  EXPECT_NE(message_of(validate(Material{1e9, 0.3, 0.0}, o)).find("kernel"), std::string::npos);
   o.kind = ModelKind::bond_based;
-  EXPECT_EQ(validate(Material{1e9, 0.3, 0.0}, o), "");
+  EXPECT_EQ(message_of(validate(Material{1e9, 0.3, 0.0}, o)), "");
 }
 
 struct TensionCase {

@@ -207,7 +207,7 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.life.critical_crack_length, 0.008);
   EXPECT_EQ(d.life.every_batches, 10);
   ASSERT_EQ(d.life.reference_spectrum.size(), 1u);
-  EXPECT_EQ(d.life.reference_spectrum[0], (SpectrumBlock{4000.0, 0.1, 0.0, 1000}));
+  EXPECT_EQ(d.life.reference_spectrum[0], (LoadBlock{4000.0, 0.1, 0.0, 1000}));
   EXPECT_EQ(d.life.band, BandSource::a2_scatter);
   EXPECT_EQ(d.life.a2_relative_scatter, 0.2);
   EXPECT_EQ(d.checkpoint.every_batches, 100);
@@ -392,9 +392,9 @@ TEST(Config, FatigueLawsMapEveryField) {
     doc.lines.insert(doc.lines.begin() + at, keys.begin(), keys.end());
     const ConfigResult r = parse(doc);
     EXPECT_TRUE(r.ok()) << r.error_text();
-    return r.ok() ? r.config->details[0].fatigue : FatigueConfig{};
+    return r.ok() ? r.config->details[0].fatigue : FatigueSettings{};
   };
-  const FatigueConfig e =
+  const FatigueSettings e =
       fatigue({R"(law = "energy")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
                "eps_inf = 1e-4", "eps_inf_prop = 2e-5", "phi0 = 0.5"});
   EXPECT_EQ(e.law, FatigueLaw::energy);
@@ -408,13 +408,13 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_TRUE(e.compressed_bonds_fatigue);  // 000 Eq. (15)'s absolute range
 
   EXPECT_EQ(e.static_failure, StaticFailure::critical_stretch);
-  const FatigueConfig g =
+  const FatigueSettings g =
       fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
                R"(static_failure = "critical_bond_energy")", "compressed_bonds_fatigue = false"});
   EXPECT_EQ(g.static_failure, StaticFailure::critical_bond_energy);
   EXPECT_FALSE(g.compressed_bonds_fatigue);
 
-  const FatigueConfig b =
+  const FatigueSettings b =
       fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"}, true);
   EXPECT_EQ(b.law, FatigueLaw::bilinear);
   EXPECT_EQ(b.bilinear.s0, 1e-3);
@@ -423,7 +423,7 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(b.bilinear.m, 4.0);
   EXPECT_EQ(b.phase_switch_damage, 0.398);
   EXPECT_EQ(b.cycle_increment, 1000);
-  const FatigueConfig b2 = fatigue(
+  const FatigueSettings b2 = fatigue(
       {R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8", "m = 3.0",
        "cycle_increment = 250", "softening_tolerance = 1e-8", "softening_max_iterations = 7"},
       true);
@@ -432,7 +432,7 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(b2.softening_tolerance, 1e-8);
   EXPECT_EQ(b2.softening_max_iterations, 7);
 
-  const FatigueConfig k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
+  const FatigueSettings k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
   EXPECT_EQ(k0.law, FatigueLaw::kinetic);
   EXPECT_EQ(k0.kinetic.U, 2e-19);
   EXPECT_EQ(k0.kinetic.gamma, 1e-28);
@@ -440,7 +440,7 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(k0.kinetic.n0, 1.771);
   EXPECT_EQ(k0.kinetic.temperature, 293.0);
   EXPECT_EQ(k0.kinetic.frequency, 0.56);
-  const FatigueConfig k = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5",
+  const FatigueSettings k = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5",
                                    "n0 = 1.5", "temperature = 300", "frequency = 10"});
   EXPECT_EQ(k.kinetic.lambda, 5.0);
   EXPECT_EQ(k.kinetic.n0, 1.5);
@@ -666,7 +666,8 @@ TEST(ConfigErrors, LifeSettings) {
   doc.lines.push_back("[detail.life]");                                                     // 24
   doc.lines.push_back(R"(criterion = "phase3")");                                           // 25
   doc.lines.push_back("critical_crack_length = 0.01");                                      // 26
-  doc.lines.push_back(R"(reference_spectrum = [{ p_max = 4000.0, r = 1.0, count = 0 }])");  // 27
+  doc.lines.push_back(  // 27: each block breaks one rule of check_load_block
+      R"(reference_spectrum = [{ p_max = 4000.0, r = 1.0, count = 1 }, { p_max = 4000.0, r = 0.1, count = 0 }])");
   doc.lines.push_back(R"(band = "a2_scatter")");                                            // 28
   const ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 4u) << r.error_text();
@@ -675,7 +676,7 @@ TEST(ConfigErrors, LifeSettings) {
   EXPECT_EQ(r.errors[1].path, "detail[0].life.critical_crack_length");
   EXPECT_EQ(r.errors[1].line, 26u);
   EXPECT_EQ(r.errors[2].path, "detail[0].life.reference_spectrum[0].r");
-  EXPECT_EQ(r.errors[3].path, "detail[0].life.reference_spectrum[0].count");
+  EXPECT_EQ(r.errors[3].path, "detail[0].life.reference_spectrum[1].count");
   EXPECT_EQ(r.errors[3].line, 27u);
 }
 

@@ -63,8 +63,8 @@ TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   Daemon daemon(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(daemon.start(&error)) << error;
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   std::map<std::int64_t, std::string> seen;
   replay::LcmReplayer replayer(lcm, batches, {false, 5, 3.0, 60.0});
   const auto result = replayer.run([&](const auto& s) { seen[s.state_seq] = s.state_hash; },
@@ -90,8 +90,8 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   const TwinConfig config = config_of(b1_text());
   lcm::LCM lcm("memq://");
   Daemon daemon(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(daemon.start(&error)) << error;
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   std::vector<peritwin_msgs::reject_t> rejects;
   std::vector<peritwin_msgs::damage_state_t> states;
   struct Sink {
@@ -152,8 +152,8 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
   lcm::LCM lcm("memq://");
   {
     Daemon first(lcm, config, options_);
-    std::string error;
-    ASSERT_TRUE(first.start(&error)) << error;
+    const Status started = first.start();
+    ASSERT_TRUE(started.ok()) << message_of(started);
     const std::vector<Batch> half(batches.begin(), batches.begin() + 7);
     replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, 60.0});
     ASSERT_TRUE(replayer
@@ -167,8 +167,8 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
     EXPECT_EQ(first.twin(0).state_hash_hex(), expected.at(7));
   }
   Daemon second(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(second.start(&error)) << error;
+  const Status started = second.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   EXPECT_EQ(second.twin(0).state_seq(), 7);
   EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(7));
   // The whole history again: 1..7 are duplicates, 8..16 are applied.
@@ -191,8 +191,8 @@ TEST_F(MemqTest, OneTwinPerDetailEachOnItsOwnChannels) {
   ASSERT_EQ(config.details.size(), 2u);
   lcm::LCM lcm("memq://");
   Daemon daemon(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(daemon.start(&error)) << error;
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   ASSERT_EQ(daemon.num_details(), 2u);
   auto send = [&](const Batch& b) {
     const auto m = batch_message(b, 0);
@@ -225,8 +225,8 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   const auto batches = history(6);
   lcm::LCM lcm("memq://");
   Daemon daemon(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(daemon.start(&error)) << error;
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   std::vector<peritwin_msgs::damage_state_t> states;
   replay::LcmReplayer replayer(lcm, batches, {false, 6, 3.0, 60.0});
   const auto t0 = std::chrono::steady_clock::now();
@@ -256,7 +256,8 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   EXPECT_EQ(states.back().state_seq, 6);
   // Estimates lag: the first states went out before any estimate.
   EXPECT_TRUE(std::isnan(states.front().remaining_cycles) || states.front().remaining_life_seq < 6);
-  auto twin = Twin::create(DetailModel::build(config.details[0], &error), {}, &error);
+  auto twin = testing::make_twin(testing::b1_model(config.details[0]));
+  ASSERT_NE(twin, nullptr);
   for (const auto& b : batches) ASSERT_TRUE(twin->apply(b).applied());
   twin->estimate_life_now();
   EXPECT_EQ(states.back().remaining_cycles, twin->life().central);
@@ -270,8 +271,8 @@ TEST_F(MemqTest, StatusCountsTheBatchesWaitingAndTheAgeOfTheOldest) {
   lcm::LCM lcm("memq://");
   options_.status_period_s = 0.0;  // a STATUS after every applied batch
   Daemon daemon(lcm, config, options_);
-  std::string error;
-  ASSERT_TRUE(daemon.start(&error)) << error;
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
   std::vector<peritwin_msgs::status_t> statuses;
   struct Sink {
     std::vector<peritwin_msgs::status_t>* statuses;

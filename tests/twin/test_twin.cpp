@@ -93,6 +93,11 @@ TEST_F(TwinTest, EveryRejectReasonLeavesTheModelUntouched) {
       {"count < 0", with({4000, 0.1, 0, -3}), Verdict::invalid, "blocks[1].count"},
       {"too many cycles", batch(2, {{4000, 0.1, 0, kMaxBatchCycles}, {4000, 0.1, 0, 1}}),
        Verdict::invalid, "blocks[1].count"},
+      // A single block over the cap (was accepted: the sum capped each count before adding).
+      {"count INT64_MAX", with({4000, 0.1, 0, std::numeric_limits<std::int64_t>::max()}),
+       Verdict::invalid, "blocks[1].count"},
+      {"count 2^50 + 1", with({4000, 0.1, 0, kMaxBatchCycles + 1}), Verdict::invalid,
+       "blocks[1].count"},
       {"duplicate", batch(1, {kBlock}), Verdict::duplicate, "seq"},
       {"gap", batch(3, {kBlock}), Verdict::gap, "seq"},
   };
@@ -224,8 +229,8 @@ TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
   write_checkpoint(path, first->to_checkpoint());
 
   auto resumed = make_twin(model_);
-  std::string error;
-  ASSERT_TRUE(resumed->restore(read_checkpoint(path), &error)) << error;
+  const Status restored = resumed->restore(read_checkpoint(path));
+  ASSERT_TRUE(restored.ok()) << message_of(restored);
   EXPECT_EQ(resumed->state_hash(), first->state_hash());
   EXPECT_EQ(resumed->state_seq(), 5);
   EXPECT_EQ(resumed->applied_seq("test"), 5);
@@ -246,14 +251,13 @@ TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
   EXPECT_EQ(data.strings.at("blas_kernel"), blas_kernel_name());
   auto other = b1_model(b1_config("every_batches = 0", {{"A2 = 1301.0", "A2 = 1000.0"}}));
   auto target = make_twin(other);
-  std::string error;
-  EXPECT_FALSE(target->restore(data, &error));
+  const std::string error = message_of(target->restore(data));
   EXPECT_NE(error.find("different model"), std::string::npos) << error;
   CheckpointData broken = data;
   broken.i64_arrays.erase("event_bond");
   auto again = make_twin(model_);
-  EXPECT_FALSE(again->restore(broken, &error));
-  EXPECT_NE(error.find("event_bond"), std::string::npos) << error;
+  const std::string missing = message_of(again->restore(broken));
+  EXPECT_NE(missing.find("event_bond"), std::string::npos) << missing;
 }
 
 TEST(BilinearTwin, CheckpointWithPendingCyclesResumesBitIdentically) {
@@ -282,8 +286,8 @@ TEST(BilinearTwin, CheckpointWithPendingCyclesResumesBitIdentically) {
   ASSERT_EQ(first->engine().pending_cycles(), 100);  // 2100 = 4·500 + 100
   const CheckpointData data = first->to_checkpoint();
   auto resumed = make_twin(model);
-  std::string error;
-  ASSERT_TRUE(resumed->restore(data, &error)) << error;
+  const Status restored = resumed->restore(data);
+  ASSERT_TRUE(restored.ok()) << message_of(restored);
   EXPECT_EQ(resumed->state_hash(), first->state_hash());
   EXPECT_EQ(resumed->engine().damage(), first->engine().damage());
   for (std::size_t i = 3; i < history.size(); ++i) {
@@ -332,22 +336,21 @@ TEST(SolverSettings, BilinearParametersAreValidated) {
   config.model.kind = ModelKind::bond_based;
   config.fatigue.law = FatigueLaw::bilinear;
   config.fatigue.bilinear = {3e-3, 1e-3, 1.0, 4.0};  // sc < s0
-  std::string error;
-  EXPECT_EQ(DetailModel::build(config, &error), nullptr);
-  EXPECT_NE(error.find("detail[0].fatigue"), std::string::npos) << error;
+  const auto built = DetailModel::build(config);
+  ASSERT_FALSE(built.ok());
+  EXPECT_NE(built.error().message().find("detail[0].fatigue"), std::string::npos)
+      << built.error().message();
 }
 
 TEST(SolverSettings, TensionOnlyFatigueReachesTheEngineAndTheSignature) {
   // compressed_bonds_fatigue = false must reach the engine's settings and change the model's
-  // signature (a checkpoint of the other setting must not resume). The default is not hashed, so
-  // checkpoints written before the option existed keep their signature.
+  // signature (a checkpoint of the other setting must not resume).
   DetailConfig config = b1_config("every_batches = 0");
-  std::string error;
-  const auto with_compressed = DetailModel::build(config, &error);
-  ASSERT_NE(with_compressed, nullptr) << error;
+  const auto with_compressed = b1_model(config);
+  ASSERT_NE(with_compressed, nullptr);
   config.fatigue.compressed_bonds_fatigue = false;
-  const auto tension_only = DetailModel::build(config, &error);
-  ASSERT_NE(tension_only, nullptr) << error;
+  const auto tension_only = b1_model(config);
+  ASSERT_NE(tension_only, nullptr);
   EXPECT_TRUE(with_compressed->settings().compressed_bonds_fatigue);
   EXPECT_FALSE(tension_only->settings().compressed_bonds_fatigue);
   EXPECT_NE(with_compressed->signature(), tension_only->signature());

@@ -47,18 +47,16 @@ inline DetailConfig b1_config(const std::string& life_extra = "every_batches = 0
 }
 
 inline std::shared_ptr<const DetailModel> b1_model(const DetailConfig& config) {
-  std::string error;
-  auto model = DetailModel::build(config, &error);
-  EXPECT_NE(model, nullptr) << error;
-  return model;
+  auto model = DetailModel::build(config);
+  EXPECT_TRUE(model.ok()) << model.error().message();
+  return model ? *model : nullptr;
 }
 
 inline std::unique_ptr<Twin> make_twin(const std::shared_ptr<const DetailModel>& model,
                                        LifeMode mode = LifeMode::synchronous) {
-  std::string error;
-  auto twin = Twin::create(model, {mode, true}, &error);
-  EXPECT_NE(twin, nullptr) << error;
-  return twin;
+  auto twin = Twin::create(model, {mode, true});
+  EXPECT_TRUE(twin.ok()) << twin.error().message();
+  return twin ? std::move(*twin) : nullptr;
 }
 
 inline Batch batch(std::int64_t seq, std::vector<LoadBlock> blocks,
