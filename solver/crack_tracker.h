@@ -1,5 +1,5 @@
 // Crack metrics from the damage field: a crack is the connected set of nodes with φ ≥ φ0 grown
-// from a notch tip (DESIGN.md "Crack metrics"); per crack its tip, length along the path,
+// from a notch tip (docs/design.md "Crack metrics"); per crack its tip, length along the path,
 // projected length and kink angle β. Stress intensity by displacement extrapolation
 // (001 Eq. 60-63) and the ASTM E647 compact-tension ΔK (000 Eq. A2).
 // Units: SI (m, rad, Pa·√m).

@@ -8,7 +8,7 @@
 //  - dose mode (strain-range law without fatigue limits): λ_b = λ0_b − F_b·D_phase, the decrement
 //    factorizes into a bond factor F_b = A|ŝ_b|^m (ŝ the stretch per unit load) and a load dose
 //    D = Σ|P(1−R)|^m accumulated cycle by cycle; a block that reaches no bond's threshold is
-//    absorbed in O(1) (DESIGN.md).
+//    absorbed in O(1) (docs/design.md).
 //  - direct mode (every other law): λ_b −= d_b once per cycle, advanced k cycles at a time with
 //    fatigue::advance_life, which reproduces k subtractions bit for bit.
 // The bilinear law (003) is different: its damage D softens the bonds, so the stretches change

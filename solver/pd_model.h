@@ -22,7 +22,7 @@ struct Material {
   double youngs_modulus = 0.0;      ///< E (Pa)
   double poisson_ratio = 0.0;       ///< ν (state-based only; bond-based fixes ν, see below)
   double fracture_toughness = 0.0;  ///< K_c (Pa·√m), 0 = not given
-  /// G_c = K_c²/E (benchmarks/README B1); 0 when K_c is not given.
+  /// G_c = K_c²/E (docs/benchmarks.md B1); 0 when K_c is not given.
   [[nodiscard]] double critical_energy_release_rate() const {
     return fracture_toughness * fracture_toughness / youngs_modulus;
   }

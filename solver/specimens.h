@@ -1,4 +1,4 @@
-// The benchmark specimens of ../shared/benchmarks/README.md, built as ready-to-solve models.
+// The benchmark specimens of docs/benchmarks.md, built as ready-to-solve models.
 // Units: SI (m, N, Pa).
 #pragma once
 

@@ -3,7 +3,7 @@
 // remaining-life estimate, and checkpoint export/import. No LCM, no threads, no wall clock: the
 // state after a batch sequence is a pure function of (config, sequence).
 //
-// Exactly-once (DESIGN.md): every batch carries (source_id, seq). Per source the twin applies
+// Exactly-once (docs/design.md): every batch carries (source_id, seq). Per source the twin applies
 // seq = last + 1 only: seq <= last is a DUPLICATE (ignored, counted), seq > last + 1 is a GAP
 // (rejected, counted; the producer resends from applied_seq + 1, which every state publishes).
 // A batch is applied as a unit, its blocks in order. A batch that is rejected for any reason

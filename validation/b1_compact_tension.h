@@ -1,4 +1,4 @@
-// B1 (benchmarks/README.md): mode-I compact tension in Al 6061-T6 after 000 Sec. 6.1 — the PD
+// B1 (docs/benchmarks.md): mode-I compact tension in Al 6061-T6 after 000 Sec. 6.1 — the PD
 // fatigue crack growth, the Paris-law reference life and the A2 calibration of 000 App. A.
 #pragma once
 

@@ -1,4 +1,4 @@
-// B2 (benchmarks/README.md): mixed-mode fatigue of the CTS specimen after 000 Sec. 6.2 — kink angle
+// B2 (docs/benchmarks.md): mixed-mode fatigue of the CTS specimen after 000 Sec. 6.2 — kink angle
 // of the grown crack and K_II/K_I at the initial tip.
 #pragma once
 

@@ -1,4 +1,4 @@
-// B3 (benchmarks/README.md): modified CT with a hole in SAE 1020 after 002 Sec. 6-7 — the crack
+// B3 (docs/benchmarks.md): modified CT with a hole in SAE 1020 after 002 Sec. 6-7 — the crack
 // turns into the hole; with the propagation-phase fatigue limit a new crack nucleates on the far
 // side, without it damage spreads along the old path.
 #pragma once

@@ -1,4 +1,4 @@
-// B4 (benchmarks/README.md): single-bond and analytical checks, one JSON line each.
+// B4 (docs/benchmarks.md): single-bond and analytical checks, one JSON line each.
 #include "validation/b4_analytical.h"
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// peritwin-validate: builds the benchmarks of ../shared/benchmarks/README.md and prints one JSON
+// peritwin-validate: builds the benchmarks of docs/benchmarks.md and prints one JSON
 // line per result. Long-running: not part of the default test run.
 #include <CLI/CLI.hpp>
 #include <cmath>
