@@ -34,6 +34,7 @@
 #include <thread>
 
 #include "replay/replay_tool.h"
+#include "tools/json_line.h"
 #include "twin/daemon.h"
 #include "twin/loopback_port.h"
 
@@ -213,16 +214,23 @@ int main(int argc, char** argv) {
                                   latencies.begin() + static_cast<std::ptrdiff_t>(split));
   const std::vector<double> saturated(latencies.begin() + static_cast<std::ptrdiff_t>(split),
                                       latencies.end());
-  std::printf(
-      "{\"bench\":\"ingest\",\"cycles_per_s\":%.1f,\"p50_ms\":%.3f,\"p99_ms\":%.3f,"
-      "\"latency_window\":%zu,\"saturated_p50_ms\":%.3f,\"saturated_p99_ms\":%.3f,"
-      "\"window\":%zu,\"batches\":%zu,\"cycles\":%lld,\"blocks_per_batch\":%zu,"
-      "\"broken_bonds\":%lld,\"transport\":\"tcpq\",\"results\":%s,\"resends\":%lld}\n",
-      static_cast<double>(cycles) / seconds, 1e3 * percentile(paced, 0.50),
-      1e3 * percentile(paced, 0.99), latency_window, 1e3 * percentile(saturated, 0.50),
-      1e3 * percentile(saturated, 0.99), window, num_batches, static_cast<long long>(cycles),
-      static_cast<std::size_t>(cycles) / std::max<std::size_t>(1, num_batches),
-      static_cast<long long>(broken), no_results ? "false" : "true",
-      static_cast<long long>(result.rewinds + latency_result.rewinds));
+  tools::JsonLine line;
+  line["bench"] = "ingest";
+  line["cycles_per_s"] = tools::fixed(static_cast<double>(cycles) / seconds, 1);
+  line["p50_ms"] = tools::fixed(1e3 * percentile(paced, 0.50), 3);
+  line["p99_ms"] = tools::fixed(1e3 * percentile(paced, 0.99), 3);
+  line["latency_window"] = latency_window;
+  line["saturated_p50_ms"] = tools::fixed(1e3 * percentile(saturated, 0.50), 3);
+  line["saturated_p99_ms"] = tools::fixed(1e3 * percentile(saturated, 0.99), 3);
+  line["window"] = window;
+  line["batches"] = num_batches;
+  line["cycles"] = static_cast<long long>(cycles);
+  line["blocks_per_batch"] =
+      static_cast<std::size_t>(cycles) / std::max<std::size_t>(1, num_batches);
+  line["broken_bonds"] = static_cast<long long>(broken);
+  line["transport"] = "tcpq";
+  line["results"] = !no_results;
+  line["resends"] = static_cast<long long>(result.rewinds + latency_result.rewinds);
+  tools::print_line(line);
   return broken == 0 ? 0 : 1;
 }

@@ -21,6 +21,7 @@
 #include "solver/specimens.h"
 #include "solver/static_solver.h"
 #include "tools/cli_checks.h"
+#include "tools/json_line.h"
 
 namespace {
 
@@ -52,15 +53,24 @@ int run_static(const std::string& model_name, double target_nodes) {
   const double w = spec.width;
   const auto up = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, 0.275 * w}));
   const auto low = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, -0.275 * w}));
-  std::printf(
-      "{\"bench\":\"static\",\"model\":\"%s\",\"nodes\":%d,\"bonds\":%d,\"dx_m\":%.6g,"
-      "\"build_s\":%.3f,\"assemble_s\":%.3f,\"analyze_s\":%.3f,\"factor_s\":%.3f,"
-      "\"solve_s\":%.3f,\"total_s\":%.3f,\"factor_nnz\":%.0f,\"load_line_opening_m_per_kN\":%.6e,"
-      "\"peak_rss_mb\":%.1f}\n",
-      model_name.c_str(), specimen.disc.num_nodes(), specimen.disc.num_bonds(), specimen.disc.dx,
-      build_s, t.assemble_s, t.analyze_s, t.factor_s, t.solve_s,
-      build_s + t.assemble_s + t.analyze_s + t.factor_s + t.solve_s,
-      solver.factor().factor_nonzeros(), 1000.0 * (u[2 * up + 1] - u[2 * low + 1]), peak_rss_mb());
+  const double total_s = build_s + t.assemble_s + t.analyze_s + t.factor_s + t.solve_s;
+  tools::JsonLine line;
+  line["bench"] = "static";
+  line["model"] = model_name;
+  line["nodes"] = specimen.disc.num_nodes();
+  line["bonds"] = specimen.disc.num_bonds();
+  line["dx_m"] = tools::significant(specimen.disc.dx, 6);
+  line["build_s"] = tools::fixed(build_s, 3);
+  line["assemble_s"] = tools::fixed(t.assemble_s, 3);
+  line["analyze_s"] = tools::fixed(t.analyze_s, 3);
+  line["factor_s"] = tools::fixed(t.factor_s, 3);
+  line["solve_s"] = tools::fixed(t.solve_s, 3);
+  line["total_s"] = tools::fixed(total_s, 3);
+  line["factor_nnz"] = tools::whole(solver.factor().factor_nonzeros());
+  line["load_line_opening_m_per_kN"] =
+      tools::significant(1000.0 * (u[2 * up + 1] - u[2 * low + 1]), 7);
+  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
+  tools::print_line(line);
   return 0;
 }
 
@@ -101,17 +111,25 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   }
   const double per_refactor =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
-  std::printf(
-      "{\"bench\":\"fatigue\",\"nodes\":%d,\"bonds\":%d,\"cycles\":%lld,\"broken_bonds\":%lld,"
-      "\"solves\":%d,\"wall_s\":%.2f,\"update_total_s\":%.2f,\"basis_solve_total_s\":%.2f,\"update_"
-      "s_mean\":%.5f,\"refactor_s_mean\":%.4f,"
-      "\"incremental_over_refactor\":%.1f,\"rebuilds\":%d,\"rebuild_total_s\":%.2f,"
-      "\"final_failure\":%s,\"peak_rss_mb\":%.1f}\n",
-      s.disc.num_nodes(), s.disc.num_bonds(), static_cast<long long>(engine.total_cycles()),
-      static_cast<long long>(engine.broken_bonds()), engine.solves(), wall, engine.update_seconds(),
-      engine.basis_solve_seconds(), per_update, per_refactor,
-      per_update > 0 ? per_refactor / per_update : 0.0, engine.rebuilds(), engine.rebuild_seconds(),
-      engine.failed() ? "true" : "false", peak_rss_mb());
+  tools::JsonLine line;
+  line["bench"] = "fatigue";
+  line["nodes"] = s.disc.num_nodes();
+  line["bonds"] = s.disc.num_bonds();
+  line["cycles"] = static_cast<long long>(engine.total_cycles());
+  line["broken_bonds"] = static_cast<long long>(engine.broken_bonds());
+  line["solves"] = engine.solves();
+  line["wall_s"] = tools::fixed(wall, 2);
+  line["update_total_s"] = tools::fixed(engine.update_seconds(), 2);
+  line["basis_solve_total_s"] = tools::fixed(engine.basis_solve_seconds(), 2);
+  line["update_s_mean"] = tools::fixed(per_update, 5);
+  line["refactor_s_mean"] = tools::fixed(per_refactor, 4);
+  line["incremental_over_refactor"] =
+      tools::fixed(per_update > 0 ? per_refactor / per_update : 0.0, 1);
+  line["rebuilds"] = engine.rebuilds();
+  line["rebuild_total_s"] = tools::fixed(engine.rebuild_seconds(), 2);
+  line["final_failure"] = engine.failed();
+  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
+  tools::print_line(line);
   return 0;
 }
 
@@ -197,21 +215,32 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   const BilinearRun fast = run_bilinear_engine(s, settings, load, increments, k);
   settings.bilinear_refactor_every_iteration = true;
   const BilinearRun oracle = run_bilinear_engine(s, settings, load, k, k);
-  std::printf(
-      "{\"bench\":\"bilinear\",\"nodes\":%d,\"bonds\":%d,\"increments\":%lld,"
-      "\"secant_iterations\":%d,\"refactorizations\":%d,\"pcg_iterations\":%lld,"
-      "\"pcg_max_iterations\":%d,\"pcg_fallbacks\":%lld,\"pcg_s\":%.2f,\"wall_s\":%.2f,"
-      "\"broken_bonds\":%lld,\"unconverged_increments\":%lld,\"max_damage\":%.4f,"
-      "\"final_failure\":%s,\"reference_step\":%d,\"tolerance\":%.0e,\"oracle_increments\":%lld,"
-      "\"oracle_secant_iterations\":%d,\"oracle_wall_s\":%.2f,\"fast_first_s\":%.2f,"
-      "\"fast_over_oracle\":%.1f,\"peak_rss_mb\":%.1f}\n",
-      s.disc.num_nodes(), s.disc.num_bonds(), static_cast<long long>(fast.increments),
-      fast.secant_iterations, fast.refactorizations, static_cast<long long>(fast.pcg.iterations),
-      fast.pcg.max_iterations, static_cast<long long>(fast.pcg.fallbacks), fast.pcg.seconds,
-      fast.wall_s, static_cast<long long>(fast.broken), static_cast<long long>(fast.unconverged),
-      fast.max_damage, fast.failed ? "true" : "false", step, tolerance, static_cast<long long>(k),
-      oracle.secant_iterations, oracle.wall_s, fast.first_k_s,
-      fast.first_k_s > 0 ? oracle.wall_s / fast.first_k_s : 0.0, peak_rss_mb());
+  tools::JsonLine line;
+  line["bench"] = "bilinear";
+  line["nodes"] = s.disc.num_nodes();
+  line["bonds"] = s.disc.num_bonds();
+  line["increments"] = static_cast<long long>(fast.increments);
+  line["secant_iterations"] = fast.secant_iterations;
+  line["refactorizations"] = fast.refactorizations;
+  line["pcg_iterations"] = static_cast<long long>(fast.pcg.iterations);
+  line["pcg_max_iterations"] = fast.pcg.max_iterations;
+  line["pcg_fallbacks"] = static_cast<long long>(fast.pcg.fallbacks);
+  line["pcg_s"] = tools::fixed(fast.pcg.seconds, 2);
+  line["wall_s"] = tools::fixed(fast.wall_s, 2);
+  line["broken_bonds"] = static_cast<long long>(fast.broken);
+  line["unconverged_increments"] = static_cast<long long>(fast.unconverged);
+  line["max_damage"] = tools::fixed(fast.max_damage, 4);
+  line["final_failure"] = fast.failed;
+  line["reference_step"] = step;
+  line["tolerance"] = tools::significant(tolerance, 1);
+  line["oracle_increments"] = static_cast<long long>(k);
+  line["oracle_secant_iterations"] = oracle.secant_iterations;
+  line["oracle_wall_s"] = tools::fixed(oracle.wall_s, 2);
+  line["fast_first_s"] = tools::fixed(fast.first_k_s, 2);
+  line["fast_over_oracle"] =
+      tools::fixed(fast.first_k_s > 0 ? oracle.wall_s / fast.first_k_s : 0.0, 1);
+  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
+  tools::print_line(line);
   return 0;
 }
 

@@ -11,7 +11,7 @@ packages=(
   libopenblas0-pthread
   libgtest-dev
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jre-headless
-  libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev
+  libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev nlohmann-json3-dev
 )
 
 missing=()

@@ -6,9 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
-#include <cstdio>
 #include <cstring>
+#include <nlohmann/json.hpp>
 
 namespace peritwin::twin {
 
@@ -69,33 +68,6 @@ std::string check_layout(const unsigned char* p, std::size_t size) {
            " bytes after the message's end";
   }
   return {};
-}
-
-void append_number(std::string& out, double v) {
-  if (!std::isfinite(v)) {
-    out += "null";
-    return;
-  }
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  out += buf;
-}
-
-void append_string(std::string& out, const std::string& s) {
-  out += '"';
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  out += '"';
 }
 
 }  // namespace
@@ -265,44 +237,32 @@ std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::
 }
 
 std::string state_json(const peritwin_msgs::damage_state_t& s) {
-  std::string out = "{\"detail\":";
-  append_string(out, s.detail_id);
-  out += ",\"state_seq\":" + std::to_string(s.state_seq);
-  out += ",\"cycles\":" + std::to_string(s.total_cycles);
-  out += ",\"broken_bonds\":" + std::to_string(s.broken_bonds);
-  out += ",\"crack_length_m\":";
-  append_number(out, crack_length(s));
-  out += ",\"max_damage\":";
-  append_number(out, s.max_damage);
-  out += ",\"k_i\":";
-  append_number(out, s.k_i);
-  out += ",\"remaining_cycles\":";
-  append_number(out, s.remaining_cycles);
-  out += ",\"remaining_low\":";
-  append_number(out, s.remaining_cycles_low);
-  out += ",\"remaining_high\":";
-  append_number(out, s.remaining_cycles_high);
-  out += ",\"remaining_life_seq\":" + std::to_string(s.remaining_life_seq);
-  out += ",\"failure\":" + std::to_string(static_cast<int>(s.failure));
-  out += ",\"state_hash\":";
-  append_string(out, s.state_hash);
-  out += '}';
-  return out;
+  nlohmann::ordered_json j;
+  j["detail"] = s.detail_id;
+  j["state_seq"] = s.state_seq;
+  j["cycles"] = s.total_cycles;
+  j["broken_bonds"] = s.broken_bonds;
+  j["crack_length_m"] = crack_length(s);
+  j["max_damage"] = s.max_damage;
+  j["k_i"] = s.k_i;
+  j["remaining_cycles"] = s.remaining_cycles;
+  j["remaining_low"] = s.remaining_cycles_low;
+  j["remaining_high"] = s.remaining_cycles_high;
+  j["remaining_life_seq"] = s.remaining_life_seq;
+  j["failure"] = static_cast<int>(s.failure);
+  j["state_hash"] = s.state_hash;
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string summary_json(const peritwin_msgs::damage_state_t& s) {
-  std::string out = "{\"detail\":";
-  append_string(out, s.detail_id);
-  out += ",\"cycles\":" + std::to_string(s.total_cycles);
-  out += ",\"broken_bonds\":" + std::to_string(s.broken_bonds);
-  out += ",\"crack_length_m\":";
-  append_number(out, crack_length(s));
-  out += ",\"remaining_cycles\":";
-  append_number(out, s.remaining_cycles);
-  out += ",\"state_hash\":";
-  append_string(out, s.state_hash);
-  out += '}';
-  return out;
+  nlohmann::ordered_json j;
+  j["detail"] = s.detail_id;
+  j["cycles"] = s.total_cycles;
+  j["broken_bonds"] = s.broken_bonds;
+  j["crack_length_m"] = crack_length(s);
+  j["remaining_cycles"] = s.remaining_cycles;
+  j["state_hash"] = s.state_hash;
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace peritwin::twin

@@ -12,15 +12,19 @@
 #include "solver/fatigue_engine.h"
 #include "solver/fatigue_law.h"
 #include "solver/pd_model.h"
+#include "tools/json_line.h"
 
 namespace peritwin::validation {
 
 namespace {
 void print(const char* check, double value, double expected) {
-  std::printf(
-      "{\"case\":\"B4\",\"check\":\"%s\",\"value\":%.10g,\"expected\":%.10g,"
-      "\"rel_error\":%.3e}\n",
-      check, value, expected, expected != 0 ? value / expected - 1 : value);
+  tools::JsonLine line;
+  line["case"] = "B4";
+  line["check"] = check;
+  line["value"] = tools::significant(value, 10);
+  line["expected"] = tools::significant(expected, 10);
+  line["rel_error"] = tools::significant(expected != 0 ? value / expected - 1 : value, 4);
+  tools::print_line(line);
 }
 
 /// 000 Eq. (9)-(12): N_c counted on the grid against the paper's 36 for δ = 3.015Δx, and the two

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "tools/cli_checks.h"
+#include "tools/json_line.h"
 #include "validation/b1_compact_tension.h"
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
@@ -63,12 +64,19 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
     char name[64];
     std::snprintf(name, sizeof name, "b1_p%.0f_r%.1f.csv", c.p_max, c.r);
     write_csv(out_dir / name, h);
-    std::printf(
-        "{\"case\":\"B1\",\"p_max\":%.0f,\"r\":%.2f,\"calibration\":%s,\"a2\":%.6g,\"dx_m\":%.6g,"
-        "\"critical_crack_m\":%.6f,\"pd_life\":%.0f,\"paris_life\":%.0f,\"rel_error\":%.4f,"
-        "\"wall_s\":%.1f}\n",
-        c.p_max, c.r, c.calibration ? "true" : "false", law.A2, dx, a_end, pd_life, ref,
-        pd_life / ref - 1, h.wall_s);
+    tools::JsonLine line;
+    line["case"] = "B1";
+    line["p_max"] = tools::whole(c.p_max);
+    line["r"] = tools::fixed(c.r, 2);
+    line["calibration"] = c.calibration;
+    line["a2"] = tools::significant(law.A2, 6);
+    line["dx_m"] = tools::significant(dx, 6);
+    line["critical_crack_m"] = tools::fixed(a_end, 6);
+    line["pd_life"] = tools::whole(pd_life);
+    line["paris_life"] = tools::whole(ref);
+    line["rel_error"] = tools::fixed(pd_life / ref - 1, 4);
+    line["wall_s"] = tools::fixed(h.wall_s, 1);
+    tools::print_line(line);
     std::fflush(stdout);
   }
   return 0;
@@ -80,14 +88,6 @@ fatigue::StrainLawParams b2_law_params(double dx, double a2_at_1mm, double horiz
   auto law = fatigue::al6061_t6_strain_params();
   law.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, horizon_ratio * dx, law.m2);
   return law;
-}
-
-/// A ratio with 4 decimals, or null when it is not a number (JSON has no NaN or infinity).
-std::string json_ratio(double value) {
-  if (!std::isfinite(value)) return "null";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4f", value);
-  return text;
 }
 
 int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesystem::path& out_dir) {
@@ -104,27 +104,32 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
     return 1;
   }
   const bool loaded_lower = !run.lower_holes_fixed;
-  const GridPerturbation& grid = run.grid;
-  const double dx = run.dx;
-  const std::string& snapshot = run.snapshot_csv;
-  std::printf(
-      "{\"case\":\"B2\",\"model\":\"%s\",\"law\":\"%s\",\"lower_holes\":\"%s\","
-      "\"pin_forces\":\"%s\",\"compressed_bonds_fatigue\":%s,"
-      "\"alpha_deg\":%.2f,\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki\":%.4g,"
-      "\"kii_over_ki_fit\":%s,\"t_over_ki_fit\":%s,\"ki_over_richard\":%s,"
-      "\"kii_over_richard\":%s,\"mts_beta_deg\":%.2f,\"growth_m\":%.4f,\"cycles\":%lld,"
-      "\"dx_m\":%.6g,\"horizon_ratio\":%.4g,\"phase_switch_damage\":%.3f,"
-      "\"grid_perturbation\":%.3f,"
-      "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
-      run.model == ModelKind::bond_based ? "bond_based" : "state_based",
-      run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range",
-      loaded_lower ? "loaded" : "fixed", run.rigid_fixtures ? "rigid_fixture" : "eq51",
-      run.compressed_bonds_fatigue ? "true" : "false", alpha_deg, r.beta * 180 / pi, r.kii_over_ki,
-      r.t_over_ki, json_ratio(r.kii_over_ki_fit).c_str(), json_ratio(r.t_over_ki_fit).c_str(),
-      json_ratio(r.ki_over_richard).c_str(), json_ratio(r.kii_over_richard).c_str(),
-      r.mts_beta * 180 / pi, r.growth, static_cast<long long>(r.cycles), dx, run.horizon_ratio,
-      r.phase_switch_damage, grid.amplitude, static_cast<unsigned long long>(grid.seed), r.wall_s,
-      snapshot.c_str());
+  tools::JsonLine line;
+  line["case"] = "B2";
+  line["model"] = run.model == ModelKind::bond_based ? "bond_based" : "state_based";
+  line["law"] = run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range";
+  line["lower_holes"] = loaded_lower ? "loaded" : "fixed";
+  line["pin_forces"] = run.rigid_fixtures ? "rigid_fixture" : "eq51";
+  line["compressed_bonds_fatigue"] = run.compressed_bonds_fatigue;
+  line["alpha_deg"] = tools::fixed(alpha_deg, 2);
+  line["beta_deg"] = tools::fixed(r.beta * 180 / pi, 2);
+  line["kii_over_ki"] = tools::fixed(r.kii_over_ki, 4);
+  line["t_over_ki"] = tools::significant(r.t_over_ki, 4);
+  line["kii_over_ki_fit"] = tools::fixed(r.kii_over_ki_fit, 4);
+  line["t_over_ki_fit"] = tools::fixed(r.t_over_ki_fit, 4);
+  line["ki_over_richard"] = tools::fixed(r.ki_over_richard, 4);
+  line["kii_over_richard"] = tools::fixed(r.kii_over_richard, 4);
+  line["mts_beta_deg"] = tools::fixed(r.mts_beta * 180 / pi, 2);
+  line["growth_m"] = tools::fixed(r.growth, 4);
+  line["cycles"] = static_cast<long long>(r.cycles);
+  line["dx_m"] = tools::significant(run.dx, 6);
+  line["horizon_ratio"] = tools::significant(run.horizon_ratio, 4);
+  line["phase_switch_damage"] = tools::fixed(r.phase_switch_damage, 3);
+  line["grid_perturbation"] = tools::fixed(run.grid.amplitude, 3);
+  line["grid_seed"] = static_cast<unsigned long long>(run.grid.seed);
+  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["snapshot"] = run.snapshot_csv;
+  tools::print_line(line);
   return 0;
 }
 
@@ -140,16 +145,24 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
     return 1;
   }
   const double deg = 180 / std::numbers::pi;
-  std::printf(
-      "{\"case\":\"B2-K-field\",\"kii_over_ki_applied\":%.4f,\"t_over_ki\":%.4g,"
-      "\"beta_deg\":%.2f,\"kii_over_ki\":%.4f,\"t_over_ki_measured\":%.4g,"
-      "\"kii_over_ki_fit\":%s,\"t_over_ki_fit\":%s,\"mts_beta_deg\":%.2f,"
-      "\"growth_m\":%.4f,\"cycles\":%lld,\"dx_m\":%.6g,\"grid_perturbation\":%.3f,"
-      "\"grid_seed\":%llu,\"wall_s\":%.1f,\"snapshot\":\"%s\"}\n",
-      run.kii_over_ki, run.t_over_ki, r.beta * deg, r.kii_over_ki, r.t_over_ki,
-      json_ratio(r.kii_over_ki_fit).c_str(), json_ratio(r.t_over_ki_fit).c_str(), r.mts_beta * deg,
-      r.growth, static_cast<long long>(r.cycles), run.dx, run.grid.amplitude,
-      static_cast<unsigned long long>(run.grid.seed), r.wall_s, run.snapshot_csv.c_str());
+  tools::JsonLine line;
+  line["case"] = "B2-K-field";
+  line["kii_over_ki_applied"] = tools::fixed(run.kii_over_ki, 4);
+  line["t_over_ki"] = tools::significant(run.t_over_ki, 4);
+  line["beta_deg"] = tools::fixed(r.beta * deg, 2);
+  line["kii_over_ki"] = tools::fixed(r.kii_over_ki, 4);
+  line["t_over_ki_measured"] = tools::significant(r.t_over_ki, 4);
+  line["kii_over_ki_fit"] = tools::fixed(r.kii_over_ki_fit, 4);
+  line["t_over_ki_fit"] = tools::fixed(r.t_over_ki_fit, 4);
+  line["mts_beta_deg"] = tools::fixed(r.mts_beta * deg, 2);
+  line["growth_m"] = tools::fixed(r.growth, 4);
+  line["cycles"] = static_cast<long long>(r.cycles);
+  line["dx_m"] = tools::significant(run.dx, 6);
+  line["grid_perturbation"] = tools::fixed(run.grid.amplitude, 3);
+  line["grid_seed"] = static_cast<unsigned long long>(run.grid.seed);
+  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["snapshot"] = run.snapshot_csv;
+  tools::print_line(line);
   return 0;
 }
 
@@ -164,29 +177,48 @@ int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double m
   const auto r =
       run_ct_with_hole(dx, p_max, limit, a2, prefix, static_cast<std::int64_t>(max_cycles));
   for (const auto& e : r.events) {
-    std::printf(
-        "{\"case\":\"B3\",\"propagation_limit\":%s,\"event\":\"%s\",\"cycle\":%lld,"
-        "\"x_m\":%.5f,\"y_m\":%.5f,\"p_max\":%.1f,\"eps_inf_prop\":%.4g}\n",
-        limit ? "true" : "false", e.what.c_str(), static_cast<long long>(e.cycle), e.where.x,
-        e.where.y, e.p_max, e.eps_inf_prop);
+    tools::JsonLine line;
+    line["case"] = "B3";
+    line["propagation_limit"] = limit;
+    line["event"] = e.what;
+    line["cycle"] = static_cast<long long>(e.cycle);
+    line["x_m"] = tools::fixed(e.where.x, 5);
+    line["y_m"] = tools::fixed(e.where.y, 5);
+    line["p_max"] = tools::fixed(e.p_max, 1);
+    line["eps_inf_prop"] = tools::significant(e.eps_inf_prop, 4);
+    tools::print_line(line);
   }
   for (const auto& [when, d] : {std::pair{"entry", r.entry}, std::pair{"settled", r.settled}}) {
-    std::printf(
-        "{\"case\":\"B3\",\"propagation_limit\":%s,\"race\":\"%s\",\"old_path_max_range\":%.4g,"
-        "\"old_path_min_life\":%.4g,\"old_path_cycles_no_limit\":%.4g,"
-        "\"old_path_cycles_limited\":%.4g,\"far_side_max_range\":%.4g,\"far_side_cycles\":%.4g}\n",
-        limit ? "true" : "false", when, d.old_path_max_range, d.old_path_min_life,
-        d.old_path_cycles, d.old_path_cycles_limited, d.far_side_max_range, d.far_side_cycles);
+    tools::JsonLine line;
+    line["case"] = "B3";
+    line["propagation_limit"] = limit;
+    line["race"] = when;
+    line["old_path_max_range"] = tools::significant(d.old_path_max_range, 4);
+    line["old_path_min_life"] = tools::significant(d.old_path_min_life, 4);
+    line["old_path_cycles_no_limit"] = tools::significant(d.old_path_cycles, 4);
+    line["old_path_cycles_limited"] = tools::significant(d.old_path_cycles_limited, 4);
+    line["far_side_max_range"] = tools::significant(d.far_side_max_range, 4);
+    line["far_side_cycles"] = tools::significant(d.far_side_cycles, 4);
+    tools::print_line(line);
   }
-  std::printf(
-      "{\"case\":\"B3\",\"propagation_limit\":%s,\"cycles\":%lld,\"broken_bonds\":%lld,"
-      "\"breaks_old_path\":%lld,\"breaks_far_side\":%lld,\"breaks_other\":%lld,\"a2\":%.6g,"
-      "\"delta_k\":%.4g,\"eps_bar\":%.4g,\"eps_inf_prop\":%.4g,\"p_entry\":%.1f,\"p_final\":%.1f,"
-      "\"dx_m\":%.6g,\"wall_s\":%.1f,\"snapshots\":\"%s_*.csv\"}\n",
-      limit ? "true" : "false", static_cast<long long>(r.cycles),
-      static_cast<long long>(r.broken_bonds), static_cast<long long>(r.breaks_old_path),
-      static_cast<long long>(r.breaks_far_side), static_cast<long long>(r.breaks_other), a2,
-      r.delta_k, r.eps_bar, r.eps_inf_prop, r.p_entry, r.p_final, dx, r.wall_s, prefix.c_str());
+  tools::JsonLine line;
+  line["case"] = "B3";
+  line["propagation_limit"] = limit;
+  line["cycles"] = static_cast<long long>(r.cycles);
+  line["broken_bonds"] = static_cast<long long>(r.broken_bonds);
+  line["breaks_old_path"] = static_cast<long long>(r.breaks_old_path);
+  line["breaks_far_side"] = static_cast<long long>(r.breaks_far_side);
+  line["breaks_other"] = static_cast<long long>(r.breaks_other);
+  line["a2"] = tools::significant(a2, 6);
+  line["delta_k"] = tools::significant(r.delta_k, 4);
+  line["eps_bar"] = tools::significant(r.eps_bar, 4);
+  line["eps_inf_prop"] = tools::significant(r.eps_inf_prop, 4);
+  line["p_entry"] = tools::fixed(r.p_entry, 1);
+  line["p_final"] = tools::fixed(r.p_final, 1);
+  line["dx_m"] = tools::significant(dx, 6);
+  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["snapshots"] = prefix + "_*.csv";
+  tools::print_line(line);
   return 0;
 }
 

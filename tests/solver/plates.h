@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <ostream>
+#include <string>
 #include <vector>
 
 #include "solver/discretization.h"
@@ -104,3 +106,34 @@ inline std::pair<double, double> interior_strains(const Discretization& d,
 }
 
 }  // namespace peritwin::testing
+
+// Parameterized suites print their parameters as words (gtest's default for an enum class or a
+// struct is its bytes, padding and pointers included, which differ from build to build).
+namespace peritwin {
+
+inline std::string model_kind_name(ModelKind kind) {
+  return kind == ModelKind::bond_based ? "bond_based" : "state_based";
+}
+inline std::string kernel_name(Kernel kernel) {
+  switch (kernel) {
+    case Kernel::constant:
+      return "constant";
+    case Kernel::conical:
+      return "conical";
+    case Kernel::gaussian:
+      return "gaussian";
+  }
+  return "unknown";
+}
+/// Found by argument-dependent lookup: gtest's printer of a ModelKind parameter.
+inline void PrintTo(ModelKind kind, std::ostream* os) { *os << model_kind_name(kind); }
+
+namespace testing {
+/// Name generator of a suite parameterized by ModelKind (4th argument of
+/// INSTANTIATE_TEST_SUITE_P): ".../bond_based", ".../state_based".
+inline std::string model_kind_param_name(const ::testing::TestParamInfo<ModelKind>& info) {
+  return model_kind_name(info.param);
+}
+}  // namespace testing
+
+}  // namespace peritwin

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <ostream>
+#include <string>
 
 #include "plates.h"
 #include "solver/pd_model.h"
@@ -83,6 +85,13 @@ struct TensionCase {
   double grid_perturbation = 0.0;  ///< irregular node arrangement, fraction of Δx
 };
 
+/// e.g. "state_based_constant_nu330", "bond_based_constant_nu333_perturbed" (ν in thousandths).
+std::string tension_case_name(const TensionCase& c) {
+  return model_kind_name(c.kind) + "_" + kernel_name(c.kernel) + "_nu" +
+         std::to_string(std::lround(1000 * c.nu)) + (c.grid_perturbation > 0 ? "_perturbed" : "");
+}
+void PrintTo(const TensionCase& c, std::ostream* os) { *os << tension_case_name(c); }
+
 class UniformTension : public ::testing::TestWithParam<TensionCase> {};
 
 TEST_P(UniformTension, InteriorStrainIsSigmaOverEAndContractionIsNu) {
@@ -117,7 +126,8 @@ INSTANTIATE_TEST_SUITE_P(
                       TensionCase{ModelKind::bond_based, Kernel::gaussian, 1.0 / 3.0},
                       // The per-node moment correction also holds E and ν on a perturbed grid.
                       TensionCase{ModelKind::state_based, Kernel::constant, 0.33, 0.2},
-                      TensionCase{ModelKind::bond_based, Kernel::constant, 1.0 / 3.0, 0.2}));
+                      TensionCase{ModelKind::bond_based, Kernel::constant, 1.0 / 3.0, 0.2}),
+    [](const ::testing::TestParamInfo<TensionCase>& p) { return tension_case_name(p.param); });
 
 }  // namespace
 }  // namespace peritwin

@@ -519,7 +519,8 @@ TEST(BondFactorsErrors, StateBasedAndInvalidFactorsAreRejected) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothModels, SolverModels,
-                         ::testing::Values(ModelKind::bond_based, ModelKind::state_based));
+                         ::testing::Values(ModelKind::bond_based, ModelKind::state_based),
+                         testing::model_kind_param_name);
 
 }  // namespace
 }  // namespace peritwin

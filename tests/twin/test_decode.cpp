@@ -2,6 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "twin/messages_io.h"
 
@@ -101,8 +105,58 @@ TEST(Json, NonFiniteIsNull) {
   s.state_hash = "00ff";
   const std::string j = summary_json(s);
   EXPECT_EQ(j,
-            "{\"detail\":\"d\\\"x\",\"cycles\":0,\"broken_bonds\":0,\"crack_length_m\":0,"
+            "{\"detail\":\"d\\\"x\",\"cycles\":0,\"broken_bonds\":0,\"crack_length_m\":0.0,"
             "\"remaining_cycles\":null,\"state_hash\":\"00ff\"}");
+}
+
+TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
+  // messages_io.h documents the keys of state_json in this order; NaN and ±∞ print as null.
+  peritwin_msgs::damage_state_t s;
+  s.detail_id = "b1-ct";
+  s.state_seq = 12;
+  s.total_cycles = 34567;
+  s.broken_bonds = 89;
+  s.max_damage = 0.25;
+  peritwin_msgs::crack_t crack{};
+  crack.length_m = 0.0125;
+  s.cracks = {crack};
+  s.num_cracks = 1;
+  s.k_i = std::numeric_limits<double>::quiet_NaN();
+  s.remaining_cycles = 1.5e6;
+  s.remaining_cycles_low = -std::numeric_limits<double>::infinity();
+  s.remaining_cycles_high = std::numeric_limits<double>::infinity();
+  s.remaining_life_seq = -1;
+  s.failure = peritwin_msgs::damage_state_t::FAILURE_SINGULAR;
+  s.state_hash = "0123abcd";
+  const std::string text = state_json(s);
+  EXPECT_EQ(text,
+            "{\"detail\":\"b1-ct\",\"state_seq\":12,\"cycles\":34567,\"broken_bonds\":89,"
+            "\"crack_length_m\":0.0125,\"max_damage\":0.25,\"k_i\":null,"
+            "\"remaining_cycles\":1500000.0,\"remaining_low\":null,\"remaining_high\":null,"
+            "\"remaining_life_seq\":-1,\"failure\":2,\"state_hash\":\"0123abcd\"}");
+  const auto j = nlohmann::ordered_json::parse(text);
+  const std::vector<std::string> documented = {"detail",
+                                               "state_seq",
+                                               "cycles",
+                                               "broken_bonds",
+                                               "crack_length_m",
+                                               "max_damage",
+                                               "k_i",
+                                               "remaining_cycles",
+                                               "remaining_low",
+                                               "remaining_high",
+                                               "remaining_life_seq",
+                                               "failure",
+                                               "state_hash"};
+  std::vector<std::string> keys;
+  for (const auto& item : j.items()) keys.push_back(item.key());
+  EXPECT_EQ(keys, documented);
+  EXPECT_TRUE(j["k_i"].is_null());
+  EXPECT_TRUE(j["remaining_low"].is_null());
+  EXPECT_TRUE(j["remaining_high"].is_null());
+  EXPECT_EQ(j["crack_length_m"].get<double>(), 0.0125);  // the double read back bit for bit
+  EXPECT_EQ(j["remaining_cycles"].get<double>(), 1.5e6);
+  EXPECT_EQ(j["cycles"].get<std::int64_t>(), 34567);
 }
 
 }  // namespace
