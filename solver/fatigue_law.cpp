@@ -526,18 +526,6 @@ Status validate(const KineticParams& p) {
 
 double kt_thermal_energy(double temperature) { return kBoltzmann * temperature; }
 
-double kt_temperature_with_losses(double ambient_temperature, double psi, double sigma_max,
-                                  double load_ratio, double frequency) {
-  const double sigma_a = 0.5 * std::abs(sigma_max * (1.0 - load_ratio));
-  return ambient_temperature + psi * sigma_a * sigma_a * frequency;  // 004 Eq. (17), Δt = 1/f
-}
-
-double kt_thermal_energy_hysteresis(double temperature, double psi, double loop_area,
-                                    double loop_area_at_yield) {
-  const double kt = kt_thermal_energy(temperature);
-  return loop_area >= loop_area_at_yield ? kt + psi * loop_area : kt;  // 004 Eq. (26)
-}
-
 double kt_breakage_rate(double sigma, double U, double gamma, double thermal_energy) {
   return thermal_energy / kPlanck * std::exp(-(U - gamma * sigma) / thermal_energy);  // 004 (14)
 }

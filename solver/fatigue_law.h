@@ -259,12 +259,10 @@ Status validate(const KineticParams& p);
 
 /// k T (J): the thermal energy of 004 Eq. (14)-(15).
 double kt_thermal_energy(double temperature);
-/// 004 Eq. (17): T = T* + ψ σa²/Δt, σa = σ_max(1 − R)/2, Δt = 1/f the cycle time.
-double kt_temperature_with_losses(double ambient_temperature, double psi, double sigma_max,
-                                  double load_ratio, double frequency);
-/// 004 Eq. (26): thermal energy kT + ψA if A >= A_σy, else kT (Eq. 15 unchanged).
-double kt_thermal_energy_hysteresis(double temperature, double psi, double loop_area,
-                                    double loop_area_at_yield);
+// Not implemented: 004's self-heating, Eq. (17) (T = T* + ψσa²/Δt), and its hysteresis energy,
+// Eq. (26) (θ = kT + ψA above the yield loop area A_σy). The twin's bonds are linear elastic: they
+// have no hysteresis loop A, and ψ is fitted in 004 to one steel's measured temperatures. The
+// law runs at the configured temperature (KineticParams::temperature) instead.
 /// 004 Eq. (14): K_b = (θ/h) exp(−(U − γσ)/θ), θ = kT (or the Eq. 26 thermal energy).
 double kt_breakage_rate(double sigma, double U, double gamma, double thermal_energy);
 /// Per-cycle dose Φ = ∫ K_b dt over one cycle in which σ ramps linearly between Rσ_max and σ_max in

@@ -378,21 +378,25 @@ void top_backward_finish(const int* lp, const int* li, const double* lx, int j, 
   }
 }
 
-#define PERITWIN_CHAIN_SWITCH(k, call) \
-  switch (k) {                         \
-    case 1:                            \
-      call(1);                         \
-      break;                           \
-    case 2:                            \
-      call(2);                         \
-      break;                           \
-    case 3:                            \
-      call(3);                         \
-      break;                           \
-    default:                           \
-      call(4);                         \
-      break;                           \
+/// Calls f(std::integral_constant<int, K>{}) with K = k, the length of a chain of columns (1 to 4:
+/// the schedule stops a chain at 4), so that each kernel is unrolled for its length.
+template <class F>
+void with_chain_length(int k, F&& f) {
+  switch (k) {
+    case 1:
+      f(std::integral_constant<int, 1>{});
+      break;
+    case 2:
+      f(std::integral_constant<int, 2>{});
+      break;
+    case 3:
+      f(std::integral_constant<int, 3>{});
+      break;
+    default:
+      f(std::integral_constant<int, 4>{});
+      break;
   }
+}
 
 /// Two threads meeting between pipeline steps (spin, then yield).
 class PairBarrier {
@@ -421,20 +425,7 @@ void forward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& ch
   const auto* lnz = static_cast<const int*>(l.nz);
   const auto* lx = static_cast<const double*>(l.x);
   for (const auto& [j, k] : chains) {
-    switch (k) {
-      case 1:
-        forward_chain<R, 1>(lp, li, lnz, lx, j, y);
-        break;
-      case 2:
-        forward_chain<R, 2>(lp, li, lnz, lx, j, y);
-        break;
-      case 3:
-        forward_chain<R, 3>(lp, li, lnz, lx, j, y);
-        break;
-      default:
-        forward_chain<R, 4>(lp, li, lnz, lx, j, y);
-        break;
-    }
+    with_chain_length(k, [&](auto K) { forward_chain<R, decltype(K)::value>(lp, li, lnz, lx, j, y); });
   }
 }
 
@@ -445,20 +436,9 @@ void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& c
   const auto* lnz = static_cast<const int*>(l.nz);
   const auto* lx = static_cast<const double*>(l.x);
   for (auto it = chains.rbegin(); it != chains.rend(); ++it) {
-    switch (it->second) {
-      case 1:
-        backward_chain<R, 1>(lp, li, lnz, lx, it->first, y);
-        break;
-      case 2:
-        backward_chain<R, 2>(lp, li, lnz, lx, it->first, y);
-        break;
-      case 3:
-        backward_chain<R, 3>(lp, li, lnz, lx, it->first, y);
-        break;
-      default:
-        backward_chain<R, 4>(lp, li, lnz, lx, it->first, y);
-        break;
-    }
+    with_chain_length(it->second, [&](auto K) {
+      backward_chain<R, decltype(K)::value>(lp, li, lnz, lx, it->first, y);
+    });
   }
 }
 
@@ -506,9 +486,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
     const auto [c0, c1] = chains_of(b);
     for (int c = c0; c < c1; ++c) {
       const auto& t = top[static_cast<std::size_t>(c)];
-#define PERITWIN_CALL(K) top_forward_chain<R, K>(lp, li, lx, t.j, true, 0, t.lo, y)
-      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
-#undef PERITWIN_CALL
+with_chain_length(t.k, [&](auto K) { top_forward_chain<R, decltype(K)::value>(lp, li, lx, t.j, true, 0, t.lo, y); });
     }
   };
   auto forward_b = [&](int b, int me) {
@@ -517,9 +495,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const auto& t = top[static_cast<std::size_t>(c)];
       const int from = me == 0 ? t.lo : t.mid;
       const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
-#define PERITWIN_CALL(K) top_forward_chain<R, K>(lp, li, lx, t.j, false, from, to, y)
-      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
-#undef PERITWIN_CALL
+with_chain_length(t.k, [&](auto K) { top_forward_chain<R, decltype(K)::value>(lp, li, lx, t.j, false, from, to, y); });
     }
   };
   // Backward, block b: B'(me) = partial sums over the rows below; A' = the block's columns.
@@ -530,9 +506,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const int from = me == 0 ? t.lo : t.mid;
       const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
       double* s = partial_at(b, me, c);
-#define PERITWIN_CALL(K) top_backward_partial<R, K>(lp, li, lx, t.j, from, to, y, s)
-      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
-#undef PERITWIN_CALL
+with_chain_length(t.k, [&](auto K) { top_backward_partial<R, decltype(K)::value>(lp, li, lx, t.j, from, to, y, s); });
     }
   };
   auto backward_a = [&](int b) {
@@ -541,9 +515,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const auto& t = top[static_cast<std::size_t>(c)];
       const double* s0 = partial_at(b, 0, c);
       const double* s1 = partial_at(b, 1, c);
-#define PERITWIN_CALL(K) top_backward_finish<R, K>(lp, li, lx, t.j, t.lo, s0, s1, y)
-      PERITWIN_CHAIN_SWITCH(t.k, PERITWIN_CALL)
-#undef PERITWIN_CALL
+with_chain_length(t.k, [&](auto K) { top_backward_finish<R, decltype(K)::value>(lp, li, lx, t.j, t.lo, s0, s1, y); });
     }
   };
   auto combine = [&] {

@@ -42,12 +42,6 @@ Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions
   return s;
 }
 
-double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes) {
-  const double rows =
-      2.0 * std::round(spec.height / std::sqrt(spec.width * spec.height / target_nodes) / 2.0);
-  return spec.height / rows;
-}
-
 double compact_tension_shear_grid_spacing(const CompactTensionShearSpec& spec, double dx) {
   // Rows sit at y = −h/2 + (k + 1/2)·dx; one lies on y = 0 when h/(2dx) − 1/2 is an integer.
   const double offset = 0.5 * spec.height / dx - 0.5;

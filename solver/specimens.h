@@ -98,9 +98,6 @@ struct CtsStressIntensity {
 CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& spec, double p,
                                                 double alpha);
 
-/// Grid spacing giving about `target_nodes` nodes, rounded so that y = 0 falls between rows.
-double compact_tension_shear_spacing(const CompactTensionShearSpec& spec, double target_nodes);
-
 /// `dx` itself, unless a node row would lie within dx/4 of the crack line y = 0 (then the nodes
 /// on the cut lose their bonds to both faces and come loose); in that case the nearest spacing
 /// with an even number of rows over the height, which puts y = 0 midway between two rows.

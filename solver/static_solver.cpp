@@ -350,7 +350,7 @@ void StaticSolver::solve_bases() {
   basis_solve_s_ += seconds_since(t0);
 }
 
-FactorReport StaticSolver::refactor_resolve(std::chrono::steady_clock::time_point t0) {
+FactorReport StaticSolver::refactor_resolve() {
   for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
     if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
   }
@@ -358,9 +358,7 @@ FactorReport StaticSolver::refactor_resolve(std::chrono::steady_clock::time_poin
     cholesky_ = SparseCholesky();
     modified_ = false;
   }
-  auto r = solve();
-  refactor_s_ += seconds_since(t0);
-  return r;
+  return solve();
 }
 
 void StaticSolver::ground_isolated(const std::vector<NodeIndex>& nodes,
@@ -397,7 +395,7 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
       intact_[static_cast<std::size_t>(b)] = 0;
       factor_[static_cast<std::size_t>(b)] = 0.0;
     }
-    return refactor_resolve(t0);
+    return refactor_resolve();
   }
   // K_new = K − Σ_b f_b·k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied
   // as one rank-k update (the added terms) followed by one downdate (the removed ones).
@@ -513,8 +511,8 @@ FactorReport StaticSolver::set_bond_factors(std::span<const BondIndex> bonds,
         intact_[b] = 0;
       }
     }
-    if (preconditioned_ && cholesky_.analyzed()) return preconditioned_resolve(broke, t0);
-    return refactor_resolve(t0);
+    if (preconditioned_ && cholesky_.analyzed()) return preconditioned_resolve(broke);
+    return refactor_resolve();
   }
   // K_new = K + Σ_b (f_new − f_old)·k_b·g_b·g_bᵀ: stiffer bonds in one update, softer ones in one
   // downdate, each column g_b scaled by sqrt(|f_new − f_old|·k_b).
@@ -714,8 +712,7 @@ bool StaticSolver::pcg_solve_bases() {
   return ok;
 }
 
-FactorReport StaticSolver::preconditioned_resolve(bool broke,
-                                                  std::chrono::steady_clock::time_point t0) {
+FactorReport StaticSolver::preconditioned_resolve(bool broke) {
   if (broke) {  // the same ground springs as refactor_resolve
     for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
       if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
@@ -744,7 +741,6 @@ FactorReport StaticSolver::preconditioned_resolve(bool broke,
     ++factorizations_;
     ++pcg_.reference_factorizations;
     timings_.factor_s = seconds_since(t);
-    refactor_s_ += seconds_since(t0);
     if (!report.ok()) {
       reference_.clear();
       return report;
@@ -753,7 +749,7 @@ FactorReport StaticSolver::preconditioned_resolve(bool broke,
   }
   if (pcg_solve_bases()) return {};
   ++pcg_.fallbacks;  // not converged: the refactorizing path (K(f) exactly)
-  return refactor_resolve(t0);
+  return refactor_resolve();
 }
 
 std::vector<double> StaticSolver::basis_force(Basis b) const {

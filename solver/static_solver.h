@@ -120,9 +120,8 @@ class StaticSolver {
   /// y = K(f)·x over the free DOFs with the given bond stiffness factors, bond by bond (plus the
   /// ground springs of isolated nodes): the matrix of the preconditioned path, never assembled.
   void multiply(const std::vector<double>& factors, const double* x, double* y) const;
-  /// Seconds spent in low-rank updates and in refactorizations after the first solve.
+  /// Seconds spent in low-rank updates.
   [[nodiscard]] double update_seconds() const { return update_s_; }
-  [[nodiscard]] double refactor_seconds() const { return refactor_s_; }
   [[nodiscard]] int updates() const { return updates_; }
   /// Seconds spent in the triangular solves of the basis cases (all paths).
   [[nodiscard]] double basis_solve_seconds() const { return basis_solve_s_; }
@@ -160,7 +159,7 @@ class StaticSolver {
   /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference).
   void assemble(const std::vector<double>& factors);
   /// Preconditioned re-solve after factor_ changed (see set_preconditioned).
-  FactorReport preconditioned_resolve(bool broke, std::chrono::steady_clock::time_point t0);
+  FactorReport preconditioned_resolve(bool broke);
   /// PCG on the loaded bases with the current factor as M; false if max_iterations was hit.
   bool pcg_solve_bases();
   void append_ground(std::vector<Eigen::Triplet<double, int>>& entries) const;
@@ -181,7 +180,7 @@ class StaticSolver {
   /// Nodes with no intact bond get a ground spring (they would make K singular).
   [[nodiscard]] bool isolated(NodeIndex k) const;
   /// Refactorizing re-solve after intact_/factor_ changed (grounds nodes that became isolated).
-  FactorReport refactor_resolve(std::chrono::steady_clock::time_point t0);
+  FactorReport refactor_resolve();
   /// Ground springs (added columns) for the nodes that became isolated.
   void ground_isolated(const std::vector<NodeIndex>& nodes,
                        std::vector<SparseCholesky::Column>& added);
@@ -222,7 +221,6 @@ class StaticSolver {
   double ground_stiffness_ = 0.0;
   std::vector<std::uint8_t> grounded_;
   double update_s_ = 0.0;
-  double refactor_s_ = 0.0;
   int updates_ = 0;
   double basis_solve_s_ = 0.0;
 };

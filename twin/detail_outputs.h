@@ -27,7 +27,6 @@ class DetailOutputs {
   /// Last snapshot, close, PNGs.
   void finish(const Twin& twin);
 
-  [[nodiscard]] bool enabled() const { return writer_ != nullptr; }
   [[nodiscard]] std::filesystem::path h5_path() const { return h5_path_; }
   [[nodiscard]] std::filesystem::path damage_png() const;
   [[nodiscard]] std::filesystem::path crack_png() const;

@@ -433,13 +433,6 @@ bool Group::exists(std::string_view path) const {
   return true;
 }
 
-bool Group::is_group(std::string_view path) const {
-  if (!exists(path)) return false;
-  Handle object(H5Oopen(id(), std::string(path).c_str(), H5P_DEFAULT), Handle::Kind::object);
-  if (!object.valid()) fail("open", path);
-  return H5Iget_type(object.get()) == H5I_GROUP;
-}
-
 void Group::remove(std::string_view path) {
   quiet();
   if (H5Ldelete(id(), std::string(path).c_str(), H5P_DEFAULT) < 0) fail("remove", path);

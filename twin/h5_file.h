@@ -173,7 +173,6 @@ class Group : public Object {
   Group require_group(std::string_view path);
   /// True when every component of the path exists (as any kind of object).
   [[nodiscard]] bool exists(std::string_view path) const;
-  [[nodiscard]] bool is_group(std::string_view path) const;
   /// Unlinks an object (its space is not reclaimed in the file).
   void remove(std::string_view path);
   /// Names of the direct children, in name order.

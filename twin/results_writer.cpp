@@ -422,12 +422,6 @@ std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path
   return rows;
 }
 
-ResultsMesh read_mesh(const std::filesystem::path& h5_path) {
-  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
-  check_format(file);
-  return {file.read<double>("mesh/x"), file.read<double>("mesh/y")};
-}
-
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path) {
   h5::File file(h5_path, h5::File::Mode::read_only, {false});
   check_format(file);

@@ -115,10 +115,6 @@ class ResultsWriter {
 // --- reading a results file back (tools, tests) ------------------------------------------------
 
 std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path);
-struct ResultsMesh {
-  std::vector<double> x, y;
-};
-ResultsMesh read_mesh(const std::filesystem::path& h5_path);
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path);
 std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot);

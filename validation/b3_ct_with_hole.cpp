@@ -146,7 +146,8 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   if (propagation_limit) {
     settings.strain.eps_inf_prop = protocol.eps_inf_prop >= 0
                                        ? protocol.eps_inf_prop
-                                       : result.eps_bar * 11.6e6 / result.delta_k;  // Eq. (13)
+                                       : fatigue::propagation_fatigue_limit(
+                                             result.eps_bar, 11.6e6, result.delta_k);  // 002 Eq. (13)
     engine.set_propagation_limit(settings.strain.eps_inf_prop);
   }
   const fatigue::StrainLawParams law = settings.strain;
