@@ -1,4 +1,5 @@
 // The replay tool's library: batching, block checks, history formats (LCM log included).
+#include <unistd.h>
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -55,7 +56,8 @@ TEST(ReplayHistory, ExampleFilesInEveryFormat) {
 }
 
 TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
-  const auto path = fs::temp_directory_path() / "peritwin_replay_test.lcmlog";
+  const auto path = fs::temp_directory_path() /
+                    ("peritwin_replay_test_" + std::to_string(::getpid()) + ".lcmlog");
   fs::remove(path);
   {
     lcm::LogFile log(path.string(), "w");
