@@ -1,6 +1,6 @@
 // The replay tool's library: batching, block checks, history formats (LCM log included).
-#include <unistd.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 

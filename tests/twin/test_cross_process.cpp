@@ -9,8 +9,8 @@
 // --give-up-after), and the assertions check what must hold whatever the timing: exit statuses,
 // the states and final state hash against the in-process run, the daemon's own log lines (read
 // only once the daemon has written them).
-#include <unistd.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -81,8 +81,8 @@ class CrossProcess : public ::testing::Test {
     if (java_.empty() || !fs::exists(kLcmJar)) GTEST_SKIP() << "java or " << kLcmJar << " missing";
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     // Per process: other checkouts on the machine run this suite at the same time.
-    dir_ = fs::temp_directory_path() / (std::string("peritwin_xproc_") + info->name() + "_" +
-                                        std::to_string(::getpid()));
+    dir_ = fs::temp_directory_path() /
+           (std::string("peritwin_xproc_") + info->name() + "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     // A port free a moment ago; the hub there must be ours (it may lose the port to another

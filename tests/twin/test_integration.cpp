@@ -6,6 +6,7 @@
 // minutes (kGiveUpS), and nothing asserts what only timing decides: the replayer resends after
 // 3 s without progress, so on a slow run the daemon may see (and drop) extra duplicates.
 #include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -264,14 +265,14 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
     }
   } sink{&states};
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
   while ((states.empty() || states.back().remaining_life_seq != 6) &&
          std::chrono::steady_clock::now() < deadline) {
     daemon.poll(50);
   }
   ASSERT_FALSE(states.empty());
-  ASSERT_EQ(states.back().remaining_life_seq, 6) << "no estimate of state 6 in " << kGiveUpS << " s";
+  ASSERT_EQ(states.back().remaining_life_seq, 6)
+      << "no estimate of state 6 in " << kGiveUpS << " s";
   EXPECT_EQ(states.back().remaining_life_source, "replay");
   EXPECT_EQ(states.back().state_seq, 6);
   // Estimates lag: the first states went out before any estimate.

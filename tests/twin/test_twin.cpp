@@ -1,5 +1,6 @@
 // Twin: every reject reason, exactly-once bookkeeping, state messages, checkpoint resume.
 #include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <limits>
