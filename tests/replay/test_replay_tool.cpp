@@ -1,5 +1,6 @@
 // The replay tool's library: batching, block checks, history formats (LCM log included).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 
@@ -62,7 +63,8 @@ TEST(ReplayHistory, ExampleFilesInEveryFormat) {
 }
 
 TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
-  const auto path = fs::temp_directory_path() / "peritwin_replay_test.lcmlog";
+  const auto path = fs::temp_directory_path() /
+                    ("peritwin_replay_test_" + std::to_string(::getpid()) + ".lcmlog");
   fs::remove(path);
   {
     lcm::LogFile log(path.string(), "w");

@@ -1,5 +1,7 @@
 // A child process for the cross-process tests: posix_spawn with stdout on a pipe (read line by
 // line with a timeout) and stderr to a file; signal, wait with a timeout, kill on destruction.
+// listens_on: whether a process holds the listening socket of a port (a hub started on a port that
+// was free a moment ago, not another one that took the same port meanwhile).
 #pragma once
 
 #include <fcntl.h>
@@ -10,7 +12,11 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <optional>
+#include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -53,6 +59,7 @@ class Process {
   Process& operator=(const Process&) = delete;
 
   [[nodiscard]] bool started() const { return pid_ > 0; }
+  [[nodiscard]] pid_t pid() const { return pid_; }
   [[nodiscard]] bool running() const { return pid_ > 0 && !status_; }
   void signal(int sig) const {
     if (running()) kill(pid_, sig);
@@ -108,6 +115,37 @@ class Process {
   bool eof_ = false;
   std::optional<int> status_;
 };
+
+/// True if process `pid` holds a TCP socket listening on `port` (any address, IPv4 or IPv6), from
+/// /proc/net/tcp{,6} and /proc/PID/fd.
+inline bool listens_on(pid_t pid, int port) {
+  std::set<std::string> inodes;
+  for (const char* table : {"/proc/net/tcp", "/proc/net/tcp6"}) {
+    std::ifstream in(table);
+    std::string line;
+    std::getline(in, line);  // the header
+    while (std::getline(in, line)) {
+      std::istringstream fields(line);
+      std::string sl, local, remote, st, queues, timer, retransmits, uid, timeout, inode;
+      fields >> sl >> local >> remote >> st >> queues >> timer >> retransmits >> uid >> timeout >>
+          inode;
+      const auto colon = local.rfind(':');
+      if (st != "0A" || colon == std::string::npos) continue;  // 0A: LISTEN
+      if (std::stoi(local.substr(colon + 1), nullptr, 16) == port) inodes.insert(inode);
+    }
+  }
+  if (inodes.empty()) return false;
+  std::error_code ec;
+  for (const auto& fd :
+       std::filesystem::directory_iterator("/proc/" + std::to_string(pid) + "/fd", ec)) {
+    const auto target = std::filesystem::read_symlink(fd.path(), ec).string();
+    if (target.rfind("socket:[", 0) == 0 &&
+        inodes.count(target.substr(8, target.size() - 9)) != 0) {
+      return true;
+    }
+  }
+  return false;
+}
 
 using twin::free_loopback_port;
 using twin::wait_for_loopback_port;

@@ -1,6 +1,12 @@
 // The daemon service and the replay client on one in-process LCM (memq://): every state through
 // LCM equals the in-process run, rejects are published with their reasons, a stopped daemon
 // resumes from its checkpoint and a full replay then gives the same final state.
+//
+// Timing: these run on shared, loaded machines (2 cores, load 4-18). Every wait has a deadline of
+// minutes (kGiveUpS), and nothing asserts what only timing decides: the replayer resends after
+// 3 s without progress, so on a slow run the daemon may see (and drop) extra duplicates.
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -17,6 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using testing::b1_text;
+
+/// No progress for this long fails a replay or a wait; generous for a loaded 2-core machine.
+constexpr double kGiveUpS = 600.0;
 
 TwinConfig config_of(const std::string& text) {
   auto r = parse_config(text, "b1-memq.toml");
@@ -35,7 +44,8 @@ class MemqTest : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
            ("peritwin_memq_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));  // per process: other checkouts run this suite too
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     options_.state_dir = dir_ / "state";
@@ -66,7 +76,7 @@ TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
   const Status started = daemon.start();
   ASSERT_TRUE(started.ok()) << message_of(started);
   std::map<std::int64_t, std::string> seen;
-  replay::LcmReplayer replayer(lcm, batches, {false, 5, 3.0, 60.0});
+  replay::LcmReplayer replayer(lcm, batches, {false, 5, 3.0, kGiveUpS});
   const auto result = replayer.run([&](const auto& s) { seen[s.state_seq] = s.state_hash; },
                                    [&] {
                                      daemon.tick();
@@ -75,7 +85,10 @@ TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
   ASSERT_TRUE(result.ok) << result.error;
   ASSERT_TRUE(result.final_state);
   EXPECT_EQ(result.final_state->state_seq, 12);
-  EXPECT_EQ(result.published, 12);  // nothing resent on a loss-free transport
+  // Each batch at least once; a slow daemon (no STATE within 3 s) gets some resent, which it
+  // drops as duplicates, and no gap ever.
+  EXPECT_GE(result.published, 12);
+  EXPECT_EQ(daemon.twin(0).counters().gaps, 0);
   const auto expected = in_process_hashes(config, batches);
   for (std::int64_t s = 1; s <= 12; ++s) {
     ASSERT_TRUE(seen.count(s)) << s;
@@ -155,7 +168,7 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
     const Status started = first.start();
     ASSERT_TRUE(started.ok()) << message_of(started);
     const std::vector<Batch> half(batches.begin(), batches.begin() + 7);
-    replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, 60.0});
+    replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, kGiveUpS});
     ASSERT_TRUE(replayer
                     .run({},
                          [&] {
@@ -172,14 +185,18 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
   EXPECT_EQ(second.twin(0).state_seq(), 7);
   EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(7));
   // The whole history again: 1..7 are duplicates, 8..16 are applied.
-  replay::LcmReplayer replayer(lcm, batches, {false, 16, 3.0, 60.0});
+  replay::LcmReplayer replayer(lcm, batches, {false, 16, 3.0, kGiveUpS});
   const auto result = replayer.run({}, [&] {
     second.tick();
     return true;
   });
   ASSERT_TRUE(result.ok) << result.error;
+  EXPECT_EQ(result.final_state->state_seq, 16);
   EXPECT_EQ(result.final_state->state_hash, expected.at(16));
-  EXPECT_EQ(second.twin(0).counters().duplicates, 7);
+  EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(16));
+  // 1..7 at least once each; more when a slow apply made the replayer resend.
+  EXPECT_GE(second.twin(0).counters().duplicates, 7);
+  EXPECT_EQ(second.twin(0).counters().gaps, 0);
   second.stop();
 }
 
@@ -228,7 +245,7 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   const Status started = daemon.start();
   ASSERT_TRUE(started.ok()) << message_of(started);
   std::vector<peritwin_msgs::damage_state_t> states;
-  replay::LcmReplayer replayer(lcm, batches, {false, 6, 3.0, 60.0});
+  replay::LcmReplayer replayer(lcm, batches, {false, 6, 3.0, kGiveUpS});
   const auto t0 = std::chrono::steady_clock::now();
   ASSERT_TRUE(replayer
                   .run([&](const auto& s) { states.push_back(s); },
@@ -248,10 +265,14 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
     }
   } sink{&states};
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
-  for (int i = 0; i < 1200 && (states.empty() || states.back().remaining_life_seq != 6); ++i) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  while ((states.empty() || states.back().remaining_life_seq != 6) &&
+         std::chrono::steady_clock::now() < deadline) {
     daemon.poll(50);
   }
-  ASSERT_EQ(states.back().remaining_life_seq, 6);
+  ASSERT_FALSE(states.empty());
+  ASSERT_EQ(states.back().remaining_life_seq, 6)
+      << "no estimate of state 6 in " << kGiveUpS << " s";
   EXPECT_EQ(states.back().remaining_life_source, "replay");
   EXPECT_EQ(states.back().state_seq, 6);
   // Estimates lag: the first states went out before any estimate.
@@ -300,7 +321,7 @@ TEST_F(MemqTest, StatusCountsTheBatchesWaitingAndTheAgeOfTheOldest) {
     EXPECT_EQ(s.pending, 3 - k);
     if (k < 3) {
       EXPECT_GE(s.lag_s, 0.030);
-      EXPECT_LT(s.lag_s, 30.0);
+      EXPECT_LT(s.lag_s, kGiveUpS);  // a sanity bound, not a timing one
     } else {
       EXPECT_EQ(s.lag_s, 0.0);
     }

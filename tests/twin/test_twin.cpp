@@ -1,4 +1,6 @@
 // Twin: every reject reason, exactly-once bookkeeping, state messages, checkpoint resume.
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -222,7 +224,8 @@ TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
   auto first = make_twin(model_);
   for (std::size_t i = 0; i < 5; ++i) ASSERT_TRUE(first->apply(history[i]).applied());
   ASSERT_GT(first->broken_bonds(), 10);
-  const auto dir = std::filesystem::temp_directory_path() / "peritwin_twin_ckpt_test";
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("peritwin_twin_ckpt_test_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   const auto path = checkpoint_path(dir, "checkpoint", 5);
   std::filesystem::create_directories(dir);
