@@ -1,9 +1,9 @@
 // peritwin-bench-ingest: how fast the daemon absorbs load cycles over LCM when no bond breaks.
 //
 // Starts LCM's Java TCP hub on a free loopback port (unless --lcm-url is given), runs the daemon
-// service (twin/daemon.h) on its own thread and LCM connection, and feeds it with the replay
-// client (replay/replay_tool.h, lockstep off) histories of single-cycle blocks at loads far too
-// low to break a bond (P_max cycling over 200..350 N, R = 0.1), batched as peritwin-replay
+// service (twin/service/daemon.h) on its own thread and LCM connection, and feeds it with the
+// replay client (replay/replay_tool.h, lockstep off) histories of single-cycle blocks at loads far
+// too low to break a bond (P_max cycling over 200..350 N, R = 0.1), batched as peritwin-replay
 // batches them (1024 blocks or 1000 cycles per batch), after a one-batch lockstep warm-up:
 //  1. latency phase: `--latency-cycles` with `--latency-window` (2) batches in flight — a
 //     producer the daemon keeps up with, as sensors are;
@@ -34,9 +34,9 @@
 #include <thread>
 
 #include "replay/replay_tool.h"
+#include "tests/support/loopback_port.h"
 #include "tools/json_line.h"
-#include "twin/daemon.h"
-#include "twin/loopback_port.h"
+#include "twin/service/daemon.h"
 
 extern char** environ;
 

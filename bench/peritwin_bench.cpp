@@ -17,11 +17,11 @@
 #include <string>
 #include <vector>
 
-#include "solver/fatigue_engine.h"
-#include "solver/specimens.h"
-#include "solver/static_solver.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/static/static_solver.h"
 #include "tools/cli_checks.h"
 #include "tools/json_line.h"
+#include "validation/specimens.h"
 
 namespace {
 
@@ -33,6 +33,7 @@ double peak_rss_mb() {
 
 int run_static(const std::string& model_name, double target_nodes) {
   using namespace peritwin;
+  using namespace peritwin::validation;
   ModelOptions options;
   options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
   const CompactTensionSpec spec;
@@ -78,6 +79,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
   // final stiffness refactorized a few times to measure the ratio in this run.
   using namespace peritwin;
+  using namespace peritwin::validation;
   ModelOptions options;
   options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
   const CompactTensionSpec spec;
@@ -149,6 +151,7 @@ struct BilinearRun {
 BilinearRun run_bilinear_engine(const peritwin::Specimen& s, peritwin::FatigueSettings settings,
                                 double load, std::int64_t increments, std::int64_t k) {
   using namespace peritwin;
+  using namespace peritwin::validation;
   BilinearRun run;
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   if (!engine.initialize()) {
@@ -186,6 +189,7 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   // stretch in `life` cycles (003 Eq. 27); ΔN = 500. The fast path runs `increments` increments
   // (or to final failure), the refactorizing oracle the first `oracle_increments` of them.
   using namespace peritwin;
+  using namespace peritwin::validation;
   ModelOptions options;
   options.kind = ModelKind::bond_based;
   const CompactTensionSpec spec;

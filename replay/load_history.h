@@ -116,7 +116,7 @@ enum class HistoryFormat { series, cycles, spectrum };
 /// Reads `file` in `format` and returns its blocks (series: converted; spectrum: expanded). The
 /// stats are those of series_to_blocks for a series and zero otherwise.
 [[nodiscard]] ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file,
-                                                  HistoryFormat format);
+                                                      HistoryFormat format);
 
 /// Splits `blocks` into consecutive batches of at most `max_blocks` blocks (the last may be
 /// shorter; none is empty; empty input -> no batches). The spans view `blocks`' storage.

@@ -17,7 +17,7 @@ double since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                           const std::string& detail_id) {
+                                     const std::string& detail_id) {
   HistoryBlocks out;
   if (format != InputFormat::lcm_log) {
     const HistoryFormat f = format == InputFormat::series   ? HistoryFormat::series

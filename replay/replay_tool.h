@@ -24,9 +24,9 @@
 #include <vector>
 
 #include "replay/load_history.h"
-#include "solver/fatigue_engine.h"
-#include "twin/config.h"
-#include "twin/messages_io.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "twin/config/config.h"
+#include "twin/lcm/messages_io.h"
 
 namespace peritwin::replay {
 
@@ -39,7 +39,7 @@ struct HistoryBlocks {
   std::string note;  ///< e.g. rainflow statistics, for the log
 };
 Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                           const std::string& detail_id);
+                                     const std::string& detail_id);
 
 struct BatchingOptions {
   // 1024 blocks = 32 KB of payload: below LCM 1.3.1's 64 KB UDP fragmentation limit, and large

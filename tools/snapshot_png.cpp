@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "twin/damage_png.h"
+#include "twin/io/damage_png.h"
 
 int main(int argc, char** argv) {
   if (argc != 4) {
@@ -32,6 +32,6 @@ int main(int argc, char** argv) {
       d.push_back(c);
     }
   }
-  peritwin::write_damage_png(argv[2], x, y, d, std::stod(argv[3]));
+  peritwin::twin::write_damage_png(argv[2], x, y, d, std::stod(argv[3]));
   return 0;
 }

@@ -3,8 +3,8 @@
 #include <chrono>
 #include <cmath>
 
-#include "solver/crack_tracker.h"
-#include "solver/fatigue_engine.h"
+#include "solver/crack/crack_tracker.h"
+#include "solver/fatigue/fatigue_engine.h"
 
 namespace peritwin::validation {
 

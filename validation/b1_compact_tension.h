@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "solver/fatigue_law.h"
-#include "solver/specimens.h"
+#include "solver/model/fatigue_law.h"
+#include "validation/specimens.h"
 
 namespace peritwin::validation {
 

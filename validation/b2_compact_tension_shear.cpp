@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "solver/crack_tracker.h"
-#include "solver/fatigue_engine.h"
+#include "solver/crack/crack_tracker.h"
+#include "solver/fatigue/fatigue_engine.h"
 #include "validation/damage_csv.h"
 
 namespace peritwin::validation {

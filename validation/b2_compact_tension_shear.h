@@ -4,9 +4,9 @@
 
 #include <string>
 
-#include "solver/fatigue_engine.h"
-#include "solver/fatigue_law.h"
-#include "solver/specimens.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/model/fatigue_law.h"
+#include "validation/specimens.h"
 
 namespace peritwin::validation {
 

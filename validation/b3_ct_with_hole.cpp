@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <limits>
 
-#include "solver/crack_tracker.h"
-#include "solver/fatigue_engine.h"
+#include "solver/crack/crack_tracker.h"
+#include "solver/fatigue/fatigue_engine.h"
 #include "validation/b1_compact_tension.h"
 #include "validation/damage_csv.h"
 
@@ -144,10 +144,10 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
     result.eps_bar = n > 0 ? sum / n : 0.0;
   }
   if (propagation_limit) {
-    settings.strain.eps_inf_prop = protocol.eps_inf_prop >= 0
-                                       ? protocol.eps_inf_prop
-                                       : fatigue::propagation_fatigue_limit(
-                                             result.eps_bar, 11.6e6, result.delta_k);  // 002 Eq. (13)
+    settings.strain.eps_inf_prop =
+        protocol.eps_inf_prop >= 0 ? protocol.eps_inf_prop
+                                   : fatigue::propagation_fatigue_limit(
+                                         result.eps_bar, 11.6e6, result.delta_k);  // 002 Eq. (13)
     engine.set_propagation_limit(settings.strain.eps_inf_prop);
   }
   const fatigue::StrainLawParams law = settings.strain;

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "replay/rainflow.h"
-#include "solver/discretization.h"
-#include "solver/fatigue_engine.h"
-#include "solver/fatigue_law.h"
-#include "solver/pd_model.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/mesh/discretization.h"
+#include "solver/model/fatigue_law.h"
+#include "solver/model/pd_model.h"
 #include "tools/json_line.h"
 
 namespace peritwin::validation {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/discretization.h"
+#include "solver/mesh/discretization.h"
 
 namespace peritwin::validation {
 

@@ -17,7 +17,9 @@ struct Error {
   std::string field;
   std::string reason;
   /// "field: reason", or the reason alone.
-  [[nodiscard]] std::string message() const { return field.empty() ? reason : field + ": " + reason; }
+  [[nodiscard]] std::string message() const {
+    return field.empty() ? reason : field + ": " + reason;
+  }
   /// The same error with `prefix` before the field (e.g. "blocks[3]." + "r").
   [[nodiscard]] Error within(const std::string& prefix) const { return {prefix + field, reason}; }
 };
@@ -29,8 +31,10 @@ inline Error failure(std::string reason) { return {{}, std::move(reason)}; }
 template <typename T, typename E = Error>
 class [[nodiscard]] Expected {
  public:
-  Expected(T value) : data_(std::in_place_index<0>, std::move(value)) {}  // NOLINT(google-explicit-constructor)
-  Expected(E error) : data_(std::in_place_index<1>, std::move(error)) {}  // NOLINT(google-explicit-constructor)
+  Expected(T value)
+      : data_(std::in_place_index<0>, std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  Expected(E error)
+      : data_(std::in_place_index<1>, std::move(error)) {}  // NOLINT(google-explicit-constructor)
   [[nodiscard]] bool ok() const { return data_.index() == 0; }
   explicit operator bool() const { return ok(); }
   /// Throws std::bad_variant_access when !ok().
@@ -53,7 +57,8 @@ template <typename E>
 class [[nodiscard]] Expected<void, E> {
  public:
   Expected() = default;
-  Expected(E error) : error_(std::move(error)), ok_(false) {}  // NOLINT(google-explicit-constructor)
+  Expected(E error)
+      : error_(std::move(error)), ok_(false) {}  // NOLINT(google-explicit-constructor)
   [[nodiscard]] bool ok() const { return ok_; }
   explicit operator bool() const { return ok_; }
   /// Meaningful only when !ok().

@@ -54,7 +54,9 @@ class Fnv1a64 {
     word(tail);
     word(n);
   }
-  void packed(std::string_view s) { packed(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()); }
+  void packed(std::string_view s) {
+    packed(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
+  }
 
   [[nodiscard]] std::uint64_t get() const { return h_; }
 

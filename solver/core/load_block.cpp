@@ -19,20 +19,23 @@ Error broken(const char* field, std::string reason) { return {field, std::move(r
 }  // namespace
 
 Status check_load_block(const LoadBlock& b) {
-  if (!std::isfinite(b.p_max)) return broken("p_max", "p_max = " + number(b.p_max) + " is not finite");
+  if (!std::isfinite(b.p_max))
+    return broken("p_max", "p_max = " + number(b.p_max) + " is not finite");
   if (!(b.p_max > 0)) {
-    return broken("p_max", "p_max = " + number(b.p_max) + " must be > 0 (the peak load of a tensile cycle)");
+    return broken("p_max",
+                  "p_max = " + number(b.p_max) + " must be > 0 (the peak load of a tensile cycle)");
   }
   if (!std::isfinite(b.r)) return broken("r", "r = " + number(b.r) + " is not finite");
   if (!(b.r < 1.0)) return broken("r", "r = " + number(b.r) + " must be < 1 (R = P_min/P_max)");
   if (!(b.r >= kMinLoadRatio)) {
     return broken("r", "r = " + number(b.r) + " must be >= " + number(kMinLoadRatio));
   }
-  if (!std::isfinite(b.alpha)) return broken("alpha", "alpha = " + number(b.alpha) + " is not finite");
+  if (!std::isfinite(b.alpha))
+    return broken("alpha", "alpha = " + number(b.alpha) + " is not finite");
   if (b.count < 1) return broken("count", "count = " + std::to_string(b.count) + " must be >= 1");
   if (b.count > kMaxBatchCycles) {
-    return broken("count", "count = " + std::to_string(b.count) + " must be <= " +
-                               std::to_string(kMaxBatchCycles));
+    return broken("count", "count = " + std::to_string(b.count) +
+                               " must be <= " + std::to_string(kMaxBatchCycles));
   }
   return {};
 }
@@ -45,7 +48,8 @@ Status check_load_blocks(std::span<const LoadBlock> blocks) {
     // Both terms are <= kMaxBatchCycles = 2^50: the sum cannot overflow.
     cycles += blocks[i].count;
     if (cycles > kMaxBatchCycles) {
-      return Error{at + "count", "the blocks' cycle count exceeds " + std::to_string(kMaxBatchCycles)};
+      return Error{at + "count",
+                   "the blocks' cycle count exceeds " + std::to_string(kMaxBatchCycles)};
     }
   }
   return {};

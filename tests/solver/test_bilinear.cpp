@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "solver/fatigue_engine.h"
-#include "solver/specimens.h"
-#include "tests/solver/plates.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/static/specimen.h"
+#include "tests/support/plates.h"
 
 namespace peritwin {
 namespace {

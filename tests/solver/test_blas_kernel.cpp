@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "solver/blas_kernel.h"
+#include "solver/core/blas_kernel.h"
 
 namespace peritwin {
 namespace {

@@ -4,11 +4,14 @@
 #include <cmath>
 #include <numbers>
 
-#include "solver/crack_tracker.h"
-#include "solver/pd_model.h"
+#include "solver/crack/crack_tracker.h"
+#include "solver/model/pd_model.h"
+#include "validation/specimens.h"
 
 namespace peritwin {
 namespace {
+
+using namespace peritwin::validation;  // the benchmark specimens
 
 constexpr double pi = std::numbers::pi;
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "plates.h"
-#include "solver/fatigue_engine.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "tests/support/plates.h"
 
 namespace peritwin {
 namespace {

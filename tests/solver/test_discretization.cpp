@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "solver/discretization.h"
+#include "solver/mesh/discretization.h"
 
 namespace peritwin {
 namespace {

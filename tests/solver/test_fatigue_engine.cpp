@@ -5,9 +5,9 @@
 #include <memory>
 #include <ostream>
 
-#include "solver/fatigue_engine.h"
-#include "solver/specimens.h"
-#include "tests/solver/plates.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/static/specimen.h"
+#include "tests/support/plates.h"
 
 namespace peritwin {
 namespace {

@@ -1,6 +1,6 @@
-// Tests of solver/fatigue_law: every expected number is either a closed form from the papers, an
-// independent numerical integration, or (for the remaining-life arithmetic) the literal per-cycle
-// loop `lambda -= d` that the fast functions must reproduce bit for bit.
+// Tests of solver/model/fatigue_law: every expected number is either a closed form from the papers,
+// an independent numerical integration, or (for the remaining-life arithmetic) the literal
+// per-cycle loop `lambda -= d` that the fast functions must reproduce bit for bit.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "solver/fatigue_law.h"
+#include "solver/model/fatigue_law.h"
 
 namespace peritwin::fatigue {
 namespace {
@@ -430,7 +430,8 @@ TEST(BilinearLaw, PlaneStressS0MatchesFractureEnergyIntegral) {
 }
 
 TEST(BilinearLaw, Validation) {
-  EXPECT_NE(message_of(validate(BilinearParams{})).find("A must"), std::string::npos);  // A has no default
+  EXPECT_NE(message_of(validate(BilinearParams{})).find("A must"),
+            std::string::npos);  // A has no default
   BilinearParams p{2e-3, 1e-3, 1.0, 4.0};
   EXPECT_NE(message_of(validate(p)).find("sc must"), std::string::npos);
 }

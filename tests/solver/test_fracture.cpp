@@ -5,14 +5,16 @@
 #include <memory>
 #include <numbers>
 
-#include "solver/crack_tracker.h"
-#include "solver/discretization.h"
-#include "solver/pd_model.h"
-#include "solver/specimens.h"
-#include "solver/static_solver.h"
+#include "solver/crack/crack_tracker.h"
+#include "solver/mesh/discretization.h"
+#include "solver/model/pd_model.h"
+#include "solver/static/static_solver.h"
+#include "validation/specimens.h"
 
 namespace peritwin {
 namespace {
+
+using namespace peritwin::validation;  // the benchmark specimens
 
 constexpr double pi = std::numbers::pi;
 

@@ -5,8 +5,8 @@
 #include <ostream>
 #include <string>
 
-#include "plates.h"
-#include "solver/pd_model.h"
+#include "solver/model/pd_model.h"
+#include "tests/support/plates.h"
 
 namespace peritwin {
 namespace {
@@ -70,8 +70,10 @@ TEST(StateBased, ConstantsAreNguyenEq4) {
 
 TEST(ModelValidation, RejectsImpossibleValues) {
   ModelOptions o;
-  EXPECT_NE(message_of(validate(Material{0.0, 0.3, 0.0}, o)).find("youngs_modulus"), std::string::npos);
-  EXPECT_NE(message_of(validate(Material{1e9, 0.5, 0.0}, o)).find("poisson_ratio"), std::string::npos);
+  EXPECT_NE(message_of(validate(Material{0.0, 0.3, 0.0}, o)).find("youngs_modulus"),
+            std::string::npos);
+  EXPECT_NE(message_of(validate(Material{1e9, 0.5, 0.0}, o)).find("poisson_ratio"),
+            std::string::npos);
   o.kernel = Kernel::gaussian;
   EXPECT_NE(message_of(validate(Material{1e9, 0.3, 0.0}, o)).find("kernel"), std::string::npos);
   o.kind = ModelKind::bond_based;

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <random>
 
-#include "plates.h"
-#include "solver/static_solver.h"
+#include "solver/static/static_solver.h"
+#include "tests/support/plates.h"
+#include "validation/specimens.h"
 
 namespace peritwin {
 namespace {
+
+using namespace peritwin::validation;  // the benchmark specimens
 
 const Material aluminium{68e9, 0.33, 48.7e6};
 

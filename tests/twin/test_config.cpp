@@ -9,11 +9,13 @@
 #include <utility>
 #include <vector>
 
-#include "solver/specimens.h"
-#include "twin/config.h"
+#include "twin/config/config.h"
+#include "validation/specimens.h"
 
 namespace peritwin::twin {
 namespace {
+
+using namespace peritwin::validation;  // the benchmark specimens
 
 std::string examples_dir() {
 #ifdef PERITWIN_EXAMPLES_DIR
@@ -440,8 +442,9 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(k0.kinetic.n0, 1.771);
   EXPECT_EQ(k0.kinetic.temperature, 293.0);
   EXPECT_EQ(k0.kinetic.frequency, 0.56);
-  const FatigueSettings k = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5",
-                                   "n0 = 1.5", "temperature = 300", "frequency = 10"});
+  const FatigueSettings k =
+      fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5", "n0 = 1.5",
+               "temperature = 300", "frequency = 10"});
   EXPECT_EQ(k.kinetic.lambda, 5.0);
   EXPECT_EQ(k.kinetic.n0, 1.5);
   EXPECT_EQ(k.kinetic.temperature, 300.0);
@@ -663,12 +666,12 @@ TEST(ConfigErrors, AllErrorsAreReportedInLineOrder) {
 
 TEST(ConfigErrors, LifeSettings) {
   Doc doc = plate();
-  doc.lines.push_back("[detail.life]");                                                     // 24
-  doc.lines.push_back(R"(criterion = "phase3")");                                           // 25
-  doc.lines.push_back("critical_crack_length = 0.01");                                      // 26
+  doc.lines.push_back("[detail.life]");                 // 24
+  doc.lines.push_back(R"(criterion = "phase3")");       // 25
+  doc.lines.push_back("critical_crack_length = 0.01");  // 26
   doc.lines.push_back(  // 27: each block breaks one rule of check_load_block
       R"(reference_spectrum = [{ p_max = 4000.0, r = 1.0, count = 1 }, { p_max = 4000.0, r = 0.1, count = 0 }])");
-  doc.lines.push_back(R"(band = "a2_scatter")");                                            // 28
+  doc.lines.push_back(R"(band = "a2_scatter")");  // 28
   const ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 4u) << r.error_text();
   EXPECT_EQ(r.errors[0].path, "detail[0].life.a2_relative_scatter");  // missing: table line

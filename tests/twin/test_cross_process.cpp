@@ -17,8 +17,8 @@
 #include <fstream>
 #include <thread>
 
-#include "tests/twin/process.h"
-#include "tests/twin/twin_fixtures.h"
+#include "tests/support/process.h"
+#include "tests/support/twin_fixtures.h"
 
 namespace peritwin::twin {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "twin/messages_io.h"
+#include "twin/lcm/messages_io.h"
 
 namespace peritwin::twin {
 namespace {

@@ -15,8 +15,8 @@
 
 #include "messages/channels.h"
 #include "replay/replay_tool.h"
-#include "tests/twin/twin_fixtures.h"
-#include "twin/daemon.h"
+#include "tests/support/twin_fixtures.h"
+#include "twin/service/daemon.h"
 
 namespace peritwin::twin {
 namespace {

@@ -1,8 +1,8 @@
 // Remaining life: rolling spectrum, forward simulation, band, synchronous estimates.
 #include <cmath>
 
-#include "tests/twin/twin_fixtures.h"
-#include "twin/life.h"
+#include "tests/support/twin_fixtures.h"
+#include "twin/model/life.h"
 
 namespace peritwin::twin {
 namespace {

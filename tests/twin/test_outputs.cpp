@@ -14,12 +14,12 @@
 #include <limits>
 #include <sstream>
 
-#include "twin/checkpoint_io.h"
-#include "twin/damage_png.h"
-#include "twin/h5_file.h"
-#include "twin/results_writer.h"
+#include "twin/io/checkpoint_io.h"
+#include "twin/io/damage_png.h"
+#include "twin/io/h5_file.h"
+#include "twin/io/results_writer.h"
 
-namespace peritwin {
+namespace peritwin::twin {
 namespace {
 
 namespace fs = std::filesystem;
@@ -571,4 +571,4 @@ TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
 }
 
 }  // namespace
-}  // namespace peritwin
+}  // namespace peritwin::twin

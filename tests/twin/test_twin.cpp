@@ -5,9 +5,10 @@
 #include <filesystem>
 #include <limits>
 
-#include "solver/blas_kernel.h"
-#include "tests/twin/twin_fixtures.h"
-#include "twin/messages_io.h"
+#include "solver/core/blas_kernel.h"
+#include "tests/support/twin_fixtures.h"
+#include "twin/io/checkpoint_io.h"
+#include "twin/lcm/messages_io.h"
 
 namespace peritwin::twin {
 namespace {

@@ -1,0 +1,44 @@
+#include "messages/batch.h"
+
+namespace peritwin::messages {
+
+namespace {
+
+Outcome invalid(std::string what, std::string why) {
+  return {Verdict::invalid, std::move(what), std::move(why)};
+}
+
+bool printable_ascii(std::string_view s) {
+  for (const char c : s) {
+    if (c < 0x21 || c > 0x7e) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Outcome check_batch(const Batch& batch, std::string_view detail_id) {
+  if (batch.detail_id != detail_id) {
+    return {Verdict::wrong_detail, "detail_id",
+            "detail_id \"" + batch.detail_id + "\" does not match the channel's detail \"" +
+                std::string(detail_id) + "\""};
+  }
+  if (batch.source_id.empty() || batch.source_id.size() > kMaxSourceIdLength ||
+      !printable_ascii(batch.source_id)) {
+    return invalid("source_id", "source_id must be 1 to " + std::to_string(kMaxSourceIdLength) +
+                                    " printable ASCII characters without blanks");
+  }
+  if (batch.seq < 1) return invalid("seq", "seq = " + std::to_string(batch.seq) + " must be >= 1");
+  if (batch.blocks.empty()) return invalid("num_blocks", "num_blocks = 0 must be >= 1");
+  if (batch.blocks.size() > kMaxBlocksPerBatch) {
+    return invalid("num_blocks", "num_blocks = " + std::to_string(batch.blocks.size()) +
+                                     " must be <= " + std::to_string(kMaxBlocksPerBatch));
+  }
+  // The one rule for load blocks and their cycle total (solver/core/load_block.h).
+  if (const Status valid = check_load_blocks(batch.blocks); !valid) {
+    return invalid(valid.error().field, valid.error().reason);
+  }
+  return {};
+}
+
+}  // namespace peritwin::messages

@@ -1,0 +1,51 @@
+// A load batch as the twin receives it (the fields of peritwin_msgs::load_batch_t the model uses),
+// what became of it (reject_t's codes), and the checks that need no bookkeeping. The exactly-once
+// rules per (source, seq) are the twin's (twin/model/twin.h).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "solver/core/load_block.h"
+
+namespace peritwin::messages {
+
+/// One load batch (the fields of peritwin_msgs::load_batch_t the model uses).
+struct Batch {
+  std::string detail_id;
+  std::string source_id;
+  std::int64_t seq = 0;
+  std::vector<LoadBlock> blocks;
+};
+
+/// What became of a batch; the values of the rejections are reject_t's CODE_* constants.
+enum class Verdict : std::int8_t {
+  applied = 0,
+  decode = 1,
+  invalid = 2,
+  wrong_detail = 3,
+  duplicate = 4,
+  gap = 5,
+  failed = 6,
+  internal = 7,
+};
+
+struct Outcome {
+  Verdict verdict = Verdict::applied;
+  std::string what;  ///< offending field path ("blocks[3].r", "seq", "message"); empty if applied
+  std::string why;   ///< for humans
+  [[nodiscard]] bool applied() const { return verdict == Verdict::applied; }
+};
+
+// Accepted domain of a batch (reject_t INVALID outside it); each block and the batch's cycle total
+// by check_load_blocks (solver/core/load_block.h: kMinLoadRatio, kMaxBatchCycles).
+inline constexpr std::size_t kMaxBlocksPerBatch = 100'000;
+inline constexpr std::size_t kMaxSourceIdLength = 64;
+
+/// Everything about a batch that needs no bookkeeping: WRONG_DETAIL or INVALID, else applied.
+Outcome check_batch(const Batch& batch, std::string_view detail_id);
+
+}  // namespace peritwin::messages

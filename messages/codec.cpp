@@ -1,0 +1,193 @@
+#include "messages/codec.h"
+
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+namespace peritwin::messages {
+
+namespace {
+
+std::uint64_t read_be(const unsigned char* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+Outcome decode_error(std::string why) { return {Verdict::decode, "message", std::move(why)}; }
+
+/// Walks the load_batch_t layout without allocating; empty when the generated decoder can be
+/// given the bytes safely and will consume exactly all of them.
+std::string check_layout(const unsigned char* p, std::size_t size) {
+  std::size_t pos = 0;
+  auto need = [&](std::size_t n, const char* what) -> std::string {
+    if (size - pos < n) {
+      return std::string("truncated payload: ") + std::to_string(size) + " bytes end inside " +
+             what;
+    }
+    return {};
+  };
+  if (auto e = need(8, "the fingerprint"); !e.empty()) return e;
+  if (static_cast<std::int64_t>(read_be(p, 8)) != peritwin_msgs::load_batch_t::getHash()) {
+    return "wrong fingerprint: not a peritwin_msgs.load_batch_t of this version";
+  }
+  pos = 8;
+  if (auto e = need(8, "utime"); !e.empty()) return e;
+  pos += 8;
+  for (const char* field : {"detail_id", "source_id"}) {
+    if (auto e = need(4, field); !e.empty()) return e;
+    const auto len = static_cast<std::int32_t>(read_be(p + pos, 4));
+    pos += 4;
+    if (len < 1) return std::string("malformed ") + field + " length " + std::to_string(len);
+    if (auto e = need(static_cast<std::size_t>(len), field); !e.empty()) return e;
+    if (p[pos + static_cast<std::size_t>(len) - 1] != 0) {
+      return std::string(field) + " is not NUL-terminated";
+    }
+    if (std::memchr(p + pos, 0, static_cast<std::size_t>(len) - 1) != nullptr) {
+      return std::string(field) + " contains a NUL byte";
+    }
+    pos += static_cast<std::size_t>(len);
+  }
+  if (auto e = need(12, "seq and num_blocks"); !e.empty()) return e;
+  pos += 8;
+  const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
+  pos += 4;
+  if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
+  const std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks);
+  if (size < expected) {
+    return "truncated payload: " + std::to_string(size) +
+           " bytes, num_blocks = " + std::to_string(blocks) + " needs " + std::to_string(expected);
+  }
+  if (size > expected) {
+    return "oversized payload: " + std::to_string(size - expected) +
+           " bytes after the message's end";
+  }
+  return {};
+}
+
+}  // namespace
+
+int handle_lcm(lcm::LCM& lcm, int timeout_ms) {
+  const int fd = lcm.getFileno();
+  int type = 0;
+  socklen_t len = sizeof type;
+  if (fd >= 0 && getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
+    const int on = 1;
+    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
+    setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &on, sizeof on);
+  }
+  return lcm.handleTimeout(timeout_ms);
+}
+
+std::int64_t now_utime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Decoded decode_batch(const void* data, std::size_t size) {
+  Decoded out;
+  if (size > kMaxBatchPayload) {
+    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
+                             std::to_string(kMaxBatchPayload));
+    return out;
+  }
+  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size);
+      !e.empty()) {
+    out.error = decode_error(e);
+    return out;
+  }
+  peritwin_msgs::load_batch_t msg;
+  const int used = msg.decode(data, 0, static_cast<int>(size));
+  if (used < 0 || static_cast<std::size_t>(used) != size) {
+    out.error = decode_error("not decodable as peritwin_msgs.load_batch_t");
+    return out;
+  }
+  Batch b;
+  b.detail_id = msg.detail_id;
+  b.source_id = msg.source_id;
+  b.seq = msg.seq;
+  b.blocks.reserve(msg.blocks.size());
+  for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
+  out.batch = std::move(b);
+  return out;
+}
+
+peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime) {
+  peritwin_msgs::load_batch_t m;
+  m.utime = utime;
+  m.detail_id = batch.detail_id;
+  m.source_id = batch.source_id;
+  m.seq = batch.seq;
+  for (const auto& b : batch.blocks) {
+    peritwin_msgs::load_block_t k;
+    k.p_max = b.p_max;
+    k.r = b.r;
+    k.alpha = b.alpha;
+    k.count = b.count;
+    m.blocks.push_back(k);
+  }
+  m.num_blocks = static_cast<std::int32_t>(m.blocks.size());
+  return m;
+}
+
+peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
+                                       std::int64_t seq, const Outcome& outcome,
+                                       std::int64_t utime) {
+  peritwin_msgs::reject_t m;
+  m.utime = utime;
+  m.detail_id = detail_id;
+  m.source_id = source;
+  m.seq = seq;
+  m.code = static_cast<std::int8_t>(outcome.verdict);
+  m.what = outcome.what;
+  m.why = outcome.why;
+  return m;
+}
+
+double crack_length(const peritwin_msgs::damage_state_t& state) {
+  return state.cracks.empty() ? 0.0 : state.cracks.front().length_m;
+}
+
+std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source) {
+  for (std::size_t i = 0; i < state.source_ids.size() && i < state.applied_seq.size(); ++i) {
+    if (state.source_ids[i] == source) return state.applied_seq[i];
+  }
+  return 0;
+}
+
+std::string state_json(const peritwin_msgs::damage_state_t& s) {
+  nlohmann::ordered_json j;
+  j["detail"] = s.detail_id;
+  j["state_seq"] = s.state_seq;
+  j["cycles"] = s.total_cycles;
+  j["broken_bonds"] = s.broken_bonds;
+  j["crack_length_m"] = crack_length(s);
+  j["max_damage"] = s.max_damage;
+  j["k_i"] = s.k_i;
+  j["remaining_cycles"] = s.remaining_cycles;
+  j["remaining_low"] = s.remaining_cycles_low;
+  j["remaining_high"] = s.remaining_cycles_high;
+  j["remaining_life_seq"] = s.remaining_life_seq;
+  j["failure"] = static_cast<int>(s.failure);
+  j["state_hash"] = s.state_hash;
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+std::string summary_json(const peritwin_msgs::damage_state_t& s) {
+  nlohmann::ordered_json j;
+  j["detail"] = s.detail_id;
+  j["cycles"] = s.total_cycles;
+  j["broken_bonds"] = s.broken_bonds;
+  j["crack_length_m"] = crack_length(s);
+  j["remaining_cycles"] = s.remaining_cycles;
+  j["state_hash"] = s.state_hash;
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace peritwin::messages

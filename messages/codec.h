@@ -1,0 +1,68 @@
+// The LCM message codec (peritwin_msgs, messages/*.lcm): decoding load batches defensively,
+// building batch and reject messages, reading state messages, the JSON lines the replay tool
+// prints, and LCM's receive loop tuned for the TCP hub. No model here: the state and field
+// messages of a twin are built in twin/lcm/messages_io.h. The replay tool's producer side links
+// this alone (no HDF5, no libpng).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <lcm/lcm-cpp.hpp>
+#include <optional>
+#include <peritwin_msgs/damage_field_t.hpp>
+#include <peritwin_msgs/damage_state_t.hpp>
+#include <peritwin_msgs/load_batch_t.hpp>
+#include <peritwin_msgs/reject_t.hpp>
+#include <peritwin_msgs/status_t.hpp>
+#include <string>
+#include <vector>
+
+#include "messages/batch.h"
+
+namespace peritwin::messages {
+
+/// Largest load_batch_t payload accepted (a full batch of kMaxBlocksPerBatch blocks with two
+/// maximal ids fits).
+inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
+
+/// lcm.handleTimeout(timeout_ms) with the socket tuned for LCM's TCP hub. LCM 1.3.1's Java hub
+/// (lcm.lcm.TCPService) writes every relayed message in five small unbuffered writes without
+/// TCP_NODELAY, and the C client writes a published one in several too; Nagle's algorithm then
+/// holds each message's tail until the peer ACKs its head, which Linux delays by up to 40 ms:
+/// a lockstep round trip took ~90 ms. Before each receive we disable Nagle on our end and ask
+/// for immediate ACKs (TCP_QUICKACK is not sticky, hence every call); both are no-ops on the
+/// memq and UDP transports.
+int handle_lcm(lcm::LCM& lcm, int timeout_ms);
+
+/// Microseconds since the Unix epoch (the informational utime of every message).
+std::int64_t now_utime();
+
+/// A decoded batch, or (verdict decode) why not: wrong fingerprint, truncated, oversized,
+/// malformed string or array length. Never allocates more than the payload justifies.
+struct Decoded {
+  std::optional<Batch> batch;
+  Outcome error;
+};
+Decoded decode_batch(const void* data, std::size_t size);
+
+peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
+
+/// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).
+peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
+                                       std::int64_t seq, const Outcome& outcome,
+                                       std::int64_t utime);
+
+/// Main crack length (m) of a state message (0 without cracks).
+double crack_length(const peritwin_msgs::damage_state_t& state);
+/// Last applied seq of `source` in a state message (0 when the source is unknown).
+std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source);
+
+/// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
+/// max_damage, k_i, remaining_cycles, remaining_low, remaining_high, remaining_life_seq,
+/// failure, state_hash. Non-finite numbers are written as null.
+std::string state_json(const peritwin_msgs::damage_state_t& state);
+/// The final summary: {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles",
+/// "state_hash"}.
+std::string summary_json(const peritwin_msgs::damage_state_t& state);
+
+}  // namespace peritwin::messages

@@ -1,0 +1,93 @@
+// Crack metrics from the damage field: a crack is the connected set of nodes with φ ≥ φ0 grown
+// from a notch tip (docs/design.md "Crack metrics"); per crack its tip, length along the path,
+// projected length and kink angle β. Stress intensity by displacement extrapolation
+// (001 Eq. 60-63) and the ASTM E647 compact-tension ΔK (000 Eq. A2).
+// Units: SI (m, rad, Pa·√m).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "solver/mesh/discretization.h"
+#include "solver/mesh/geometry.h"
+#include "solver/model/pd_model.h"
+
+namespace peritwin {
+
+struct CrackMetrics {
+  int notch = 0;                  ///< index of the notch it grows from
+  Point origin;                   ///< the notch tip
+  Point tip;                      ///< the crack-path node farthest along the path
+  double length = 0.0;            ///< length along the path from the notch tip (m)
+  double projected_length = 0.0;  ///< (tip − origin)·notch direction (m)
+  double kink_angle = 0.0;  ///< β: angle from the notch direction to the early path (rad, CCW +)
+  std::int32_t nodes = 0;   ///< damaged nodes in the crack
+};
+
+struct CrackTrackerOptions {
+  double phase_switch_damage = 0.398;  ///< φ0 (000 Sec. 4.4)
+  /// β is the direction from the notch tip to the centroid of the crack nodes whose path distance
+  /// lies within Δx of this distance (or of the crack length when the crack is shorter) and that
+  /// lie within a horizon of the tip's own path (a branched crack is measured on the branch that
+  /// leads to its tip). 0 = 8δ/3.
+  double kink_distance = 0.0;
+};
+
+class CrackTracker {
+ public:
+  CrackTracker(const Discretization& disc, std::vector<Segment> notches,
+               CrackTrackerOptions options = {});
+  /// One entry per notch, in notch order (length 0 when nothing has grown yet).
+  [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage) const;
+
+ private:
+  const Discretization& disc_;
+  std::vector<Segment> notches_;
+  CrackTrackerOptions options_;
+};
+
+/// Mode I and II stress intensity factors from the crack-face displacement jump at r1 < r2 behind
+/// a tip, 001 Eq. (62)-(63), for a crack running along `direction` (unit vector) with its faces
+/// on either side of the line through `tip`. `kappa` from 001 Eq. (59), `mu` the shear modulus.
+struct StressIntensity {
+  double k_i = 0.0;
+  double k_ii = 0.0;
+};
+StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
+                                                  const std::vector<double>& u, Point tip,
+                                                  Point direction, double r1, double r2, double mu,
+                                                  double kappa);
+
+/// T-stress (Pa) at a crack tip on a straight crack along +x (the tip at `tip`): on a traction-free
+/// face the singular mode I σ_xx vanishes and mode II's has opposite signs on the two faces, so the
+/// mean of E·ε_xx over the face rows (y = tip.y ± Δx/2; plane stress, σ_yy = 0 on the face) is T.
+/// ε_xx by central differences along each row, averaged over r1 ≤ r ≤ r2 behind the tip.
+double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
+                                 Point tip, double r1, double r2, double youngs_modulus);
+
+/// K_I, K_II and T at a tip from a least-squares fit of the Williams series to the displacements of
+/// every node in the annulus r_in ≤ r ≤ r_out around it (the over-deterministic method): per mode
+/// the terms r^(n/2), n = 1…`terms`, plus a rigid translation (the mode II n = 2 term is the rigid
+/// turn). K_I = √(2π)·a₁, K_II = √(2π)·b₁ and T = 4·a₂ in the normalization
+///   u_x = Σ aₙ r^(n/2)/(2μ)·[(κ + n/2 + (−1)ⁿ) cos(nθ/2) − (n/2) cos((n/2 − 2)θ)] + mode II,
+/// which gives 001 Eq. (57)-(58) at n = 1 and the uniform σ_xx = T at n = 2. An independent check
+/// of the two-point extrapolation (its K) and of the crack-face T (which the r¹ term biases).
+struct WilliamsFit {
+  double k_i = 0.0;
+  double k_ii = 0.0;
+  double t_stress = 0.0;
+  int nodes = 0;        ///< nodes in the annulus
+  bool fitted = false;  ///< false: fewer nodes than unknowns, no fit (the values stay 0)
+};
+WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
+                                Point direction, double r_in, double r_out, int terms, double mu,
+                                double kappa);
+
+/// Kolosov constant of 001 Eq. (59) and the shear modulus of the model's effective material.
+double kolosov_kappa(double poisson_ratio, PlaneCondition plane);
+
+/// 000 Eq. (A2): ASTM E647 ΔK (Pa·√m) of a compact-tension specimen, crack length q from the
+/// load line, width W, thickness h, load range ΔP = P_max(1 − R).
+double compact_tension_delta_k(double delta_p, double thickness, double width, double q);
+
+}  // namespace peritwin

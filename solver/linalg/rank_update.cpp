@@ -1,0 +1,337 @@
+// SparseCholesky::modify_fused: a group of rank-one updates and downdates of the simplicial LDLᵀ
+// factor in one sweep along their elimination-tree paths, keeping the tracked forward solve up to
+// date (see sparse_cholesky.h).
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <atomic>
+#include <stdexcept>
+#include <system_error>
+#include <thread>
+
+#include "solver/linalg/cholesky_impl.h"
+
+namespace peritwin {
+
+namespace {
+
+constexpr int kGroup = 16;  ///< ranks per sweep of the fused update
+
+struct RankScalars {
+  int rank;
+  double p, beta;
+};
+
+/// Entries q in [from, to) of column j: w_i −= p·l_ij, l_ij += β·w_i for each active rank; with
+/// R tracked right-hand sides also δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
+template <int R>
+void apply_column(const int* li, double* lx, double* w, int from, int to, const RankScalars* active,
+                  int count, double* delta, const double* y_old, const double* y_new) {
+  for (int q = from; q < to; ++q) {
+    const int i = li[q];
+    double* wi = w + static_cast<std::size_t>(i) * kGroup;
+    const double l_old = lx[q];
+    double l = l_old;
+    for (int a = 0; a < count; ++a) {
+      double& x = wi[active[a].rank];
+      x -= active[a].p * l;
+      l += active[a].beta * x;
+    }
+    lx[q] = l;
+    if constexpr (R > 0) {
+      double* di = delta + static_cast<std::size_t>(i) * 3;
+      for (int r = 0; r < R; ++r) {
+        di[r] += l_old * y_old[r];
+        di[r] -= l * y_new[r];
+      }
+    }
+  }
+}
+
+inline void apply_column(int tracked, const int* li, double* lx, double* w, int from, int to,
+                         const RankScalars* active, int count, double* delta, const double* y_old,
+                         const double* y_new) {
+  switch (tracked) {
+    case 0:
+      apply_column<0>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 1:
+      apply_column<1>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 2:
+      apply_column<2>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    default:
+      apply_column<3>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+  }
+}
+
+/// The forward solve's value at row j: ȳ_j = y_j + δ_j (δ_j is complete once the path's earlier
+/// columns are done); δ_j is cleared. Returns whether it changed (the column must then be swept
+/// even without an active rank).
+inline bool forward_pivot(int tracked, int j, double* y, double* delta, double* y_old,
+                          double* y_new) {
+  bool moved = false;
+  for (int r = 0; r < tracked; ++r) {
+    double& yj = y[static_cast<std::size_t>(j) * static_cast<std::size_t>(tracked) +
+                   static_cast<std::size_t>(r)];
+    double& dj = delta[static_cast<std::size_t>(j) * 3 + static_cast<std::size_t>(r)];
+    y_old[r] = yj;
+    y_new[r] = yj + dj;
+    moved = moved || dj != 0.0;
+    dj = 0.0;
+    yj = y_new[r];
+  }
+  return moved;
+}
+
+/// The scalars of column j (method C1 of Gill, Golub, Murray and Saunders, rank by rank in
+/// order): p = w_j, d̄ = d + α·p², β = α·p/d̄, α ← α·d/d̄; row j of W is cleared. Returns the number
+/// of active ranks (p ≠ 0: a rank whose path does not reach j has w_j = 0 and leaves it alone).
+inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks, double* alpha,
+                          RankScalars* active) {
+  double d = lx[lp[j]];
+  double* wj = w + static_cast<std::size_t>(j) * kGroup;
+  int count = 0;
+  for (int r = 0; r < ranks; ++r) {
+    const double p = wj[r];
+    if (p == 0.0) continue;
+    wj[r] = 0.0;
+    const double dbar = d + alpha[r] * p * p;
+    const double beta = alpha[r] * p / dbar;
+    alpha[r] *= d / dbar;
+    d = dbar;
+    active[count++] = {r, p, beta};
+  }
+  lx[lp[j]] = d;
+  return count;
+}
+
+}  // namespace
+
+FactorReport SparseCholesky::modify_fused(const std::vector<Column>& added,
+                                          const std::vector<Column>& removed) {
+  if (added.empty() && removed.empty()) return {};
+  cholmod_factor* l = impl_->factor;
+  if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
+  auto& impl = *impl_;
+  auto& common = impl.common;
+  if (l->is_super || l->is_ll) {
+    if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
+      return {FactorStatus::failed, "cholmod_change_factor failed"};
+    }
+  }
+  impl.ensure_schedule();
+  const auto n = static_cast<std::size_t>(l->n);
+  if (impl.inverse_perm.size() != n) {
+    impl.inverse_perm.assign(n, 0);
+    const int* perm = static_cast<const int*>(l->Perm);
+    for (std::size_t k = 0; k < n; ++k)
+      impl.inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
+  }
+  const auto* lp = static_cast<const int*>(l->p);
+  const auto* li = static_cast<const int*>(l->i);
+  const auto* lnz = static_cast<const int*>(l->nz);
+  auto* lx = static_cast<double*>(l->x);
+  // Permuted, sorted columns with their signs, updates first. The fused sweep needs the rows of
+  // each column below its first one to be in that column of L (no fill; true for the bond
+  // vectors, whose pairs are all in the matrix's pattern); otherwise CHOLMOD does it.
+  struct Rank {
+    std::vector<std::pair<int, double>> entries;
+    double sign;
+  };
+  std::vector<Rank> ranks;
+  bool fits = impl.schedule.sorted && impl.schedule.nested;
+  for (int pass = 0; pass < 2 && fits; ++pass) {
+    for (const auto& c : pass == 0 ? added : removed) {
+      Rank rank{{}, pass == 0 ? 1.0 : -1.0};
+      for (std::size_t e = 0; e < c.rows.size(); ++e) {
+        rank.entries.emplace_back(impl.inverse_perm[static_cast<std::size_t>(c.rows[e])],
+                                  c.values[e]);
+      }
+      std::sort(rank.entries.begin(), rank.entries.end());
+      if (rank.entries.empty()) continue;
+      const int first = rank.entries.front().first;
+      const int* rows = li + lp[first] + 1;
+      const int* end = li + lp[first] + lnz[first];
+      for (std::size_t e = 1; e < rank.entries.size() && fits; ++e) {
+        fits = rank.entries[e].first != rank.entries[e - 1].first &&
+               std::binary_search(rows, end, rank.entries[e].first);
+      }
+      ranks.push_back(std::move(rank));
+    }
+  }
+  if (!fits) {
+    FactorReport r = modify(added, true);
+    if (r.ok()) r = modify(removed, false);
+    return r;
+  }
+  if (impl.w.size() != n * kGroup) impl.w.assign(n * kGroup, 0.0);
+  double* w = impl.w.data();
+  const int tracked = impl.forward_valid ? static_cast<int>(impl.tracked_rhs.cols()) : 0;
+  if (impl.delta.size() != n * 3) impl.delta.assign(n * 3, 0.0);
+  double* delta = impl.delta.data();
+  double* fy = impl.forward_y.data();
+  if (++impl.stamp == 0) {
+    std::fill(impl.mark.begin(), impl.mark.end(), 0);
+    impl.stamp = 1;
+  }
+  const int all_stamp = impl.stamp;  // columns touched by any group, for the D refresh
+  std::vector<int> touched;
+  std::vector<int> path;
+  std::vector<int> group_mark(n, 0);
+  std::vector<RankScalars> scalars;
+  std::vector<int> counts;
+  std::vector<double> pivots;
+  std::vector<std::uint8_t> moves;
+  for (std::size_t g0 = 0; g0 < ranks.size(); g0 += kGroup) {
+    const int group = static_cast<int>(std::min<std::size_t>(kGroup, ranks.size() - g0));
+    double alpha[kGroup];
+    path.clear();
+    const int gstamp = static_cast<int>(g0 / kGroup) + 1;
+    for (int r = 0; r < group; ++r) {
+      const Rank& rank = ranks[g0 + static_cast<std::size_t>(r)];
+      alpha[r] = rank.sign;
+      for (const auto& [row, value] : rank.entries) {
+        w[static_cast<std::size_t>(row) * kGroup + static_cast<std::size_t>(r)] = value;
+      }
+      for (int j = rank.entries.front().first;
+           j >= 0 && group_mark[static_cast<std::size_t>(j)] != gstamp;
+           j = impl.schedule.parent[static_cast<std::size_t>(j)]) {
+        group_mark[static_cast<std::size_t>(j)] = gstamp;
+        path.push_back(j);
+        if (impl.mark[static_cast<std::size_t>(j)] != all_stamp) {
+          impl.mark[static_cast<std::size_t>(j)] = all_stamp;
+          touched.push_back(j);
+        }
+      }
+    }
+    std::sort(path.begin(), path.end());
+    const int columns = static_cast<int>(path.size());
+    double entries = 0.0;
+    for (int j : path) entries += lnz[j];
+    const bool threaded =
+        impl.solve_threads == 2 ||
+        (impl.solve_threads == 0 && entries > 200'000 && std::thread::hardware_concurrency() > 1);
+    if (!threaded) {
+      RankScalars active[kGroup];
+      double y_old[3], y_new[3];
+      for (int j : path) {
+        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
+        const bool moved = forward_pivot(tracked, j, fy, delta, y_old, y_new);
+        if (count > 0 || moved) {
+          apply_column(tracked, li, lx, w, lp[j] + 1, lp[j] + lnz[j], active, count, delta, y_old,
+                       y_new);
+        }
+      }
+      continue;
+    }
+    // Two threads: rows below the split row S belong to thread 0, the others to thread 1. For the
+    // path's columns below S, thread 0 computes the scalars (it owns w_j) and publishes them;
+    // thread 1 follows with its rows. Columns from S on are thread 1's alone. Every entry gets
+    // the same operations as on one thread. S balances the entries (rows assumed spread evenly
+    // between a column's first and last row).
+    auto below = [&](int split) {
+      double count = 0.0;
+      for (int j : path) {
+        if (j >= split) break;
+        const int len = lnz[j] - 1;
+        if (len <= 0) continue;
+        const int first = li[lp[j] + 1];
+        const int last = li[lp[j] + lnz[j] - 1];
+        const double f = last > first ? static_cast<double>(split - first) / (last - first + 1)
+                                      : (split > first ? 1.0 : 0.0);
+        count += len * std::clamp(f, 0.0, 1.0);
+      }
+      return count;
+    };
+    int lo_split = path.front(), hi_split = static_cast<int>(n);
+    while (hi_split - lo_split > 1) {
+      const int mid = lo_split + (hi_split - lo_split) / 2;
+      (below(mid) < 0.5 * entries ? lo_split : hi_split) = mid;
+    }
+    const int split = hi_split;
+    const int k0 =
+        static_cast<int>(std::lower_bound(path.begin(), path.end(), split) - path.begin());
+    scalars.resize(static_cast<std::size_t>(columns) * kGroup);
+    counts.assign(static_cast<std::size_t>(columns), 0);
+    pivots.resize(static_cast<std::size_t>(columns) * 6);  // y_old[3], y_new[3] per column
+    moves.assign(static_cast<std::size_t>(columns), 0);
+    std::atomic<int> ready{0};
+    auto thread0 = [&] {
+      for (int k = 0; k < k0; ++k) {
+        const int j = path[static_cast<std::size_t>(k)];
+        RankScalars* active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
+        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
+        double* piv = pivots.data() + static_cast<std::size_t>(k) * 6;
+        const bool moved = forward_pivot(tracked, j, fy, delta, piv, piv + 3);
+        counts[static_cast<std::size_t>(k)] = count;
+        moves[static_cast<std::size_t>(k)] = moved ? 1 : 0;
+        ready.store(k + 1, std::memory_order_release);
+        if (count == 0 && !moved) continue;
+        const int* rows = li + lp[j] + 1;
+        const int end = lp[j] + lnz[j];
+        const int cut = static_cast<int>(std::lower_bound(rows, li + end, split) - li);
+        apply_column(tracked, li, lx, w, lp[j] + 1, cut, active, count, delta, piv, piv + 3);
+      }
+    };
+    auto thread1 = [&] {
+      for (int k = 0; k < columns; ++k) {
+        const int j = path[static_cast<std::size_t>(k)];
+        const RankScalars* active;
+        int count;
+        int from;
+        bool moved;
+        const double* piv;
+        RankScalars own[kGroup];
+        double own_pivot[6];
+        if (k < k0) {
+          for (int spins = 0; ready.load(std::memory_order_acquire) <= k; ++spins) {
+            if (spins > 2000) std::this_thread::yield();
+          }
+          active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
+          count = counts[static_cast<std::size_t>(k)];
+          moved = moves[static_cast<std::size_t>(k)] != 0;
+          piv = pivots.data() + static_cast<std::size_t>(k) * 6;
+          const int* rows = li + lp[j] + 1;
+          from = static_cast<int>(std::lower_bound(rows, li + lp[j] + lnz[j], split) - li);
+        } else {
+          if (k == k0) {  // thread 0 is done with α (it published column k0 − 1 last)
+            for (int spins = 0; ready.load(std::memory_order_acquire) < k0; ++spins) {
+              if (spins > 2000) std::this_thread::yield();
+            }
+          }
+          count = column_scalars(lp, lx, w, j, group, alpha, own);
+          moved = forward_pivot(tracked, j, fy, delta, own_pivot, own_pivot + 3);
+          piv = own_pivot;
+          active = own;
+          from = lp[j] + 1;
+        }
+        if (count > 0 || moved) {
+          apply_column(tracked, li, lx, w, from, lp[j] + lnz[j], active, count, delta, piv,
+                       piv + 3);
+        }
+      }
+    };
+    std::thread helper;
+    try {
+      helper = std::thread(thread1);
+    } catch (const std::system_error&) {
+      thread0();
+      thread1();
+      continue;
+    }
+    thread0();
+    helper.join();
+  }
+  for (int j : touched) {
+    impl.diagonal[static_cast<std::size_t>(j)] = lx[lp[j]];
+  }
+  if (!removed.empty()) {
+    if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
+  }
+  return {};
+}
+
+}  // namespace peritwin

@@ -1,0 +1,67 @@
+// Shared helpers of the twin tests: the B1 example config (coarse demo grid) with edits.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "twin/config/config.h"
+#include "twin/model/detail_model.h"
+#include "twin/model/twin.h"
+
+namespace peritwin::twin::testing {
+
+inline std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+using Edits = std::vector<std::pair<std::string, std::string>>;
+
+/// The B1 example text with `life_extra` (default: no remaining-life estimates) replacing its
+/// `every_batches = 10` line under [detail.life], and every edit's first string replaced by its
+/// second.
+inline std::string b1_text(const std::string& life_extra = "every_batches = 0",
+                           const Edits& edits = {}) {
+  std::string text = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+  const std::string anchor = "\nevery_batches = 10\n";
+  text.replace(text.find(anchor), anchor.size(), "\n" + life_extra + "\n");
+  for (const auto& [from, to] : edits) {
+    const auto p = text.find(from);
+    EXPECT_NE(p, std::string::npos) << from;
+    if (p != std::string::npos) text.replace(p, from.size(), to);
+  }
+  return text;
+}
+
+inline DetailConfig b1_config(const std::string& life_extra = "every_batches = 0",
+                              const Edits& edits = {}) {
+  const std::string text = b1_text(life_extra, edits);
+  auto result = parse_config(text, "b1-test.toml");
+  EXPECT_TRUE(result.ok()) << result.error_text();
+  return result.config->details.at(0);
+}
+
+inline std::shared_ptr<const DetailModel> b1_model(const DetailConfig& config) {
+  auto model = DetailModel::build(config);
+  EXPECT_TRUE(model.ok()) << model.error().message();
+  return model ? *model : nullptr;
+}
+
+inline std::unique_ptr<Twin> make_twin(const std::shared_ptr<const DetailModel>& model,
+                                       LifeMode mode = LifeMode::synchronous) {
+  auto twin = Twin::create(model, {mode, true});
+  EXPECT_TRUE(twin.ok()) << twin.error().message();
+  return twin ? std::move(*twin) : nullptr;
+}
+
+inline Batch batch(std::int64_t seq, std::vector<LoadBlock> blocks,
+                   const std::string& source = "test") {
+  return {"b1-ct", source, seq, std::move(blocks)};
+}
+
+}  // namespace peritwin::twin::testing

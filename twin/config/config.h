@@ -1,0 +1,224 @@
+// The daemon's configuration: one TOML file (toml++), SI units (m, N, Pa, s, rad), one
+// [[detail]] table per monitored structural detail, parsed into plain validated value structs.
+// examples/b1-ct-al6061.toml and examples/b2-cts-al6061.toml are complete, commented examples.
+//
+// Schema (R = required, otherwise the default is given; "region" is an inline table that is
+// either a rectangle {x_min, y_min, x_max, y_max} or a circle {centre = [x, y], radius}; points
+// and vectors are arrays [x, y]):
+//
+//   [[detail]]           id R (1-32 chars [A-Za-z0-9_-], unique after upper-casing and '-'->'_'),
+//                        description ""
+//   [detail.geometry] R  thickness R (m, > 0), rigid_factor 200 (E_rigid/E, >= 1),
+//                        outline R [{x_min, y_min, x_max, y_max}, ...] (m, at least one),
+//                        holes [] [{centre, radius}], notches [] [{from, to}] (segments, m),
+//                        rigid_regions [] [region, ...], no_fail_zones [] [region, ...]
+//   [detail.grid] R      dx R (m, > 0, <= the smaller side of the body's bounding box),
+//                        horizon_ratio 3.015 (δ/Δx, >= 1)
+//   [detail.model]       kind "state_based" | "bond_based", kernel "constant" | "conical" |
+//                        "gaussian" (state-based: constant only), plane "plane_stress" |
+//                        "plane_strain", surface_correction true
+//   [detail.material] R  E R (Pa, > 0), nu R (-1 < ν < 0.5), K_c 0 (Pa·√m, >= 0; 0 = not given)
+//   [detail.fatigue] R   law R "strain_range" | "energy" | "bilinear" | "kinetic",
+//                        phi0 (phase-switch / crack damage index, 0 < φ0 < 1; default the
+//                          damage along a straight split at horizon_ratio, 0.398 at 3.015);
+//                        strain_range, energy: A1 R, m1 R, A2 R, m2 R (> 0), eps_inf 0,
+//                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams),
+//                          compressed_bonds_fatigue true (false: only bonds in tension at P_max
+//                          lose life; FatigueSettings::compressed_bonds_fatigue)
+//                        bilinear (model.kind = "bond_based" only): s0 R (> 0), sc R (> s0),
+//                          A R (> 0), m 4 (> 0) (fatigue::BilinearParams), cycle_increment 1000
+//                          (ΔN, >= 1), softening_tolerance 1e-6 (> 0),
+//                          softening_max_iterations 100 (>= 1)
+//                        strain_range, energy, kinetic: static_failure "critical_stretch"
+//                          (000 Eq. 7-8) | "critical_bond_energy" (000 Eq. 9-12, g_c = G_c/N_c)
+//                        kinetic: U R (J, > 0), gamma R (m^3, > 0), lambda 9 (> 0), n0 1.771
+//                          (> 1), temperature 293 (K, > 0), frequency 0.56 (Hz, > 0)
+//                                                                (fatigue::KineticParams)
+//   [[detail.load]] R    name "", exactly one of point [x, y] (the nearest node) | region;
+//   (at least one)       constant, per_cos, per_sin [Fx, Fy] (N per N of P, default [0, 0], not
+//                        all zero): the total force P·(constant + cos α·per_cos + sin α·per_sin)
+//                        shared equally by the selected nodes
+//   [[detail.support]] R name "", exactly one of point | region, fix_x true, fix_y true (not
+//   (at least one)       both false)
+//   [detail.output]      directory "results/<id>" (relative to the daemon's working directory),
+//                        field_every_batches 10 (>= 0, 0 = never), png false
+//   [detail.life]        criterion "phase3" | "crack_length" | "connectivity",
+//                        critical_crack_length (m, > 0, grown length along the crack path from
+//                        the notch tip; R with and only with "crack_length"),
+//                        reference_spectrum "empirical" (the rolling spectrum of the received
+//                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count
+//                        (>= 1)}, ...] (repeated until the criterion is met), band "none" |
+//                        "a2_scatter", a2_relative_scatter (0 < s < 1, the life band from
+//                        A2·(1 ± s), for the bilinear law A·(1 ± s); R with and only with
+//                        "a2_scatter"), every_batches 10 (>= 0, 0 = never: in deterministic mode an
+//                        estimate is computed synchronously whenever state_seq is a multiple of it,
+//                        state 0 included)
+//   [detail.stress_intensity]
+//                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
+//                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
+//                        for a CT detail: K_I from P_max and the crack length from the load line,
+//                        K_II = 0), width (W, m, > 0) and load_line [x, y] (m; a point on the load
+//                        line, the crack length is measured from it along the notch) R with and
+//                        only with "compact_tension"
+//   [detail.checkpoint]  every_batches 100 (>= 0, 0 = off), every_seconds 300 (s, >= 0, 0 = off;
+//                        wall clock: it decides when a checkpoint is written, never a number)
+//
+// Integers are accepted where a real number is expected, not the other way round; every real
+// must be finite. Unknown keys, wrong types, missing required keys and impossible values are
+// errors, each reported with file, line, column and key path (e.g. detail[0].material.E); all of
+// them are collected, not only the first. Two details may share neither a channel token nor an
+// output directory. No exception escapes this API.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "solver/core/load_block.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "solver/mesh/discretization.h"
+#include "solver/mesh/geometry.h"
+#include "solver/model/fatigue_law.h"
+#include "solver/model/pd_model.h"
+#include "solver/static/static_solver.h"
+
+namespace peritwin::twin {
+
+/// One configuration error. line/column are 1-based; 0 = not known (e.g. the file is unreadable).
+struct ConfigError {
+  std::string file;
+  std::uint32_t line = 0;
+  std::uint32_t column = 0;
+  std::string path;  ///< key path, e.g. "detail[0].material.E"; empty for TOML syntax errors
+  std::string reason;
+  /// "file:line:column: path: reason" (parts that are unknown or empty are left out).
+  [[nodiscard]] std::string message() const;
+};
+
+/// Where a load or support spec was written, so that resolve() can name it.
+struct SourceRef {
+  std::string file;
+  std::uint32_t line = 0;
+  std::uint32_t column = 0;
+  std::string path;  ///< e.g. "detail[0].load[1]"
+};
+
+/// What a load or support acts on: the node nearest to a point, or every node inside a region.
+struct NodeSelector {
+  enum class Kind { point, region } kind = Kind::point;
+  Point point;
+  Region region;
+};
+
+/// A load term before it is bound to nodes (see LoadTerm in solver/static/static_solver.h).
+struct LoadSpec {
+  std::string name;
+  NodeSelector target;
+  Point constant;  ///< N per N of P
+  Point per_cos;   ///< N per N of P, times cos α
+  Point per_sin;   ///< N per N of P, times sin α
+  SourceRef where;
+};
+
+/// A support before it is bound to nodes (see Support in solver/static/static_solver.h).
+struct SupportSpec {
+  std::string name;
+  NodeSelector target;
+  bool fix_x = true;
+  bool fix_y = true;
+  SourceRef where;
+};
+
+struct OutputConfig {
+  std::string directory;                  ///< default "results/<id>"
+  std::int64_t field_every_batches = 10;  ///< damage-field snapshot period, 0 = never
+  bool png = false;                       ///< damage-map PNG and crack-length plot
+};
+
+enum class LifeCriterion { crack_length, phase3, connectivity };
+enum class BandSource { none, a2_scatter };
+
+struct LifeConfig {
+  LifeCriterion criterion = LifeCriterion::phase3;
+  double critical_crack_length = 0.0;  ///< m, crack_length only
+  /// Empty = the rolling empirical spectrum of the received cycles ("empirical").
+  std::vector<LoadBlock> reference_spectrum;  ///< each valid by check_load_block
+  BandSource band = BandSource::none;
+  double a2_relative_scatter = 0.0;  ///< a2_scatter only
+  /// Deterministic mode: estimate at every state_seq that is a multiple of this (0 = never).
+  std::int64_t every_batches = 10;
+  [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }
+};
+
+enum class StressIntensityMethod { extrapolation, compact_tension };
+
+/// How K_I and K_II at the main crack tip are reported (STATE, results).
+struct StressIntensityConfig {
+  StressIntensityMethod method = StressIntensityMethod::extrapolation;
+  double width = 0.0;  ///< W (m), compact_tension only
+  Point load_line;     ///< a point on the load line (m), compact_tension only
+};
+
+struct CheckpointConfig {
+  std::int64_t every_batches = 100;  ///< 0 = off
+  double every_seconds = 300.0;      ///< wall-clock period, 0 = off
+};
+
+struct DetailConfig {
+  std::string id;     ///< as written, e.g. "b1-ct"
+  std::string token;  ///< channel token: upper case, '-' -> '_', e.g. "B1_CT"
+  std::string description;
+  DetailGeometry geometry;
+  double dx = 0.0;               ///< grid spacing Δx (m)
+  double horizon_ratio = 3.015;  ///< δ/Δx
+  Material material;
+  ModelOptions model;
+  /// [detail.fatigue]: the engine's own settings (law, parameters, φ0, phase III); the daemon
+  /// keeps the engine defaults for the keys the schema does not expose.
+  FatigueSettings fatigue;
+  std::vector<LoadSpec> loads;
+  std::vector<SupportSpec> supports;
+  OutputConfig output;
+  LifeConfig life;
+  StressIntensityConfig stress_intensity;
+  CheckpointConfig checkpoint;
+  SourceRef where;  ///< the [[detail]] table
+
+  [[nodiscard]] double horizon() const { return horizon_ratio * dx; }
+};
+
+struct TwinConfig {
+  std::vector<DetailConfig> details;
+};
+
+/// Either a config (errors empty) or every error found (config empty).
+struct ConfigResult {
+  std::optional<TwinConfig> config;
+  std::vector<ConfigError> errors;
+  [[nodiscard]] bool ok() const { return config.has_value(); }
+  /// One message() per line.
+  [[nodiscard]] std::string error_text() const;
+};
+
+/// Reads and parses a file; errors name it as given.
+[[nodiscard]] ConfigResult load_config(const std::string& file);
+/// Parses TOML text; errors name `file_name` (need not exist).
+[[nodiscard]] ConfigResult parse_config(std::string_view text, std::string_view file_name);
+
+/// The supports and load terms of a detail bound to the nodes of its discretization. A point
+/// selects its nearest node, a region every node inside it; a selection without nodes is an error
+/// (named with the spec's file, line and path) and its entry is left out.
+struct ResolvedBoundary {
+  std::vector<Support> supports;
+  std::vector<LoadTerm> loads;
+  std::vector<ConfigError> errors;
+  [[nodiscard]] bool ok() const { return errors.empty(); }
+};
+[[nodiscard]] ResolvedBoundary resolve(const DetailConfig& detail, const Discretization& disc);
+
+/// discretize(detail.geometry, detail.dx, detail.horizon()).
+[[nodiscard]] Discretization discretize(const DetailConfig& detail);
+
+}  // namespace peritwin::twin

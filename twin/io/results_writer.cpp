@@ -1,0 +1,438 @@
+#include "twin/io/results_writer.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <sstream>
+
+#include "twin/io/checkpoint_io.h"
+#include "twin/io/h5_file.h"
+
+namespace peritwin::twin {
+
+namespace {
+
+constexpr const char* kFormat = "peritwin-results";
+constexpr std::int64_t kLayoutVersion = 1;
+
+struct IntColumn {
+  const char* name;
+  std::int64_t TimeSeriesRow::*member;
+  const char* units;
+};
+struct DoubleColumn {
+  const char* name;
+  double TimeSeriesRow::*member;
+  const char* units;
+};
+
+constexpr std::array<IntColumn, 3> kIntColumns{{
+    {"state_seq", &TimeSeriesRow::state_seq, "1"},
+    {"total_cycles", &TimeSeriesRow::total_cycles, "cycles"},
+    {"broken_bonds", &TimeSeriesRow::broken_bonds, "1"},
+}};
+constexpr std::array<DoubleColumn, 10> kDoubleColumns{{
+    {"crack_length_m", &TimeSeriesRow::crack_length_m, "m"},
+    {"crack_projected_length_m", &TimeSeriesRow::crack_projected_length_m, "m"},
+    {"tip_x", &TimeSeriesRow::tip_x, "m"},
+    {"tip_y", &TimeSeriesRow::tip_y, "m"},
+    {"kink_angle_rad", &TimeSeriesRow::kink_angle_rad, "rad"},
+    {"k_i", &TimeSeriesRow::k_i, "Pa*m^0.5"},
+    {"k_ii", &TimeSeriesRow::k_ii, "Pa*m^0.5"},
+    {"remaining_cycles", &TimeSeriesRow::remaining_cycles, "cycles"},
+    {"remaining_low", &TimeSeriesRow::remaining_low, "cycles"},
+    {"remaining_high", &TimeSeriesRow::remaining_high, "cycles"},
+}};
+
+std::string step_name(std::int64_t index) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "step_%06lld", static_cast<long long>(index));
+  return buf;
+}
+
+/// index of "step_<digits>", or -1.
+std::int64_t parse_step(const std::string& name) {
+  if (name.rfind("step_", 0) != 0 || name.size() == 5) return -1;
+  std::int64_t v = 0;
+  for (std::size_t i = 5; i < name.size(); ++i) {
+    if (name[i] < '0' || name[i] > '9') return -1;
+    v = v * 10 + (name[i] - '0');
+  }
+  return v;
+}
+
+std::string xml_escape(std::string_view s) {
+  std::string out;
+  for (const char c : s) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+void check_format(const h5::File& file) {
+  if (!file.has_attribute("format") || file.attribute_string("format") != kFormat) {
+    throw ResultsError("'" + file.file_name() + "' is not a peritwin results file");
+  }
+  const std::int64_t layout = file.attribute_int64("layout_version");
+  if (layout != kLayoutVersion) {
+    throw ResultsError("'" + file.file_name() + "' has results layout_version " +
+                       std::to_string(layout) + "; this build reads " +
+                       std::to_string(kLayoutVersion));
+  }
+}
+
+/// Snapshots whose dataset and attributes are complete, by index; with `drop_partial`, removes
+/// the step groups a crash left incomplete.
+std::vector<SnapshotInfo> scan_snapshots(h5::Group& root, bool drop_partial) {
+  std::vector<SnapshotInfo> out;
+  if (!root.exists("fields")) return out;
+  h5::Group fields = root.open_group("fields");
+  for (const auto& name : fields.children()) {
+    const std::int64_t index = parse_step(name);
+    if (index < 0) continue;
+    bool complete = fields.exists(name + "/damage");
+    if (complete) {
+      const h5::Dataset ds = fields.open_dataset(name + "/damage");
+      complete = ds.has_attribute("state_seq") && ds.has_attribute("total_cycles");
+      if (complete) {
+        out.push_back({index, ds.attribute_int64("state_seq"), ds.attribute_int64("total_cycles")});
+      }
+    }
+    if (!complete && drop_partial) fields.remove(name);
+  }
+  std::sort(out.begin(), out.end(),
+            [](const SnapshotInfo& a, const SnapshotInfo& b) { return a.index < b.index; });
+  return out;
+}
+
+}  // namespace
+
+std::string SnapshotInfo::group() const { return "/fields/" + step_name(index); }
+
+struct ResultsWriter::Impl {
+  std::filesystem::path h5_path;
+  std::filesystem::path xdmf_path;
+  ResultsOptions options;
+  std::optional<std::filesystem::path> recovered_from;
+  h5::File file;
+  std::vector<h5::Dataset> int_columns;
+  std::vector<h5::Dataset> double_columns;
+  std::uint64_t rows = 0;
+  std::size_t nodes = 0;
+  std::vector<SnapshotInfo> snapshots;
+
+  void open_or_create();
+  void require_open(const char* what) const {
+    if (!file.is_open()) throw ResultsError(std::string(what) + " after close()");
+  }
+  void open_columns();
+  void write_xdmf() const;
+  [[nodiscard]] std::string xdmf_grid(std::string_view name, const SnapshotInfo* snapshot) const;
+};
+
+void ResultsWriter::Impl::open_or_create() {
+  const h5::File::Options fopts{options.file_locking};
+  if (std::filesystem::exists(h5_path)) {
+    try {
+      file = h5::File(h5_path, h5::File::Mode::read_write, fopts);
+    } catch (const h5::Error& e) {
+      // Not ours to move aside: something that is not a file, no permission, or a lock held
+      // by another writer. Anything else is a file a crash left unreadable.
+      const std::string why = e.what();
+      if (!std::filesystem::is_regular_file(h5_path) ||
+          ::access(h5_path.c_str(), R_OK | W_OK) != 0 || why.find("to lock") != std::string::npos) {
+        throw;
+      }
+      std::filesystem::path aside = h5_path;
+      aside += ".corrupt";
+      std::filesystem::rename(h5_path, aside);
+      recovered_from = aside;
+    }
+  }
+  if (file.is_open()) {
+    check_format(file);
+  } else {
+    file = h5::File(h5_path, h5::File::Mode::create_exclusive, fopts);
+    file.set_attribute("format", std::string_view(kFormat));
+    file.set_attribute("layout_version", kLayoutVersion);
+    file.set_attribute("detail", options.detail);
+  }
+  open_columns();
+  if (file.exists("mesh/x")) {
+    nodes = static_cast<std::size_t>(file.open_dataset("mesh/x").size());
+  }
+  snapshots = scan_snapshots(file, true);
+  file.flush();
+  if (nodes > 0) write_xdmf();
+}
+
+void ResultsWriter::Impl::open_columns() {
+  h5::Group ts = file.require_group("timeseries");
+  auto open = [&ts](const char* name, const char* units, auto tag) {
+    using T = decltype(tag);
+    if (ts.exists(name)) return ts.open_dataset(name);
+    h5::Dataset ds = ts.create_extendible<T>(name, 1024);
+    ds.set_attribute("units", std::string_view(units));
+    return ds;
+  };
+  int_columns.clear();
+  double_columns.clear();
+  for (const auto& c : kIntColumns) int_columns.push_back(open(c.name, c.units, std::int64_t{}));
+  for (const auto& c : kDoubleColumns) double_columns.push_back(open(c.name, c.units, double{}));
+  // A crash between the appends of one row leaves columns of different lengths: drop the tail.
+  std::uint64_t n = int_columns.front().size();
+  for (const auto& ds : int_columns) n = std::min(n, ds.size());
+  for (const auto& ds : double_columns) n = std::min(n, ds.size());
+  for (auto& ds : int_columns) {
+    if (ds.size() != n) ds.resize(n);
+  }
+  for (auto& ds : double_columns) {
+    if (ds.size() != n) ds.resize(n);
+  }
+  rows = n;
+}
+
+std::string ResultsWriter::Impl::xdmf_grid(std::string_view name,
+                                           const SnapshotInfo* snapshot) const {
+  const std::string h5 = xml_escape(h5_path.filename().string());
+  const std::string n = std::to_string(nodes);
+  std::ostringstream g;
+  g << "      <Grid Name=\"" << name << "\" GridType=\"Uniform\">\n";
+  if (snapshot != nullptr) g << "        <Time Value=\"" << snapshot->total_cycles << "\"/>\n";
+  g << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
+    << "\" NodesPerElement=\"1\"/>\n"
+    << "        <Geometry GeometryType=\"X_Y\">\n";
+  for (const char* axis : {"x", "y"}) {
+    g << "          <DataItem Name=\"" << axis << "\" Dimensions=\"" << n
+      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5 << ":/mesh/" << axis
+      << "</DataItem>\n";
+  }
+  g << "        </Geometry>\n";
+  if (snapshot != nullptr) {
+    g << "        <Attribute Name=\"damage\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+      << "          <DataItem Dimensions=\"" << n
+      << "\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">" << h5 << ":" << snapshot->group()
+      << "/damage</DataItem>\n"
+      << "        </Attribute>\n";
+  }
+  g << "      </Grid>\n";
+  return g.str();
+}
+
+void ResultsWriter::Impl::write_xdmf() const {
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" ?>\n"
+    << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
+    << "<Xdmf Version=\"3.0\">\n"
+    << "  <Domain>\n";
+  const std::string detail = xml_escape(options.detail.empty() ? "detail" : options.detail);
+  if (snapshots.empty()) {
+    x << xdmf_grid(detail + " mesh", nullptr);
+  } else {
+    x << "    <Grid Name=\"" << detail
+      << " damage\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (const auto& s : snapshots) x << xdmf_grid(step_name(s.index), &s);
+    x << "    </Grid>\n";
+  }
+  x << "  </Domain>\n"
+    << "</Xdmf>\n";
+  write_file_atomically(xdmf_path, x.str());
+}
+
+ResultsWriter::ResultsWriter(std::filesystem::path h5_path, ResultsOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->xdmf_path = xdmf_path_for(h5_path);
+  impl_->h5_path = std::move(h5_path);
+  impl_->options = std::move(options);
+  impl_->open_or_create();
+}
+
+ResultsWriter::~ResultsWriter() {
+  if (!impl_) return;
+  try {
+    close();
+  } catch (...) {  // NOLINT(bugprone-empty-catch): a destructor must not throw
+  }
+}
+
+ResultsWriter::ResultsWriter(ResultsWriter&&) noexcept = default;
+ResultsWriter& ResultsWriter::operator=(ResultsWriter&&) noexcept = default;
+
+void ResultsWriter::write_mesh(std::span<const double> x, std::span<const double> y) {
+  impl_->require_open("write_mesh");
+  if (x.size() != y.size() || x.empty()) {
+    throw ResultsError("write_mesh: x and y must be non-empty and of equal size (got " +
+                       std::to_string(x.size()) + " and " + std::to_string(y.size()) + ")");
+  }
+  h5::File& f = impl_->file;
+  if (f.exists("mesh/x")) {
+    const auto sx = f.read<double>("mesh/x");
+    const auto sy = f.read<double>("mesh/y");
+    if (!std::equal(x.begin(), x.end(), sx.begin(), sx.end()) ||
+        !std::equal(y.begin(), y.end(), sy.begin(), sy.end())) {
+      throw ResultsError("'" + impl_->h5_path.string() +
+                         "' already holds a different mesh; start a new results file");
+    }
+    return;
+  }
+  {
+    h5::Group mesh = f.require_group("mesh");
+    mesh.write<double>("x", x);
+    mesh.write<double>("y", y);
+    mesh.set_attribute("node_count", static_cast<std::int64_t>(x.size()));
+  }
+  f.flush();
+  impl_->nodes = x.size();
+  impl_->write_xdmf();
+}
+
+void ResultsWriter::append(const TimeSeriesRow& row) {
+  impl_->require_open("append");
+  for (std::size_t i = 0; i < kIntColumns.size(); ++i) {
+    impl_->int_columns[i].append(row.*(kIntColumns[i].member));
+  }
+  for (std::size_t i = 0; i < kDoubleColumns.size(); ++i) {
+    impl_->double_columns[i].append(row.*(kDoubleColumns[i].member));
+  }
+  impl_->file.flush();
+  ++impl_->rows;
+}
+
+void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
+                                   std::span<const double> damage) {
+  std::vector<float> f(damage.size());
+  std::transform(damage.begin(), damage.end(), f.begin(),
+                 [](double d) { return static_cast<float>(d); });
+  write_snapshot(state_seq, total_cycles, std::span<const float>(f));
+}
+
+void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
+                                   std::span<const float> damage) {
+  Impl& im = *impl_;
+  im.require_open("write_snapshot");
+  if (im.nodes == 0) throw ResultsError("write_snapshot before write_mesh");
+  if (damage.size() != im.nodes) {
+    throw ResultsError("write_snapshot: " + std::to_string(damage.size()) + " damage values for " +
+                       std::to_string(im.nodes) + " nodes");
+  }
+  const std::int64_t index = im.snapshots.empty() ? 0 : im.snapshots.back().index + 1;
+  const SnapshotInfo info{index, state_seq, total_cycles};
+  {
+    h5::Group step = im.file.create_group("fields/" + step_name(index));
+    h5::Dataset ds = step.write<float>("damage", damage, {im.options.field_deflate_level});
+    for (h5::Object* o : {static_cast<h5::Object*>(&step), static_cast<h5::Object*>(&ds)}) {
+      o->set_attribute("state_seq", state_seq);
+      o->set_attribute("total_cycles", total_cycles);
+    }
+  }
+  im.file.flush();
+  im.snapshots.push_back(info);
+  im.write_xdmf();
+}
+
+void ResultsWriter::rewind_to(std::int64_t state_seq) {
+  impl_->require_open("rewind_to");
+  Impl& im = *impl_;
+  const auto seqs = im.int_columns.front().read<std::int64_t>();
+  const auto keep = static_cast<std::uint64_t>(
+      std::find_if(seqs.begin(), seqs.end(), [&](std::int64_t s) { return s > state_seq; }) -
+      seqs.begin());
+  if (keep != im.rows) {
+    for (auto& ds : im.int_columns) ds.resize(keep);
+    for (auto& ds : im.double_columns) ds.resize(keep);
+    im.rows = keep;
+  }
+  const auto before = im.snapshots.size();
+  std::erase_if(im.snapshots, [&](const SnapshotInfo& s) {
+    if (s.state_seq <= state_seq) return false;
+    im.file.remove(s.group());
+    return true;
+  });
+  im.file.flush();
+  if (im.snapshots.size() != before && im.nodes > 0) im.write_xdmf();
+}
+
+std::uint64_t ResultsWriter::rows() const { return impl_->rows; }
+const std::vector<SnapshotInfo>& ResultsWriter::snapshots() const { return impl_->snapshots; }
+std::size_t ResultsWriter::node_count() const { return impl_->nodes; }
+const std::filesystem::path& ResultsWriter::h5_path() const { return impl_->h5_path; }
+const std::filesystem::path& ResultsWriter::xdmf_path() const { return impl_->xdmf_path; }
+const std::optional<std::filesystem::path>& ResultsWriter::recovered_from() const {
+  return impl_->recovered_from;
+}
+
+void ResultsWriter::close() {
+  if (!impl_ || !impl_->file.is_open()) return;
+  impl_->int_columns.clear();
+  impl_->double_columns.clear();
+  impl_->file.flush();
+  impl_->file.close();
+}
+
+std::filesystem::path ResultsWriter::xdmf_path_for(const std::filesystem::path& h5_path) {
+  std::filesystem::path p = h5_path;
+  p.replace_extension(".xdmf");
+  return p;
+}
+
+// --- reading -----------------------------------------------------------------------------------
+
+std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  std::vector<std::vector<std::int64_t>> ints;
+  std::vector<std::vector<double>> doubles;
+  std::size_t n = std::numeric_limits<std::size_t>::max();
+  for (const auto& c : kIntColumns) {
+    ints.push_back(file.read<std::int64_t>(std::string("timeseries/") + c.name));
+    n = std::min(n, ints.back().size());
+  }
+  for (const auto& c : kDoubleColumns) {
+    doubles.push_back(file.read<double>(std::string("timeseries/") + c.name));
+    n = std::min(n, doubles.back().size());
+  }
+  std::vector<TimeSeriesRow> rows(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    for (std::size_t i = 0; i < kIntColumns.size(); ++i)
+      rows[r].*(kIntColumns[i].member) = ints[i][r];
+    for (std::size_t i = 0; i < kDoubleColumns.size(); ++i) {
+      rows[r].*(kDoubleColumns[i].member) = doubles[i][r];
+    }
+  }
+  return rows;
+}
+
+std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path) {
+  h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  return scan_snapshots(file, false);
+}
+
+std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
+                                        const SnapshotInfo& snapshot) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  return file.read<float>(snapshot.group() + "/damage");
+}
+
+}  // namespace peritwin::twin

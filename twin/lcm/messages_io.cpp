@@ -1,0 +1,83 @@
+#include "twin/lcm/messages_io.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace peritwin::twin {
+
+peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime) {
+  peritwin_msgs::damage_state_t m;
+  m.utime = utime;
+  m.detail_id = twin.detail_id();
+  m.state_seq = twin.state_seq();
+  for (const auto& [source, seq] : twin.applied()) {
+    m.source_ids.push_back(source);
+    m.applied_seq.push_back(seq);
+  }
+  m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
+  const FatigueEngine& engine = twin.engine();
+  m.total_cycles = engine.total_cycles();
+  m.broken_bonds = twin.broken_bonds();
+  const CrackReport& report = twin.cracks();
+  m.max_damage = report.max_damage;
+  bool overload = false;
+  for (const auto& e : engine.break_events())
+    overload = overload || e.cause == BreakCause::overload;
+  for (const auto& c : report.cracks) {
+    if (c.length <= 0.0 && c.nodes == 0) continue;  // not initiated
+    peritwin_msgs::crack_t k;
+    k.notch_index = c.notch;
+    k.origin_x = c.origin.x;
+    k.origin_y = c.origin.y;
+    k.tip_x = c.tip.x;
+    k.tip_y = c.tip.y;
+    k.length_m = c.length;
+    k.projected_length_m = c.projected_length;
+    k.kink_angle_rad = c.kink_angle;
+    k.num_nodes = c.nodes;
+    k.phase = twin.failure() != Failure::none || overload ? peritwin_msgs::crack_t::PHASE_FINAL
+              : c.length > 0.0 ? peritwin_msgs::crack_t::PHASE_PROPAGATION
+                               : peritwin_msgs::crack_t::PHASE_INITIATION;
+    m.cracks.push_back(k);
+  }
+  m.num_cracks = static_cast<std::int32_t>(m.cracks.size());
+  m.k_i = report.k_i;
+  m.k_ii = report.k_ii;
+  const LifeEstimate& life = twin.life();
+  m.remaining_cycles = life.central;
+  m.remaining_cycles_low = life.low;
+  m.remaining_cycles_high = life.high;
+  m.remaining_life_seq = life.seq;
+  m.remaining_life_source = life.source;
+  m.failure = static_cast<std::int8_t>(twin.failure());
+  m.state_hash = twin.state_hash_hex();
+  return m;
+}
+
+std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime) {
+  const auto& damage = twin.engine().node_damage();
+  const auto total = static_cast<std::int32_t>(damage.size());
+  const std::int32_t per = peritwin_msgs::damage_field_t::MAX_NODES_PER_CHUNK;
+  const std::int32_t chunks = std::max<std::int32_t>(1, (total + per - 1) / per);
+  std::vector<peritwin_msgs::damage_field_t> out;
+  for (std::int32_t c = 0; c < chunks; ++c) {
+    peritwin_msgs::damage_field_t m;
+    m.utime = utime;
+    m.detail_id = twin.detail_id();
+    m.state_seq = twin.state_seq();
+    m.chunk_index = c;
+    m.num_chunks = chunks;
+    m.total_nodes = total;
+    m.first_node = c * per;
+    m.num_nodes = std::min(per, total - m.first_node);
+    m.damage.reserve(static_cast<std::size_t>(m.num_nodes));
+    for (std::int32_t k = 0; k < m.num_nodes; ++k) {
+      m.damage.push_back(static_cast<float>(
+          damage[static_cast<std::size_t>(m.first_node) + static_cast<std::size_t>(k)]));
+    }
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+}  // namespace peritwin::twin

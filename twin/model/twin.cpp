@@ -1,0 +1,154 @@
+#include "twin/model/twin.h"
+
+#include <string_view>
+
+#include "solver/core/fnv1a.h"
+
+namespace peritwin::twin {
+
+Twin::Twin(std::shared_ptr<const DetailModel> model, Options options)
+    : model_(std::move(model)), options_(options) {}
+
+Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailModel> model,
+                                             Options options) {
+  std::unique_ptr<Twin> twin(new Twin(std::move(model), options));
+  twin->engine_ = twin->model_->make_engine();
+  if (!twin->engine_->initialize()) {
+    return peritwin::failure(
+        "detail " + twin->detail_id() +
+        ": the virgin model cannot be solved: " + twin->engine_->failure_reason());
+  }
+  twin->refresh();
+  return twin;
+}
+
+std::int64_t Twin::applied_seq(const std::string& source) const {
+  const auto it = applied_.find(source);
+  return it == applied_.end() ? 0 : it->second;
+}
+
+std::int64_t Twin::broken_bonds() const { return engine_->broken_bonds() - model_->precut_bonds(); }
+
+void Twin::refresh() {
+  report_ = measure_cracks(*model_, *engine_, last_block_ ? &*last_block_ : nullptr);
+  failure_ = end_of_life(*model_, *engine_, report_);
+}
+
+Outcome Twin::apply(const Batch& batch) {
+  Outcome o = check_batch(batch, detail_id());
+  if (!o.applied()) {
+    ++counters_.rejected;
+    return o;
+  }
+  const std::int64_t last = applied_seq(batch.source_id);
+  if (batch.seq <= last) {
+    ++counters_.duplicates;
+    return {Verdict::duplicate, "seq",
+            "seq " + std::to_string(batch.seq) + " of source \"" + batch.source_id +
+                "\" is already applied (last applied " + std::to_string(last) + ")"};
+  }
+  if (batch.seq > last + 1) {
+    ++counters_.gaps;
+    ++counters_.rejected;
+    return {Verdict::gap, "seq",
+            "seq " + std::to_string(batch.seq) + " of source \"" + batch.source_id +
+                "\" skips ahead: expected " + std::to_string(last + 1) + ", missing " +
+                std::to_string(batch.seq - last - 1) + " batch(es); resend from " +
+                std::to_string(last + 1)};
+  }
+  if (failure_ != Failure::none) {
+    ++counters_.rejected;
+    return {Verdict::failed, "message",
+            failure_ == Failure::singular
+                ? "the detail has reached final failure: " + engine_->failure_reason()
+                : std::string("the detail has reached its end-of-life criterion")};
+  }
+  for (const LoadBlock& block : batch.blocks) {
+    if (engine_->failed()) break;
+    engine_->apply(block);
+    spectrum_.add(block);
+    last_block_ = block;
+  }
+  applied_[batch.source_id] = batch.seq;
+  ++state_seq_;
+  last_source_ = batch.source_id;
+  last_seq_ = batch.seq;
+  ++counters_.applied;
+  refresh();
+  if (failure_ != Failure::none) {
+    set_life({0.0, 0.0, 0.0, state_seq_, last_seq_, last_source_});
+  } else if (options_.life == LifeMode::synchronous) {
+    catch_up_life();
+  }
+  return {};
+}
+
+namespace {
+
+void hash_field(Fnv1a64& h, const std::map<std::string, std::int64_t>& applied) {
+  h.integer(static_cast<std::int64_t>(applied.size()));
+  for (const auto& [source, seq] : applied) {
+    h.packed(source);
+    h.integer(seq);
+  }
+}
+void hash_field(Fnv1a64& h, const std::optional<LoadBlock>& block) {
+  h.integer(block ? 1 : 0);
+  if (block) peritwin::hash_field(h, *block);
+}
+void hash_field(Fnv1a64& h, Failure failure) { h.integer(static_cast<std::int64_t>(failure)); }
+void hash_field(Fnv1a64& h, const RollingSpectrum& spectrum) {
+  h.integer(static_cast<std::int64_t>(spectrum.blocks().size()));
+  for (const auto& b : spectrum.blocks()) peritwin::hash_field(h, b);
+}
+using peritwin::hash_field;
+
+}  // namespace
+
+std::uint64_t Twin::state_hash() const {
+  // Equal hashes <=> bit-identical states (up to 64-bit collisions).
+  Fnv1a64 h;
+  for_each_own_field(*this, [&h](std::string_view, const auto& field, Hashed hashed) {
+    if (hashed == Hashed::yes) hash_field(h, field);
+  });
+  const EngineState engine = engine_->export_state();
+  for_each_field(engine, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+  return h.get();
+}
+
+std::string Twin::state_hash_hex() const { return hex64(state_hash()); }
+
+LifeJob Twin::life_job() const {
+  return {model_,
+          engine_->export_state(),
+          reference_spectrum(*model_, spectrum_),
+          state_seq_,
+          last_seq_,
+          last_source_};
+}
+
+void Twin::set_life(const LifeEstimate& estimate) {
+  if (estimate.state_seq < life_.state_seq) return;
+  life_ = estimate;
+}
+
+bool Twin::life_due() const {
+  const std::int64_t every = model_->config().life.every_batches;
+  return failure_ == Failure::none && every > 0 && state_seq_ % every == 0 &&
+         life_.state_seq != state_seq_;
+}
+
+void Twin::estimate_life_now() {
+  const LifeJob job = life_job();
+  LifeEstimate e = estimate_life(*model_, job.state, job.spectrum, options_.parallel_band);
+  e.state_seq = job.state_seq;
+  e.seq = job.seq;
+  e.source = job.source;
+  set_life(e);
+}
+
+void Twin::catch_up_life() {
+  if (options_.life == LifeMode::synchronous && life_due()) estimate_life_now();
+}
+
+}  // namespace peritwin::twin

@@ -1,0 +1,168 @@
+// The live twin of one detail: the fatigue engine on the detail's model, exactly-once
+// bookkeeping per load source, crack metrics, end-of-life state, the rolling spectrum, the latest
+// remaining-life estimate, and checkpoint export/import. No LCM, no threads, no wall clock: the
+// state after a batch sequence is a pure function of (config, sequence).
+//
+// Exactly-once (docs/design.md): every batch carries (source_id, seq). Per source the twin applies
+// seq = last + 1 only: seq <= last is a DUPLICATE (ignored, counted), seq > last + 1 is a GAP
+// (rejected, counted; the producer resends from applied_seq + 1, which every state publishes).
+// A batch is applied as a unit, its blocks in order. A batch that is rejected for any reason
+// leaves the model untouched. After final failure (end criterion met or singular stiffness)
+// every new batch is rejected with FAILED.
+//
+// Remaining life (LifeMode):
+//  * synchronous (deterministic mode: replay in-process, the daemon with --deterministic): an
+//    estimate is computed inside apply() whenever state_seq is a multiple of
+//    life.every_batches (catch_up_life() does it for the state the twin starts from);
+//  * external (the daemon's worker thread): the owner takes life_job() snapshots, runs
+//    estimate_life() elsewhere and hands the result back with set_life().
+// The estimate is not part of state_hash(); it is published with the state it was computed on.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "messages/batch.h"
+#include "solver/fatigue/fatigue_engine.h"
+#include "twin/model/checkpoint_data.h"
+#include "twin/model/detail_model.h"
+#include "twin/model/life.h"
+
+namespace peritwin::twin {
+
+// The batch and its verdicts are the message codec's (messages/batch.h).
+using messages::Batch;
+using messages::check_batch;
+using messages::kMaxBlocksPerBatch;
+using messages::kMaxSourceIdLength;
+using messages::Outcome;
+using messages::Verdict;
+
+enum class LifeMode { synchronous, external };
+
+/// Counters since this Twin object was created (not part of the state, not checkpointed).
+struct TwinCounters {
+  std::int64_t applied = 0;
+  std::int64_t duplicates = 0;
+  std::int64_t gaps = 0;
+  std::int64_t rejected = 0;  ///< everything not applied except duplicates
+};
+
+/// A snapshot for a remaining-life estimate off the ingest path.
+struct LifeJob {
+  std::shared_ptr<const DetailModel> model;
+  EngineState state;
+  std::vector<LoadBlock> spectrum;
+  std::int64_t state_seq = 0;
+  std::int64_t seq = -1;
+  std::string source;
+};
+
+class Twin {
+ public:
+  struct Options {
+    LifeMode life = LifeMode::synchronous;
+    bool parallel_band = true;  ///< the three band simulations on three threads
+  };
+
+  /// Builds the engine on `model` and solves the virgin state; or why it cannot.
+  static Expected<std::unique_ptr<Twin>> create(std::shared_ptr<const DetailModel> model,
+                                                Options options);
+
+  Outcome apply(const Batch& batch);
+
+  [[nodiscard]] const DetailModel& model() const { return *model_; }
+  [[nodiscard]] const std::shared_ptr<const DetailModel>& model_ptr() const { return model_; }
+  [[nodiscard]] const std::string& detail_id() const { return model_->config().id; }
+  [[nodiscard]] const Options& options() const { return options_; }
+  /// Batches applied since the virgin state, all sources together (0 = virgin).
+  [[nodiscard]] std::int64_t state_seq() const { return state_seq_; }
+  /// Last applied seq per source (sorted by source id).
+  [[nodiscard]] const std::map<std::string, std::int64_t>& applied() const { return applied_; }
+  [[nodiscard]] std::int64_t applied_seq(const std::string& source) const;
+  /// (source, seq) of the batch that produced the current state ("" / -1 for the virgin state).
+  [[nodiscard]] const std::string& last_source() const { return last_source_; }
+  [[nodiscard]] std::int64_t last_seq() const { return last_seq_; }
+  [[nodiscard]] const FatigueEngine& engine() const { return *engine_; }
+  [[nodiscard]] const CrackReport& cracks() const { return report_; }
+  [[nodiscard]] Failure failure() const { return failure_; }
+  [[nodiscard]] const LifeEstimate& life() const { return life_; }
+  [[nodiscard]] const RollingSpectrum& spectrum() const { return spectrum_; }
+  [[nodiscard]] const std::optional<LoadBlock>& last_block() const { return last_block_; }
+  [[nodiscard]] const TwinCounters& counters() const { return counters_; }
+  /// Broken bonds since the virgin state (notch-cut bonds not counted).
+  [[nodiscard]] std::int64_t broken_bonds() const;
+  /// Word-wise FNV-1a 64 (solver/core/fnv1a.h) over the twin's hashed fields (for_each_field:
+  /// state_seq, the applied seq per source, the last batch, the last block, the failure code, the
+  /// rolling spectrum) and then the engine's state (EngineState's field table: lives, doses,
+  /// intact bonds, cycles, break events, bilinear damage). Not over the life estimate.
+  [[nodiscard]] std::uint64_t state_hash() const;
+  [[nodiscard]] std::string state_hash_hex() const;
+
+  /// Remaining life ----------------------------------------------------------------------------
+  [[nodiscard]] LifeJob life_job() const;
+  /// Installs an estimate unless it belongs to an older state than the current estimate.
+  void set_life(const LifeEstimate& estimate);
+  /// True when a synchronous estimate is due for the current state and not computed yet.
+  [[nodiscard]] bool life_due() const;
+  /// Computes the estimate for the current state now (on this thread).
+  void estimate_life_now();
+  /// Synchronous mode: estimate_life_now() if life_due().
+  void catch_up_life();
+
+  /// Checkpoints -------------------------------------------------------------------------------
+  /// 2: bilinear law state. 3: keys from the field tables (Twin::for_each_own_field,
+  /// peritwin::for_each_field of EngineState) and the real FNV-1a 64 offset basis in every hash
+  /// (the model signature changed with it). An older checkpoint is refused with both versions.
+  static constexpr std::int64_t kCheckpointFormat = 3;
+  [[nodiscard]] CheckpointData to_checkpoint() const;
+  /// Restores a checkpoint of the same model (signature checked). On failure the twin must be
+  /// discarded.
+  Status restore(const CheckpointData& data);
+
+  /// Whether a field of the twin's table enters state_hash().
+  enum class Hashed : bool { no = false, yes = true };
+  /// The field table of the twin's own state (the engine's is EngineState's): every field once,
+  /// with its checkpoint key. `visit(key, field, hashed)`; Self is Twin or const Twin.
+  template <class Self, class Visit>
+  static void for_each_own_field(Self& self, Visit&& visit) {
+    visit("state_seq", self.state_seq_, Hashed::yes);
+    visit("source", self.applied_, Hashed::yes);
+    visit("last_source", self.last_source_, Hashed::yes);
+    visit("last_seq", self.last_seq_, Hashed::yes);
+    visit("last_block", self.last_block_, Hashed::yes);
+    visit("failure", self.failure_, Hashed::yes);
+    visit("spectrum", self.spectrum_, Hashed::yes);
+    visit("life_central", self.life_.central, Hashed::no);
+    visit("life_low", self.life_.low, Hashed::no);
+    visit("life_high", self.life_.high, Hashed::no);
+    visit("life_state_seq", self.life_.state_seq, Hashed::no);
+    visit("life_seq", self.life_.seq, Hashed::no);
+    visit("life_source", self.life_.source, Hashed::no);
+  }
+
+ private:
+  Twin(std::shared_ptr<const DetailModel> model, Options options);
+  void refresh();  ///< crack report and failure from the engine
+
+  std::shared_ptr<const DetailModel> model_;
+  Options options_;
+  std::unique_ptr<FatigueEngine> engine_;
+  std::int64_t state_seq_ = 0;
+  std::map<std::string, std::int64_t> applied_;
+  std::string last_source_;
+  std::int64_t last_seq_ = -1;
+  std::optional<LoadBlock> last_block_;
+  CrackReport report_;
+  Failure failure_ = Failure::none;
+  LifeEstimate life_;
+  RollingSpectrum spectrum_;
+  TwinCounters counters_;
+};
+
+}  // namespace peritwin::twin

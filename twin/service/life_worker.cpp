@@ -1,0 +1,58 @@
+#include "twin/service/life_worker.h"
+
+namespace peritwin::twin {
+
+LifeWorker::LifeWorker() : thread_([this] { run(); }) {}
+
+LifeWorker::~LifeWorker() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+    cancel_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void LifeWorker::submit(LifeJob job) {
+  {
+    std::lock_guard lock(mutex_);
+    pending_ = std::move(job);
+  }
+  wake_.notify_all();
+}
+
+bool LifeWorker::busy() const {
+  std::lock_guard lock(mutex_);
+  return running_ || pending_.has_value();
+}
+
+std::optional<LifeEstimate> LifeWorker::take() {
+  std::lock_guard lock(mutex_);
+  std::optional<LifeEstimate> out;
+  out.swap(done_);
+  return out;
+}
+
+void LifeWorker::run() {
+  while (true) {
+    LifeJob job;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait(lock, [this] { return stop_ || pending_.has_value(); });
+      if (stop_) return;
+      job = std::move(*pending_);
+      pending_.reset();
+      running_ = true;
+    }
+    LifeEstimate e = estimate_life(*job.model, job.state, job.spectrum, true, &cancel_);
+    e.state_seq = job.state_seq;
+    e.seq = job.seq;
+    e.source = job.source;
+    std::lock_guard lock(mutex_);
+    running_ = false;
+    if (!stop_) done_ = std::move(e);
+  }
+}
+
+}  // namespace peritwin::twin

@@ -1,0 +1,116 @@
+// peritwin: the twin daemon. See README.md and twin/service/daemon.h.
+//
+//   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
+//            [--deterministic] [--no-results]
+//
+// Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
+// (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
+// applying a batch; the last checkpoint is left as it was).
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdlib>
+#include <iostream>
+
+#include "twin/config/config.h"
+#include "twin/service/daemon.h"
+
+namespace {
+
+std::atomic<int> g_signal{0};
+
+extern "C" void on_signal(int signal) { g_signal.store(signal); }
+
+constexpr int kExitOk = 0;
+constexpr int kExitUsage = 2;
+constexpr int kExitRuntime = 3;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin: structural-health-monitoring digital twin daemon (LCM in/out)"};
+  std::string config_file, lcm_url, state_dir = "state", log_level = "info";
+  bool deterministic = false, no_results = false;
+  app.add_option("--config", config_file, "detail configuration (TOML)")->required();
+  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  app.add_option("--state-dir", state_dir, "checkpoint directory (default: state)");
+  app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  app.add_flag("--deterministic", deterministic,
+               "remaining life synchronously at fixed state_seq points (reproducible outputs; "
+               "use with a lockstep replay)");
+  app.add_flag("--no-results", no_results, "write no HDF5 results or PNG pictures");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? kExitOk : kExitUsage;
+  }
+
+  auto logger = spdlog::stderr_color_mt("peritwin");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  const auto loaded = peritwin::twin::load_config(config_file);
+  if (!loaded.ok()) {
+    for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
+    return kExitUsage;
+  }
+  for (const auto& detail : loaded.config->details) {
+    // e.g. bilinear parameters out of range
+    if (const auto settings = peritwin::twin::solver_settings(detail); !settings) {
+      spdlog::error("config: {}", settings.error().message());
+      return kExitUsage;
+    }
+  }
+  if (lcm_url.empty()) {
+    if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
+  }
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+
+  try {
+    lcm::LCM lcm(lcm_url);
+    if (!lcm.good()) {
+      spdlog::critical("cannot open LCM at \"{}\"", lcm_url.empty() ? "(LCM default)" : lcm_url);
+      return kExitRuntime;
+    }
+    peritwin::twin::DaemonOptions options;
+    options.state_dir = state_dir;
+    options.deterministic = deterministic;
+    options.results = !no_results;
+    peritwin::twin::Daemon daemon(lcm, *loaded.config, options);
+    spdlog::info("peritwin: {} detail(s) from {}, LCM \"{}\", state in {}, {} mode",
+                 loaded.config->details.size(), config_file,
+                 lcm_url.empty() ? "(LCM default)" : lcm_url, state_dir,
+                 deterministic ? "deterministic" : "asynchronous-life");
+    if (const peritwin::Status started = daemon.start(); !started) {
+      spdlog::critical("start-up failed: {}", started.error().message());
+      return kExitRuntime;
+    }
+    spdlog::info("ready");
+    while (g_signal.load() == 0) {
+      if (!daemon.poll(100)) break;
+    }
+    if (const int s = g_signal.load(); s != 0) {
+      spdlog::info("signal {} received: checkpointing and stopping", s);
+    }
+    daemon.stop();
+    if (!daemon.error().empty()) {
+      spdlog::critical("stopped after a runtime failure: {}", daemon.error());
+      return kExitRuntime;
+    }
+    return kExitOk;
+  } catch (const std::exception& e) {
+    spdlog::critical("runtime failure: {}", e.what());
+    return kExitRuntime;
+  }
+}
