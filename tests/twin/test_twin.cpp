@@ -257,11 +257,46 @@ TEST_F(TwinTest, CheckpointOfAnotherModelIsRefused) {
   auto target = make_twin(other);
   const std::string error = message_of(target->restore(data));
   EXPECT_NE(error.find("different model"), std::string::npos) << error;
+  // A checkpoint of another format version (2: before the field tables and the FNV-1a fix) is
+  // refused, naming both versions: never resumed silently.
+  CheckpointData old = data;
+  old.format_version = 2;
+  const std::string version = message_of(make_twin(model_)->restore(old));
+  EXPECT_NE(version.find("format_version 2 is not 3"), std::string::npos) << version;
+  EXPECT_EQ(Twin::kCheckpointFormat, 3);
   CheckpointData broken = data;
   broken.i64_arrays.erase("event_bond");
   auto again = make_twin(model_);
   const std::string missing = message_of(again->restore(broken));
   EXPECT_NE(missing.find("event_bond"), std::string::npos) << missing;
+}
+
+TEST_F(TwinTest, EveryCheckpointEntryIsReadBack) {
+  // The field tables write and read the same keys: dropping any entry the twin wrote (except the
+  // BLAS kernel name, which the daemon compares) makes the restore fail and name it.
+  auto twin = make_twin(model_);
+  ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
+  const CheckpointData data = twin->to_checkpoint();
+  std::size_t entries = 0;
+  auto check = [&](auto member) {
+    for (const auto& entry : data.*member) {
+      const std::string& key = entry.first;
+      if (key == "blas_kernel") continue;
+      CheckpointData without = data;
+      (without.*member).erase(key);
+      const std::string why = message_of(make_twin(model_)->restore(without));
+      EXPECT_NE(why.find(key), std::string::npos) << key << ": " << why;
+      ++entries;
+    }
+  };
+  check(&CheckpointData::f64_arrays);
+  check(&CheckpointData::i64_arrays);
+  check(&CheckpointData::u8_arrays);
+  check(&CheckpointData::i64_scalars);
+  check(&CheckpointData::f64_scalars);
+  check(&CheckpointData::strings);
+  EXPECT_GE(entries, 40u);  // 13 twin + 15 engine fields, composites spread over several keys
+  ASSERT_TRUE(make_twin(model_)->restore(data).ok());
 }
 
 TEST(BilinearTwin, CheckpointWithPendingCyclesResumesBitIdentically) {
