@@ -43,9 +43,9 @@ int run_static(const std::string& model_name, double target_nodes) {
   const double build_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
-  const FactorReport report = solver.solve();
+  const Status report = solver.solve();
   if (!report.ok()) {
-    std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n", report.message.c_str());
+    std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n", message_of(report).c_str());
     return 1;
   }
   const auto& t = solver.timings();

@@ -122,11 +122,11 @@ bool FatigueEngine::dose_mode() const {
 }
 
 bool FatigueEngine::initialize() {
-  const FactorReport r = solver_->solve();
+  const Status r = solver_->solve();
   ++solves_;
   if (!r.ok()) {
     state_.failed = true;
-    state_.failure_reason = r.message;
+    state_.failure_reason = message_of(r);
     return false;
   }
   const auto& intact = solver_->intact();
@@ -513,12 +513,12 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
                                  s[b] >= p.sc ? BreakCause::overload : BreakCause::fatigue});
       }
     }
-    const FactorReport r = solver_->set_bond_factors(changed_bonds, changed_factors);
+    const Status r = solver_->set_bond_factors(changed_bonds, changed_factors);
     ++solves_;
     if (!r.ok()) {
       state_.failed = true;
       state_.failure_reason =
-          "final failure at cycle " + std::to_string(at_cycle) + ": " + r.message;
+          "final failure at cycle " + std::to_string(at_cycle) + ": " + message_of(r);
       state_.damage = iterate;
       update_phases();
       return false;
@@ -610,13 +610,13 @@ double FatigueEngine::basis_solve_seconds() const {
   return retired_basis_solve_s_ + solver_->basis_solve_seconds();
 }
 
-FactorReport FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& intact) {
+Status FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& intact) {
   const auto t0 = std::chrono::steady_clock::now();
   retired_update_s_ += solver_->update_seconds();
   retired_updates_ += solver_->updates();
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
   auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_, ties_);
-  FactorReport r = fresh->solve();
+  Status r = fresh->solve();
   std::vector<BondIndex> broken;
   for (std::size_t b = 0; b < intact.size(); ++b) {
     if (!intact[b] && fresh->intact()[b]) broken.push_back(static_cast<BondIndex>(b));
@@ -638,7 +638,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
     rate_[static_cast<std::size_t>(b)] = 0.0;
   }
   cascade_checked_ = false;
-  FactorReport r = solver_->break_bonds(newly_broken);
+  Status r = solver_->break_bonds(newly_broken);
   ++solves_;
   state_.resolve_groups.push_back(static_cast<std::int64_t>(newly_broken.size()));
   if (r.ok() && rebuild_due(state_.resolve_groups.size())) r = rebuild_solver(solver_->intact());
@@ -646,7 +646,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
   if (!r.ok()) {
     state_.failed = true;
     state_.failure_reason =
-        "final failure at cycle " + std::to_string(state_.total_cycles) + ": " + r.message;
+        "final failure at cycle " + std::to_string(state_.total_cycles) + ": " + message_of(r);
     return false;
   }
   update_phases();
@@ -744,13 +744,13 @@ bool FatigueEngine::import_state(const EngineState& s) {
     for (std::size_t k = 0; k < first; ++k) {
       for (BondIndex b : groups[k]) intact[static_cast<std::size_t>(b)] = 0;
     }
-    const FactorReport r = rebuild_solver(intact);
+    const Status r = rebuild_solver(intact);
     ++solves_;
     if (!r.ok()) return false;
   }
   for (std::size_t k = first; k < groups.size(); ++k) {
     if (!groups[k].empty() && !state_.failed) {
-      const FactorReport r = solver_->break_bonds(groups[k]);
+      const Status r = solver_->break_bonds(groups[k]);
       ++solves_;
       if (!r.ok()) return false;
     }
@@ -783,7 +783,7 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
     }
   }
   if (!bonds.empty() && !s.failed) {
-    const FactorReport r = solver_->set_bond_factors(bonds, factors);
+    const Status r = solver_->set_bond_factors(bonds, factors);
     ++solves_;
     if (!r.ok()) return false;
   }

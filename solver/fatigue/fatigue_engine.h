@@ -316,7 +316,7 @@ class FatigueEngine {
   [[nodiscard]] bool rebuild_due(std::size_t resolves) const;
   /// Replaces the solver by a fresh one with exactly the bonds not in `intact` broken (one
   /// refactorization): the same operations whatever the previous solver went through.
-  FactorReport rebuild_solver(const std::vector<std::uint8_t>& intact);
+  Status rebuild_solver(const std::vector<std::uint8_t>& intact);
   void update_phases();
 
   const Discretization& disc_;

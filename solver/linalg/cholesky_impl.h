@@ -15,7 +15,7 @@ namespace peritwin {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
-FactorReport check_after_downdate(const std::vector<double>& diagonal);
+Status check_after_downdate(const std::vector<double>& diagonal);
 
 struct SparseCholesky::Impl {
   cholmod_common common{};

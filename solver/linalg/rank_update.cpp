@@ -2,9 +2,9 @@
 // factor in one sweep along their elimination-tree paths, keeping the tracked forward solve up to
 // date (see sparse_cholesky.h).
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
-#include <atomic>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -110,16 +110,16 @@ inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks
 
 }  // namespace
 
-FactorReport SparseCholesky::modify_fused(const std::vector<Column>& added,
-                                          const std::vector<Column>& removed) {
+Status SparseCholesky::modify_fused(const std::vector<Column>& added,
+                                    const std::vector<Column>& removed) {
   if (added.empty() && removed.empty()) return {};
   cholmod_factor* l = impl_->factor;
-  if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
+  if (l == nullptr) return failure("modify before factorize");
   auto& impl = *impl_;
   auto& common = impl.common;
   if (l->is_super || l->is_ll) {
     if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
-      return {FactorStatus::failed, "cholmod_change_factor failed"};
+      return failure("cholmod_change_factor failed");
     }
   }
   impl.ensure_schedule();
@@ -163,7 +163,7 @@ FactorReport SparseCholesky::modify_fused(const std::vector<Column>& added,
     }
   }
   if (!fits) {
-    FactorReport r = modify(added, true);
+    Status r = modify(added, true);
     if (r.ok()) r = modify(removed, false);
     return r;
   }

@@ -19,7 +19,7 @@ namespace peritwin {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
-FactorReport check_after_downdate(const std::vector<double>& diagonal) {
+Status check_after_downdate(const std::vector<double>& diagonal) {
   double d_min = diagonal.empty() ? 0.0 : diagonal.front();
   double d_max = d_min;
   bool positive = true;
@@ -29,15 +29,14 @@ FactorReport check_after_downdate(const std::vector<double>& diagonal) {
     d_max = std::max(d_max, d);
   }
   if (!positive) {
-    return {FactorStatus::not_positive_definite,
-            "stiffness is not positive definite after breaking bonds: a part of the model has "
-            "come loose"};
+    return failure(
+        "stiffness is not positive definite after breaking bonds: a part of the model has "
+        "come loose");
   }
   const double rcond = d_min / d_max;
   if (!(rcond > 1e-14)) {
-    return {FactorStatus::singular, "stiffness is numerically singular (rcond " +
-                                        std::to_string(rcond) +
-                                        "): a part of the model has come loose"};
+    return failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                   "): a part of the model has come loose");
   }
   return {};
 }
@@ -77,9 +76,8 @@ std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& uppe
   return perm;
 }
 
-FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
-                                     const std::vector<int>* permutation) {
-  if (!upper.isCompressed()) return {FactorStatus::failed, "matrix is not compressed"};
+Status SparseCholesky::analyze(const SparseMatrix& upper, const std::vector<int>* permutation) {
+  if (!upper.isCompressed()) return failure("matrix is not compressed");
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   impl_->inverse_perm.clear();
   impl_->schedule = {};
@@ -99,13 +97,12 @@ FactorReport SparseCholesky::analyze(const SparseMatrix& upper,
     impl_->factor = cholmod_analyze(&a, &impl_->common);
   }
   if (impl_->factor == nullptr || impl_->common.status < CHOLMOD_OK) {
-    return {FactorStatus::failed,
-            "cholmod_analyze failed (status " + std::to_string(impl_->common.status) + ")"};
+    return failure("cholmod_analyze failed (status " + std::to_string(impl_->common.status) + ")");
   }
   return {};
 }
 
-FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
+Status SparseCholesky::factorize(const SparseMatrix& upper) {
   if (impl_->factor == nullptr) {
     if (auto r = analyze(upper); !r.ok()) return r;
   }
@@ -115,32 +112,31 @@ FactorReport SparseCholesky::factorize(const SparseMatrix& upper) {
   impl_->forward_valid = false;
   const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
-    return {FactorStatus::not_positive_definite,
-            "stiffness is not positive definite (pivot " + std::to_string(impl_->factor->minor) +
-                "): a part of the model is unconstrained or has come loose"};
+    return failure("stiffness is not positive definite (pivot " +
+                   std::to_string(impl_->factor->minor) +
+                   "): a part of the model is unconstrained or has come loose");
   }
   if (!ok || impl_->common.status < CHOLMOD_OK) {
-    return {FactorStatus::failed,
-            "cholmod_factorize failed (status " + std::to_string(impl_->common.status) + ")"};
+    return failure("cholmod_factorize failed (status " + std::to_string(impl_->common.status) +
+                   ")");
   }
   const double rcond = cholmod_rcond(impl_->factor, &impl_->common);
   if (!(rcond > 1e-14)) {
-    return {FactorStatus::singular,
-            "stiffness is numerically singular (rcond " + std::to_string(rcond) +
-                "): a part of the model is unconstrained or has come loose"};
+    return failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                   "): a part of the model is unconstrained or has come loose");
   }
   return {};
 }
 
-FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
+Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   if (columns.empty()) return {};
   impl_->forward_valid = false;  // CHOLMOD's updown does not update our forward solve
   cholmod_factor* l = impl_->factor;
-  if (l == nullptr) return {FactorStatus::failed, "modify before factorize"};
+  if (l == nullptr) return failure("modify before factorize");
   auto& common = impl_->common;
   if (l->is_super || l->is_ll) {
     if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
-      return {FactorStatus::failed, "cholmod_change_factor failed"};
+      return failure("cholmod_change_factor failed");
     }
   }
   impl_->ensure_schedule();
@@ -155,7 +151,7 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   for (const auto& c : columns) nnz += c.rows.size();
   cholmod_sparse* c =
       cholmod_allocate_sparse(n, columns.size(), nnz, 1, 1, 0, CHOLMOD_REAL, &common);
-  if (c == nullptr) return {FactorStatus::failed, "cholmod_allocate_sparse failed"};
+  if (c == nullptr) return failure("cholmod_allocate_sparse failed");
   auto* cp = static_cast<int*>(c->p);
   auto* ci = static_cast<int*>(c->i);
   auto* cx = static_cast<double*>(c->x);
@@ -182,8 +178,7 @@ FactorReport SparseCholesky::modify(const std::vector<Column>& columns, bool add
   const int ok = cholmod_updown(add ? 1 : 0, c, l, &common);
   cholmod_free_sparse(&c, &common);
   if (!ok || common.status < CHOLMOD_OK) {
-    return {FactorStatus::failed,
-            "cholmod_updown failed (status " + std::to_string(common.status) + ")"};
+    return failure("cholmod_updown failed (status " + std::to_string(common.status) + ")");
   }
   // The update changed the columns on the elimination-tree paths from each column's first row
   // to the root: refresh D there (all of it if the update added fill), then check the whole D.

@@ -7,17 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "solver/core/expected.h"
+
 namespace peritwin {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-enum class FactorStatus { ok, not_positive_definite, singular, failed };
-
-struct FactorReport {
-  FactorStatus status = FactorStatus::ok;
-  std::string message;
-  [[nodiscard]] bool ok() const { return status == FactorStatus::ok; }
-};
+// Factorizations, updates and solves report a Status (solver/core/expected.h): OK, or the
+// reason (not positive definite, numerically singular — a part of the model has come loose — or
+// a CHOLMOD failure).
 
 class SparseCholesky {
  public:
@@ -30,14 +28,14 @@ class SparseCholesky {
 
   /// Fill-reducing ordering and symbolic factorization of the upper triangle `upper`. With a
   /// permutation (new position -> row), that ordering is used as given.
-  FactorReport analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
+  Status analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
   /// A fill-reducing ordering (METIS nested dissection, AMD when METIS does worse) of the
   /// symmetric pattern whose upper triangle is `upper`; values are ignored.
   static std::vector<int> fill_reducing_ordering(const SparseMatrix& upper);
   /// Numeric factorization; the pattern must be the analyzed one. Reports a matrix that is not
   /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
   /// a piece of the model that came loose) as a typed failure.
-  FactorReport factorize(const SparseMatrix& upper);
+  Status factorize(const SparseMatrix& upper);
   /// A sparse column in the analyzed matrix's (unpermuted) row numbering.
   struct Column {
     std::vector<int> rows;
@@ -46,13 +44,13 @@ class SparseCholesky {
   /// Low-rank modification of the factor: A ← A + Σ c·cᵀ (add = true) or A − Σ c·cᵀ, by CHOLMOD's
   /// rank-k update/downdate (the factor becomes simplicial LDLᵀ on the first call). Reports a
   /// downdate that leaves the matrix not positive definite or numerically singular.
-  FactorReport modify(const std::vector<Column>& columns, bool add);
+  Status modify(const std::vector<Column>& columns, bool add);
   /// A ← A + Σ a·aᵀ − Σ r·rᵀ in one sweep over the factor (peritwin's own multiple-rank update,
   /// method C1 rank by rank, the updates before the downdates, 16 ranks per sweep, the rows split
   /// between two threads on large paths; same arithmetic on one thread). Requires the rows of
   /// each column to be in the factor's column of its first row (no fill), else falls back to
   /// modify(added, true) then modify(removed, false). Reports like modify().
-  FactorReport modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
+  Status modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
   /// Solves A·X = B in place for every column of B. After modify() (simplicial LDLᵀ) with 1-3
   /// columns this is peritwin's own triangular solve, whose two independent elimination subtrees
   /// run on two threads (same arithmetic with one); otherwise CHOLMOD's.

@@ -291,7 +291,7 @@ std::vector<int> StaticSolver::dof_ordering() const {
   return order;
 }
 
-FactorReport StaticSolver::solve() {
+Status StaticSolver::solve() {
   auto t0 = std::chrono::steady_clock::now();
   assemble(factor_);
   timings_.assemble_s = seconds_since(t0);
@@ -350,7 +350,7 @@ void StaticSolver::solve_bases() {
   basis_solve_s_ += seconds_since(t0);
 }
 
-FactorReport StaticSolver::refactor_resolve() {
+Status StaticSolver::refactor_resolve() {
   for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
     if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
   }
@@ -373,11 +373,11 @@ void StaticSolver::ground_isolated(const std::vector<NodeIndex>& nodes,
   }
 }
 
-FactorReport StaticSolver::update_resolve(const std::vector<SparseCholesky::Column>& added,
-                                          const std::vector<SparseCholesky::Column>& removed,
-                                          std::chrono::steady_clock::time_point t0) {
+Status StaticSolver::update_resolve(const std::vector<SparseCholesky::Column>& added,
+                                    const std::vector<SparseCholesky::Column>& removed,
+                                    std::chrono::steady_clock::time_point t0) {
   modified_ = true;
-  FactorReport r = cholesky_.modify_fused(added, removed);
+  Status r = cholesky_.modify_fused(added, removed);
   ++updates_;
   if (!r.ok()) {
     update_s_ += seconds_since(t0);
@@ -388,7 +388,7 @@ FactorReport StaticSolver::update_resolve(const std::vector<SparseCholesky::Colu
   return r;
 }
 
-FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
+Status StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!incremental_ || !cholesky_.analyzed()) {
     for (BondIndex b : bonds) {
@@ -478,8 +478,8 @@ FactorReport StaticSolver::break_bonds(std::span<const BondIndex> bonds) {
   return update_resolve(added, removed, t0);
 }
 
-FactorReport StaticSolver::set_bond_factors(std::span<const BondIndex> bonds,
-                                            std::span<const double> factors) {
+Status StaticSolver::set_bond_factors(std::span<const BondIndex> bonds,
+                                      std::span<const double> factors) {
   if (model_.options.kind != ModelKind::bond_based) {
     throw std::logic_error("StaticSolver::set_bond_factors: bond-based models only");
   }
@@ -712,7 +712,7 @@ bool StaticSolver::pcg_solve_bases() {
   return ok;
 }
 
-FactorReport StaticSolver::preconditioned_resolve(bool broke) {
+Status StaticSolver::preconditioned_resolve(bool broke) {
   if (broke) {  // the same ground springs as refactor_resolve
     for (NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
       if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
@@ -737,7 +737,7 @@ FactorReport StaticSolver::preconditioned_resolve(bool broke) {
       if (auto r = cholesky_.analyze(upper_, &permutation); !r.ok()) return r;
     }
     t = std::chrono::steady_clock::now();
-    FactorReport report = cholesky_.factorize(upper_);
+    Status report = cholesky_.factorize(upper_);
     ++factorizations_;
     ++pcg_.reference_factorizations;
     timings_.factor_s = seconds_since(t);

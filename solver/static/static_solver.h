@@ -72,17 +72,17 @@ class StaticSolver {
                std::vector<LoadTerm> loads, std::vector<Tie> ties = {});
 
   /// Assembles, factorizes and solves the three basis cases for the current bond state.
-  FactorReport solve();
+  Status solve();
   /// Breaks the given bonds and re-solves: by a low-rank update of the factor when incremental
   /// (CHOLMOD rank-k update/downdate; exact up to round-off), else by refactorizing (the oracle).
-  FactorReport break_bonds(std::span<const BondIndex> bonds);
+  Status break_bonds(std::span<const BondIndex> bonds);
   /// Sets the stiffness factor f_b = 1 − D_b of each listed bond (1 intact, 0 broken; 0 ≤ f ≤ 1),
   /// bond-based models only (std::logic_error for state-based). Incremental: CHOLMOD rank update/
   /// downdate with the bond vector scaled by sqrt(|f_old − f_new|·c); otherwise refactorization
   /// (the oracle). Re-solves the basis cases like break_bonds. A factor of 0 is the same as
   /// breaking the bond. std::invalid_argument for a factor outside [0, 1], a size mismatch, or a
   /// factor above 0 for a broken bond (a broken bond stays broken).
-  FactorReport set_bond_factors(std::span<const BondIndex> bonds, std::span<const double> factors);
+  Status set_bond_factors(std::span<const BondIndex> bonds, std::span<const double> factors);
   /// The bond's stiffness factor: 1 for intact, 0 for broken, in between for a softened bond.
   [[nodiscard]] double bond_factor(BondIndex b) const {
     return factor_[static_cast<std::size_t>(b)];
@@ -159,7 +159,7 @@ class StaticSolver {
   /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference).
   void assemble(const std::vector<double>& factors);
   /// Preconditioned re-solve after factor_ changed (see set_preconditioned).
-  FactorReport preconditioned_resolve(bool broke);
+  Status preconditioned_resolve(bool broke);
   /// PCG on the loaded bases with the current factor as M; false if max_iterations was hit.
   bool pcg_solve_bases();
   void append_ground(std::vector<Eigen::Triplet<double, int>>& entries) const;
@@ -180,14 +180,14 @@ class StaticSolver {
   /// Nodes with no intact bond get a ground spring (they would make K singular).
   [[nodiscard]] bool isolated(NodeIndex k) const;
   /// Refactorizing re-solve after intact_/factor_ changed (grounds nodes that became isolated).
-  FactorReport refactor_resolve();
+  Status refactor_resolve();
   /// Ground springs (added columns) for the nodes that became isolated.
   void ground_isolated(const std::vector<NodeIndex>& nodes,
                        std::vector<SparseCholesky::Column>& added);
   /// Applies the added then the removed columns to the factor and re-solves the basis cases.
-  FactorReport update_resolve(const std::vector<SparseCholesky::Column>& added,
-                              const std::vector<SparseCholesky::Column>& removed,
-                              std::chrono::steady_clock::time_point t0);
+  Status update_resolve(const std::vector<SparseCholesky::Column>& added,
+                        const std::vector<SparseCholesky::Column>& removed,
+                        std::chrono::steady_clock::time_point t0);
 
   const Discretization& disc_;
   const PdModel& model_;
