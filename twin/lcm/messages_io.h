@@ -23,6 +23,8 @@ using messages::reject_message;
 using messages::state_json;
 using messages::summary_json;
 
+/// STATE of the twin's current state: cycles, bonds, cracks, K, remaining life, applied seq per
+/// source, state_hash (fields: messages/README.md).
 peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime);
 
 /// The damage field of the current state in chunks of at most MAX_NODES_PER_CHUNK nodes.
