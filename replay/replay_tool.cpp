@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <set>
 
 #include "messages/channels.h"
@@ -84,12 +85,7 @@ std::vector<twin::Batch> make_twin_batches(const std::vector<LoadBlock>& blocks,
 }
 
 Status check_blocks(std::span<const LoadBlock> blocks) {
-  for (std::size_t i = 0; i < blocks.size(); ++i) {
-    if (Status s = check_load_block(blocks[i]); !s) {
-      return s.error().within("blocks[" + std::to_string(i) + "].");
-    }
-  }
-  return {};
+  return check_load_blocks(blocks, std::numeric_limits<std::int64_t>::max());
 }
 
 LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options)

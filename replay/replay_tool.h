@@ -53,8 +53,9 @@ std::vector<twin::Batch> make_twin_batches(const std::vector<LoadBlock>& blocks,
                                            const std::string& source_id,
                                            const BatchingOptions& options);
 
-/// Every block of a history by check_load_block (the daemon's own rule); the error names the first
-/// invalid one as "blocks[i].<field>". (The per-batch cycle cap is the batches' business.)
+/// Every block of a history by the daemon's own rule (check_load_blocks), the total capped only
+/// by what int64 holds (the per-batch cap is the batches' business); the error names the first
+/// invalid block as "blocks[i].<field>".
 Status check_blocks(std::span<const LoadBlock> blocks);
 
 struct ReplayOptions {

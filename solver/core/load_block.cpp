@@ -40,17 +40,16 @@ Status check_load_block(const LoadBlock& b) {
   return {};
 }
 
-Status check_load_blocks(std::span<const LoadBlock> blocks) {
+Status check_load_blocks(std::span<const LoadBlock> blocks, std::int64_t max_cycles) {
   std::int64_t cycles = 0;
   for (std::size_t i = 0; i < blocks.size(); ++i) {
     const std::string at = "blocks[" + std::to_string(i) + "].";
     if (Status s = check_load_block(blocks[i]); !s) return s.error().within(at);
-    // Both terms are <= kMaxBatchCycles = 2^50: the sum cannot overflow.
-    cycles += blocks[i].count;
-    if (cycles > kMaxBatchCycles) {
-      return Error{at + "count",
-                   "the blocks' cycle count exceeds " + std::to_string(kMaxBatchCycles)};
+    // cycles <= max_cycles and count >= 1: the comparison cannot overflow, and neither can the sum.
+    if (blocks[i].count > max_cycles - cycles) {
+      return Error{at + "count", "the blocks' cycle count exceeds " + std::to_string(max_cycles)};
     }
+    cycles += blocks[i].count;
   }
   return {};
 }

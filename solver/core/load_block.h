@@ -43,7 +43,9 @@ inline constexpr std::int64_t kMaxBatchCycles = std::int64_t{1} << 50;
 Status check_load_block(const LoadBlock& block);
 
 /// Every block (fields "blocks[i].<field>") and the total count (field "blocks[i].count" of the
-/// block that takes the sum past kMaxBatchCycles).
-Status check_load_blocks(std::span<const LoadBlock> blocks);
+/// block that takes the sum past `max_cycles`, >= 0): kMaxBatchCycles for a batch; a whole
+/// history (the replay tool) passes the int64 maximum, the most the engine's cycle count holds.
+Status check_load_blocks(std::span<const LoadBlock> blocks,
+                         std::int64_t max_cycles = kMaxBatchCycles);
 
 }  // namespace peritwin

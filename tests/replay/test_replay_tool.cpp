@@ -37,6 +37,14 @@ TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
   const Status bad = check_blocks(blocks);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().field, "blocks[1].r") << bad.error().message();
+  // A history may exceed one batch's cap but not what the engine's int64 cycle count holds:
+  // 2^13 blocks of 2^50 cycles sum to 2^63, one more than int64's maximum, at the last block.
+  const std::vector<LoadBlock> beyond_batch(2, {4000, 0.1, 0, kMaxBatchCycles});
+  EXPECT_TRUE(check_blocks(beyond_batch).ok());
+  const std::vector<LoadBlock> beyond_int64(8192, {4000, 0.1, 0, kMaxBatchCycles});
+  const Status overflow = check_blocks(beyond_int64);
+  ASSERT_FALSE(overflow.ok());
+  EXPECT_EQ(overflow.error().field, "blocks[8191].count") << overflow.error().message();
 }
 
 TEST(ReplayHistory, ExampleFilesInEveryFormat) {
