@@ -38,6 +38,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <span>
 #include <string>
 #include <utility>
@@ -111,11 +112,19 @@ struct Spectrum {
 [[nodiscard]] ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file);
 [[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file);
 
+/// The same readers on a stream (open it in binary mode); errors name the file `name`.
+[[nodiscard]] ReadResult<LoadSeries> read_series_csv(std::istream& in, const std::string& name);
+[[nodiscard]] ReadResult<std::vector<LoadBlock>> read_cycles_csv(std::istream& in,
+                                                                 const std::string& name);
+[[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name);
+
 enum class HistoryFormat { series, cycles, spectrum };
 
 /// Reads `file` in `format` and returns its blocks (series: converted; spectrum: expanded). The
 /// stats are those of series_to_blocks for a series and zero otherwise.
 [[nodiscard]] ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file,
+                                                      HistoryFormat format);
+[[nodiscard]] ReadResult<BlockConversion> read_blocks(std::istream& in, const std::string& name,
                                                       HistoryFormat format);
 
 /// Splits `blocks` into consecutive batches of at most `max_blocks` blocks (the last may be
