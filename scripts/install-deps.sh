@@ -13,6 +13,11 @@ packages=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jre-headless
   libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev nlohmann-json3-dev
 )
+# The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
+# PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.
+if [ "${PERITWIN_SANITIZER_DEPS:-0}" = 1 ]; then
+  packages+=(clang libclang-rt-14-dev libfuzzer-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
