@@ -22,8 +22,9 @@ std::uint64_t read_be(const unsigned char* p, int bytes) {
 Outcome decode_error(std::string why) { return {Verdict::decode, "message", std::move(why)}; }
 
 /// Walks the load_batch_t layout without allocating; empty when the generated decoder can be
-/// given the bytes safely and will consume exactly all of them.
-std::string check_layout(const unsigned char* p, std::size_t size) {
+/// given the bytes safely and will consume exactly all of them. `signed_size` is set to the
+/// number of leading bytes the auth tag covers (everything before tag_length).
+std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& signed_size) {
   std::size_t pos = 0;
   auto need = [&](std::size_t n, const char* what) -> std::string {
     if (size - pos < n) {
@@ -58,10 +59,21 @@ std::string check_layout(const unsigned char* p, std::size_t size) {
   const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
   pos += 4;
   if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
-  const std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks);
+  std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks) + 4;
   if (size < expected) {
     return "truncated payload: " + std::to_string(size) +
-           " bytes, num_blocks = " + std::to_string(blocks) + " needs " + std::to_string(expected);
+           " bytes, num_blocks = " + std::to_string(blocks) + " needs " +
+           std::to_string(expected) + " with the tag length";
+  }
+  signed_size = expected - 4;
+  const auto tag_length = static_cast<std::int32_t>(read_be(p + signed_size, 4));
+  if (tag_length != 0 && tag_length != static_cast<std::int32_t>(kAuthTagBytes)) {
+    return "malformed tag_length " + std::to_string(tag_length) + " (0 or " +
+           std::to_string(kAuthTagBytes) + ")";
+  }
+  expected += static_cast<std::size_t>(tag_length);
+  if (size < expected) {
+    return "truncated payload: " + std::to_string(size) + " bytes end inside auth_tag";
   }
   if (size > expected) {
     return "oversized payload: " + std::to_string(size - expected) +
@@ -97,12 +109,13 @@ Decoded decode_batch(const void* data, std::size_t size) {
                              std::to_string(kMaxBatchPayload));
     return out;
   }
-  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size);
+  std::size_t signed_size = 0;
+  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size, signed_size);
       !e.empty()) {
     out.error = decode_error(e);
     return out;
   }
-  peritwin_msgs::load_batch_t msg;
+  peritwin_msgs::load_batch_t msg{};
   const int used = msg.decode(data, 0, static_cast<int>(size));
   if (used < 0 || static_cast<std::size_t>(used) != size) {
     out.error = decode_error("not decodable as peritwin_msgs.load_batch_t");
@@ -114,12 +127,14 @@ Decoded decode_batch(const void* data, std::size_t size) {
   b.seq = msg.seq;
   b.blocks.reserve(msg.blocks.size());
   for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
+  out.auth_tag = std::move(msg.auth_tag);
   out.batch = std::move(b);
+  out.signed_size = signed_size;
   return out;
 }
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime) {
-  peritwin_msgs::load_batch_t m;
+  peritwin_msgs::load_batch_t m{};
   m.utime = utime;
   m.detail_id = batch.detail_id;
   m.source_id = batch.source_id;
@@ -139,7 +154,7 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
                                        std::int64_t seq, const Outcome& outcome,
                                        std::int64_t utime) {
-  peritwin_msgs::reject_t m;
+  peritwin_msgs::reject_t m{};
   m.utime = utime;
   m.detail_id = detail_id;
   m.source_id = source;

@@ -42,6 +42,10 @@ std::int64_t now_utime();
 struct Decoded {
   std::optional<Batch> batch;
   Outcome error;
+  /// Leading bytes of the payload the batch's auth tag covers (messages/README.md), and the tag:
+  /// empty (unsigned) or kAuthTagBytes bytes.
+  std::size_t signed_size = 0;
+  std::vector<std::uint8_t> auth_tag;
 };
 Decoded decode_batch(const void* data, std::size_t size);
 

@@ -231,7 +231,7 @@ void Daemon::publish_fields(Detail& d) {
 }
 
 void Daemon::publish_status(Detail& d, const char* health) {
-  peritwin_msgs::status_t m;
+  peritwin_msgs::status_t m{};
   m.utime = now_utime();
   m.detail_id = d.twin->detail_id();
   m.health =
