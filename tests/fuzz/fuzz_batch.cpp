@@ -1,6 +1,7 @@
 // Fuzz target: a load_batch_t payload as it comes off the bus -> decode_batch -> check_batch.
-// Properties: decoding never reads or allocates beyond the payload (ASan), a decoded batch
-// re-encodes to a payload that decodes to the same batch, and an error names its field.
+// Properties: decoding never reads or allocates beyond the payload (ASan); a decoded batch and
+// its tag re-encode to the same bytes (utime aside) and decode to the same batch; the signed
+// bytes, tag_length and the tag (0 or 32 bytes) are the whole payload; an error names its field.
 #include <cstring>
 #include <vector>
 
@@ -44,13 +45,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     require(o.applied() || (!o.what.empty() && !o.why.empty()),
             "a rejected batch names the field and the reason");
   }
-  // Round trip through the generated encoder.
-  const auto msg = batch_message(batch, 0);
+  require(decoded.auth_tag.empty() || decoded.auth_tag.size() == kAuthTagBytes,
+          "the tag is absent or kAuthTagBytes long");
+  require(decoded.signed_size + 4 + decoded.auth_tag.size() == size,
+          "the signed bytes, tag_length and the tag are the whole payload");
+  // Round trip through the generated encoder: the same bytes after the fingerprint and utime.
+  auto msg = batch_message(batch, 0);
+  msg.tag_length = static_cast<std::int32_t>(decoded.auth_tag.size());
+  msg.auth_tag = decoded.auth_tag;
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
   require(
       msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()),
       "a decoded batch encodes");
+  require(bytes.size() == size && std::memcmp(bytes.data() + 16, data + 16, size - 16) == 0,
+          "encode(decode(payload)) == payload but for utime");
   const Decoded again = decode_batch(bytes.data(), bytes.size());
-  require(again.batch && same(*again.batch, batch), "decode(encode(batch)) == batch");
+  require(again.batch && same(*again.batch, batch) && again.signed_size == decoded.signed_size &&
+              again.auth_tag == decoded.auth_tag,
+          "decode(encode(batch)) == batch");
   return 0;
 }

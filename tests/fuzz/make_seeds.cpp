@@ -19,8 +19,11 @@ using peritwin::messages::Batch;
 
 namespace {
 
-std::vector<std::uint8_t> encode(const Batch& batch) {
-  const auto msg = peritwin::messages::batch_message(batch, 1'700'000'000'000'000);
+// An unsigned batch, or one carrying `tag` (not a valid HMAC: the decoder only bounds it).
+std::vector<std::uint8_t> encode(const Batch& batch, const std::vector<std::uint8_t>& tag = {}) {
+  auto msg = peritwin::messages::batch_message(batch, 1'700'000'000'000'000);
+  msg.tag_length = static_cast<std::int32_t>(tag.size());
+  msg.auth_tag = tag;
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
@@ -58,6 +61,9 @@ std::vector<std::pair<std::string, Batch>> batches() {
 void batch_seeds(const fs::path& dir) {
   fs::create_directories(dir);
   for (const auto& [name, batch] : batches()) write(dir / (name + ".bin"), encode(batch));
+  std::vector<std::uint8_t> tag(peritwin::messages::kAuthTagBytes);
+  for (std::size_t i = 0; i < tag.size(); ++i) tag[i] = static_cast<std::uint8_t>(0xa5 ^ i);
+  write(dir / "tagged.bin", encode(batches().front().second, tag));
 }
 
 void lcm_log_seed(const fs::path& file, bool with_noise) {
