@@ -260,7 +260,10 @@ std::vector<LoadBlock> expand(const Spectrum& spectrum) {
   const auto repeat = static_cast<std::size_t>(spectrum.repeat < 0 ? 0 : spectrum.repeat);
   std::vector<LoadBlock> out;
   if (n == 0 || repeat == 0) return out;
-  if (repeat > out.max_size() / n) throw std::length_error("expand: spectrum too large");
+  if (repeat > kMaxSpectrumBlocks / n) {
+    throw std::length_error("expand: " + std::to_string(n) + " blocks x " + std::to_string(repeat) +
+                            " are more than " + std::to_string(kMaxSpectrumBlocks) + " blocks");
+  }
   out.reserve(n * repeat);
   for (std::size_t k = 0; k < repeat; ++k) {
     out.insert(out.end(), spectrum.blocks.begin(), spectrum.blocks.end());
@@ -307,6 +310,15 @@ ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name
   Spectrum spectrum;
   if (auto error = scan_blocks(in, name, &spectrum.repeat, spectrum.blocks)) {
     return std::move(*error);
+  }
+  // The directive is line 1; a list longer than the cap on its own is refused here too.
+  const std::size_t n = spectrum.blocks.size();
+  if (n > kMaxSpectrumBlocks ||
+      static_cast<std::uint64_t>(spectrum.repeat) > kMaxSpectrumBlocks / n) {
+    return ParseError{name, spectrum.repeat > 1 ? std::size_t{1} : std::size_t{0},
+                      "'# repeat " + std::to_string(spectrum.repeat) + "' of " + std::to_string(n) +
+                          " blocks expands to more than " + std::to_string(kMaxSpectrumBlocks) +
+                          " blocks"};
   }
   return spectrum;
 }
