@@ -683,6 +683,24 @@ TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
   EXPECT_EQ(ok.errors[1].path, "detail[0].δ");
 }
 
+// Found by fuzz_config: toml++ echoes the input in its errors ("saw 'tr<newline>'"), and a quoted
+// key may hold any character; every message is one line all the same.
+TEST(ConfigErrors, MessagesAreOneLine) {
+  const ConfigResult echo = parse_config("[[detail]]\nid = tr\n", "e.toml");
+  ASSERT_EQ(echo.errors.size(), 1u);
+  EXPECT_EQ(echo.errors[0].message(),
+            "e.toml:2:8: TOML syntax error: Error while parsing boolean: expected 'true', saw "
+            "'tr\\n'");
+  Doc doc = plate();
+  doc.insert_after("id = ", R"("a\nb\u0001" = 1)");
+  const ConfigResult key = parse(doc);
+  ASSERT_EQ(key.errors.size(), 1u) << key.error_text();
+  EXPECT_EQ(key.errors[0].path, "detail[0].a\nb\x01");
+  EXPECT_TRUE(key.errors[0].message().starts_with(
+      "plate.toml:3:1: detail[0].a\\nb\\x01: unknown key \"a\\nb\\x01\" (known here: "))
+      << key.errors[0].message();
+}
+
 TEST(ConfigErrors, AllErrorsAreReportedInLineOrder) {
   Doc doc = plate();
   doc.replace("thickness", "thickness = 0.0");

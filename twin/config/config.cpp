@@ -204,8 +204,34 @@ void TableReader::finish() {
 
 }  // namespace config_internal
 
+namespace {
+/// Appends `s` with its control characters escaped (\n, \r, \t, \xNN): a message stays one
+/// line whatever the file name, a quoted key or toml++'s echo of the input holds (found by
+/// fuzz_config: "expected 'true', saw 'tr<newline>'").
+void append_one_line(std::string& out, std::string_view s) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  for (const char c : s) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (u < 0x20 || u == 0x7f) {
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 0xf];
+    } else {
+      out += c;
+    }
+  }
+}
+}  // namespace
+
 std::string ConfigError::message() const {
-  std::string m = file;
+  std::string m;
+  append_one_line(m, file);
   if (line > 0) {
     m += ':';
     m += std::to_string(line);
@@ -216,10 +242,10 @@ std::string ConfigError::message() const {
   }
   if (!path.empty()) {
     m += ": ";
-    m += path;
+    append_one_line(m, path);
   }
   m += ": ";
-  m += reason;
+  append_one_line(m, reason);
   return m;
 }
 
