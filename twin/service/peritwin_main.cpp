@@ -1,11 +1,12 @@
 // peritwin: the twin daemon. See README.md and twin/service/daemon.h.
 //
 //   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
-//            [--deterministic] [--no-results]
+//            [--deterministic] [--no-results] [--fresh-start]
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
-// applying a batch; the last checkpoint is left as it was).
+// applying a batch; the last checkpoint is left as it was; checkpoints exist and none is valid,
+// without --fresh-start; the state dir is not writable).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -33,7 +34,7 @@ constexpr int kExitRuntime = 3;
 int main(int argc, char** argv) {
   CLI::App app{"peritwin: structural-health-monitoring digital twin daemon (LCM in/out)"};
   std::string config_file, lcm_url, state_dir = "state", log_level = "info";
-  bool deterministic = false, no_results = false;
+  bool deterministic = false, no_results = false, fresh_start = false;
   app.add_option("--config", config_file, "detail configuration (TOML)")->required();
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   app.add_option("--state-dir", state_dir, "checkpoint directory (default: state)");
@@ -43,6 +44,9 @@ int main(int argc, char** argv) {
                "remaining life synchronously at fixed state_seq points (reproducible outputs; "
                "use with a lockstep replay)");
   app.add_flag("--no-results", no_results, "write no HDF5 results or PNG pictures");
+  app.add_flag("--fresh-start", fresh_start,
+               "start from the virgin state when checkpoints exist but none is valid (by "
+               "default the daemon then refuses to start, naming each file and why)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -87,6 +91,7 @@ int main(int argc, char** argv) {
     options.state_dir = state_dir;
     options.deterministic = deterministic;
     options.results = !no_results;
+    options.fresh_start = fresh_start;
     peritwin::twin::Daemon daemon(lcm, *loaded.config, options);
     spdlog::info("peritwin: {} detail(s) from {}, LCM \"{}\", state in {}, {} mode",
                  loaded.config->details.size(), config_file,
