@@ -49,6 +49,14 @@ struct Decoded {
 };
 Decoded decode_batch(const void* data, std::size_t size);
 
+/// A STATE or REJECT decoded from untrusted bytes, or nullopt: wrong fingerprint, truncated,
+/// bytes after the end, or a string length or array count the payload cannot hold. The layout is
+/// walked first, so LCM's decoder (which sizes its arrays from the counts before reading them) is
+/// never asked to allocate more than the payload justifies: a forged num_sources of 2^30 would
+/// otherwise cost gigabytes in any receiver that subscribes with the typed handler.
+std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size);
+std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size);
+
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 
 /// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).
