@@ -5,7 +5,8 @@
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
-// applying a batch; the last checkpoint is left as it was).
+// applying a batch; the last checkpoint is left as it was). A tcpq hub that is down is not a
+// failure: the daemon waits for it and reconnects with backoff (twin/service/hub_connection.h).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -17,6 +18,7 @@
 
 #include "twin/config/config.h"
 #include "twin/service/daemon.h"
+#include "twin/service/hub_connection.h"
 
 namespace {
 
@@ -78,11 +80,17 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   try {
-    lcm::LCM lcm(lcm_url);
-    if (!lcm.good()) {
-      spdlog::critical("cannot open LCM at \"{}\"", lcm_url.empty() ? "(LCM default)" : lcm_url);
-      return kExitRuntime;
+    peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
+    const std::unique_ptr<lcm::LCM> connection = hub.open();
+    if (!connection) {
+      if (!hub.error().empty()) {
+        spdlog::critical("{}", hub.error());
+        return kExitRuntime;
+      }
+      spdlog::info("signal {} received while waiting for the LCM hub: stopping", g_signal.load());
+      return kExitOk;
     }
+    lcm::LCM& lcm = *connection;
     peritwin::twin::DaemonOptions options;
     options.state_dir = state_dir;
     options.deterministic = deterministic;
@@ -98,7 +106,13 @@ int main(int argc, char** argv) {
     }
     spdlog::info("ready");
     while (g_signal.load() == 0) {
-      if (!daemon.poll(100)) break;
+      if (!hub.connected()) {
+        hub.reconnect(lcm, daemon);
+      } else if (!daemon.poll(100)) {
+        break;
+      } else {
+        hub.check(lcm);
+      }
     }
     if (const int s = g_signal.load(); s != 0) {
       spdlog::info("signal {} received: checkpointing and stopping", s);
