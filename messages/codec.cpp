@@ -2,6 +2,7 @@
 
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/socket.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 namespace peritwin::messages {
 
@@ -179,14 +181,25 @@ std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size
 
 int handle_lcm(lcm::LCM& lcm, int timeout_ms) {
   const int fd = lcm.getFileno();
+  if (fd < 0) {  // tcpq without a hub (see messages/transport.h): nothing to wait on
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::max(0, timeout_ms)));
+    return 0;
+  }
   int type = 0;
   socklen_t len = sizeof type;
-  if (fd >= 0 && getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
+  if (getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
     const int on = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
     setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &on, sizeof on);
   }
-  return lcm.handleTimeout(timeout_ms);
+  // lcm.handleTimeout() as LCM 1.3.1 does it, with poll() instead of select(): FD_SET of a
+  // descriptor >= FD_SETSIZE aborts as a negative one does.
+  pollfd p{fd, POLLIN, 0};
+  const int ready = poll(&p, 1, std::max(0, timeout_ms));
+  if (ready <= 0) return ready;  // 0: timeout; -1: errno (EINTR: a signal)
+  if (lcm.handle() == 0) return 1;
+  // The hub closed the connection (the provider's socket is -1 now): not this call's failure.
+  return lcm.getFileno() < 0 ? 0 : -1;
 }
 
 std::int64_t now_utime() {

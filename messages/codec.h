@@ -32,6 +32,10 @@ inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
 /// a lockstep round trip took ~90 ms. Before each receive we disable Nagle on our end and ask
 /// for immediate ACKs (TCP_QUICKACK is not sticky, hence every call); both are no-ops on the
 /// memq and UDP transports.
+/// Returns 1 when a message was handled, 0 after the timeout, -1 on failure (errno; EINTR is a
+/// signal). Without a transport (a tcpq hub that is down or has just closed the connection, see
+/// messages/transport.h) it returns 0, after waiting timeout_ms when it was down already, and
+/// never lets LCM select() on a negative descriptor: callers check transport_up() to tell.
 int handle_lcm(lcm::LCM& lcm, int timeout_ms);
 
 /// Microseconds since the Unix epoch (the informational utime of every message).

@@ -8,7 +8,8 @@
 // --in-process runs the twin library directly with the same config (deterministic mode, no LCM).
 // Output: one line per state update (human text, or JSON with --json) on stdout, then a summary
 // line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","state_hash"} with
-// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress).
+// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress;
+// a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
@@ -16,6 +17,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "messages/transport.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
 
@@ -125,9 +127,17 @@ int main(int argc, char** argv) {
     if (lcm_url.empty()) {
       if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
     }
+    // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
+    const auto hub = messages::tcpq_hub(lcm_url);
+    if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+      std::cerr << "peritwin-replay: LCM hub " << lcm_url
+                << " unreachable: " << up.error().message() << "\n";
+      return kExitRuntime;
+    }
     lcm::LCM lcm(lcm_url);
-    if (!lcm.good()) {
-      std::cerr << "peritwin-replay: cannot open LCM at \"" << lcm_url << "\"\n";
+    if (!lcm.good() || !messages::transport_up(lcm)) {
+      std::cerr << "peritwin-replay: cannot open LCM at \"" << messages::shown_url(lcm_url)
+                << "\"\n";
       return kExitRuntime;
     }
     struct sigaction sa {};
@@ -135,12 +145,18 @@ int main(int argc, char** argv) {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGINT, &sa, nullptr);
-    replay::LcmReplayer replayer(lcm, std::move(batches), options);
-    const auto r = replayer.run(print, [] { return g_signal.load() == 0; });
+    replay::ReplayResult r;
+    bool lost = false;
+    {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
+      replay::LcmReplayer replayer(lcm, std::move(batches), options);
+      r = replayer.run(print, [] { return g_signal.load() == 0; });
+      lost = !messages::transport_up(lcm);
+    }
     std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
               << " resend(s)\n";
     if (!r.ok) {
-      std::cerr << "peritwin-replay: " << r.error << "\n";
+      std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
+                << "\n";
       return kExitRuntime;
     }
     final_state = r.final_state;

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "messages/channels.h"
+#include "messages/transport.h"
 
 namespace peritwin::replay {
 
@@ -143,13 +144,21 @@ ReplayResult LcmReplayer::run(
     const std::int64_t base = std::max<std::int64_t>(applied, 0);
     const std::int64_t limit =
         std::min<std::int64_t>(n, base + static_cast<std::int64_t>(options_.window));
-    while (next <= limit) {
+    while (next <= limit && messages::transport_up(lcm_)) {
       publish(next++);
       last_send = std::chrono::steady_clock::now();
     }
     errno = 0;
-    if (twin::handle_lcm(lcm_, 20) < 0 && errno != EINTR) {
+    if (messages::transport_up(lcm_) && twin::handle_lcm(lcm_, 20) < 0 && errno != EINTR) {
       result.error = "LCM failed while receiving";
+      break;
+    }
+    if (!messages::transport_up(lcm_)) {  // a tcpq hub closed the connection: no retry here
+      result.error = "connection lost (" +
+                     (applied < 0 ? std::string("no state from the daemon yet")
+                                  : "the daemon had applied seq " + std::to_string(applied) +
+                                        " of " + std::to_string(n)) +
+                     ")";
       break;
     }
     for (const auto& s : inbox_) {

@@ -6,7 +6,8 @@
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
 // applying a batch; the last checkpoint is left as it was; checkpoints exist and none is valid,
-// without --fresh-start; the state dir is not writable).
+// without --fresh-start; the state dir is not writable). A tcpq hub that is down is not a
+// failure: the daemon waits for it and reconnects with backoff (twin/service/hub_connection.h).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -18,6 +19,7 @@
 
 #include "twin/config/config.h"
 #include "twin/service/daemon.h"
+#include "twin/service/hub_connection.h"
 
 namespace {
 
@@ -82,11 +84,17 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   try {
-    lcm::LCM lcm(lcm_url);
-    if (!lcm.good()) {
-      spdlog::critical("cannot open LCM at \"{}\"", lcm_url.empty() ? "(LCM default)" : lcm_url);
-      return kExitRuntime;
+    peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
+    const std::unique_ptr<lcm::LCM> connection = hub.open();
+    if (!connection) {
+      if (!hub.error().empty()) {
+        spdlog::critical("{}", hub.error());
+        return kExitRuntime;
+      }
+      spdlog::info("signal {} received while waiting for the LCM hub: stopping", g_signal.load());
+      return kExitOk;
     }
+    lcm::LCM& lcm = *connection;
     peritwin::twin::DaemonOptions options;
     options.state_dir = state_dir;
     options.deterministic = deterministic;
@@ -103,7 +111,13 @@ int main(int argc, char** argv) {
     }
     spdlog::info("ready");
     while (g_signal.load() == 0) {
-      if (!daemon.poll(100)) break;
+      if (!hub.connected()) {
+        hub.reconnect(lcm, daemon);
+      } else if (!daemon.poll(100)) {
+        break;
+      } else {
+        hub.check(lcm);
+      }
     }
     if (const int s = g_signal.load(); s != 0) {
       spdlog::info("signal {} received: checkpointing and stopping", s);
