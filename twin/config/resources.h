@@ -13,8 +13,9 @@
 //  - factor: nested dissection of a 2D mesh-like graph (George 1973; Lipton, Rose, Tarjan 1979)
 //    leaves nnz(L) = O(n log n); with d unknowns per node and a coupling reach of w grid spacings
 //    the separators are w nodes wide, giving nnz(L) ≈ κ·d²·w²·N·log2(√N / w). κ = 5 bounds
-//    CHOLMOD's supernodal factor (METIS or AMD, the better) on every measured B1 grid from 3,720 to
-//    60,000 nodes and δ/Δx from 2 to 6, by 7-40 % (docs/limits.md); capped at the dense triangle.
+//    CHOLMOD's supernodal factor (METIS or AMD, the better) on every measured B1/B2 grid from
+//    3,720 to 60,000 nodes and δ/Δx from 2 to 6, by 7-44 % (the condensed state-based form by
+//    26-79 %; docs/limits.md); capped at the dense triangle.
 //  - bytes: the arrays each part allocates per node, bond, matrix entry and factor entry (read
 //    off solver/ and twin/model; the constants below name them), times the fatigue engines that
 //    can be alive at once: the live one and the remaining-life simulations (3 with the A2 band).
