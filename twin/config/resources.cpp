@@ -45,9 +45,9 @@ constexpr double kMatrixEntryBytes = 12.0;
 constexpr double kFactorEntryBytes = 8.0 + 12.0;
 // nnz(L) ≈ κ·d²·w²·N·log2(√N/w): see resources.h; κ bounds every measurement in docs/limits.md.
 constexpr double kNestedDissection = 5.0;
-// Beyond these counts the exact slab sweep is replaced by the bounding box (an over-estimate).
-constexpr std::size_t kMaxSweptRectangles = 1024;
-constexpr std::size_t kMaxSweptHoles = 1024;
+// The slab sweep takes up to 2R slabs × R rectangles × (1 + H holes) steps; beyond this many the
+// bounding box's lattice is used instead (an over-estimate), so that no outline stalls parsing.
+constexpr double kMaxSweepSteps = 5e7;
 // Any count above this is far beyond every limit; clamping keeps inf − inf (NaN) out.
 constexpr double kHuge = 1e30;
 
@@ -251,7 +251,9 @@ BodyMeasure measure_body(const DetailConfig& d) {
   // discretize()'s grid: nx = floor(width/dx + 1e-9) columns from the box's lower left corner.
   const Axis ax{box.x_min, d.dx, finite_or_huge(std::floor((box.x_max - box.x_min) / d.dx + 1e-9))};
   const Axis ay{box.y_min, d.dx, finite_or_huge(std::floor((box.y_max - box.y_min) / d.dx + 1e-9))};
-  if (d.geometry.outline.size() > kMaxSweptRectangles || d.geometry.holes.size() > kMaxSweptHoles) {
+  const auto rectangles = static_cast<double>(d.geometry.outline.size());
+  const auto holes = static_cast<double>(d.geometry.holes.size());
+  if (2.0 * rectangles * rectangles * (1.0 + holes) > kMaxSweepSteps) {
     return box_measure(box, ax, ay);
   }
   try {

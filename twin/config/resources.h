@@ -1,7 +1,8 @@
 // What a detail will cost before anything is built (issue 14, item 6): nodes, bonds, solver
 // unknowns, stiffness and Cholesky-factor nonzeros and bytes, from the outline's lattice points,
-// dx and horizon_ratio alone, in O(rectangles²) time and O(rectangles + holes) memory — no
-// discretization, no allocation that grows with the grid. parse_config refuses a config whose
+// dx and horizon_ratio alone, in O(rectangles²·holes) time (at most 5·10⁷ steps, beyond which the
+// bounding box stands in) and O(rectangles + holes) memory — no discretization, no allocation
+// that grows with the grid. parse_config refuses a config whose
 // estimate exceeds ConfigLimits::max_memory_bytes or the solver's 32-bit indices (config.h).
 //
 // The model (docs/limits.md has the derivation and the measured ratios):
