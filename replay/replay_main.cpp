@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 
 #include "messages/transport.h"
 #include "replay/replay_tool.h"
@@ -61,7 +62,9 @@ int main(int argc, char** argv) {
   }
   options.lockstep = lockstep;
 
-  const auto loaded = twin::load_config(config_file);
+  // The memory bound (75 % of physical memory) only where the model is built: in-process.
+  const auto loaded =
+      twin::load_config(config_file, {in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return kExitUsage;

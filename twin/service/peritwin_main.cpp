@@ -1,7 +1,7 @@
 // peritwin: the twin daemon. See README.md and twin/service/daemon.h.
 //
 //   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
-//            [--deterministic] [--no-results] [--fresh-start]
+//            [--deterministic] [--no-results] [--fresh-start] [--max-memory BYTES]
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
@@ -49,6 +49,13 @@ int main(int argc, char** argv) {
   app.add_flag("--fresh-start", fresh_start,
                "start from the virgin state when checkpoints exist but none is valid (by "
                "default the daemon then refuses to start, naming each file and why)");
+  std::string max_memory;
+  app.add_option("--max-memory", max_memory,
+                 "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
+                 "(e.g. 8G; default 75 % of physical memory)")
+      ->check([](const std::string& s) {
+        return peritwin::twin::parse_byte_size(s) ? "" : "not a byte size > 0 (e.g. 8G): " + s;
+      });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -61,7 +68,8 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
   spdlog::set_level(spdlog::level::from_str(log_level));
 
-  const auto loaded = peritwin::twin::load_config(config_file);
+  const auto loaded = peritwin::twin::load_config(
+      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0)});
   if (!loaded.ok()) {
     for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
     return kExitUsage;
