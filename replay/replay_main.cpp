@@ -3,7 +3,7 @@
 //   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
 //                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
 //                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
-//                   [--key-file F [--daemon-key ID]]
+//                   [--key-file F [--daemon-key ID | --sign-only]]
 //   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
 // Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
   std::string key_file, daemon_key_id = "peritwin", generate_key_file;
   std::vector<std::string> key_ids;
-  bool lockstep = false, in_process = false, json = false;
+  bool lockstep = false, in_process = false, json = false, sign_only = false;
   replay::BatchingOptions batching;
   replay::ReplayOptions options;
   // Required unless --generate-key-file (checked after parsing).
@@ -56,9 +56,14 @@ int main(int argc, char** argv) {
       "sign the batches with the key of --source and verify every STATE and REJECT with the "
       "daemon's (TOML [keys], mode 0600; messages/README.md). Without it nothing is signed or "
       "verified, and anyone on the bus can forge the states this tool reports");
-  app.add_option("--daemon-key", daemon_key_id,
-                 "id of the daemon's key in --key-file (default peritwin)")
-      ->needs(key_file_opt);
+  auto* daemon_key_opt = app.add_option("--daemon-key", daemon_key_id,
+                                        "id of the daemon's key in --key-file (default peritwin)")
+                             ->needs(key_file_opt);
+  app.add_flag("--sign-only", sign_only,
+               "sign the batches but verify nothing (for a producer whose key file holds only "
+               "its own key; the states it reports can then be forged)")
+      ->needs(key_file_opt)
+      ->excludes(daemon_key_opt);
   auto* generate_opt =
       app.add_option("--generate-key-file", generate_key_file,
                      "write a new key file (random keys, mode 0600, never overwrites) and exit");
@@ -149,13 +154,20 @@ int main(int argc, char** argv) {
     }
     for (const auto& [id, role] :
          {std::pair{source_id, "--source"}, std::pair{daemon_key_id, "--daemon-key"}}) {
-      if (ring->find(id) == nullptr) {
+      if (ring->find(id) == nullptr && !(sign_only && id == daemon_key_id)) {
         std::cerr << "peritwin-replay: " << key_file << ": no key \"" << id << "\" (" << role
                   << ")\n";
         return kExitUsage;
       }
     }
-    auth = {*ring->find(source_id), *ring->find(daemon_key_id), daemon_key_id};
+    auth.batch_key = *ring->find(source_id);
+    if (sign_only) {
+      std::cerr << "peritwin-replay: --sign-only: the daemon's STATE and REJECT are not "
+                   "verified\n";
+    } else {
+      auth.daemon_key = *ring->find(daemon_key_id);
+      auth.daemon_key_id = daemon_key_id;
+    }
   }
   auto batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching);
   std::int64_t cycles = 0;

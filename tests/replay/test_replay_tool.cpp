@@ -446,7 +446,7 @@ TEST_F(ReplayAuthBinary, AuthRejectExitsThreeWithTheDaemonsReason) {
       << log();
 }
 
-TEST_F(ReplayAuthBinary, MissingKeyExitsTwoBeforePublishing) {
+TEST_F(ReplayAuthBinary, MissingKeyExitsTwoBeforePublishingAndSignOnlyNeedsNoDaemonKey) {
   FakeOnHub daemon(hub_->url(), Answer::signed_states, daemon_key_, replay_key_);
   auto r = replay_over_hub({"--key-file", keys_.string(), "--source", "gauge-3"});
   lines_to_end(*r);
@@ -462,6 +462,22 @@ TEST_F(ReplayAuthBinary, MissingKeyExitsTwoBeforePublishing) {
   EXPECT_EQ(exit_code(open), 2) << log();
   EXPECT_NE(log().find("mode 0644"), std::string::npos) << log();
   EXPECT_EQ(daemon.fake.batches(), 0);
+  // --sign-only needs no daemon key (and checks nothing).
+  const auto own_key = dir_ / "own-key.toml";
+  std::ofstream(own_key) << "[keys]\nreplay = \"" << [&] {
+    std::string hex;
+    for (const auto b : replay_key_.bytes)
+      hex += "0123456789abcdef"[b >> 4], hex += "0123456789abcdef"[b & 15];
+    return hex;
+  }() << "\"\n";
+  ::chmod(own_key.c_str(), 0600);
+  auto sign_only = replay_over_hub({"--key-file", own_key.string(), "--sign-only"});
+  const auto lines = lines_to_end(*sign_only);
+  EXPECT_EQ(exit_code(sign_only), 0) << log();
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find("\"state_hash\":\"fake-3\""), std::string::npos) << lines.back();
+  EXPECT_GE(daemon.fake.verified(), 3);
+  EXPECT_EQ(daemon.fake.verified(), daemon.fake.batches());
   // The key file is never overwritten.
   const auto again = run_replay({"--generate-key-file", keys_.string()});
   EXPECT_EQ(exit_code(again), 2) << log();
