@@ -72,18 +72,13 @@ bool HubConnection::check(lcm::LCM& lcm) {
   return connected_;
 }
 
-bool HubConnection::reconnect(lcm::LCM& lcm, const Daemon& daemon) {
+bool HubConnection::reconnect(lcm::LCM& lcm, Daemon& daemon) {
   if (connected_) return true;
   if (!wait(backoff_.next())) return false;
   if (hub_ && !messages::probe_hub(*hub_)) return false;  // still down: leave LCM alone
-  // The first publish on a closed tcpq instance reconnects it (and re-sends its subscriptions).
-  for (std::size_t i = 0; i < daemon.num_details(); ++i) {
-    const Twin& twin = daemon.twin(i);
-    const auto m = state_message(twin, now_utime());
-    if (lcm.publish(messages::channel(twin.detail_id(), messages::Kind::kState), &m) != 0) {
-      return false;
-    }
-  }
+  // The first publish on a closed tcpq instance reconnects it (and re-sends its subscriptions):
+  // a STATUS per detail; the workers republish their STATEs.
+  if (!daemon.announce()) return false;
   if (!messages::transport_up(lcm)) return false;
   connected_ = true;
   backoff_.reset();

@@ -6,9 +6,10 @@
 //     and says "ready" only once it is connected; other transports open at once.
 //   - after every poll(), check(): when the hub has closed the connection, one warning line.
 //   - while disconnected, reconnect(): waits the next backoff delay, probes the hub without LCM
-//     (so LCM prints nothing and stays as it is), and when the hub answers, republishes every
-//     detail's STATE — the publish that makes the same lcm::LCM reconnect; LCM then re-sends its
-//     subscriptions, so the Daemon keeps its instance and its models. One line when it is back.
+//     (so LCM prints nothing and stays as it is), and when the hub answers, Daemon::announce()
+//     publishes every detail's STATUS — the publish that makes the same lcm::LCM reconnect; LCM
+//     then re-sends its subscriptions, so the Daemon keeps its instance and its models — and has
+//     the workers republish their STATEs. One line when it is back.
 //
 // While disconnected the daemon is not polled: no STATUS (it could not be delivered), no timed
 // checkpoint; SIGTERM still stops it with its checkpoint. Everything runs on the thread that
@@ -39,7 +40,7 @@ class HubConnection {
   /// After Daemon::poll(): false, with one warning line, once the hub has closed the connection.
   bool check(lcm::LCM& lcm);
   /// While disconnected: waits the next backoff delay and tries once; true when reconnected.
-  bool reconnect(lcm::LCM& lcm, const Daemon& daemon);
+  bool reconnect(lcm::LCM& lcm, Daemon& daemon);
 
   [[nodiscard]] bool connected() const { return connected_; }
   [[nodiscard]] const std::string& error() const { return error_; }
