@@ -18,12 +18,16 @@
 // peak. One JSON line:
 //   {"bench":"soak","batches":…,"warm_up_batches":…,"complete":…,"seconds":…,"batches_per_s":…,
 //    "rss_first_batch_kb":…,"rss_start_kb":…,"rss_end_kb":…,"rss_peak_kb":…,"growth_percent":…,
-//    "growth_kb_per_million_batches":…,"samples":[{"batches":…,"rss_kb":…},…],
-//    "broken_bonds":…,"resends":…,"daemon_exit":…,"transport":"tcpq"}
+//    "growth_kb_per_million_batches":…,"rss_max_per_tenth_kb":[…],"envelope_growth_percent":…,
+//    "samples":[{"batches":…,"rss_kb":…},…],"broken_bonds":…,"resends":…,"daemon_exit":…,
+//    "transport":"tcpq"}
 // seconds, batches_per_s and growth_* cover the batches after the warm-up; growth_* is
-// end - start. daemon_exit: the daemon's exit status after SIGTERM (0: checkpointed and stopped
-// cleanly). Exit 0 when the run completed and nothing broke, 1 when a bond broke (the detail is
-// not in steady state), 3 on a runtime failure.
+// end - start. rss_max_per_tenth_kb: the highest VmRSS of each tenth after the warm-up (sampled
+// every second), envelope_growth_percent the last tenth's against the first's — the measure for
+// a daemon whose RSS swings (asynchronous life estimates copy the model for each estimate).
+// daemon_exit: the daemon's exit status after SIGTERM (0: checkpointed and stopped cleanly). Exit 0
+// when the run completed and nothing broke, 1 when a bond broke (the detail is not in steady
+// state), 3 on a runtime failure.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -312,12 +316,26 @@ int main(int argc, char** argv) {
   bool ok = producer.run_to(warm_up, 120.0, daemon_alive);
   const std::int64_t rss_start = ok && producer.applied() >= warm_up ? sample() : -1;
   const auto t0 = Clock::now();
+  // The highest RSS of each tenth, from a sample every second: a daemon whose RSS swings (a life
+  // estimate's model copy comes and goes) is compared by its upper envelope, not by two samples
+  // that may fall on a swing.
+  std::vector<std::int64_t> tenth_max;
+  auto last_poll = Clock::now();
   for (int tenth = 1; tenth <= 10 && ok && rss_start >= 0; ++tenth) {
     const std::int64_t target = warm_up + (batches - warm_up) * tenth / 10;
-    ok = producer.run_to(target, 120.0, [&] { return since(t0) < max_seconds && daemon_alive(); });
+    tenth_max.push_back(-1);
+    auto note = [&](std::int64_t rss) { tenth_max.back() = std::max(tenth_max.back(), rss); };
+    ok = producer.run_to(target, 120.0, [&] {
+      if (since(last_poll) >= 1.0) {
+        last_poll = Clock::now();
+        note(proc_status_kb(daemon, "VmRSS"));
+      }
+      return since(t0) < max_seconds && daemon_alive();
+    });
     if (producer.applied() < target) break;  // --max-seconds, or the daemon is gone
-    if (target > warm_up) sample();
+    if (target > warm_up) note(sample());
   }
+  while (!tenth_max.empty() && tenth_max.back() < 0) tenth_max.pop_back();
   const double seconds = since(t0);
   const std::int64_t applied = producer.applied();
   const bool alive = daemon_alive();
@@ -354,6 +372,14 @@ int main(int argc, char** argv) {
   line["growth_kb_per_million_batches"] =
       measured_rss ? tools::JsonLine(tools::fixed(1e6 * growth_kb / measured, 1))
                    : tools::JsonLine(nullptr);
+  line["rss_max_per_tenth_kb"] = tenth_max;
+  line["envelope_growth_percent"] =
+      tenth_max.size() >= 2 && tenth_max.front() > 0
+          ? tools::JsonLine(
+                tools::fixed(100.0 * static_cast<double>(tenth_max.back() - tenth_max.front()) /
+                                 static_cast<double>(tenth_max.front()),
+                             2))
+          : tools::JsonLine(nullptr);
   line["samples"] = samples;
   line["broken_bonds"] = producer.broken_bonds();
   line["resends"] = producer.resends();
