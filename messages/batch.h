@@ -31,6 +31,8 @@ enum class Verdict : std::int8_t {
   gap = 5,
   failed = 6,
   internal = 7,
+  auth = 8,
+  limit = 9,
 };
 
 struct Outcome {
@@ -44,6 +46,8 @@ struct Outcome {
 // by check_load_blocks (solver/core/load_block.h: kMinLoadRatio, kMaxBatchCycles).
 inline constexpr std::size_t kMaxBlocksPerBatch = 100'000;
 inline constexpr std::size_t kMaxSourceIdLength = 64;
+/// Length of an HMAC-SHA256 tag (load_batch_t.auth_tag and the daemon's messages).
+inline constexpr std::size_t kAuthTagBytes = 32;
 
 /// Everything about a batch that needs no bookkeeping: WRONG_DETAIL or INVALID, else applied.
 Outcome check_batch(const Batch& batch, std::string_view detail_id);

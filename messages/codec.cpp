@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -24,8 +25,9 @@ std::uint64_t read_be(const unsigned char* p, int bytes) {
 Outcome decode_error(std::string why) { return {Verdict::decode, "message", std::move(why)}; }
 
 /// Walks the load_batch_t layout without allocating; empty when the generated decoder can be
-/// given the bytes safely and will consume exactly all of them.
-std::string check_layout(const unsigned char* p, std::size_t size) {
+/// given the bytes safely and will consume exactly all of them. `signed_size` is set to the
+/// number of leading bytes the auth tag covers (everything before tag_length).
+std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& signed_size) {
   std::size_t pos = 0;
   auto need = [&](std::size_t n, const char* what) -> std::string {
     if (size - pos < n) {
@@ -60,10 +62,21 @@ std::string check_layout(const unsigned char* p, std::size_t size) {
   const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
   pos += 4;
   if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
-  const std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks);
+  std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks) + 4;
   if (size < expected) {
     return "truncated payload: " + std::to_string(size) +
-           " bytes, num_blocks = " + std::to_string(blocks) + " needs " + std::to_string(expected);
+           " bytes, num_blocks = " + std::to_string(blocks) + " needs " +
+           std::to_string(expected) + " with the tag length";
+  }
+  signed_size = expected - 4;
+  const auto tag_length = static_cast<std::int32_t>(read_be(p + signed_size, 4));
+  if (tag_length != 0 && tag_length != static_cast<std::int32_t>(kAuthTagBytes)) {
+    return "malformed tag_length " + std::to_string(tag_length) + " (0 or " +
+           std::to_string(kAuthTagBytes) + ")";
+  }
+  expected += static_cast<std::size_t>(tag_length);
+  if (size < expected) {
+    return "truncated payload: " + std::to_string(size) + " bytes end inside auth_tag";
   }
   if (size > expected) {
     return "oversized payload: " + std::to_string(size - expected) +
@@ -72,7 +85,99 @@ std::string check_layout(const unsigned char* p, std::size_t size) {
   return {};
 }
 
+/// Walks an encoded message field by field; every count and length is checked against the bytes
+/// left before anything is skipped.
+class LayoutWalker {
+ public:
+  LayoutWalker(const unsigned char* p, std::size_t size) : p_(p), size_(size) {}
+  bool fingerprint(std::int64_t hash) {
+    if (!skip(8)) return false;
+    return static_cast<std::int64_t>(read_be(p_, 8)) == hash;
+  }
+  bool skip(std::size_t n) {
+    if (!ok_ || size_ - pos_ < n) return ok_ = false;
+    pos_ += n;
+    return true;
+  }
+  /// An int32 count of elements of at least `min_element_bytes` each that the rest can hold.
+  bool count(std::size_t min_element_bytes, std::int32_t& n) {
+    if (!ok_ || size_ - pos_ < 4) return ok_ = false;
+    n = static_cast<std::int32_t>(read_be(p_ + pos_, 4));
+    pos_ += 4;
+    if (n < 0 || static_cast<std::size_t>(n) > (size_ - pos_) / min_element_bytes) {
+      return ok_ = false;
+    }
+    return true;
+  }
+  /// A string: NUL-terminated, no NUL inside (LCM's encoder stops at the first NUL, so only
+  /// such strings re-encode to the bytes they were decoded from).
+  bool string() {
+    std::int32_t len = 0;
+    if (!count(1, len) || len < 1) return ok_ = false;
+    const unsigned char* s = p_ + pos_;
+    const auto n = static_cast<std::size_t>(len);
+    if (s[n - 1] != 0 || std::memchr(s, 0, n - 1) != nullptr) return ok_ = false;
+    return skip(n);
+  }
+  [[nodiscard]] bool at_end() const { return ok_ && pos_ == size_; }
+
+ private:
+  const unsigned char* p_;
+  std::size_t size_, pos_ = 0;
+  bool ok_ = true;
+};
+
+/// Encoded bytes of one crack_t inside a damage_state_t: int32, 7 doubles, int32, int8.
+constexpr std::size_t kCrackBytes = 4 + 7 * 8 + 4 + 1;
+
+bool state_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t sources = 0, cracks = 0, tag = 0;
+  if (!w.fingerprint(peritwin_msgs::damage_state_t::getHash()) || !w.skip(8) || !w.string() ||
+      !w.skip(8) || !w.count(4 + 1 + 8 + 8, sources)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < sources; ++i) {
+    if (!w.string()) return false;
+  }
+  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8) ||
+      !w.count(kCrackBytes, cracks) || !w.skip(kCrackBytes * static_cast<std::size_t>(cracks)) ||
+      !w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1) || !w.string() || !w.count(1, tag) ||
+      !w.skip(static_cast<std::size_t>(tag))) {
+    return false;
+  }
+  return w.at_end();
+}
+
+bool reject_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t tag = 0;
+  return w.fingerprint(peritwin_msgs::reject_t::getHash()) && w.skip(8) && w.string() &&
+         w.string() && w.skip(8 + 1) && w.string() && w.string() && w.count(1, tag) &&
+         w.skip(static_cast<std::size_t>(tag)) && w.at_end();
+}
+
+template <typename Message>
+std::optional<Message> decode_checked(const void* data, std::size_t size,
+                                      bool (*layout)(const unsigned char*, std::size_t)) {
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+      !layout(static_cast<const unsigned char*>(data), size)) {
+    return std::nullopt;
+  }
+  Message m{};
+  if (m.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return std::nullopt;
+  return m;
+}
+
 }  // namespace
+
+std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::damage_state_t>(data, size, state_layout);
+}
+
+std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::reject_t>(data, size, reject_layout);
+}
 
 int handle_lcm(lcm::LCM& lcm, int timeout_ms) {
   const int fd = lcm.getFileno();
@@ -110,12 +215,13 @@ Decoded decode_batch(const void* data, std::size_t size) {
                              std::to_string(kMaxBatchPayload));
     return out;
   }
-  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size);
+  std::size_t signed_size = 0;
+  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size, signed_size);
       !e.empty()) {
     out.error = decode_error(e);
     return out;
   }
-  peritwin_msgs::load_batch_t msg;
+  peritwin_msgs::load_batch_t msg{};
   const int used = msg.decode(data, 0, static_cast<int>(size));
   if (used < 0 || static_cast<std::size_t>(used) != size) {
     out.error = decode_error("not decodable as peritwin_msgs.load_batch_t");
@@ -127,12 +233,14 @@ Decoded decode_batch(const void* data, std::size_t size) {
   b.seq = msg.seq;
   b.blocks.reserve(msg.blocks.size());
   for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
+  out.auth_tag = std::move(msg.auth_tag);
   out.batch = std::move(b);
+  out.signed_size = signed_size;
   return out;
 }
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime) {
-  peritwin_msgs::load_batch_t m;
+  peritwin_msgs::load_batch_t m{};
   m.utime = utime;
   m.detail_id = batch.detail_id;
   m.source_id = batch.source_id;
@@ -152,7 +260,7 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
                                        std::int64_t seq, const Outcome& outcome,
                                        std::int64_t utime) {
-  peritwin_msgs::reject_t m;
+  peritwin_msgs::reject_t m{};
   m.utime = utime;
   m.detail_id = detail_id;
   m.source_id = source;

@@ -46,8 +46,20 @@ std::int64_t now_utime();
 struct Decoded {
   std::optional<Batch> batch;
   Outcome error;
+  /// Leading bytes of the payload the batch's auth tag covers (messages/README.md), and the tag:
+  /// empty (unsigned) or kAuthTagBytes bytes.
+  std::size_t signed_size = 0;
+  std::vector<std::uint8_t> auth_tag;
 };
 Decoded decode_batch(const void* data, std::size_t size);
+
+/// A STATE or REJECT decoded from untrusted bytes, or nullopt: wrong fingerprint, truncated,
+/// bytes after the end, or a string length or array count the payload cannot hold. The layout is
+/// walked first, so LCM's decoder (which sizes its arrays from the counts before reading them) is
+/// never asked to allocate more than the payload justifies: a forged num_sources of 2^30 would
+/// otherwise cost gigabytes in any receiver that subscribes with the typed handler.
+std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size);
+std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size);
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 

@@ -94,6 +94,8 @@ void expect_equal(const msgs::load_batch_t& a, const msgs::load_batch_t& b) {
     SCOPED_TRACE("block " + std::to_string(i));
     expect_equal(a.blocks[i], b.blocks[i]);
   }
+  EXPECT_EQ(a.tag_length, b.tag_length);
+  EXPECT_EQ(a.auth_tag, b.auth_tag);
 }
 
 void expect_equal(const msgs::crack_t& a, const msgs::crack_t& b) {
@@ -116,6 +118,7 @@ void expect_equal(const msgs::damage_state_t& a, const msgs::damage_state_t& b) 
   EXPECT_EQ(a.num_sources, b.num_sources);
   EXPECT_EQ(a.source_ids, b.source_ids);
   EXPECT_EQ(a.applied_seq, b.applied_seq);
+  EXPECT_EQ(a.checkpointed_seq, b.checkpointed_seq);
   EXPECT_EQ(a.total_cycles, b.total_cycles);
   EXPECT_EQ(a.broken_bonds, b.broken_bonds);
   EXPECT_SAME_FIELD(a, b, max_damage);
@@ -134,6 +137,8 @@ void expect_equal(const msgs::damage_state_t& a, const msgs::damage_state_t& b) 
   EXPECT_EQ(a.remaining_life_source, b.remaining_life_source);
   EXPECT_EQ(a.failure, b.failure);
   EXPECT_EQ(a.state_hash, b.state_hash);
+  EXPECT_EQ(a.tag_length, b.tag_length);
+  EXPECT_EQ(a.auth_tag, b.auth_tag);
 }
 
 void expect_equal(const msgs::damage_field_t& a, const msgs::damage_field_t& b) {
@@ -159,6 +164,8 @@ void expect_equal(const msgs::reject_t& a, const msgs::reject_t& b) {
   EXPECT_EQ(a.code, b.code);
   EXPECT_EQ(a.what, b.what);
   EXPECT_EQ(a.why, b.why);
+  EXPECT_EQ(a.tag_length, b.tag_length);
+  EXPECT_EQ(a.auth_tag, b.auth_tag);
 }
 
 void expect_equal(const msgs::status_t& a, const msgs::status_t& b) {
@@ -172,6 +179,9 @@ void expect_equal(const msgs::status_t& a, const msgs::status_t& b) {
   EXPECT_EQ(a.errors, b.errors);
   EXPECT_EQ(a.duplicates, b.duplicates);
   EXPECT_EQ(a.gaps, b.gaps);
+  EXPECT_SAME_FIELD(a, b, busy_s);
+  EXPECT_EQ(a.auth_rejects, b.auth_rejects);
+  EXPECT_SAME_FIELD(a, b, reject_rate);
 }
 
 // ---- sample messages (awkward values on purpose) ---------------------------------------------
@@ -186,13 +196,15 @@ msgs::load_block_t make_block(int i) {
 }
 
 msgs::load_batch_t make_batch() {
-  msgs::load_batch_t m;
+  msgs::load_batch_t m{};
   m.utime = 1'700'000'000'123'456;
   m.detail_id = "b1-ct";
   m.source_id = "strain-gauge_3 \xc2\xb5";  // UTF-8 is carried as bytes
   m.seq = 42;
   for (int i = 0; i < 5; ++i) m.blocks.push_back(make_block(i));
   m.num_blocks = static_cast<std::int32_t>(m.blocks.size());
+  for (int i = 0; i < 32; ++i) m.auth_tag.push_back(static_cast<std::uint8_t>(255 - 7 * i));
+  m.tag_length = static_cast<std::int32_t>(m.auth_tag.size());
   return m;
 }
 
@@ -212,12 +224,13 @@ msgs::crack_t make_crack(int i) {
 }
 
 msgs::damage_state_t make_state() {
-  msgs::damage_state_t m;
+  msgs::damage_state_t m{};
   m.utime = -1;
   m.detail_id = "Weld_Toe-07";
   m.state_seq = 17;
   m.source_ids = {"", "live", "replay"};
   m.applied_seq = {0, kI64Max, 16};
+  m.checkpointed_seq = {0, kI64Max - 1, 0};
   m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
   m.total_cycles = 9'876'543'210;
   m.broken_bonds = 4321;
@@ -233,6 +246,8 @@ msgs::damage_state_t make_state() {
   m.remaining_life_source = "replay";
   m.failure = msgs::damage_state_t::FAILURE_SINGULAR;
   m.state_hash = "0123456789abcdef0123456789abcdef";
+  m.auth_tag.assign(32, 0xA5);
+  m.tag_length = 32;
   return m;
 }
 
@@ -258,7 +273,7 @@ msgs::damage_field_t make_field(int num_nodes, std::string detail_id = "b1-ct") 
 }
 
 msgs::reject_t make_reject() {
-  msgs::reject_t m;
+  msgs::reject_t m{};
   m.utime = 1;
   m.detail_id = "b1-ct";
   m.source_id = "replay";
@@ -266,11 +281,13 @@ msgs::reject_t make_reject() {
   m.code = msgs::reject_t::CODE_INVALID;
   m.what = "blocks[3].r";
   m.why = "r = 1.2 must be < 1";
+  m.auth_tag.assign(32, 0x5A);
+  m.tag_length = 32;
   return m;
 }
 
 msgs::status_t make_status() {
-  msgs::status_t m;
+  msgs::status_t m{};
   m.utime = 2;
   m.detail_id = "b1-ct";
   m.health = "degraded";
@@ -281,6 +298,9 @@ msgs::status_t make_status() {
   m.errors = 1;
   m.duplicates = 2;
   m.gaps = kI64Max;
+  m.busy_s = 61.5;
+  m.auth_rejects = 12;
+  m.reject_rate = 0.1;
   return m;
 }
 
@@ -326,7 +346,7 @@ TEST(MessagesRoundTrip, Reject) { check_round_trip(make_reject()); }
 TEST(MessagesRoundTrip, Status) { check_round_trip(make_status()); }
 
 TEST(MessagesRoundTrip, EmptyArraysAndStrings) {
-  msgs::load_batch_t batch;
+  msgs::load_batch_t batch{};
   batch.utime = 0;
   batch.seq = 0;
   batch.num_blocks = 0;
@@ -377,10 +397,10 @@ TEST(MessagesDecode, WrongFingerprintFails) {
 TEST(MessagesDecode, OtherTypeFails) {
   // A message decoded as another type is rejected by the fingerprint, even when it would fit.
   const auto reject_bytes = encode(make_reject());
-  msgs::status_t status;
+  msgs::status_t status{};
   EXPECT_LT(status.decode(reject_bytes.data(), 0, static_cast<int>(reject_bytes.size())), 0);
   const auto batch_bytes = encode(make_batch());
-  msgs::reject_t reject;
+  msgs::reject_t reject{};
   EXPECT_LT(reject.decode(batch_bytes.data(), 0, static_cast<int>(batch_bytes.size())), 0);
 }
 

@@ -82,4 +82,51 @@ inline std::int64_t state_seq_of(const std::string& json) {
   return p == std::string::npos ? -1 : std::atoll(json.c_str() + p + 12);
 }
 
+/// A hub of one test on a port that was free a moment ago, checked to be this hub's (another
+/// process may take the port between the check and the JVM's bind: then it retries on another
+/// port). For tests that run the binaries over tcpq://127.0.0.1:PORT; without java or lcm.jar
+/// such tests skip.
+class LcmHub {
+ public:
+  /// Starts the hub, its output to `log`; waits up to timeout_s for it to listen.
+  LcmHub(const std::filesystem::path& log, double timeout_s) {
+    const std::string java = find_java();
+    if (java.empty() || !std::filesystem::exists(kLcmJar)) {
+      missing_ = std::string("java or ") + kLcmJar + " missing";
+      return;
+    }
+    for (int attempt = 0; attempt < 5 && !hub_; ++attempt) {
+      port_ = free_loopback_port();
+      hub_ = std::make_unique<Process>(
+          std::vector<std::string>{java, "-cp", kLcmJar, "lcm.lcm.TCPService",
+                                   std::to_string(port_)},
+          log.string());
+      if (!hub_->started()) {
+        hub_.reset();
+        break;
+      }
+      const auto deadline =
+          std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+      bool ours = false;
+      while (!(ours = listens_on(hub_->pid(), port_)) && !hub_->wait_for(0).has_value() &&
+             std::chrono::steady_clock::now() < deadline) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+      if (!ours) hub_.reset();
+    }
+    if (hub_ && !wait_for_loopback_port(port_, timeout_s)) hub_.reset();
+  }
+
+  /// Why there is no hub to test with (java or lcm.jar missing: skip), or "".
+  [[nodiscard]] const std::string& missing() const { return missing_; }
+  /// True when the hub is up; url() is then tcpq://127.0.0.1:PORT.
+  [[nodiscard]] bool up() const { return hub_ != nullptr; }
+  [[nodiscard]] std::string url() const { return "tcpq://127.0.0.1:" + std::to_string(port_); }
+
+ private:
+  std::string missing_;
+  int port_ = 0;
+  std::unique_ptr<Process> hub_;
+};
+
 }  // namespace peritwin::testing

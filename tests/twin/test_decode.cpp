@@ -1,6 +1,7 @@
 // Decoding load batches defensively: wrong fingerprint, truncation, oversize, malformed lengths.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -55,7 +56,7 @@ TEST(DecodeBatch, WrongFingerprint) {
   EXPECT_FALSE(d.batch.has_value());
   EXPECT_NE(d.error.why.find("fingerprint"), std::string::npos) << d.error.why;
   // Another type's bytes.
-  peritwin_msgs::reject_t r;
+  peritwin_msgs::reject_t r{};
   r.detail_id = "b1-ct";
   std::vector<std::uint8_t> other(static_cast<std::size_t>(r.getEncodedSize()));
   r.encode(other.data(), 0, static_cast<int>(other.size()));
@@ -76,8 +77,9 @@ TEST(DecodeBatch, OversizedPayloads) {
 
 TEST(DecodeBatch, MalformedLengthsDoNotAllocate) {
   const auto good = encode(sample(1));
-  // num_blocks sits right before the 32 bytes of the one block.
-  const std::size_t at = good.size() - 32 - 4;
+  // num_blocks sits right before the 32 bytes of the one block, which the 4 bytes of an empty
+  // auth tag's tag_length follow.
+  const std::size_t at = good.size() - 4 - 32 - 4;
   for (const std::uint32_t n : {0x7fffffffu, 0x80000000u, 2u}) {
     auto bytes = good;
     for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
@@ -96,8 +98,37 @@ TEST(DecodeBatch, MalformedLengthsDoNotAllocate) {
   EXPECT_FALSE(decode_batch(bytes.data(), bytes.size()).batch.has_value());
 }
 
+TEST(DecodeBatch, AuthTagIsCarriedAndItsCoverageIsEverythingBeforeTagLength) {
+  auto msg = sample(2);
+  const auto unsigned_bytes = encode(msg);
+  const Decoded plain = decode_batch(unsigned_bytes.data(), unsigned_bytes.size());
+  ASSERT_TRUE(plain.batch.has_value()) << plain.error.why;
+  EXPECT_TRUE(plain.auth_tag.empty());
+  EXPECT_EQ(plain.signed_size, unsigned_bytes.size() - 4);
+
+  msg.auth_tag.assign(messages::kAuthTagBytes, 0xC3);
+  msg.tag_length = static_cast<std::int32_t>(messages::kAuthTagBytes);
+  const auto signed_bytes = encode(msg);
+  const Decoded tagged = decode_batch(signed_bytes.data(), signed_bytes.size());
+  ASSERT_TRUE(tagged.batch.has_value()) << tagged.error.why;
+  EXPECT_EQ(tagged.auth_tag, msg.auth_tag);
+  // The covered bytes are the same whether the message carries a tag or not.
+  EXPECT_EQ(tagged.signed_size, plain.signed_size);
+  EXPECT_TRUE(std::equal(unsigned_bytes.begin(),
+                         unsigned_bytes.begin() + static_cast<std::ptrdiff_t>(plain.signed_size),
+                         signed_bytes.begin()));
+
+  // A tag of any other length than 0 or 32 is refused before the generated decoder sees it.
+  msg.auth_tag.assign(5, 0x01);
+  msg.tag_length = 5;
+  const auto odd = encode(msg);
+  const Decoded refused = decode_batch(odd.data(), odd.size());
+  EXPECT_FALSE(refused.batch.has_value());
+  EXPECT_NE(refused.error.why.find("tag_length 5"), std::string::npos) << refused.error.why;
+}
+
 TEST(Json, NonFiniteIsNull) {
-  peritwin_msgs::damage_state_t s;
+  peritwin_msgs::damage_state_t s{};
   s.detail_id = "d\"x";
   s.total_cycles = 0;
   s.broken_bonds = 0;
@@ -111,7 +142,7 @@ TEST(Json, NonFiniteIsNull) {
 
 TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
   // messages_io.h documents the keys of state_json in this order; NaN and ±∞ print as null.
-  peritwin_msgs::damage_state_t s;
+  peritwin_msgs::damage_state_t s{};
   s.detail_id = "b1-ct";
   s.state_seq = 12;
   s.total_cycles = 34567;

@@ -197,7 +197,7 @@ TEST_F(TwinTest, StateMessage) {
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
   ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
             static_cast<int>(bytes.size()));
-  peritwin_msgs::damage_state_t back;
+  peritwin_msgs::damage_state_t back{};
   ASSERT_EQ(back.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
             static_cast<int>(bytes.size()));
   EXPECT_EQ(back.state_hash, m.state_hash);

@@ -5,14 +5,17 @@
 
 namespace peritwin::twin {
 
-peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime) {
-  peritwin_msgs::damage_state_t m;
+peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime,
+                                            const SeqBySource& checkpointed) {
+  peritwin_msgs::damage_state_t m{};
   m.utime = utime;
   m.detail_id = twin.detail_id();
   m.state_seq = twin.state_seq();
   for (const auto& [source, seq] : twin.applied()) {
     m.source_ids.push_back(source);
     m.applied_seq.push_back(seq);
+    const auto durable = checkpointed.find(source);
+    m.checkpointed_seq.push_back(durable == checkpointed.end() ? 0 : durable->second);
   }
   m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
   const FatigueEngine& engine = twin.engine();

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "messages/codec.h"
@@ -23,9 +25,14 @@ using messages::reject_message;
 using messages::state_json;
 using messages::summary_json;
 
-/// STATE of the twin's current state: cycles, bonds, cracks, K, remaining life, applied seq per
-/// source, state_hash (fields: messages/README.md).
-peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime);
+/// Last seq per source of the newest checkpoint on disk (damage_state_t.checkpointed_seq).
+using SeqBySource = std::map<std::string, std::int64_t>;
+
+/// STATE of the twin's current state: cycles, bonds, cracks, K, remaining life, applied seq and
+/// checkpointed seq per source (a source missing from `checkpointed` has 0), state_hash (fields:
+/// messages/README.md). Unsigned (tag_length 0).
+peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime,
+                                            const SeqBySource& checkpointed = {});
 
 /// The damage field of the current state in chunks of at most MAX_NODES_PER_CHUNK nodes.
 std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime);

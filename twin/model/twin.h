@@ -121,8 +121,12 @@ class Twin {
   /// (the model signature changed with it). An older checkpoint is refused with both versions.
   static constexpr std::int64_t kCheckpointFormat = 3;
   [[nodiscard]] CheckpointData to_checkpoint() const;
-  /// Restores a checkpoint of the same model (signature checked). On failure the twin must be
-  /// discarded.
+  /// Whether `data` is a checkpoint this twin can restore: format version, detail id, model
+  /// signature and (when given) the state_seq its file name promises. Reads no state.
+  [[nodiscard]] Status check_checkpoint(const CheckpointData& data,
+                                        std::optional<std::int64_t> state_seq) const;
+  /// Restores a checkpoint of the same model (check_checkpoint first). On failure the twin must
+  /// be discarded.
   Status restore(const CheckpointData& data);
 
   /// Whether a field of the twin's table enters state_hash().
