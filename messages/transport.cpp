@@ -75,6 +75,16 @@ Status probe_hub(const TcpqHub& hub, double timeout_s) {
 
 bool transport_up(lcm::LCM& lcm) { return lcm.getFileno() >= 0; }
 
+Status reconnect(lcm::LCM& lcm) {
+  if (transport_up(lcm)) return {};
+  lcm::Subscription* probe = lcm.subscribeFunction(
+      "PERITWIN_RECONNECT_PROBE", +[](const lcm::ReceiveBuffer*, const std::string&, void*) {},
+      static_cast<void*>(nullptr));
+  if (probe != nullptr) lcm.unsubscribe(probe);
+  if (!transport_up(lcm)) return failure("LCM could not connect");
+  return {};
+}
+
 std::string shown_url(const std::string& url) { return url.empty() ? "(LCM default)" : url; }
 
 }  // namespace peritwin::messages

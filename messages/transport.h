@@ -45,6 +45,13 @@ Status probe_hub(const TcpqHub& hub, double timeout_s = 2.0);
 /// Always true for udpm, memq and file URLs.
 bool transport_up(lcm::LCM& lcm);
 
+/// Makes a tcpq instance without a connection connect again, publishing nothing: a subscription
+/// made while the socket is closed connects (lcm_tcpq_subscribe), the connection re-sends every
+/// subscription of the instance, and the probe subscription is dropped again. OK when `lcm` has
+/// its transport afterwards (then at once for other transports); otherwise LCM has printed its
+/// three lines, so probe the hub first (probe_hub).
+Status reconnect(lcm::LCM& lcm);
+
 /// `url`, or "(LCM default)" when it is empty.
 std::string shown_url(const std::string& url);
 

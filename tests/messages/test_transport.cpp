@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <thread>
 
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -86,6 +87,39 @@ TEST(HandleLcm, HubClosingTheConnectionIsNoFailure) {
   EXPECT_FALSE(transport_up(lcm));
   EXPECT_GE(calls, 1);
   EXPECT_EQ(handle_lcm(lcm, 10), 0);  // and after it, no FD_SET(-1)
+}
+
+TEST(Reconnect, SameInstanceResubscribesAndPublishesNothing) {
+  testing::FakeTcpqHub hub(0, /*accept_again=*/true);  // closes the first connection at once
+  lcm::LCM lcm(hub.url());
+  auto* sub = lcm.subscribeFunction(
+      "PERITWIN_B1_CT_LOAD", +[](const lcm::ReceiveBuffer*, const std::string&, void*) {},
+      static_cast<void*>(nullptr));
+  ASSERT_NE(sub, nullptr);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+  while (transport_up(lcm) && std::chrono::steady_clock::now() < deadline) handle_lcm(lcm, 100);
+  ASSERT_FALSE(transport_up(lcm));
+  ASSERT_TRUE(reconnect(lcm).ok());
+  EXPECT_TRUE(transport_up(lcm));
+  // The hub saw the daemon's subscription again and the probe's come and go, and no message.
+  while ((hub.resubscribes() < 2 || hub.unsubscribes() < 1) &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(hub.resubscribes(), 2);  // PERITWIN_B1_CT_LOAD and the probe
+  EXPECT_EQ(hub.unsubscribes(), 1);  // the probe
+  EXPECT_EQ(hub.republishes(), 0);
+  EXPECT_TRUE(reconnect(lcm).ok());  // connected: nothing to do
+  lcm.unsubscribe(sub);
+}
+
+TEST(Reconnect, WithoutHubFails) {
+  lcm::LCM lcm("tcpq://127.0.0.1:" + std::to_string(twin::free_loopback_port()));
+  const Status again = reconnect(lcm);
+  ASSERT_FALSE(again.ok());
+  EXPECT_EQ(again.error().message(), "LCM could not connect");
+  lcm::LCM memq("memq://");
+  EXPECT_TRUE(reconnect(memq).ok());
 }
 
 }  // namespace

@@ -163,7 +163,6 @@ struct Daemon::Detail {
   std::atomic<std::int64_t> duplicates{0};
   std::atomic<std::int64_t> gaps{0};
   std::atomic<bool> failed{false};           ///< final failure reached
-  std::atomic<bool> republish_state{false};  ///< announce(): the worker publishes its STATE
 
   std::thread worker;
 };
@@ -606,16 +605,6 @@ void Daemon::flush_outbox() {
   }
 }
 
-bool Daemon::announce() {
-  bool delivered = true;
-  for (auto& d : details_) {
-    delivered = publish_status(*d, "ok") && delivered;
-    d->republish_state = true;
-    d->wake.notify_one();
-  }
-  return delivered;
-}
-
 void Daemon::heartbeat(bool force) {
   const auto now = Clock::now();
   if (!force && seconds(now - last_status_) < options_.status_period_s) return;
@@ -624,7 +613,6 @@ void Daemon::heartbeat(bool force) {
 }
 
 void Daemon::worker_chores(Detail& d) {
-  if (d.republish_state.exchange(false)) publish_state(d);
   submit_life(d);
   const auto now = Clock::now();
   const double every = d.twin->model().config().checkpoint.every_seconds;

@@ -92,9 +92,6 @@ class Daemon {
   /// Applies what was received, then final checkpoints, results and PNGs, a "stopping" status.
   /// Idempotent.
   void stop();
-  /// On the LCM thread: a STATUS for every detail now (true when LCM took every publish), and
-  /// each worker republishes its STATE (after a reconnect to the hub).
-  bool announce();
 
   [[nodiscard]] std::string error() const;
   [[nodiscard]] std::size_t num_details() const { return details_.size(); }

@@ -4,9 +4,6 @@
 
 #include <thread>
 
-#include "messages/channels.h"
-#include "twin/lcm/messages_io.h"
-
 namespace peritwin::twin {
 
 namespace {
@@ -72,18 +69,14 @@ bool HubConnection::check(lcm::LCM& lcm) {
   return connected_;
 }
 
-bool HubConnection::reconnect(lcm::LCM& lcm, Daemon& daemon) {
+bool HubConnection::reconnect(lcm::LCM& lcm) {
   if (connected_) return true;
   if (!wait(backoff_.next())) return false;
   if (hub_ && !messages::probe_hub(*hub_)) return false;  // still down: leave LCM alone
-  // The first publish on a closed tcpq instance reconnects it (and re-sends its subscriptions):
-  // a STATUS per detail; the workers republish their STATEs.
-  if (!daemon.announce()) return false;
-  if (!messages::transport_up(lcm)) return false;
+  if (!messages::reconnect(lcm)) return false;            // LCM re-sends the daemon's subscriptions
   connected_ = true;
   backoff_.reset();
-  spdlog::info("LCM hub {}: reconnected after {:.1f} s, states republished", shown_,
-               seconds_since(since_));
+  spdlog::info("LCM hub {}: reconnected after {:.1f} s", shown_, seconds_since(since_));
   return true;
 }
 

@@ -6,14 +6,18 @@
 //     and says "ready" only once it is connected; other transports open at once.
 //   - after every poll(), check(): when the hub has closed the connection, one warning line.
 //   - while disconnected, reconnect(): waits the next backoff delay, probes the hub without LCM
-//     (so LCM prints nothing and stays as it is), and when the hub answers, Daemon::announce()
-//     publishes every detail's STATUS — the publish that makes the same lcm::LCM reconnect; LCM
-//     then re-sends its subscriptions, so the Daemon keeps its instance and its models — and has
-//     the workers republish their STATEs. One line when it is back.
+//     (so LCM prints nothing and stays as it is), and when the hub answers, makes the same
+//     lcm::LCM connect again (messages::reconnect: LCM re-sends its subscriptions, so the Daemon
+//     keeps its instance and its models). One line when it is back. The next Daemon::poll()
+//     publishes what the detail workers queued meanwhile (the STATEs of batches received before
+//     the loss). No STATE is made up here: the daemon publishes the next one (signed, with its
+//     checkpointed seqs) when a producer resumes — a resent batch is a duplicate, which is
+//     answered with the STATE.
 //
-// While disconnected the daemon is not polled: no STATUS (it could not be delivered), no timed
-// checkpoint; SIGTERM still stops it with its checkpoint. Everything runs on the thread that
-// polls the daemon.
+// While disconnected the daemon is not polled: no STATUS (it could not be delivered); its detail
+// workers go on applying the batches received before the loss (their STATEs wait in the outbox)
+// and write their checkpoints; SIGTERM still stops it with its checkpoint. All LCM calls run on
+// the thread that polls the daemon.
 #pragma once
 
 #include <chrono>
@@ -24,7 +28,6 @@
 #include <string>
 
 #include "messages/transport.h"
-#include "twin/service/daemon.h"
 
 namespace peritwin::twin {
 
@@ -40,7 +43,7 @@ class HubConnection {
   /// After Daemon::poll(): false, with one warning line, once the hub has closed the connection.
   bool check(lcm::LCM& lcm);
   /// While disconnected: waits the next backoff delay and tries once; true when reconnected.
-  bool reconnect(lcm::LCM& lcm, Daemon& daemon);
+  bool reconnect(lcm::LCM& lcm);
 
   [[nodiscard]] bool connected() const { return connected_; }
   [[nodiscard]] const std::string& error() const { return error_; }

@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
     spdlog::info("ready");
     while (g_signal.load() == 0) {
       if (!hub.connected()) {
-        hub.reconnect(lcm, daemon);
+        hub.reconnect(lcm);
       } else if (!daemon.poll(100)) {
         break;
       } else {
