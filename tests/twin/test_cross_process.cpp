@@ -106,18 +106,10 @@ class CrossProcess : public ::testing::Test {
     ASSERT_TRUE(hub_) << "no LCM hub of this test listening (see " << (dir_ / "hub.log") << ")";
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
     ASSERT_TRUE(wait_for_loopback_port(port_, kWaitS)) << "the LCM hub did not come up on " << url_;
-    // B1 on the demo grid; a 3 mm life criterion without band keeps the synchronous estimates
-    // (states 0, 10, 20) to a few seconds; checkpoints every 4 batches.
+    // B1, 3 mm life criterion, 24 batches (testing::write_cross_process_inputs).
     config_ = (dir_ / "b1.toml").string();
-    std::ofstream(config_) << testing::b1_text(
-        "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
-                               {"band = \"a2_scatter\"", "band = \"none\""},
-                               {"a2_relative_scatter = 0.2", ""},
-                               {"every_batches = 100", "every_batches = 4"}});
     history_ = (dir_ / "history.csv").string();
-    std::ofstream h(history_);
-    h << "p_max_N,r,angle_rad,count\n";
-    for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+    testing::write_cross_process_inputs(config_, history_);
   }
   void TearDown() override {
     hub_.reset();

@@ -392,6 +392,38 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   daemon.stop();
 }
 
+/// What a hostile producer and the real one see on the REJECT and STATE channels.
+struct Observer {
+  std::vector<peritwin_msgs::reject_t> rejects;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  std::vector<peritwin_msgs::status_t> statuses;
+  void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+    rejects.push_back(*m);
+  }
+  void state(const lcm::ReceiveBuffer*, const std::string&,
+             const peritwin_msgs::damage_state_t* m) {
+    states.push_back(*m);
+  }
+  void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
+    statuses.push_back(*m);
+  }
+  void subscribe(lcm::LCM& lcm) {
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Observer::reject, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Observer::state, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Observer::status, this);
+  }
+};
+
+/// Publishes, lets the daemon apply everything, and delivers what it published.
+void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::load_batch_t>& sent) {
+  for (const auto& m : sent) lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  daemon.tick();
+  while (lcm.handleTimeout(0) > 0) {
+  }
+}
+
 /// Runs a daemon over `batches` (in-process LCM) and stops it: one checkpoint, at stop.
 void run_and_stop(const TwinConfig& config, const DaemonOptions& options,
                   const std::vector<Batch>& batches) {
@@ -508,23 +540,12 @@ TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
   lcm::LCM lcm("memq://");
   Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
-  std::vector<peritwin_msgs::damage_state_t> states;
-  struct Sink {
-    std::vector<peritwin_msgs::damage_state_t>* states;
-    void on(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::damage_state_t* m) {
-      states->push_back(*m);
-    }
-  } sink{&states};
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
-  for (const auto& b : history(3)) {
-    const auto m = batch_message(b, 0);
-    lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
-  }
-  while (lcm.handleTimeout(0) > 0) {
-  }
-  daemon.tick();
-  while (lcm.handleTimeout(0) > 0) {
-  }
+  Observer seen;
+  seen.subscribe(lcm);
+  std::vector<peritwin_msgs::load_batch_t> sent;
+  for (const auto& b : history(3)) sent.push_back(batch_message(b, 0));
+  exchange(lcm, daemon, sent);
+  const auto& states = seen.states;
   ASSERT_EQ(states.size(), 3u);
   for (std::size_t k = 0; k < 3; ++k) {
     ASSERT_EQ(states[k].num_sources, 1);
@@ -539,38 +560,6 @@ TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
   }
   ASSERT_EQ(states.size(), 4u);
   EXPECT_EQ(states.back().checkpointed_seq[0], 3);
-}
-
-/// What a hostile producer and the real one see on the REJECT and STATE channels.
-struct Observer {
-  std::vector<peritwin_msgs::reject_t> rejects;
-  std::vector<peritwin_msgs::damage_state_t> states;
-  std::vector<peritwin_msgs::status_t> statuses;
-  void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
-    rejects.push_back(*m);
-  }
-  void state(const lcm::ReceiveBuffer*, const std::string&,
-             const peritwin_msgs::damage_state_t* m) {
-    states.push_back(*m);
-  }
-  void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
-    statuses.push_back(*m);
-  }
-  void subscribe(lcm::LCM& lcm) {
-    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Observer::reject, this);
-    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Observer::state, this);
-    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Observer::status, this);
-  }
-};
-
-/// Publishes, lets the daemon apply everything, and delivers what it published.
-void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::load_batch_t>& sent) {
-  for (const auto& m : sent) lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
-  while (lcm.handleTimeout(0) > 0) {
-  }
-  daemon.tick();
-  while (lcm.handleTimeout(0) > 0) {
-  }
 }
 
 TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {

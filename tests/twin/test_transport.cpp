@@ -36,18 +36,10 @@ class Transport : public ::testing::Test {
     fs::create_directories(dir_);
     port_ = free_loopback_port();  // nothing listens here until a test starts a hub
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
-    // The config and history of test_cross_process.cpp: B1, 3 mm life criterion without band,
-    // checkpoints every 4 batches, 24 batches of 1000 cycles.
+    // B1, 3 mm life criterion, 24 batches (testing::write_cross_process_inputs).
     config_ = (dir_ / "b1.toml").string();
-    std::ofstream(config_) << testing::b1_text(
-        "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
-                               {"band = \"a2_scatter\"", "band = \"none\""},
-                               {"a2_relative_scatter = 0.2", ""},
-                               {"every_batches = 100", "every_batches = 4"}});
     history_ = (dir_ / "history.csv").string();
-    std::ofstream h(history_);
-    h << "p_max_N,r,angle_rad,count\n";
-    for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+    testing::write_cross_process_inputs(config_, history_);
   }
   void TearDown() override {
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
