@@ -97,20 +97,16 @@ std::optional<std::string_view> repeat_directive(std::string_view line) {
   return trim(rest);
 }
 
-// Reads `file` line by line: comments, the optional repeat directive (only when `repeat` is not
-// null), the header (one of `headers`; its index goes to `header_index`), then on_row(line,
-// fields) for each data row, which returns an error reason or nothing.
+// Reads `in` (errors name `name`) line by line: comments, the optional repeat directive (only
+// when `repeat` is not null), the header (one of `headers`; its index goes to `header_index`),
+// then on_row(line, fields) for each data row, which returns an error reason or nothing.
 template <typename RowFn>
-std::optional<ParseError> scan_csv(const fs::path& file, std::span<const std::string_view> headers,
-                                   std::int64_t* repeat, std::size_t& header_index,
-                                   RowFn&& on_row) {
-  const std::string name = file.string();
+std::optional<ParseError> scan_csv(std::istream& in, const std::string& name,
+                                   std::span<const std::string_view> headers, std::int64_t* repeat,
+                                   std::size_t& header_index, RowFn&& on_row) {
   auto fail = [&](std::size_t line, std::string reason) {
     return std::optional<ParseError>(ParseError{name, line, std::move(reason)});
   };
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return fail(0, "cannot open file");
-
   std::string text;
   std::size_t line_no = 0;
   bool have_header = false;
@@ -159,13 +155,13 @@ std::optional<ParseError> scan_csv(const fs::path& file, std::span<const std::st
 }
 
 // The block rows of a cycles or spectrum file.
-std::optional<ParseError> scan_blocks(const fs::path& file, std::int64_t* repeat,
-                                      std::vector<LoadBlock>& blocks) {
+std::optional<ParseError> scan_blocks(std::istream& in, const std::string& name,
+                                      std::int64_t* repeat, std::vector<LoadBlock>& blocks) {
   constexpr std::string_view kNames[] = {"p_max_N", "r", "angle_rad", "count"};
   const std::string_view headers[] = {kBlockHeader};
   std::size_t header_index = 0;
   return scan_csv(
-      file, headers, repeat, header_index,
+      in, name, headers, repeat, header_index,
       [&](std::size_t, const std::vector<std::string_view>& f) -> std::optional<std::string> {
         double v[3] = {};
         for (std::size_t i = 0; i < 3; ++i) {
@@ -180,6 +176,14 @@ std::optional<ParseError> scan_blocks(const fs::path& file, std::int64_t* repeat
         blocks.push_back(block);
         return std::nullopt;
       });
+}
+
+// Opens `file` for one of the stream readers; "cannot open file" when it cannot.
+template <typename T, typename ReadFn>
+ReadResult<T> read_file(const fs::path& file, ReadFn&& read) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return ParseError{file.string(), 0, "cannot open file"};
+  return read(in, file.string());
 }
 
 }  // namespace
@@ -256,7 +260,10 @@ std::vector<LoadBlock> expand(const Spectrum& spectrum) {
   const auto repeat = static_cast<std::size_t>(spectrum.repeat < 0 ? 0 : spectrum.repeat);
   std::vector<LoadBlock> out;
   if (n == 0 || repeat == 0) return out;
-  if (repeat > out.max_size() / n) throw std::length_error("expand: spectrum too large");
+  if (repeat > kMaxSpectrumBlocks / n) {
+    throw std::length_error("expand: " + std::to_string(n) + " blocks x " + std::to_string(repeat) +
+                            " are more than " + std::to_string(kMaxSpectrumBlocks) + " blocks");
+  }
   out.reserve(n * repeat);
   for (std::size_t k = 0; k < repeat; ++k) {
     out.insert(out.end(), spectrum.blocks.begin(), spectrum.blocks.end());
@@ -264,14 +271,14 @@ std::vector<LoadBlock> expand(const Spectrum& spectrum) {
   return out;
 }
 
-ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file) {
+ReadResult<LoadSeries> read_series_csv(std::istream& in, const std::string& name) {
   const std::string_view headers[] = {kSeriesHeader, kSeriesAngleHeader};
   constexpr std::string_view kNames[] = {"time_s", "load_N", "angle_rad"};
   LoadSeries series;
   std::size_t header_index = 0;
   std::size_t previous_line = 0;
   auto error = scan_csv(
-      file, headers, nullptr, header_index,
+      in, name, headers, nullptr, header_index,
       [&](std::size_t line, const std::vector<std::string_view>& f) -> std::optional<std::string> {
         double v[3] = {};
         for (std::size_t i = 0; i < f.size(); ++i) {
@@ -293,37 +300,70 @@ ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file) {
   return series;
 }
 
-ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file) {
+ReadResult<std::vector<LoadBlock>> read_cycles_csv(std::istream& in, const std::string& name) {
   std::vector<LoadBlock> blocks;
-  if (auto error = scan_blocks(file, nullptr, blocks)) return std::move(*error);
+  if (auto error = scan_blocks(in, name, nullptr, blocks)) return std::move(*error);
   return blocks;
 }
 
-ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
+ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name) {
   Spectrum spectrum;
-  if (auto error = scan_blocks(file, &spectrum.repeat, spectrum.blocks)) return std::move(*error);
+  if (auto error = scan_blocks(in, name, &spectrum.repeat, spectrum.blocks)) {
+    return std::move(*error);
+  }
+  // The directive is line 1; a list longer than the cap on its own is refused here too.
+  const std::size_t n = spectrum.blocks.size();
+  if (n > kMaxSpectrumBlocks ||
+      static_cast<std::uint64_t>(spectrum.repeat) > kMaxSpectrumBlocks / n) {
+    return ParseError{name, spectrum.repeat > 1 ? std::size_t{1} : std::size_t{0},
+                      "'# repeat " + std::to_string(spectrum.repeat) + "' of " + std::to_string(n) +
+                          " blocks expands to more than " + std::to_string(kMaxSpectrumBlocks) +
+                          " blocks"};
+  }
   return spectrum;
 }
 
-ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
+ReadResult<BlockConversion> read_blocks(std::istream& in, const std::string& name,
+                                        HistoryFormat format) {
   switch (format) {
     case HistoryFormat::series: {
-      auto series = read_series_csv(file);
+      auto series = read_series_csv(in, name);
       if (!series) return series.error();
       return series_to_blocks(series.value());
     }
     case HistoryFormat::cycles: {
-      auto blocks = read_cycles_csv(file);
+      auto blocks = read_cycles_csv(in, name);
       if (!blocks) return blocks.error();
       return BlockConversion{std::move(blocks).value(), {}};
     }
     case HistoryFormat::spectrum: {
-      auto spectrum = read_spectrum_csv(file);
+      auto spectrum = read_spectrum_csv(in, name);
       if (!spectrum) return spectrum.error();
       return BlockConversion{expand(spectrum.value()), {}};
     }
   }
-  return ParseError{file.string(), 0, "unknown history format"};
+  return ParseError{name, 0, "unknown history format"};
+}
+
+ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file) {
+  return read_file<LoadSeries>(
+      file, [](std::istream& in, const std::string& name) { return read_series_csv(in, name); });
+}
+
+ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file) {
+  return read_file<std::vector<LoadBlock>>(
+      file, [](std::istream& in, const std::string& name) { return read_cycles_csv(in, name); });
+}
+
+ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
+  return read_file<Spectrum>(
+      file, [](std::istream& in, const std::string& name) { return read_spectrum_csv(in, name); });
+}
+
+ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
+  return read_file<BlockConversion>(file, [format](std::istream& in, const std::string& name) {
+    return read_blocks(in, name, format);
+  });
 }
 
 std::vector<std::span<const LoadBlock>> make_batches(std::span<const LoadBlock> blocks,

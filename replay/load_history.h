@@ -28,7 +28,8 @@
 //  * cycles:   p_max_N,r,angle_rad,count   one block per row, kept as given (not merged).
 //  * spectrum: p_max_N,r,angle_rad,count   a list of blocks; an optional directive "# repeat N" as
 //              the very first line (line 1) means the whole list is applied N times (N >= 1,
-//              default 1). "# repeat" anywhere else, or in a series/cycles file, is an error.
+//              default 1). "# repeat" anywhere else, or in a series/cycles file, is an error;
+//              so is a repeat that expands the list to more than kMaxSpectrumBlocks blocks.
 // Row checks: every number finite; exactly as many fields as the header; cycles/spectrum rows also
 // count an integer (digits only) and the block valid by check_load_block
 // (solver/core/load_block.h: p_max_N > 0, -10 <= r < 1, count >= 1). A file without data rows is an
@@ -38,6 +39,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <span>
 #include <string>
 #include <utility>
@@ -97,6 +99,10 @@ struct LoadSeries {
 /// extract_reversals -> rainflow_count -> cycles_to_blocks -> merge_consecutive.
 [[nodiscard]] BlockConversion series_to_blocks(const LoadSeries& series);
 
+/// Most blocks a spectrum expands to (blocks x repeat): 32 MB of blocks, e.g. 100 levels
+/// repeated 10 000 times. Each block is a solve in the engine; more is a units slip, not a life.
+inline constexpr std::size_t kMaxSpectrumBlocks = 1'000'000;
+
 /// A block spectrum: `blocks` applied `repeat` times as a whole.
 struct Spectrum {
   std::vector<LoadBlock> blocks;
@@ -104,18 +110,27 @@ struct Spectrum {
 };
 
 /// The spectrum's blocks repeated `repeat` times (no merging across the seams).
-/// Throws std::length_error when the result would not fit in memory limits of std::vector.
+/// Throws std::length_error when that is more than kMaxSpectrumBlocks blocks (the readers refuse
+/// such a file).
 [[nodiscard]] std::vector<LoadBlock> expand(const Spectrum& spectrum);
 
 [[nodiscard]] ReadResult<LoadSeries> read_series_csv(const std::filesystem::path& file);
 [[nodiscard]] ReadResult<std::vector<LoadBlock>> read_cycles_csv(const std::filesystem::path& file);
 [[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file);
 
+/// The same readers on a stream (open it in binary mode); errors name the file `name`.
+[[nodiscard]] ReadResult<LoadSeries> read_series_csv(std::istream& in, const std::string& name);
+[[nodiscard]] ReadResult<std::vector<LoadBlock>> read_cycles_csv(std::istream& in,
+                                                                 const std::string& name);
+[[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name);
+
 enum class HistoryFormat { series, cycles, spectrum };
 
 /// Reads `file` in `format` and returns its blocks (series: converted; spectrum: expanded). The
 /// stats are those of series_to_blocks for a series and zero otherwise.
 [[nodiscard]] ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file,
+                                                      HistoryFormat format);
+[[nodiscard]] ReadResult<BlockConversion> read_blocks(std::istream& in, const std::string& name,
                                                       HistoryFormat format);
 
 /// Splits `blocks` into consecutive batches of at most `max_blocks` blocks (the last may be

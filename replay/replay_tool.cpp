@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <set>
 
 #include "messages/channels.h"
 #include "messages/transport.h"
+#include "replay/lcm_log.h"
 
 namespace peritwin::replay {
 
@@ -81,29 +83,34 @@ Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFor
     }
     return out;
   }
-  try {
-    lcm::LogFile log(file.string(), "r");
-    if (!log.good()) return failure(file.string() + ": cannot open as an LCM log");
-    const std::string channel = messages::channel(detail_id, messages::Kind::kLoad);
-    std::set<std::pair<std::string, std::int64_t>> seen;
-    std::int64_t skipped = 0, events = 0;
-    while (const lcm::LogEvent* e = log.readNextEvent()) {
-      if (e->channel != channel) continue;
-      ++events;
-      const auto decoded = twin::decode_batch(e->data, static_cast<std::size_t>(e->datalen));
-      if (!decoded.batch || decoded.batch->detail_id != detail_id ||
-          !seen.insert({decoded.batch->source_id, decoded.batch->seq}).second) {
-        ++skipped;
-        continue;
-      }
-      for (const auto& b : decoded.batch->blocks) out.blocks.push_back(b);
-    }
-    out.note = "LCM log: " + std::to_string(events) + " events on " + channel + ", " +
-               std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
-    if (out.blocks.empty()) return failure(file.string() + ": no load blocks on " + channel);
-  } catch (const std::exception& e) {  // the edge of LCM's log reader
-    return failure(file.string() + ": " + e.what());
-  }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return failure(file.string() + ": cannot open file");
+  return read_lcm_log(in, file.string(), detail_id);
+}
+
+Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
+                                     const std::string& detail_id) {
+  HistoryBlocks out;
+  const std::string channel = messages::channel(detail_id, messages::Kind::kLoad);
+  std::set<std::pair<std::string, std::int64_t>> seen;
+  std::int64_t skipped = 0;
+  const auto scan = scan_lcm_log(
+      in, name, channel, messages::kMaxBatchPayload, [&](std::span<const std::uint8_t> data) {
+        const auto decoded = twin::decode_batch(data.data(), data.size());
+        if (!decoded.batch || decoded.batch->detail_id != detail_id ||
+            !seen.insert({decoded.batch->source_id, decoded.batch->seq}).second) {
+          ++skipped;
+          return;
+        }
+        for (const auto& b : decoded.batch->blocks) {
+          out.blocks.push_back(b);
+        }
+      });
+  if (!scan) return scan.error();
+  skipped += scan.value().oversized;
+  out.note = "LCM log: " + std::to_string(scan.value().on_channel) + " events on " + channel +
+             ", " + std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
+  if (out.blocks.empty()) return failure(name + ": no load blocks on " + channel);
   return out;
 }
 

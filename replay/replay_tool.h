@@ -26,6 +26,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <istream>
 #include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <string>
@@ -48,6 +49,10 @@ struct HistoryBlocks {
   std::string note;  ///< e.g. rainflow statistics, for the log
 };
 Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
+                                     const std::string& detail_id);
+/// The lcm-log case on a stream (binary); errors name `name`. Malformed logs are refused with
+/// the event's byte offset (replay/lcm_log.h), events above kMaxBatchPayload skipped unread.
+Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
                                      const std::string& detail_id);
 
 struct BatchingOptions {

@@ -15,6 +15,11 @@ packages=(
   # HMAC-SHA256 of the signed messages and key generation (messages/auth.h, issue 14).
   libsodium-dev
 )
+# The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
+# PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.
+if [ "${PERITWIN_SANITIZER_DEPS:-0}" = 1 ]; then
+  packages+=(clang libclang-rt-14-dev libfuzzer-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

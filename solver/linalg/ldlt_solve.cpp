@@ -364,9 +364,12 @@ void forward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& ch
   const auto* li = static_cast<const int*>(l.i);
   const auto* lnz = static_cast<const int*>(l.nz);
   const auto* lx = static_cast<const double*>(l.x);
-  for (const auto& [j, k] : chains) {
-    with_chain_length(k,
-                      [&](auto K) { forward_chain<R, decltype(K)::value>(lp, li, lnz, lx, j, y); });
+  // chain.first, not a structured binding: clang 14 (the fuzz and sanitizer builds) cannot
+  // capture one in a lambda.
+  for (const auto& chain : chains) {
+    with_chain_length(chain.second, [&](auto K) {
+      forward_chain<R, decltype(K)::value>(lp, li, lnz, lx, chain.first, y);
+    });
   }
 }
 

@@ -346,6 +346,15 @@ TEST_F(LoadHistoryFiles, SpectrumRepeatDirective) {
   ASSERT_TRUE(blocks.ok());
   EXPECT_EQ(blocks.value().blocks, three);
 
+  // At the cap exactly: 2 blocks x 500 000.
+  const auto at_cap = read_blocks(
+      write("cap.csv", "# repeat 500000\np_max_N,r,angle_rad,count\n100,0.1,0,10\n200,0.5,0.2,1\n"),
+      HistoryFormat::spectrum);
+  ASSERT_TRUE(at_cap.ok()) << at_cap.error().message();
+  ASSERT_EQ(at_cap.value().blocks.size(), kMaxSpectrumBlocks);
+  EXPECT_EQ(at_cap.value().blocks.back(), one.back());
+  EXPECT_THROW((void)expand({one, 500'001}), std::length_error);
+
   const auto plain = read_spectrum_csv(write("p.csv", "p_max_N,r,angle_rad,count\n100,0,0,1\n"));
   ASSERT_TRUE(plain.ok());
   EXPECT_EQ(plain.value().repeat, 1);
@@ -390,6 +399,12 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
       {HistoryFormat::spectrum, blocks + "# repeat 2\n1,0,0,1\n", 2, "must be the first line"},
       {HistoryFormat::spectrum, "# repeat 0\n" + blocks + "1,0,0,1\n", 1, "'repeat' must be"},
       {HistoryFormat::spectrum, "# repeat x\n" + blocks + "1,0,0,1\n", 1, "'repeat' must be"},
+      // Found by fuzz_spectrum: the repeat used to be expanded unchecked (std::bad_alloc, the
+      // replay tool aborted; 10^8 x 2 blocks took 6 GB and a minute).
+      {HistoryFormat::spectrum, "# repeat 100000000000000000\n" + blocks + "1,0,0,1\n", 1,
+       "'# repeat 100000000000000000' of 1 blocks expands to more than 1000000 blocks"},
+      {HistoryFormat::spectrum, "# repeat 500001\n" + blocks + "1,0,0,1\n2,0,0,1\n", 1,
+       "'# repeat 500001' of 2 blocks expands to more than 1000000 blocks"},
       {HistoryFormat::spectrum, "# only comments\n\n", 0, "no header line"},
       {HistoryFormat::spectrum, blocks + "# nothing\n", 0, "no data rows"},
   };

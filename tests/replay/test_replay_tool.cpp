@@ -17,6 +17,10 @@
 #include <fstream>
 #include <limits>
 #include <thread>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "messages/auth.h"
 #include "messages/channels.h"
@@ -127,6 +131,72 @@ TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
   EXPECT_NE(h.note.find("2 skipped"), std::string::npos) << h.note;
   EXPECT_FALSE(read_history(path, InputFormat::lcm_log, "b2-cts")->blocks.empty());
   fs::remove(path);
+}
+
+// One LCM log event as lcm-logger writes it (big-endian header; replay/lcm_log.h), with the
+// lengths given explicitly so that they can lie.
+std::string log_event(const std::string& channel, const std::string& data,
+                      std::int32_t channel_length, std::int32_t data_length) {
+  std::string out;
+  auto be = [&out](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+  };
+  be(0xEDA1DA01, 4);
+  be(7, 8);              // eventnum
+  be(1'700'000'000, 8);  // timestamp
+  be(static_cast<std::uint32_t>(channel_length), 4);
+  be(static_cast<std::uint32_t>(data_length), 4);
+  return out + channel + data;
+}
+
+std::string log_event(const std::string& channel, const std::string& data) {
+  return log_event(channel, data, static_cast<std::int32_t>(channel.size()),
+                   static_cast<std::int32_t>(data.size()));
+}
+
+std::string encoded_batch(std::int64_t seq, double p_max) {
+  const auto m = twin::batch_message({"b1-ct", "gauge", seq, {{p_max, 0.1, 0, 10}}}, 0);
+  std::string bytes(static_cast<std::size_t>(m.getEncodedSize()), '\0');
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Found by fuzz_lcm_log: LCM 1.3.1's reader callocs whatever data length an event header claims
+// (1.36 GB from a 40-byte file) and ends the log silently at a malformed event. The bounded reader
+// refuses each malformed log naming the event and its byte offset, and never stores more than
+// kMaxBatchPayload bytes of an event.
+TEST(ReplayHistory, MalformedLcmLogsAreRefusedWithTheEventAndItsOffset) {
+  const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
+  const std::string good = log_event(load, encoded_batch(1, 1000));
+  const std::string at = "log: event 2 at byte " + std::to_string(good.size()) + ": ";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {log_event(load, "", 19, 1'358'954'650),
+       "log: event 1 at byte 0: the file ends inside the event's 1358954650 data bytes"},
+      {good + "garbage", at + "no LCM log sync word (not an LCM log, or corrupt)"},
+      {good + log_event(load, "x", 0, 1), at + "channel length 0 is not in 1..999"},
+      {good + log_event(std::string(1000, 'C'), "x"), at + "channel length 1000 is not in 1..999"},
+      {good + log_event(load, "", 19, -5), at + "negative data length -5"},
+      {good + log_event(load, "").substr(0, 10), at + "the file ends inside the event header"},
+      {good + log_event(load, "", 19, 0).substr(0, 30),
+       at + "the file ends inside the channel name"},
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    SCOPED_TRACE(i);
+    std::istringstream in(cases[i].first);
+    const auto read = read_lcm_log(in, "log", "b1-ct");
+    ASSERT_FALSE(read.ok());
+    EXPECT_EQ(read.error().message(), cases[i].second);
+  }
+  // An event too large to be a batch is skipped unread and counted; the log goes on.
+  std::istringstream in(good + log_event(load, std::string(messages::kMaxBatchPayload + 1, '\0')) +
+                        log_event("OTHER", std::string(100'000, 'x')) +
+                        log_event(load, encoded_batch(2, 2000)));
+  const auto read = read_lcm_log(in, "log", "b1-ct");
+  ASSERT_TRUE(read.ok()) << read.error().message();
+  ASSERT_EQ(read.value().blocks.size(), 2u);
+  EXPECT_EQ(read.value().blocks[1].p_max, 2000);
+  EXPECT_EQ(read.value().note, "LCM log: 3 events on " + load +
+                                   ", 1 skipped (undecodable, other detail or duplicate)");
 }
 
 TEST(ReplayDescribe, OneLinePerState) {

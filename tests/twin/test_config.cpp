@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -641,6 +642,63 @@ TEST(ConfigErrors, TomlSyntaxError) {
   EXPECT_EQ(e.column, 6u);
   EXPECT_EQ(e.path, "");
   EXPECT_TRUE(e.message().starts_with("plate.toml:12:6: TOML syntax error: ")) << e.message();
+}
+
+// Found by fuzz_config: toml++ 3.3.0 reaches TOML_UNREACHABLE (undefined behaviour) when it
+// classifies most non-ASCII characters as whitespace or not, e.g. in a table header. Such
+// characters are refused before toml++ reads the text, with line and column; strings and
+// comments keep any UTF-8.
+TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
+  const std::vector<std::tuple<std::string, std::uint32_t, std::uint32_t, std::string>> cases = {
+      // the fuzzer's input, cut short: U+0213 in a table header
+      {"[[detail\xC8\x93oad]]\n", 1, 9, "in a table header"},
+      {"[detail]\n[detail.\"g\xC3\xA9ometry\"]\n", 2, 11, "in a table header"},
+      {"a = 1\nb\xC3\xA9 = 2\n", 2, 2, "outside a string or comment"},
+      {"a = \"x\"\xC2\xA7\n", 1, 8, "outside a string or comment"},
+      {"a = [\n  1,\n  \xC2\xA7\n]\n", 3, 3, "outside a string or comment"},
+      // upstream issue 190: a line-ending backslash in a multi-line string, then U+00A7
+      {"s = \"\"\"\\\n\xC2\xA7\"\"\"\n", 2, 1, "after a line-ending backslash in a string"},
+      {"s = \"\"\"a\\  \n   \n \xC2\xA7\"\"\"\n", 3, 2,
+       "after a line-ending backslash in a string"},
+      {"s = \"\\\xC2\xA7\"\n", 1, 7, "after a backslash in a string"},
+      {"\xFF", 1, 1, "outside a string or comment"},
+  };
+  for (const auto& [text, line, column, where] : cases) {
+    SCOPED_TRACE(text);
+    const ConfigResult r = parse_config(text, "u.toml");
+    ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
+    EXPECT_EQ(r.errors[0].message(), "u.toml:" + std::to_string(line) + ":" +
+                                         std::to_string(column) +
+                                         ": TOML syntax error: non-ASCII character " + where);
+  }
+  // Any UTF-8 in comments, strings (quoted keys too) and multi-line strings; a leading BOM.
+  Doc doc = plate();
+  doc.lines.insert(doc.lines.begin(), "\xEF\xBB\xBF# Größe δ/Δx");
+  doc.insert_after("id = ", R"(description = """Platte mit Loch, Ø 2 mm \u00e9 é""" # ü)");
+  doc.insert_after("id = ", R"('δ' = 1)");
+  doc.insert_after("id = ", R"("ключ" = 'ü' # [x])");
+  const ConfigResult ok = parse(doc);
+  ASSERT_EQ(ok.errors.size(), 2u) << ok.error_text();  // the two quoted keys are unknown keys
+  EXPECT_EQ(ok.errors[0].path, "detail[0].ключ");
+  EXPECT_EQ(ok.errors[1].path, "detail[0].δ");
+}
+
+// Found by fuzz_config: toml++ echoes the input in its errors ("saw 'tr<newline>'"), and a quoted
+// key may hold any character; every message is one line all the same.
+TEST(ConfigErrors, MessagesAreOneLine) {
+  const ConfigResult echo = parse_config("[[detail]]\nid = tr\n", "e.toml");
+  ASSERT_EQ(echo.errors.size(), 1u);
+  EXPECT_EQ(echo.errors[0].message(),
+            "e.toml:2:8: TOML syntax error: Error while parsing boolean: expected 'true', saw "
+            "'tr\\n'");
+  Doc doc = plate();
+  doc.insert_after("id = ", R"("a\nb\u0001" = 1)");
+  const ConfigResult key = parse(doc);
+  ASSERT_EQ(key.errors.size(), 1u) << key.error_text();
+  EXPECT_EQ(key.errors[0].path, "detail[0].a\nb\x01");
+  EXPECT_TRUE(key.errors[0].message().starts_with(
+      "plate.toml:3:1: detail[0].a\\nb\\x01: unknown key \"a\\nb\\x01\" (known here: "))
+      << key.errors[0].message();
 }
 
 TEST(ConfigErrors, AllErrorsAreReportedInLineOrder) {

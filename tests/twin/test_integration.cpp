@@ -8,14 +8,16 @@
 #include <unistd.h>
 
 #include <chrono>
-#include <condition_variable>
-#include <mutex>
 #include <cmath>
+#include <condition_variable>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <mutex>
 #include <thread>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "replay/replay_tool.h"
 #include "tests/support/twin_fixtures.h"
@@ -303,7 +305,10 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   // busy and how many batches wait behind it.
   const std::string b2 =
       testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
-  const TwinConfig config = config_of(b1_text() + "\n" + b2);
+  // b1-ct turns "degraded" once its batch has run for 0.2 s ([detail.limits] max_batch_seconds).
+  const TwinConfig config = config_of(
+      b1_text("every_batches = 0", {{"max_batch_seconds = 60.0", "max_batch_seconds = 0.2"}}) +
+      "\n" + b2);
   std::mutex hold_mutex;
   std::condition_variable hold_cv;
   bool held = false, release = false;
@@ -343,7 +348,7 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   // b1-ct's STATUS has reported a busy batch with the two others waiting, twice.
   auto b1_busy_reports = [&] {
     int n = 0;
-    for (const auto& s : sink.statuses["b1-ct"]) n += s.busy_s > 0.0 && s.pending == 2 ? 1 : 0;
+    for (const auto& s : sink.statuses["b1-ct"]) n += s.busy_s > 0.2 && s.pending == 2 ? 1 : 0;
     return n;
   };
   auto b2_done = [&] {
@@ -372,6 +377,7 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   EXPECT_EQ(sink.statuses["b2-cts"].back().last_seq, 3);
   EXPECT_EQ(sink.statuses["b2-cts"].back().health, "ok");
   const auto& waiting = sink.statuses["b1-ct"].back();
+  EXPECT_EQ(waiting.health, "degraded");  // busy_s > max_batch_seconds
   EXPECT_EQ(waiting.last_seq, 0);
   EXPECT_GT(waiting.lag_s, 0.0);  // the oldest waiting batch has waited since it was received
   EXPECT_LT(waiting.lag_s, kGiveUpS);
@@ -496,7 +502,8 @@ TEST_F(MemqTest, AStateDirThatCannotBeWrittenStopsTheStartBeforeAnyState) {
 
 TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
   // checkpointed_seq follows the checkpoints: 0 before the first, then the seq of the newest.
-  const TwinConfig config = config_of(b1_text("every_batches = 0", {{"every_batches = 100", "every_batches = 2"}}));
+  const TwinConfig config =
+      config_of(b1_text("every_batches = 0", {{"every_batches = 100", "every_batches = 2"}}));
   ASSERT_EQ(config.details[0].checkpoint.every_batches, 2);
   lcm::LCM lcm("memq://");
   Daemon daemon(lcm, config, options_);
@@ -532,6 +539,181 @@ TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
   }
   ASSERT_EQ(states.size(), 4u);
   EXPECT_EQ(states.back().checkpointed_seq[0], 3);
+}
+
+/// What a hostile producer and the real one see on the REJECT and STATE channels.
+struct Observer {
+  std::vector<peritwin_msgs::reject_t> rejects;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  std::vector<peritwin_msgs::status_t> statuses;
+  void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+    rejects.push_back(*m);
+  }
+  void state(const lcm::ReceiveBuffer*, const std::string&,
+             const peritwin_msgs::damage_state_t* m) {
+    states.push_back(*m);
+  }
+  void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
+    statuses.push_back(*m);
+  }
+  void subscribe(lcm::LCM& lcm) {
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Observer::reject, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Observer::state, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Observer::status, this);
+  }
+};
+
+/// Publishes, lets the daemon apply everything, and delivers what it published.
+void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::load_batch_t>& sent) {
+  for (const auto& m : sent) lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  daemon.tick();
+  while (lcm.handleTimeout(0) > 0) {
+  }
+}
+
+TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
+  // The hostile producer of issue 14 publishes source "replay", seq 1 before the real replay.
+  // With [auth] its batch is refused (unsigned, wrongly signed, unknown source), the model is
+  // untouched, and the real seq 1 is applied; STATE and REJECT carry the daemon's tag.
+  const fs::path key_file = dir_ / "keys.toml";
+  const std::vector<std::string> ids = {"replay", "peritwin"};
+  ASSERT_TRUE(messages::write_key_file(key_file, ids).ok());
+  const TwinConfig config =
+      config_of(b1_text() + "\n[auth]\nkey_file = \"" + key_file.string() + "\"\n");
+  ASSERT_TRUE(config.auth.has_value());
+  const auto keys = messages::KeyRing::load(key_file);
+  ASSERT_TRUE(keys.ok());
+  const messages::AuthKey& replay_key = *keys->find("replay");
+  const messages::AuthKey& daemon_key = *keys->find("peritwin");
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const Batch real = history(1).front();
+  auto unsigned_hijack = batch_message(real, 0);
+  unsigned_hijack.blocks[0].p_max *= 1.5;  // a different load under the real (source, seq)
+  auto forged = unsigned_hijack;
+  messages::AuthKey wrong;
+  wrong.bytes.fill(0x42);
+  messages::sign(forged, wrong);
+  auto intruder = batch_message({"b1-ct", "intruder", 1, real.blocks}, 0);
+  messages::sign(intruder, replay_key);  // a stolen key does not make another source
+  exchange(lcm, daemon, {unsigned_hijack, forged, intruder});
+  ASSERT_EQ(seen.rejects.size(), 3u);
+  const std::vector<std::string> what = {"auth_tag", "auth_tag", "source_id"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(seen.rejects[k].code, peritwin_msgs::reject_t::CODE_AUTH) << k;
+    EXPECT_EQ(seen.rejects[k].what, what[k]) << seen.rejects[k].why;
+    EXPECT_TRUE(messages::verify(seen.rejects[k], daemon_key).ok()) << k;
+  }
+  EXPECT_NE(seen.rejects[0].why.find("unsigned"), std::string::npos);
+  EXPECT_NE(seen.rejects[1].why.find("wrong tag"), std::string::npos);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  EXPECT_EQ(daemon.twin(0).applied_seq("replay"), 0);
+
+  auto genuine = batch_message(real, 0);
+  messages::sign(genuine, replay_key);
+  exchange(lcm, daemon, {genuine});
+  ASSERT_FALSE(seen.states.empty());
+  const auto& state = seen.states.back();
+  EXPECT_EQ(state.state_seq, 1);
+  EXPECT_EQ(applied_seq(state, "replay"), 1);
+  EXPECT_TRUE(messages::verify(state, daemon_key).ok());
+  EXPECT_EQ(state.state_hash, in_process_hashes(config, {real}).at(1));
+  for (int i = 0; i < 200 && (seen.statuses.empty() || seen.statuses.back().auth_rejects < 3);
+       ++i) {
+    daemon.poll(10);
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+  ASSERT_FALSE(seen.statuses.empty());
+  EXPECT_EQ(seen.statuses.back().auth_rejects, 3);
+  EXPECT_EQ(seen.statuses.back().errors, 3);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, WithoutAuthTheFirstToPublishASeqOwnsIt) {
+  // The documented behaviour without [auth] (messages/README.md, Authentication): exactly-once
+  // trusts (source, seq), so a hijacker's seq 1 is applied and the real seq 1 is then a
+  // duplicate. Unsigned STATE.
+  const TwinConfig config = config_of(b1_text());
+  ASSERT_FALSE(config.auth.has_value());
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const Batch real = history(1).front();
+  auto hijack = batch_message(real, 0);
+  hijack.blocks[0].p_max *= 1.5;
+  exchange(lcm, daemon, {hijack, batch_message(real, 0)});
+  ASSERT_EQ(seen.rejects.size(), 1u);
+  EXPECT_EQ(seen.rejects[0].code, peritwin_msgs::reject_t::CODE_DUPLICATE);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 1);
+  EXPECT_NE(daemon.twin(0).state_hash_hex(), in_process_hashes(config, {real}).at(1));
+  EXPECT_EQ(seen.states.back().tag_length, 0);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, OverflowingCountsAndAbsurdLoadsAreInvalidOverLcm) {
+  // Issue 14's hostile cases over the bus: count INT64_MAX (wrapped total_cycles), 2^50 + 1
+  // (final failure in one batch) and p_max = 1e308 (210 s in one batch): INVALID with the field,
+  // nothing applied.
+  const TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const auto hash = daemon.twin(0).state_hash_hex();
+  exchange(lcm, daemon,
+           {batch_message(
+                {"b1-ct", "p", 1, {{4000, 0.1, 0, std::numeric_limits<std::int64_t>::max()}}}, 0),
+            batch_message({"b1-ct", "p", 1, {{4000, 0.1, 0, kMaxBatchCycles + 1}}}, 0),
+            batch_message({"b1-ct", "p", 1, {{1e308, 0.1, 0, 1}}}, 0)});
+  ASSERT_EQ(seen.rejects.size(), 3u);
+  const std::vector<std::string> what = {"blocks[0].count", "blocks[0].count", "blocks[0].p_max"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(seen.rejects[k].code, peritwin_msgs::reject_t::CODE_INVALID) << k;
+    EXPECT_EQ(seen.rejects[k].what, what[k]) << seen.rejects[k].why;
+  }
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  EXPECT_EQ(daemon.twin(0).engine().total_cycles(), 0);
+  EXPECT_EQ(daemon.twin(0).state_hash_hex(), hash);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch) {
+  // 40 invalid batches at once against max_rejects_per_second = 1 (over 10 s): STATUS counts
+  // them all, reports the rate and says "degraded"; the model is untouched.
+  const TwinConfig config = config_of(b1_text(
+      "every_batches = 0", {{"max_rejects_per_second = 10.0", "max_rejects_per_second = 1.0"}}));
+  options_.status_period_s = 0.0;
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  std::vector<peritwin_msgs::load_batch_t> flood;
+  for (int k = 0; k < 40; ++k)
+    flood.push_back(batch_message({"b1-ct", "p", 1, {{4000, 2.0, 0, 1}}}, 0));
+  exchange(lcm, daemon, flood);
+  daemon.poll(0);  // a heartbeat after the flood
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(seen.rejects.size(), 40u);
+  ASSERT_FALSE(seen.statuses.empty());
+  const auto& s = seen.statuses.back();
+  EXPECT_EQ(s.errors, 40);
+  // 40 in the 10-s window (fewer only if this machine stalled for seconds in between).
+  EXPECT_LE(s.reject_rate, 4.0);
+  EXPECT_GT(s.reject_rate, 1.0);
+  EXPECT_EQ(s.health, "degraded");
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  daemon.stop();
 }
 
 }  // namespace

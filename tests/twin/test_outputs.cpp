@@ -427,6 +427,68 @@ TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
   EXPECT_THROW((void)read_checkpoint(dir_ / "nope.h5"), CheckpointError);
 }
 
+// A corrupt checkpoint may declare arrays and strings far larger than the file (HDF5 reads storage
+// that was never written as fill values): refused before anything is allocated, naming the entry.
+// Before, 2^40 doubles went to std::vector (bad_alloc; an ASan build aborted) and a 2 GB string to
+// std::string.
+TEST_F(OutputsTest, CheckpointEntriesLargerThanTheFileAreRefused) {
+  const fs::path good = dir_ / "good.h5";
+  write_checkpoint(good, sample_checkpoint(4));
+  auto expect_refused = [](const fs::path& p, const std::string& what) {
+    try {
+      (void)read_checkpoint(p);
+      FAIL() << "read " << p;
+    } catch (const CheckpointError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+
+  // An extendible array of 2^40 doubles with no chunk written: the file grows by ~1 kB.
+  const fs::path huge = dir_ / "huge-array.h5";
+  fs::copy_file(good, huge);
+  {
+    const hid_t f = H5Fopen(huge.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED}, chunk[1] = {1024};
+    const hid_t space = H5Screate_simple(1, dims, maxdims);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 1, chunk);
+    const hid_t ds =
+        H5Dcreate2(f, "/arrays/f64/huge", H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    ASSERT_GE(ds, 0);
+    const hsize_t extent[1] = {hsize_t{1} << 40};
+    ASSERT_GE(H5Dset_extent(ds, extent), 0);
+    H5Dclose(ds);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(f);
+  }
+  ASSERT_LT(fs::file_size(huge), fs::file_size(good) + 16'384);
+  expect_refused(huge,
+                 "array '/arrays/f64/huge' claims 1099511627776 elements of 8 bytes, more "
+                 "than the ");
+
+  // A fixed-length string of 2^31 bytes whose storage is never allocated.
+  const fs::path text = dir_ / "huge-string.h5";
+  fs::copy_file(good, text);
+  {
+    const hid_t f = H5Fopen(text.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t type = H5Tcopy(H5T_C_S1);
+    H5Tset_size(type, std::size_t{1} << 31);
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_LATE);
+    const hid_t ds = H5Dcreate2(f, "/strings/huge", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    ASSERT_GE(ds, 0);
+    H5Dclose(ds);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Tclose(type);
+    H5Fclose(f);
+  }
+  ASSERT_LT(fs::file_size(text), fs::file_size(good) + 16'384);
+  expect_refused(text, "is a string of 2147483648 bytes, more than the ");
+}
+
 TEST_F(OutputsTest, NewestValidCheckpointSkipsBrokenOnes) {
   for (std::uint64_t seq : {1u, 2u, 3u, 10u}) {
     write_checkpoint(checkpoint_path(dir_, "ct", seq),

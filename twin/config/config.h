@@ -118,7 +118,8 @@ struct ConfigError {
   std::uint32_t column = 0;
   std::string path;  ///< key path, e.g. "detail[0].material.E"; empty for TOML syntax errors
   std::string reason;
-  /// "file:line:column: path: reason" (parts that are unknown or empty are left out).
+  /// "file:line:column: path: reason" (parts that are unknown or empty are left out), one line:
+  /// control characters are escaped (\n, \t, \x01).
   [[nodiscard]] std::string message() const;
 };
 

@@ -119,8 +119,31 @@ std::optional<std::uint64_t> parse_seq(std::string_view name, std::string_view p
   return seq;
 }
 
+/// What reading a checkpoint may allocate: no more than the file holds, since a checkpoint
+/// stores every element of its arrays and strings (contiguous, uncompressed). HDF5 reads a
+/// dataset whose storage was never written as fill values, so without this a few-kB corrupt file
+/// could declare terabytes and have them allocated and filled.
+class ReadBudget {
+ public:
+  explicit ReadBudget(std::uintmax_t file_bytes) : left_(file_bytes) {}
+  [[nodiscard]] std::uintmax_t left() const { return left_; }
+  /// Takes n elements of `element_bytes` each, or throws naming `what`.
+  void take(std::uint64_t n, std::size_t element_bytes, const std::string& what) {
+    if (n > left_ / element_bytes) {
+      throw std::runtime_error(what + " claims " + std::to_string(n) + " elements of " +
+                               std::to_string(element_bytes) + " bytes, more than the " +
+                               std::to_string(left_) + " bytes of the file left to read");
+    }
+    left_ -= n * element_bytes;
+  }
+
+ private:
+  std::uintmax_t left_;
+};
+
 template <h5::Element T>
-void read_arrays(const h5::Group& group, std::map<std::string, std::vector<T>>& out) {
+void read_arrays(const h5::Group& group, std::map<std::string, std::vector<T>>& out,
+                 ReadBudget& budget) {
   for (const auto& name : group.children()) {
     const h5::Dataset ds = group.open_dataset(name);
     if (ds.element_type() != h5::element_type_of<T>()) {
@@ -128,9 +151,13 @@ void read_arrays(const h5::Group& group, std::map<std::string, std::vector<T>>& 
                                h5::to_string(ds.element_type()) + ", expected " +
                                h5::to_string(h5::element_type_of<T>()));
     }
+    budget.take(ds.size(), sizeof(T), "array '" + ds.path() + "'");
     out.emplace(name, ds.read<T>());
   }
 }
+
+/// The longest root attribute string (format name, checksum) a checkpoint has.
+constexpr std::size_t kMaxAttributeString = 64;
 
 }  // namespace
 
@@ -215,8 +242,10 @@ CheckpointData read_checkpoint(const std::filesystem::path& path) {
   std::string stored_checksum;
   try {
     if (!std::filesystem::is_regular_file(path)) throw std::runtime_error("no such file");
+    ReadBudget budget(std::filesystem::file_size(path));
     const h5::File file(path, h5::File::Mode::read_only);
-    if (!file.has_attribute("format") || file.attribute_string("format") != kFormat) {
+    if (!file.has_attribute("format") ||
+        file.attribute_string("format", kMaxAttributeString) != kFormat) {
       throw std::runtime_error("not a peritwin checkpoint (attribute 'format' missing or wrong)");
     }
     const std::int64_t layout = file.attribute_int64("layout_version");
@@ -226,17 +255,21 @@ CheckpointData read_checkpoint(const std::filesystem::path& path) {
                                std::to_string(kLayoutVersion) + ")");
     }
     data.format_version = file.attribute_int64("format_version");
-    stored_checksum = file.attribute_string("checksum_fnv1a64");
-    read_arrays(file.open_group("arrays/f64"), data.f64_arrays);
-    read_arrays(file.open_group("arrays/i64"), data.i64_arrays);
-    read_arrays(file.open_group("arrays/u8"), data.u8_arrays);
+    stored_checksum = file.attribute_string("checksum_fnv1a64", kMaxAttributeString);
+    read_arrays(file.open_group("arrays/f64"), data.f64_arrays, budget);
+    read_arrays(file.open_group("arrays/i64"), data.i64_arrays, budget);
+    read_arrays(file.open_group("arrays/u8"), data.u8_arrays, budget);
     const h5::Group si = file.open_group("scalars/i64");
     for (const auto& name : si.attribute_names()) data.i64_scalars[name] = si.attribute_int64(name);
     const h5::Group sf = file.open_group("scalars/f64");
     for (const auto& name : sf.attribute_names())
       data.f64_scalars[name] = sf.attribute_double(name);
     const h5::Group strings = file.open_group("strings");
-    for (const auto& name : strings.children()) data.strings[name] = strings.read_string(name);
+    for (const auto& name : strings.children()) {
+      std::string value = strings.read_string(name, budget.left());
+      budget.take(value.size(), 1, "string '" + name + "'");
+      data.strings[name] = std::move(value);
+    }
   } catch (const std::exception& e) {
     throw CheckpointError(path, std::string("unreadable: ") + e.what());
   }

@@ -107,6 +107,18 @@ Handle string_type(std::size_t size) {
   return t;
 }
 
+/// Empty when a string stored in `type` may be read within `max_bytes`, else why not.
+std::string string_too_long(hid_t type, std::size_t max_bytes) {
+  if (max_bytes == Object::kUnbounded || H5Tget_class(type) != H5T_STRING) return {};
+  if (H5Tis_variable_str(type) > 0) return "a variable-length string (its size is not bounded)";
+  const std::size_t size = H5Tget_size(type);
+  if (size > max_bytes) {
+    return "a string of " + std::to_string(size) + " bytes, more than the " +
+           std::to_string(max_bytes) + " allowed";
+  }
+  return {};
+}
+
 /// Reads a string stored in `type` through `read(memtype, buffer)` (dataset or attribute).
 template <class ReadFn>
 bool read_string_value(hid_t type, hid_t space, ReadFn read, std::string& out) {
@@ -297,13 +309,17 @@ double Object::attribute_double(std::string_view name) const {
   return v;
 }
 
-std::string Object::attribute_string(std::string_view name) const {
+std::string Object::attribute_string(std::string_view name, std::size_t max_bytes) const {
   quiet();
   const std::string n(name);
   Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
   if (!attr.valid()) fail("open attribute " + n + " of");
   Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
   Handle space(H5Aget_space(attr.get()), Handle::Kind::dataspace);
+  if (const std::string why = string_too_long(ftype.get(), max_bytes); !why.empty()) {
+    throw Error("HDF5: attribute " + n + " of '" + path_ + "' in file '" + file_ + "' is " + why,
+                file_, path_);
+  }
   std::string out;
   auto read = [&](hid_t mem, void* buf) { return H5Aread(attr.get(), mem, buf); };
   if (!read_string_value(ftype.get(), space.get(), read, out)) {
@@ -352,10 +368,13 @@ void Dataset::read_raw(ElementType type, void* out, std::size_t n) const {
   }
 }
 
-std::string Dataset::read_string() const {
+std::string Dataset::read_string(std::size_t max_bytes) const {
   quiet();
   Handle ftype(H5Dget_type(id()), Handle::Kind::datatype);
   Handle space(H5Dget_space(id()), Handle::Kind::dataspace);
+  if (const std::string why = string_too_long(ftype.get(), max_bytes); !why.empty()) {
+    throw Error("HDF5: dataset '" + path_ + "' in file '" + file_ + "' is " + why, file_, path_);
+  }
   std::string out;
   auto read = [&](hid_t mem, void* buf) {
     return H5Dread(id(), mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf);
@@ -492,8 +511,8 @@ Dataset Group::write_string(std::string_view path, std::string_view value) {
   return Dataset(std::move(ds), file_, child_path(path));
 }
 
-std::string Group::read_string(std::string_view path) const {
-  return open_dataset(path).read_string();
+std::string Group::read_string(std::string_view path, std::size_t max_bytes) const {
+  return open_dataset(path).read_string(max_bytes);
 }
 
 Dataset Group::create_extendible_raw(std::string_view path, ElementType type, std::uint64_t chunk,

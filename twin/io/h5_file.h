@@ -82,6 +82,9 @@ struct WriteOptions {
 /// What groups, datasets and files share: the handle, the file name, the path, attributes.
 class Object {
  public:
+  /// No limit on the bytes a string read may take.
+  static constexpr std::size_t kUnbounded = static_cast<std::size_t>(-1);
+
   [[nodiscard]] const std::string& file_name() const noexcept { return file_; }
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
   [[nodiscard]] Hid id() const noexcept { return handle_.get(); }
@@ -104,7 +107,10 @@ class Object {
   }
   [[nodiscard]] std::int64_t attribute_int64(std::string_view name) const;
   [[nodiscard]] double attribute_double(std::string_view name) const;
-  [[nodiscard]] std::string attribute_string(std::string_view name) const;
+  /// A string attribute. With `max_bytes` a fixed-length string longer than that, and any
+  /// variable-length one (HDF5 allocates it before we could look), is an Error, never allocated.
+  [[nodiscard]] std::string attribute_string(std::string_view name,
+                                             std::size_t max_bytes = kUnbounded) const;
 
  protected:
   Object() = default;
@@ -139,7 +145,8 @@ class Dataset : public Object {
     read_raw(element_type_of<T>(), out.data(), out.size());
     return out;
   }
-  [[nodiscard]] std::string read_string() const;
+  /// The scalar string; `max_bytes` as for Object::attribute_string.
+  [[nodiscard]] std::string read_string(std::size_t max_bytes = kUnbounded) const;
 
   /// Appends to an extendible dataset (see Group::create_extendible).
   template <Element T>
@@ -194,7 +201,8 @@ class Group : public Object {
   }
   /// A scalar fixed-length UTF-8 string dataset (no size limit, unlike attributes).
   Dataset write_string(std::string_view path, std::string_view value);
-  [[nodiscard]] std::string read_string(std::string_view path) const;
+  [[nodiscard]] std::string read_string(std::string_view path,
+                                        std::size_t max_bytes = kUnbounded) const;
 
   /// An empty 1-D dataset with unlimited maximum extent, chunked by `chunk` elements.
   template <Element T>

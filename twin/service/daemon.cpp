@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <condition_variable>
 #include <deque>
 #include <map>
@@ -147,9 +148,9 @@ struct Daemon::Detail {
 
   // Shared between the LCM thread and the worker, under `mutex`.
   std::mutex mutex;
-  std::condition_variable wake;  ///< the worker: a batch arrived, or stop
-  std::condition_variable idle;  ///< tick(): the inbox ran empty
-  std::deque<Received> inbox;    ///< received, not yet applied, in arrival order
+  std::condition_variable wake;                ///< the worker: a batch arrived, or stop
+  std::condition_variable idle;                ///< tick(): the inbox ran empty
+  std::deque<Received> inbox;                  ///< received, not yet applied, in arrival order
   std::deque<Clock::time_point> reject_times;  ///< rejects of the last kRejectRateWindowS
   bool applying = false;
   bool stop_requested = false;
@@ -161,7 +162,7 @@ struct Daemon::Detail {
   std::atomic<std::int64_t> auth_rejects{0};
   std::atomic<std::int64_t> duplicates{0};
   std::atomic<std::int64_t> gaps{0};
-  std::atomic<bool> failed{false};  ///< final failure reached
+  std::atomic<bool> failed{false};           ///< final failure reached
 
   std::thread worker;
 };
@@ -207,6 +208,7 @@ Status Daemon::start() {
       "BLAS kernel: {} (states are bit-identical on the same kernel; "
       "OPENBLAS_CORETYPE pins it)",
       blas_kernel_name());
+  if (Status keys = load_keys(); !keys) return keys;
   for (const DetailConfig& config : config_.details) {
     if (Status s = start_detail(config); !s) return s;
   }
@@ -224,6 +226,63 @@ Status Daemon::start() {
   return {};
 }
 
+Status Daemon::load_keys() {
+  if (!config_.auth) {
+    spdlog::warn(
+        "no [auth] in the config: load batches are not authenticated and STATE/REJECT are not "
+        "signed, so anyone on the bus can feed or impersonate this twin (messages/README.md, "
+        "Authentication)");
+    return {};
+  }
+  const AuthConfig& auth = *config_.auth;
+  auto keys = messages::KeyRing::load(auth.key_file);
+  if (!keys) return failure("[auth] key_file: " + keys.error().message());
+  keys_ = std::move(*keys);
+  daemon_key_ = keys_->find(auth.daemon_key);
+  if (daemon_key_ == nullptr) {
+    return failure("[auth] daemon_key: the key file " + auth.key_file + " has no key \"" +
+                   auth.daemon_key + "\" to sign STATE and REJECT with");
+  }
+  if (!auth.sources.empty()) {
+    for (const auto& source : auth.sources) {
+      if (keys_->find(source) == nullptr) {
+        return failure("[auth] sources: the key file " + auth.key_file +
+                       " has no key for source \"" + source + "\"");
+      }
+    }
+    allowed_sources_ = auth.sources;
+  } else {
+    // Every key but the daemon's own: a producer never needs the daemon's key.
+    for (const auto& id : keys_->ids()) {
+      if (id != auth.daemon_key) allowed_sources_.push_back(id);
+    }
+  }
+  std::sort(allowed_sources_.begin(), allowed_sources_.end());
+  spdlog::info("authentication on: {} source(s) allowed, STATE and REJECT signed with key \"{}\"",
+               allowed_sources_.size(), auth.daemon_key);
+  return {};
+}
+
+Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
+  const std::string& source = decoded.batch->source_id;
+  if (!std::binary_search(allowed_sources_.begin(), allowed_sources_.end(), source)) {
+    return {Verdict::auth, "source_id",
+            "source \"" + source + "\" is not allowed: no key for it in the daemon's key file" +
+                (config_.auth->sources.empty() ? std::string() : " or not in [auth] sources")};
+  }
+  if (decoded.auth_tag.empty()) {
+    return {Verdict::auth, "auth_tag",
+            "unsigned: this daemon requires an HMAC-SHA256 tag with the key of source \"" + source +
+                "\""};
+  }
+  if (!messages::tag_matches(*keys_->find(source), r.bytes.data(), decoded.signed_size,
+                             decoded.auth_tag)) {
+    return {Verdict::auth, "auth_tag",
+            "wrong tag: not signed with the key of source \"" + source + "\""};
+  }
+  return {};
+}
+
 Status Daemon::start_detail(const DetailConfig& config) {
   auto d = std::make_unique<Detail>();
   d->id = config.id;
@@ -237,8 +296,24 @@ Status Daemon::start_detail(const DetailConfig& config) {
   if (!twin) return failure(twin.error().message());
   d->twin = std::move(*twin);
   spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
-               model->disc().num_nodes(), model->disc().num_bonds(),
-               seconds(Clock::now() - t0));
+               model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0));
+  d->max_batch_seconds = config.limits.max_batch_seconds;
+  d->max_rejects_per_second = config.limits.max_rejects_per_second;
+  if (config.limits.max_p) {
+    spdlog::info("[{}] bounds: p_max <= {:.6g} N ([detail.limits] max_p), {} sources", config.id,
+                 d->twin->max_p(), config.limits.max_sources);
+  } else if (std::isfinite(d->twin->max_p())) {
+    spdlog::info(
+        "[{}] bounds: p_max <= {:.6g} N (default: {:g} x {:.6g} N, the load at which the virgin "
+        "detail's peak bond stretch reaches the critical stretch), {} sources",
+        config.id, d->twin->max_p(), kDefaultMaxPOverFirstBreak, d->twin->first_break_load(),
+        config.limits.max_sources);
+  } else {
+    spdlog::warn(
+        "[{}] no bound on p_max: the model knows no critical stretch (no K_c, no critical "
+        "stretch); set [detail.limits] max_p",
+        config.id);
+  }
   d->state_dir = detail_state_dir(options_.state_dir, config.id);
   if (options_.checkpoints) {
     if (Status resumed = resume(*d); !resumed) return resumed;
@@ -298,8 +373,7 @@ Status Daemon::resume(Detail& d) {
       refused.emplace_back(e.what());
       continue;
     }
-    if (const Status matches =
-            d.twin->check_checkpoint(data, static_cast<std::int64_t>(file.seq));
+    if (const Status matches = d.twin->check_checkpoint(data, static_cast<std::int64_t>(file.seq));
         !matches) {
       refused.push_back(file.path.string() + ": " + matches.error().message());
       continue;
@@ -410,6 +484,7 @@ void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
     spdlog::debug("[{}] duplicate: {}", d.id, outcome.why);
   }
   auto m = reject_message(d.id, source, seq, outcome, now_utime());
+  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
   outbox_->push({d.reject_channel, encode(m), 0});
 }
 
@@ -421,6 +496,12 @@ void Daemon::apply_received(Detail& d, const Received& r) {
     return;
   }
   const Batch& batch = *decoded.batch;
+  if (keys_) {
+    if (const Outcome denied = authenticate(r, decoded); !denied.applied()) {
+      reject(d, batch.source_id, batch.seq, denied);
+      return;
+    }
+  }
   Outcome outcome;
   try {
     outcome = twin.apply(batch);
@@ -464,7 +545,8 @@ void Daemon::apply_received(Detail& d, const Received& r) {
 }
 
 void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {
-  const auto m = state_message(*d.twin, now_utime(), d.checkpointed);
+  auto m = state_message(*d.twin, now_utime(), d.checkpointed);
+  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
   outbox_->push({d.state_channel, encode(m), recv_utime});
 }
 
@@ -474,7 +556,7 @@ void Daemon::publish_fields(Detail& d) {
   }
 }
 
-void Daemon::publish_status(Detail& d, const char* health) {
+bool Daemon::publish_status(Detail& d, const char* health) {
   peritwin_msgs::status_t m{};
   m.utime = now_utime();
   m.detail_id = d.id;
@@ -486,8 +568,7 @@ void Daemon::publish_status(Detail& d, const char* health) {
     std::lock_guard lock(d.mutex);
     m.pending = static_cast<std::int32_t>(d.inbox.size());
     if (!d.inbox.empty()) oldest_utime = d.inbox.front().recv_utime;
-    while (!d.reject_times.empty() &&
-           seconds(now - d.reject_times.front()) > kRejectRateWindowS) {
+    while (!d.reject_times.empty() && seconds(now - d.reject_times.front()) > kRejectRateWindowS) {
       d.reject_times.pop_front();
     }
     m.reject_rate = static_cast<double>(d.reject_times.size()) / kRejectRateWindowS;
@@ -496,7 +577,8 @@ void Daemon::publish_status(Detail& d, const char* health) {
                 ? 0.0
                 : std::max(0.0, 1e-6 * static_cast<double>(now_utime() - oldest_utime));
   const std::int64_t busy_since = d.busy_since_ns;
-  m.busy_s = busy_since == 0 ? 0.0 : std::max(0.0, 1e-9 * static_cast<double>(now_ns() - busy_since));
+  m.busy_s =
+      busy_since == 0 ? 0.0 : std::max(0.0, 1e-9 * static_cast<double>(now_ns() - busy_since));
   m.uptime_s = seconds(now - started_);
   m.errors = d.errors;
   m.duplicates = d.duplicates;
@@ -510,7 +592,7 @@ void Daemon::publish_status(Detail& d, const char* health) {
       m.health = "degraded";
     }
   }
-  lcm_.publish(d.status_channel, &m);
+  return lcm_.publish(d.status_channel, &m) == 0;
 }
 
 void Daemon::flush_outbox() {

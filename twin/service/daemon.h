@@ -8,6 +8,11 @@
 // valid (unless fresh_start). The three newest are kept. Results per detail: see
 // twin/io/detail_outputs.h.
 //
+// Authentication ([auth] in the config; messages/README.md, "Authentication"): every batch must
+// come from an allowed source with that source's HMAC-SHA256 tag, else REJECT CODE_AUTH (model
+// untouched, counted in STATUS auth_rejects); STATE and REJECT are signed with [auth] daemon_key.
+// Without [auth] the daemon runs unauthenticated and says so once at start.
+//
 // Threads (docs/design.md, "Threads of the daemon"):
 //  * the LCM thread — whoever calls poll() or tick() — is the only one that touches LCM: it
 //    receives batches into the per-detail inboxes (raw bytes + LCM receive time), publishes what
@@ -34,9 +39,12 @@
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "messages/auth.h"
+#include "messages/codec.h"
 #include "twin/config/config.h"
 #include "twin/io/detail_outputs.h"
 #include "twin/model/twin.h"
@@ -99,6 +107,9 @@ class Daemon {
   struct Received;
   struct Outgoing;
   class Outbox;
+  Status load_keys();
+  /// With [auth]: the batch's source is allowed and its tag is the source key's; else AUTH.
+  [[nodiscard]] Outcome authenticate(const Received& r, const messages::Decoded& decoded) const;
   Status start_detail(const DetailConfig& config);
   Status resume(Detail& d);
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
@@ -109,7 +120,7 @@ class Daemon {
   void log_reject_summary(Detail& d);
   void publish_state(Detail& d, std::int64_t recv_utime = 0);
   void publish_fields(Detail& d);
-  void publish_status(Detail& d, const char* health);
+  bool publish_status(Detail& d, const char* health);
   void flush_outbox();
   void heartbeat(bool force);
   void checkpoint(Detail& d, const char* why);
@@ -123,6 +134,9 @@ class Daemon {
   DaemonOptions options_;
   std::vector<std::unique_ptr<Detail>> details_;
   std::unique_ptr<Outbox> outbox_;
+  std::optional<messages::KeyRing> keys_;          ///< [auth] key_file; none = unauthenticated
+  const messages::AuthKey* daemon_key_ = nullptr;  ///< signs STATE and REJECT
+  std::vector<std::string> allowed_sources_;       ///< sorted; with keys_ only
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_status_;
   std::vector<double> latencies_;

@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "messages/auth.h"
 #include "twin/config/config.h"
 #include "twin/service/daemon.h"
 #include "twin/service/hub_connection.h"
@@ -78,6 +79,13 @@ int main(int argc, char** argv) {
     // e.g. bilinear parameters out of range
     if (const auto settings = peritwin::twin::solver_settings(detail); !settings) {
       spdlog::error("config: {}", settings.error().message());
+      return kExitUsage;
+    }
+  }
+  if (const auto& auth = loaded.config->auth) {
+    // A key file that is missing, open to others or malformed is a config error: nothing starts.
+    if (const auto keys = peritwin::messages::KeyRing::load(auth->key_file); !keys) {
+      spdlog::error("config: [auth] key_file: {}", keys.error().message());
       return kExitUsage;
     }
   }
