@@ -23,8 +23,9 @@
 //    "transport":"tcpq"}
 // seconds, batches_per_s and growth_* cover the batches after the warm-up; growth_* is
 // end - start. rss_max_per_tenth_kb: the highest VmRSS of each tenth after the warm-up (sampled
-// every second), envelope_growth_percent the last tenth's against the first's — the measure for
-// a daemon whose RSS swings (asynchronous life estimates copy the model for each estimate).
+// every second), envelope_growth_percent the highest of the second half of the tenths against
+// the highest of the first half — the measure for a daemon whose RSS swings (asynchronous life
+// estimates copy the model for each estimate, so two samples can fall anywhere on the swing).
 // daemon_exit: the daemon's exit status after SIGTERM (0: checkpointed and stopped cleanly). Exit 0
 // when the run completed and nothing broke, 1 when a bond broke (the detail is not in steady
 // state), 3 on a runtime failure.
@@ -373,12 +374,18 @@ int main(int argc, char** argv) {
       measured_rss ? tools::JsonLine(tools::fixed(1e6 * growth_kb / measured, 1))
                    : tools::JsonLine(nullptr);
   line["rss_max_per_tenth_kb"] = tenth_max;
+  // The highest RSS of the second half of the tenths against the first half's.
+  const auto half = static_cast<std::ptrdiff_t>(tenth_max.size() / 2);
   line["envelope_growth_percent"] =
-      tenth_max.size() >= 2 && tenth_max.front() > 0
-          ? tools::JsonLine(
-                tools::fixed(100.0 * static_cast<double>(tenth_max.back() - tenth_max.front()) /
-                                 static_cast<double>(tenth_max.front()),
-                             2))
+      half >= 1 && tenth_max.front() > 0
+          ? tools::JsonLine(tools::fixed(
+                100.0 *
+                    static_cast<double>(
+                        *std::max_element(tenth_max.begin() + half, tenth_max.end()) -
+                        *std::max_element(tenth_max.begin(), tenth_max.begin() + half)) /
+                    static_cast<double>(
+                        *std::max_element(tenth_max.begin(), tenth_max.begin() + half)),
+                2))
           : tools::JsonLine(nullptr);
   line["samples"] = samples;
   line["broken_bonds"] = producer.broken_bonds();
