@@ -3,6 +3,7 @@
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
 //   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
+//   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -251,16 +252,18 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
 }  // namespace
 
 int main(int argc, char** argv) {
-  // `peritwin-bench ingest ...` runs peritwin-bench-ingest (it needs LCM and the twin library,
-  // which this solver benchmark does not link) from the same directory with the same arguments.
-  if (argc >= 2 && std::string(argv[1]) == "ingest") {
+  // `peritwin-bench ingest|soak ...` runs peritwin-bench-ingest|soak (they need LCM and the twin
+  // library or daemon, which this solver benchmark does not link) from the same directory with
+  // the same arguments.
+  if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak")) {
     const auto self = std::filesystem::read_symlink("/proc/self/exe");
-    const std::string ingest = (self.parent_path() / "peritwin-bench-ingest").string();
-    std::vector<char*> args{const_cast<char*>(ingest.c_str())};
+    const std::string program =
+        (self.parent_path() / ("peritwin-bench-" + std::string(argv[1]))).string();
+    std::vector<char*> args{const_cast<char*>(program.c_str())};
     for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
     args.push_back(nullptr);
-    execv(ingest.c_str(), args.data());
-    std::perror("peritwin-bench: cannot run peritwin-bench-ingest");
+    execv(program.c_str(), args.data());
+    std::perror(("peritwin-bench: cannot run " + program).c_str());
     return 2;
   }
   CLI::App app{"peritwin-bench: performance figures as JSON lines"};

@@ -2,12 +2,15 @@
 
 #include <netinet/in.h>
 #include <netinet/tcp.h>
+#include <poll.h>
 #include <sys/socket.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <limits>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 namespace peritwin::messages {
 
@@ -82,18 +85,121 @@ std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& 
   return {};
 }
 
+/// Walks an encoded message field by field; every count and length is checked against the bytes
+/// left before anything is skipped.
+class LayoutWalker {
+ public:
+  LayoutWalker(const unsigned char* p, std::size_t size) : p_(p), size_(size) {}
+  bool fingerprint(std::int64_t hash) {
+    if (!skip(8)) return false;
+    return static_cast<std::int64_t>(read_be(p_, 8)) == hash;
+  }
+  bool skip(std::size_t n) {
+    if (!ok_ || size_ - pos_ < n) return ok_ = false;
+    pos_ += n;
+    return true;
+  }
+  /// An int32 count of elements of at least `min_element_bytes` each that the rest can hold.
+  bool count(std::size_t min_element_bytes, std::int32_t& n) {
+    if (!ok_ || size_ - pos_ < 4) return ok_ = false;
+    n = static_cast<std::int32_t>(read_be(p_ + pos_, 4));
+    pos_ += 4;
+    if (n < 0 || static_cast<std::size_t>(n) > (size_ - pos_) / min_element_bytes) {
+      return ok_ = false;
+    }
+    return true;
+  }
+  /// A string: NUL-terminated, no NUL inside (LCM's encoder stops at the first NUL, so only
+  /// such strings re-encode to the bytes they were decoded from).
+  bool string() {
+    std::int32_t len = 0;
+    if (!count(1, len) || len < 1) return ok_ = false;
+    const unsigned char* s = p_ + pos_;
+    const auto n = static_cast<std::size_t>(len);
+    if (s[n - 1] != 0 || std::memchr(s, 0, n - 1) != nullptr) return ok_ = false;
+    return skip(n);
+  }
+  [[nodiscard]] bool at_end() const { return ok_ && pos_ == size_; }
+
+ private:
+  const unsigned char* p_;
+  std::size_t size_, pos_ = 0;
+  bool ok_ = true;
+};
+
+/// Encoded bytes of one crack_t inside a damage_state_t: int32, 7 doubles, int32, int8.
+constexpr std::size_t kCrackBytes = 4 + 7 * 8 + 4 + 1;
+
+bool state_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t sources = 0, cracks = 0, tag = 0;
+  if (!w.fingerprint(peritwin_msgs::damage_state_t::getHash()) || !w.skip(8) || !w.string() ||
+      !w.skip(8) || !w.count(4 + 1 + 8 + 8, sources)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < sources; ++i) {
+    if (!w.string()) return false;
+  }
+  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8) ||
+      !w.count(kCrackBytes, cracks) || !w.skip(kCrackBytes * static_cast<std::size_t>(cracks)) ||
+      !w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1) || !w.string() || !w.count(1, tag) ||
+      !w.skip(static_cast<std::size_t>(tag))) {
+    return false;
+  }
+  return w.at_end();
+}
+
+bool reject_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t tag = 0;
+  return w.fingerprint(peritwin_msgs::reject_t::getHash()) && w.skip(8) && w.string() &&
+         w.string() && w.skip(8 + 1) && w.string() && w.string() && w.count(1, tag) &&
+         w.skip(static_cast<std::size_t>(tag)) && w.at_end();
+}
+
+template <typename Message>
+std::optional<Message> decode_checked(const void* data, std::size_t size,
+                                      bool (*layout)(const unsigned char*, std::size_t)) {
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()) ||
+      !layout(static_cast<const unsigned char*>(data), size)) {
+    return std::nullopt;
+  }
+  Message m{};
+  if (m.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) return std::nullopt;
+  return m;
+}
+
 }  // namespace
+
+std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::damage_state_t>(data, size, state_layout);
+}
+
+std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::reject_t>(data, size, reject_layout);
+}
 
 int handle_lcm(lcm::LCM& lcm, int timeout_ms) {
   const int fd = lcm.getFileno();
+  if (fd < 0) {  // tcpq without a hub (see messages/transport.h): nothing to wait on
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::max(0, timeout_ms)));
+    return 0;
+  }
   int type = 0;
   socklen_t len = sizeof type;
-  if (fd >= 0 && getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
+  if (getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &len) == 0 && type == SOCK_STREAM) {
     const int on = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &on, sizeof on);
     setsockopt(fd, IPPROTO_TCP, TCP_QUICKACK, &on, sizeof on);
   }
-  return lcm.handleTimeout(timeout_ms);
+  // lcm.handleTimeout() as LCM 1.3.1 does it, with poll() instead of select(): FD_SET of a
+  // descriptor >= FD_SETSIZE aborts as a negative one does.
+  pollfd p{fd, POLLIN, 0};
+  const int ready = poll(&p, 1, std::max(0, timeout_ms));
+  if (ready <= 0) return ready;  // 0: timeout; -1: errno (EINTR: a signal)
+  if (lcm.handle() == 0) return 1;
+  // The hub closed the connection (the provider's socket is -1 now): not this call's failure.
+  return lcm.getFileno() < 0 ? 0 : -1;
 }
 
 std::int64_t now_utime() {

@@ -32,6 +32,10 @@ inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
 /// a lockstep round trip took ~90 ms. Before each receive we disable Nagle on our end and ask
 /// for immediate ACKs (TCP_QUICKACK is not sticky, hence every call); both are no-ops on the
 /// memq and UDP transports.
+/// Returns 1 when a message was handled, 0 after the timeout, -1 on failure (errno; EINTR is a
+/// signal). Without a transport (a tcpq hub that is down or has just closed the connection, see
+/// messages/transport.h) it returns 0, after waiting timeout_ms when it was down already, and
+/// never lets LCM select() on a negative descriptor: callers check transport_up() to tell.
 int handle_lcm(lcm::LCM& lcm, int timeout_ms);
 
 /// Microseconds since the Unix epoch (the informational utime of every message).
@@ -48,6 +52,14 @@ struct Decoded {
   std::vector<std::uint8_t> auth_tag;
 };
 Decoded decode_batch(const void* data, std::size_t size);
+
+/// A STATE or REJECT decoded from untrusted bytes, or nullopt: wrong fingerprint, truncated,
+/// bytes after the end, or a string length or array count the payload cannot hold. The layout is
+/// walked first, so LCM's decoder (which sizes its arrays from the counts before reading them) is
+/// never asked to allocate more than the payload justifies: a forged num_sources of 2^30 would
+/// otherwise cost gigabytes in any receiver that subscribes with the typed handler.
+std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size);
+std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size);
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 

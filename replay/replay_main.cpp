@@ -3,19 +3,28 @@
 //   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
 //                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
 //                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
+//                   [--key-file F [--daemon-key ID | --sign-only]]
+//   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
 // Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
 // --in-process runs the twin library directly with the same config (deterministic mode, no LCM).
+// --key-file: batches signed with the key of --source, every STATE and REJECT verified with the
+// daemon's key (messages/README.md, "Authentication"); without it anyone on the bus can forge the
+// states it reports. --generate-key-file writes a new key file (mode 0600) and exits.
 // Output: one line per state update (human text, or JSON with --json) on stdout, then a summary
 // line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","state_hash"} with
-// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress).
+// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress;
+// a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 
+#include "messages/transport.h"
+#include "messages/auth.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
 
@@ -29,18 +38,43 @@ int main(int argc, char** argv) {
   using namespace peritwin;
   CLI::App app{"peritwin-replay: recorded load history -> load blocks -> the twin"};
   std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
-  bool lockstep = false, in_process = false, json = false;
+  std::string key_file, daemon_key_id = "peritwin", generate_key_file;
+  std::vector<std::string> key_ids;
+  bool lockstep = false, in_process = false, json = false, sign_only = false;
   replay::BatchingOptions batching;
   replay::ReplayOptions options;
-  app.add_option("--config", config_file, "detail configuration (TOML)")->required();
-  app.add_option("--history", history, "load history file")->required();
+  // Required unless --generate-key-file (checked after parsing).
+  app.add_option("--config", config_file, "detail configuration (TOML), required");
+  app.add_option("--history", history, "load history file, required");
   app.add_option("--format", format, "series|cycles|spectrum|lcm-log (default cycles)")
       ->check(CLI::IsMember({"series", "cycles", "spectrum", "lcm-log"}));
   app.add_option("--detail", detail_id, "detail id (default: the config's first detail)");
   app.add_option("--source", source_id, "source id of the batches (default replay)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
   app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
-  app.add_flag("--in-process", in_process, "run the twin library here (no LCM, no daemon)");
+  app.add_flag("--in-process", in_process,
+               "run the twin library here (no LCM, no daemon; ignores --key-file)");
+  auto* key_file_opt = app.add_option(
+      "--key-file", key_file,
+      "sign the batches with the key of --source and verify every STATE and REJECT with the "
+      "daemon's (TOML [keys], mode 0600; messages/README.md). Without it nothing is signed or "
+      "verified, and anyone on the bus can forge the states this tool reports");
+  auto* daemon_key_opt = app.add_option("--daemon-key", daemon_key_id,
+                                        "id of the daemon's key in --key-file (default peritwin)")
+                             ->needs(key_file_opt);
+  app.add_flag("--sign-only", sign_only,
+               "sign the batches but verify nothing (for a producer whose key file holds only "
+               "its own key; the states it reports can then be forged)")
+      ->needs(key_file_opt)
+      ->excludes(daemon_key_opt);
+  auto* generate_opt =
+      app.add_option("--generate-key-file", generate_key_file,
+                     "write a new key file (random keys, mode 0600, never overwrites) and exit");
+  app.add_option("--key-ids", key_ids,
+                 "ids of the generated keys, comma-separated (default: --source and "
+                 "--daemon-key, i.e. replay,peritwin)")
+      ->delimiter(',')
+      ->needs(generate_opt);
   app.add_flag("--json", json, "JSON lines: one per state update, then a summary");
   app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 1024)")
       ->check(CLI::PositiveNumber);
@@ -58,8 +92,26 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? kExitOk : kExitUsage;
   }
   options.lockstep = lockstep;
+  if (!generate_key_file.empty()) {
+    if (key_ids.empty()) key_ids = {source_id, daemon_key_id};
+    if (const Status written = messages::write_key_file(generate_key_file, key_ids); !written) {
+      std::cerr << "peritwin-replay: " << written.error().message() << "\n";
+      return kExitUsage;
+    }
+    std::cerr << "peritwin-replay: wrote " << generate_key_file << " (mode 0600), keys:";
+    for (const auto& id : key_ids) std::cerr << " " << id;
+    std::cerr << "\n";
+    return kExitOk;
+  }
+  if (config_file.empty() || history.empty()) {
+    std::cerr << "peritwin-replay: " << (config_file.empty() ? "--config" : "--history")
+              << " is required\nRun with --help for more information.\n";
+    return kExitUsage;
+  }
 
-  const auto loaded = twin::load_config(config_file);
+  // The memory bound (75 % of physical memory) only where the model is built: in-process.
+  const auto loaded =
+      twin::load_config(config_file, {in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return kExitUsage;
@@ -94,6 +146,34 @@ int main(int argc, char** argv) {
     std::cerr << "peritwin-replay: --source must have 1 to 64 characters\n";
     return kExitUsage;
   }
+  // The keys, before anything is published: a missing one is a usage error.
+  replay::ReplayAuth auth;
+  if (!key_file.empty() && in_process) {
+    std::cerr << "peritwin-replay: --in-process publishes and receives nothing: --key-file "
+                 "ignored\n";
+  } else if (!key_file.empty()) {
+    const auto ring = messages::KeyRing::load(key_file);
+    if (!ring) {
+      std::cerr << "peritwin-replay: " << ring.error().message() << "\n";
+      return kExitUsage;
+    }
+    for (const auto& [id, role] :
+         {std::pair{source_id, "--source"}, std::pair{daemon_key_id, "--daemon-key"}}) {
+      if (ring->find(id) == nullptr && !(sign_only && id == daemon_key_id)) {
+        std::cerr << "peritwin-replay: " << key_file << ": no key \"" << id << "\" (" << role
+                  << ")\n";
+        return kExitUsage;
+      }
+    }
+    auth.batch_key = *ring->find(source_id);
+    if (sign_only) {
+      std::cerr << "peritwin-replay: --sign-only: the daemon's STATE and REJECT are not "
+                   "verified\n";
+    } else {
+      auth.daemon_key = *ring->find(daemon_key_id);
+      auth.daemon_key_id = daemon_key_id;
+    }
+  }
   auto batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching);
   std::int64_t cycles = 0;
   for (const auto& b : history_blocks.blocks) cycles += b.count;
@@ -125,9 +205,17 @@ int main(int argc, char** argv) {
     if (lcm_url.empty()) {
       if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
     }
+    // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
+    const auto hub = messages::tcpq_hub(lcm_url);
+    if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+      std::cerr << "peritwin-replay: LCM hub " << lcm_url
+                << " unreachable: " << up.error().message() << "\n";
+      return kExitRuntime;
+    }
     lcm::LCM lcm(lcm_url);
-    if (!lcm.good()) {
-      std::cerr << "peritwin-replay: cannot open LCM at \"" << lcm_url << "\"\n";
+    if (!lcm.good() || !messages::transport_up(lcm)) {
+      std::cerr << "peritwin-replay: cannot open LCM at \"" << messages::shown_url(lcm_url)
+                << "\"\n";
       return kExitRuntime;
     }
     struct sigaction sa {};
@@ -135,12 +223,18 @@ int main(int argc, char** argv) {
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, nullptr);
     sigaction(SIGINT, &sa, nullptr);
-    replay::LcmReplayer replayer(lcm, std::move(batches), options);
-    const auto r = replayer.run(print, [] { return g_signal.load() == 0; });
+    replay::ReplayResult r;
+    bool lost = false;
+    {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
+      replay::LcmReplayer replayer(lcm, std::move(batches), options, std::move(auth));
+      r = replayer.run(print, [] { return g_signal.load() == 0; });
+      lost = !messages::transport_up(lcm);
+    }
     std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
               << " resend(s)\n";
     if (!r.ok) {
-      std::cerr << "peritwin-replay: " << r.error << "\n";
+      std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
+                << "\n";
       return kExitRuntime;
     }
     final_state = r.final_state;

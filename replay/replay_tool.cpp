@@ -9,6 +9,7 @@
 #include <set>
 
 #include "messages/channels.h"
+#include "messages/transport.h"
 #include "replay/lcm_log.h"
 
 namespace peritwin::replay {
@@ -16,6 +17,49 @@ namespace peritwin::replay {
 namespace {
 double since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+/// Reads the leading fields of an encoded message that could not be verified, for the error
+/// (bounded; a field it cannot read reads as empty / -1).
+class Peek {
+ public:
+  Peek(const void* data, std::size_t size)
+      : p_(static_cast<const unsigned char*>(data)), size_(size), pos_(8 + 8) {}
+  std::int64_t int64() {
+    if (size_ < pos_ + 8) return fail<std::int64_t>(-1);
+    std::uint64_t v = 0;
+    for (int i = 0; i < 8; ++i) v = (v << 8) | p_[pos_++];
+    return static_cast<std::int64_t>(v);
+  }
+  std::string string() {
+    if (size_ < pos_ + 4) return fail<std::string>({});
+    std::uint32_t len = 0;
+    for (int i = 0; i < 4; ++i) len = (len << 8) | p_[pos_++];
+    if (len < 1 || len > 256 || size_ - pos_ < len) return fail<std::string>({});
+    std::string s;
+    for (std::uint32_t i = 0; i + 1 < len; ++i) {
+      const unsigned char c = p_[pos_ + i];
+      s += c >= 0x20 && c < 0x7f ? static_cast<char>(c) : '?';
+    }
+    pos_ += len;
+    return s;
+  }
+
+ private:
+  template <typename T>
+  T fail(T value) {
+    pos_ = size_ + 1;
+    return value;
+  }
+  const unsigned char* p_;
+  std::size_t size_, pos_;
+};
+/// Text from the bus for a log line: printable ASCII only, at most 300 characters (an unverified
+/// reject's reason must not reach the terminal as control sequences).
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text.substr(0, 300)) out += c >= 0x20 && c < 0x7f ? c : '?';
+  return out;
 }
 }  // namespace
 
@@ -95,8 +139,9 @@ Status check_blocks(std::span<const LoadBlock> blocks) {
   return check_load_blocks(blocks, std::numeric_limits<std::int64_t>::max());
 }
 
-LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options)
-    : lcm_(lcm), batches_(std::move(batches)), options_(options) {
+LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options,
+                         ReplayAuth auth)
+    : lcm_(lcm), batches_(std::move(batches)), options_(options), auth_(std::move(auth)) {
   if (!batches_.empty()) {
     detail_id_ = batches_.front().detail_id;
     source_id_ = batches_.front().source_id;
@@ -117,21 +162,64 @@ LcmReplayer::~LcmReplayer() {
   lcm_.unsubscribe(reject_sub_);
 }
 
-void LcmReplayer::on_state_msg(const lcm::ReceiveBuffer*, const std::string&,
-                               const peritwin_msgs::damage_state_t* state) {
-  if (state->detail_id == detail_id_) inbox_.push_back(*state);
+void LcmReplayer::on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  if (!fatal_.empty()) return;  // the run ends with the first failure
+  const auto size = static_cast<std::size_t>(rbuf->data_size);
+  if (auth_.daemon_key) {
+    const Status v = messages::verify_encoded<peritwin_msgs::damage_state_t>(rbuf->data, size,
+                                                                             *auth_.daemon_key);
+    if (!v) {
+      Peek peek(rbuf->data, size);
+      const std::string detail = peek.string();
+      const std::int64_t state_seq = peek.int64();
+      fatal_ = channel + ": " +
+               (v.error().field == "auth_tag"
+                    ? "state_seq " + std::to_string(state_seq) + " of detail \"" + detail +
+                          "\": " + v.error().reason + " (not from the holder of daemon key \"" +
+                          auth_.daemon_key_id + "\")"
+                    : v.error().reason);
+      return;
+    }
+  }
+  // Unverified (no key) or verified: decoded only after its layout is checked.
+  const auto state = messages::decode_state(rbuf->data, size);
+  if (state && state->detail_id == detail_id_) inbox_.push_back(*state);
 }
 
-void LcmReplayer::on_reject_msg(const lcm::ReceiveBuffer*, const std::string&,
-                                const peritwin_msgs::reject_t* reject) {
-  if (reject->source_id == source_id_ && reject->code == peritwin_msgs::reject_t::CODE_FAILED) {
-    ++rejected_failed_;
+void LcmReplayer::on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  if (!fatal_.empty()) return;
+  const auto size = static_cast<std::size_t>(rbuf->data_size);
+  if (auth_.daemon_key) {
+    const Status v =
+        messages::verify_encoded<peritwin_msgs::reject_t>(rbuf->data, size, *auth_.daemon_key);
+    if (!v) {
+      Peek peek(rbuf->data, size);
+      peek.string();  // detail_id
+      const std::string source = peek.string();
+      const std::int64_t seq = peek.int64();
+      fatal_ = channel + ": " +
+               (v.error().field == "auth_tag"
+                    ? "reject of source \"" + source + "\" seq " + std::to_string(seq) + ": " +
+                          v.error().reason + " (not from the holder of daemon key \"" +
+                          auth_.daemon_key_id + "\")"
+                    : v.error().reason);
+      return;
+    }
+  }
+  const auto reject = messages::decode_reject(rbuf->data, size);
+  if (!reject || reject->source_id != source_id_) return;
+  if (reject->code == peritwin_msgs::reject_t::CODE_FAILED) ++rejected_failed_;
+  if (reject->code == peritwin_msgs::reject_t::CODE_AUTH) {
+    fatal_ = "the daemon refused batch " + std::to_string(reject->seq) + " of source \"" +
+             source_id_ + "\" (CODE_AUTH): " + printable(reject->what) + ": " +
+             printable(reject->why) +
+             (auth_.batch_key ? "" : " (this run signs nothing: give it --key-file)");
   }
 }
 
 void LcmReplayer::publish(std::int64_t seq) {
-  const auto m =
-      twin::batch_message(batches_[static_cast<std::size_t>(seq - 1)], twin::now_utime());
+  auto m = twin::batch_message(batches_[static_cast<std::size_t>(seq - 1)], twin::now_utime());
+  if (auth_.batch_key) messages::sign(m, *auth_.batch_key);
   lcm_.publish(load_channel_, &m);
   ++published_;
 }
@@ -150,13 +238,25 @@ ReplayResult LcmReplayer::run(
     const std::int64_t base = std::max<std::int64_t>(applied, 0);
     const std::int64_t limit =
         std::min<std::int64_t>(n, base + static_cast<std::int64_t>(options_.window));
-    while (next <= limit) {
+    while (next <= limit && messages::transport_up(lcm_)) {
       publish(next++);
       last_send = std::chrono::steady_clock::now();
     }
     errno = 0;
-    if (twin::handle_lcm(lcm_, 20) < 0 && errno != EINTR) {
+    if (messages::transport_up(lcm_) && twin::handle_lcm(lcm_, 20) < 0 && errno != EINTR) {
       result.error = "LCM failed while receiving";
+      break;
+    }
+    if (!fatal_.empty()) {
+      result.error = fatal_;
+      break;
+    }
+    if (!messages::transport_up(lcm_)) {  // a tcpq hub closed the connection: no retry here
+      result.error = "connection lost (" +
+                     (applied < 0 ? std::string("no state from the daemon yet")
+                                  : "the daemon had applied seq " + std::to_string(applied) +
+                                        " of " + std::to_string(n)) +
+                     ")";
       break;
     }
     for (const auto& s : inbox_) {

@@ -13,6 +13,14 @@
 // checkpoint) or nothing progresses for `resend_after_s`, sending restarts at applied + 1. The
 // run ends when a STATE shows the last seq applied (or the detail failed), or fails after
 // `give_up_after_s` without progress.
+//
+// Authentication (ReplayAuth, messages/README.md "Authentication"): with a batch key every batch
+// is signed before it is published; with a daemon key every STATE and REJECT on the detail's
+// channels is checked on its bytes before it is decoded, and the first one that is unsigned or
+// wrongly signed ends the run with an error naming the channel, the message and why. A CODE_AUTH
+// reject of one of our batches ends it too (signed or not: the daemon refuses what we send).
+// Without keys nothing is signed or checked, and anyone on the bus can forge the states the run
+// reports.
 #pragma once
 
 #include <cstdint>
@@ -24,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "messages/auth.h"
 #include "replay/load_history.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "twin/config/config.h"
@@ -78,9 +87,17 @@ struct ReplayResult {
   std::int64_t rewinds = 0;    ///< times sending restarted at applied + 1
 };
 
+/// Keys of an authenticated run (see the top of this file).
+struct ReplayAuth {
+  std::optional<messages::AuthKey> batch_key;   ///< the key of the batches' source id
+  std::optional<messages::AuthKey> daemon_key;  ///< the daemon's key, for its STATE and REJECT
+  std::string daemon_key_id;                    ///< named in errors
+};
+
 class LcmReplayer {
  public:
-  LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options);
+  LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options,
+              ReplayAuth auth = {});
   ~LcmReplayer();
   LcmReplayer(const LcmReplayer&) = delete;
   LcmReplayer& operator=(const LcmReplayer&) = delete;
@@ -92,15 +109,16 @@ class LcmReplayer {
                    const std::function<bool()>& idle = {});
 
  private:
-  void on_state_msg(const lcm::ReceiveBuffer*, const std::string&,
-                    const peritwin_msgs::damage_state_t* state);
-  void on_reject_msg(const lcm::ReceiveBuffer*, const std::string&,
-                     const peritwin_msgs::reject_t* reject);
+  // Raw handlers: the bytes are checked (tag, then layout) before anything is decoded.
+  void on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void publish(std::int64_t seq);
 
   lcm::LCM& lcm_;
   std::vector<twin::Batch> batches_;
   ReplayOptions options_;
+  ReplayAuth auth_;
+  std::string fatal_;  ///< set by a handler: a message that must end the run (auth)
   std::string detail_id_, source_id_, load_channel_;
   lcm::Subscription* state_sub_ = nullptr;
   lcm::Subscription* reject_sub_ = nullptr;

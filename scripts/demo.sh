@@ -5,7 +5,9 @@
 #   the daemon (build/bin/peritwin --deterministic),
 #   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1),
 # and prints every state: cycles, broken bonds, crack length and the remaining life with its band
-# (re-estimated every 10 batches). The daemon stops at the end-of-life criterion (8 mm of crack
+# (re-estimated every 10 batches). Authenticated: the script generates a key file
+# (out/demo/keys.toml, mode 0600, keys "replay" and "peritwin"), the daemon's config is the example
+# plus an [auth] table naming it, and the replay signs its batches and verifies every state. The daemon stops at the end-of-life criterion (8 mm of crack
 # growth), then gets SIGTERM, checkpoints and writes its results and pictures under out/demo/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,13 +47,18 @@ for _ in $(seq 100); do
 done
 echo "demo: LCM hub on $url (log: out/demo/hub.log)"
 
-(cd "$demo" && exec "$bin/peritwin" --config "$root/examples/b1-ct-al6061.toml" \
+# Keys: one per producer ("replay") and the daemon's own ("peritwin"), HMAC-SHA256.
+"$bin/peritwin-replay" --generate-key-file "$demo/keys.toml" --key-ids replay,peritwin
+{ cat "$root/examples/b1-ct-al6061.toml"; printf '\n[auth]\nkey_file = "keys.toml"\n'; } \
+  >"$demo/b1-ct.toml"
+
+(cd "$demo" && exec "$bin/peritwin" --config "$demo/b1-ct.toml" \
    --lcm-url "$url" --state-dir state --deterministic) >"$demo/daemon.log" 2>&1 &
 daemon_pid=$!
 echo "demo: daemon started (log: out/demo/daemon.log); replaying examples/b1-cycles.csv in lockstep"
 echo
 
-"$bin/peritwin-replay" --config examples/b1-ct-al6061.toml \
+"$bin/peritwin-replay" --config examples/b1-ct-al6061.toml --key-file "$demo/keys.toml" \
   --history examples/b1-cycles.csv --format cycles --lcm-url "$url" --lockstep \
   2> >(grep -v '^LCM tcpq' >&2)
 

@@ -12,6 +12,8 @@ packages=(
   libgtest-dev
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jre-headless
   libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev nlohmann-json3-dev
+  # HMAC-SHA256 of the signed messages and key generation (messages/auth.h, issue 14).
+  libsodium-dev
 )
 # The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
 # PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.

@@ -1,15 +1,32 @@
-// The replay tool's library: batching, block checks, history formats (LCM log included).
+// The replay tool's library: batching, block checks, history formats (LCM log included); its
+// authentication against a fake daemon, in-process over memq:// (the library) and across
+// processes over tcpq:// with LCM's Java hub (the binary and its exit codes; skipped without java
+// or lcm.jar). The fake daemon checks every batch's tag on the bytes, as the daemon does, and
+// answers with STATE or REJECT signed, unsigned or signed with another key.
+//
+// Timing: waits on other processes have minute-scale deadlines (kWaitS) and nothing asserts a
+// duration; on a loaded machine a run may resend batches, which the fake answers again.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <limits>
+#include <thread>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "replay/replay_tool.h"
+#include "tests/support/lcm_hub.h"
+#include "tests/support/process.h"
 
 namespace peritwin::replay {
 namespace {
@@ -197,6 +214,352 @@ TEST(ReplayDescribe, OneLinePerState) {
             "1100] (estimated at seq 2)");
   s.failure = peritwin_msgs::damage_state_t::FAILURE_END_CRITERION;
   EXPECT_NE(describe(s).find("END OF LIFE"), std::string::npos);
+}
+
+// --- authentication against a fake daemon ------------------------------------------------
+
+/// Deadline of every wait on another process or on a replay run.
+constexpr double kWaitS = 600.0;
+
+/// How the fake daemon answers a batch.
+enum class Answer {
+  signed_states,     ///< STATE signed with the daemon key (only for a batch that verifies)
+  unsigned_states,   ///< STATE without a tag
+  wrong_key_states,  ///< STATE signed with a key that is not the daemon's
+  unsigned_reject,   ///< REJECT (GAP) without a tag
+  auth_reject,       ///< REJECT CODE_AUTH, signed, as a daemon with another key for the source
+};
+
+/// Answers every batch on b1-ct's LOAD channel of `lcm` like a daemon would, after checking its
+/// tag on the received bytes with tag_matches(source key, bytes, signed_size, auth_tag) — the
+/// daemon's check.
+class FakeDaemon {
+ public:
+  FakeDaemon(lcm::LCM& lcm, Answer answer, messages::AuthKey daemon_key,
+             messages::AuthKey source_key)
+      : lcm_(lcm), answer_(answer), daemon_key_(daemon_key), source_key_(source_key) {
+    sub_ = lcm_.subscribe(messages::channel("b1-ct", messages::Kind::kLoad), &FakeDaemon::on_load,
+                          this);
+  }
+  ~FakeDaemon() { lcm_.unsubscribe(sub_); }
+  FakeDaemon(const FakeDaemon&) = delete;
+  FakeDaemon& operator=(const FakeDaemon&) = delete;
+
+  [[nodiscard]] int batches() const { return batches_.load(); }
+  [[nodiscard]] int verified() const { return verified_.load(); }
+
+ private:
+  void on_load(const lcm::ReceiveBuffer* rb, const std::string&) {
+    ++batches_;
+    const auto* bytes = static_cast<const std::uint8_t*>(rb->data);
+    const messages::Decoded d = messages::decode_batch(bytes, rb->data_size);
+    if (!d.batch) return;
+    const bool ok = messages::tag_matches(source_key_, bytes, d.signed_size, d.auth_tag);
+    if (ok) ++verified_;
+    const std::string& source = d.batch->source_id;
+    if (answer_ == Answer::auth_reject || answer_ == Answer::unsigned_reject) {
+      auto r = messages::reject_message(
+          "b1-ct", source, d.batch->seq,
+          answer_ == Answer::auth_reject
+              ? messages::Outcome{messages::Verdict::auth, "auth_tag",
+                                  "wrong tag for source \"" + source + "\""}
+              : messages::Outcome{messages::Verdict::gap, "seq", "forged gap"},
+          messages::now_utime());
+      if (answer_ == Answer::auth_reject) messages::sign(r, daemon_key_);
+      lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
+      return;
+    }
+    if (!ok && answer_ == Answer::signed_states) return;  // a daemon with [auth] rejects it
+    if (d.batch->seq == applied_ + 1) ++applied_;
+    peritwin_msgs::damage_state_t s{};
+    s.utime = messages::now_utime();
+    s.detail_id = "b1-ct";
+    s.state_seq = applied_;
+    s.source_ids = {source};
+    s.applied_seq = {applied_};
+    s.checkpointed_seq = {0};
+    s.num_sources = 1;
+    s.total_cycles = 1000 * applied_;
+    s.k_i = s.k_ii = std::numeric_limits<double>::quiet_NaN();
+    s.remaining_cycles = s.remaining_cycles_low = s.remaining_cycles_high = s.k_i;
+    s.remaining_life_seq = -1;
+    s.state_hash = "fake-" + std::to_string(applied_);
+    if (answer_ == Answer::signed_states) messages::sign(s, daemon_key_);
+    if (answer_ == Answer::wrong_key_states) {
+      messages::AuthKey other = daemon_key_;
+      other.bytes[0] ^= 1;
+      messages::sign(s, other);
+    }
+    lcm_.publish(messages::channel("b1-ct", messages::Kind::kState), &s);
+  }
+
+  lcm::LCM& lcm_;
+  Answer answer_;
+  messages::AuthKey daemon_key_, source_key_;
+  lcm::Subscription* sub_ = nullptr;
+  std::atomic<int> batches_{0}, verified_{0};
+  std::int64_t applied_ = 0;
+};
+
+messages::AuthKey test_key(std::uint8_t seed) {
+  messages::AuthKey k;
+  for (std::size_t i = 0; i < k.bytes.size(); ++i)
+    k.bytes[i] = static_cast<std::uint8_t>(seed * 31 + i);
+  return k;
+}
+
+std::vector<twin::Batch> three_batches() {
+  const std::vector<LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
+  return make_twin_batches(blocks, "b1-ct", "replay", {1024, 1000});
+}
+
+/// The library on memq://: the replayer and the fake share one LCM.
+struct MemqRun {
+  ReplayResult result;
+  int batches = 0, verified = 0;
+  std::vector<std::string> hashes;  ///< of the states the run accepted
+};
+MemqRun run_memq(Answer answer, ReplayAuth auth) {
+  lcm::LCM lcm("memq://");
+  EXPECT_TRUE(lcm.good());
+  const messages::AuthKey daemon = test_key(1), source = test_key(2);
+  FakeDaemon fake(lcm, answer, daemon, source);
+  MemqRun run;
+  LcmReplayer replayer(lcm, three_batches(), {true, 1, 3.0, kWaitS}, std::move(auth));
+  run.result = replayer.run([&](const auto& s) { run.hashes.push_back(s.state_hash); });
+  run.batches = fake.batches();
+  run.verified = fake.verified();
+  return run;
+}
+
+ReplayAuth both_keys() { return {test_key(2), test_key(1), "peritwin"}; }
+
+TEST(ReplayAuthMemq, SignedBatchesAndVerifiedStates) {
+  const auto run = run_memq(Answer::signed_states, both_keys());
+  ASSERT_TRUE(run.result.ok) << run.result.error;
+  ASSERT_TRUE(run.result.final_state);
+  EXPECT_EQ(run.result.final_state->state_hash, "fake-3");
+  EXPECT_EQ(run.hashes, (std::vector<std::string>{"fake-1", "fake-2", "fake-3"}));
+  EXPECT_GE(run.batches, 3);
+  EXPECT_EQ(run.verified, run.batches);  // every batch carried the source's tag
+}
+
+TEST(ReplayAuthMemq, UnsignedOrForeignStateEndsTheRun) {
+  for (const auto& [answer, why] : {std::pair{Answer::unsigned_states, "unsigned"},
+                                    std::pair{Answer::wrong_key_states, "wrong tag"}}) {
+    const auto run = run_memq(answer, both_keys());
+    EXPECT_FALSE(run.result.ok);
+    EXPECT_EQ(run.result.error,
+              std::string("PERITWIN_B1_CT_STATE: state_seq 1 of detail \"b1-ct\": ") + why +
+                  " (not from the holder of daemon key \"peritwin\")");
+    EXPECT_TRUE(run.hashes.empty());  // nothing unverified reached on_state
+    EXPECT_FALSE(run.result.final_state);
+  }
+}
+
+TEST(ReplayAuthMemq, UnsignedRejectAndAuthRejectEndTheRun) {
+  const auto forged = run_memq(Answer::unsigned_reject, both_keys());
+  EXPECT_FALSE(forged.result.ok);
+  EXPECT_EQ(forged.result.error,
+            "PERITWIN_B1_CT_REJECT: reject of source \"replay\" seq 1: unsigned (not from the "
+            "holder of daemon key \"peritwin\")");
+  const auto refused = run_memq(Answer::auth_reject, both_keys());
+  EXPECT_FALSE(refused.result.ok);
+  EXPECT_EQ(refused.result.error,
+            "the daemon refused batch 1 of source \"replay\" (CODE_AUTH): auth_tag: wrong tag for "
+            "source \"replay\"");
+  // Unsigned batches to a daemon that wants them signed: the same, with a hint.
+  const auto unsigned_run = run_memq(Answer::auth_reject, {});
+  EXPECT_FALSE(unsigned_run.result.ok);
+  EXPECT_NE(unsigned_run.result.error.find("give it --key-file"), std::string::npos)
+      << unsigned_run.result.error;
+  EXPECT_EQ(unsigned_run.verified, 0);
+}
+
+TEST(ReplayAuthMemq, WithoutKeysAForgedStateIsBelieved) {
+  // The documented limit of a run without --key-file: unsigned states are taken as they come.
+  const auto run = run_memq(Answer::unsigned_states, {});
+  ASSERT_TRUE(run.result.ok) << run.result.error;
+  EXPECT_EQ(run.result.final_state->state_hash, "fake-3");
+  EXPECT_EQ(run.verified, 0);
+}
+
+/// The binary over tcpq:// with LCM's Java hub (one per suite) and the fake daemon on a thread.
+class ReplayAuthBinary : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    hub_log_ = fs::temp_directory_path() /
+               ("peritwin_replay_auth_hub_" + std::to_string(::getpid()) + ".log");
+    hub_ = new peritwin::testing::LcmHub(hub_log_, kWaitS);
+  }
+  static void TearDownTestSuite() {
+    delete hub_;
+    hub_ = nullptr;
+    fs::remove(hub_log_);
+  }
+  void SetUp() override {
+    if (!hub_->missing().empty()) GTEST_SKIP() << hub_->missing();
+    ASSERT_TRUE(hub_->up()) << "no LCM hub of this test (see " << hub_log_ << ")";
+    dir_ = fs::temp_directory_path() /
+           ("peritwin_replay_auth_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    history_ = dir_ / "history.csv";
+    std::ofstream(history_) << "p_max_N,r,angle_rad,count\n4000,0.1,0,1000\n4000,0.1,0,1000\n"
+                               "4000,0.1,0,1000\n";
+    keys_ = dir_ / "keys.toml";
+    const auto generated = exit_code(run_replay({"--generate-key-file", keys_.string()}));
+    ASSERT_EQ(generated, 0) << log();
+    const auto ring = messages::KeyRing::load(keys_);
+    ASSERT_TRUE(ring.ok()) << ring.error().message();
+    ASSERT_EQ(ring->ids(), (std::vector<std::string>{"peritwin", "replay"}));
+    replay_key_ = *ring->find("replay");
+    daemon_key_ = *ring->find("peritwin");
+  }
+  void TearDown() override {
+    if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
+  }
+
+  std::unique_ptr<peritwin::testing::Process> run_replay(const std::vector<std::string>& args) {
+    std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return std::make_unique<peritwin::testing::Process>(argv, (dir_ / "replay.log").string());
+  }
+  /// A lockstep replay of the three-batch history with `args` added.
+  std::unique_ptr<peritwin::testing::Process> replay_over_hub(std::vector<std::string> args) {
+    std::vector<std::string> argv{
+        "--config",        std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml",
+        "--history",       history_.string(),
+        "--json",          "--lcm-url",
+        hub_->url(),       "--lockstep",
+        "--give-up-after", "600"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return run_replay(argv);
+  }
+  /// Exit code, or -1 when it did not exit normally within kWaitS.
+  static int exit_code(const std::unique_ptr<peritwin::testing::Process>& p) {
+    const auto status = p->wait_for(kWaitS);
+    return status && WIFEXITED(*status) ? WEXITSTATUS(*status) : -1;
+  }
+  static std::vector<std::string> lines_to_end(peritwin::testing::Process& p) {
+    std::vector<std::string> lines;
+    while (auto line = p.read_line(kWaitS)) lines.push_back(*line);
+    return lines;
+  }
+  std::string log() const {
+    std::ifstream in(dir_ / "replay.log");
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+
+  /// Runs the fake daemon on its own LCM connection to the hub while `body` runs.
+  struct FakeOnHub {
+    FakeOnHub(const std::string& url, Answer answer, messages::AuthKey daemon,
+              messages::AuthKey source)
+        : lcm(url), fake(lcm, answer, daemon, source), thread([this] {
+            while (!stop.load()) lcm.handleTimeout(50);
+          }) {}
+    ~FakeOnHub() {
+      stop.store(true);
+      thread.join();
+    }
+    lcm::LCM lcm;
+    FakeDaemon fake;
+    std::atomic<bool> stop{false};
+    std::thread thread;
+  };
+
+  static inline peritwin::testing::LcmHub* hub_ = nullptr;
+  static inline fs::path hub_log_;
+  fs::path dir_, history_, keys_;
+  messages::AuthKey replay_key_, daemon_key_;
+};
+
+TEST_F(ReplayAuthBinary, SignedStatesExitZero) {
+  FakeOnHub daemon(hub_->url(), Answer::signed_states, daemon_key_, replay_key_);
+  ASSERT_TRUE(daemon.lcm.good());
+  auto r = replay_over_hub({"--key-file", keys_.string()});
+  const auto lines = lines_to_end(*r);
+  ASSERT_EQ(exit_code(r), 0) << log();
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find("\"state_hash\":\"fake-3\""), std::string::npos) << lines.back();
+  EXPECT_GE(daemon.fake.batches(), 3);
+  EXPECT_EQ(daemon.fake.verified(), daemon.fake.batches());
+}
+
+TEST_F(ReplayAuthBinary, UnsignedOrWronglySignedStateExitsThree) {
+  for (const auto& [answer, why] : {std::pair{Answer::unsigned_states, "unsigned"},
+                                    std::pair{Answer::wrong_key_states, "wrong tag"}}) {
+    fs::remove(dir_ / "replay.log");
+    FakeOnHub daemon(hub_->url(), answer, daemon_key_, replay_key_);
+    auto r = replay_over_hub({"--key-file", keys_.string()});
+    const auto lines = lines_to_end(*r);
+    EXPECT_EQ(exit_code(r), 3) << log();
+    for (const auto& line : lines) EXPECT_EQ(line.find("fake-"), std::string::npos) << line;
+    const std::string expected = std::string(
+                                     "peritwin-replay: PERITWIN_B1_CT_STATE: state_seq 1 of "
+                                     "detail \"b1-ct\": ") +
+                                 why + " (not from the holder of daemon key \"peritwin\")\n";
+    EXPECT_NE(log().find(expected), std::string::npos) << log();
+  }
+}
+
+TEST_F(ReplayAuthBinary, AuthRejectExitsThreeWithTheDaemonsReason) {
+  FakeOnHub daemon(hub_->url(), Answer::auth_reject, daemon_key_, replay_key_);
+  auto r = replay_over_hub({"--key-file", keys_.string()});
+  lines_to_end(*r);
+  EXPECT_EQ(exit_code(r), 3) << log();
+  EXPECT_NE(log().find("peritwin-replay: the daemon refused batch 1 of source \"replay\" "
+                       "(CODE_AUTH): auth_tag: wrong tag for source \"replay\"\n"),
+            std::string::npos)
+      << log();
+}
+
+TEST_F(ReplayAuthBinary, MissingKeyExitsTwoBeforePublishingAndSignOnlyNeedsNoDaemonKey) {
+  FakeOnHub daemon(hub_->url(), Answer::signed_states, daemon_key_, replay_key_);
+  auto r = replay_over_hub({"--key-file", keys_.string(), "--source", "gauge-3"});
+  lines_to_end(*r);
+  EXPECT_EQ(exit_code(r), 2) << log();
+  EXPECT_NE(log().find("no key \"gauge-3\" (--source)"), std::string::npos) << log();
+  auto d = replay_over_hub({"--key-file", keys_.string(), "--daemon-key", "twin-7"});
+  lines_to_end(*d);
+  EXPECT_EQ(exit_code(d), 2) << log();
+  EXPECT_NE(log().find("no key \"twin-7\" (--daemon-key)"), std::string::npos) << log();
+  ::chmod(keys_.c_str(), 0644);
+  auto open = replay_over_hub({"--key-file", keys_.string()});
+  lines_to_end(*open);
+  EXPECT_EQ(exit_code(open), 2) << log();
+  EXPECT_NE(log().find("mode 0644"), std::string::npos) << log();
+  EXPECT_EQ(daemon.fake.batches(), 0);
+  // --sign-only needs no daemon key (and checks nothing).
+  const auto own_key = dir_ / "own-key.toml";
+  std::ofstream(own_key) << "[keys]\nreplay = \"" << [&] {
+    std::string hex;
+    for (const auto b : replay_key_.bytes)
+      hex += "0123456789abcdef"[b >> 4], hex += "0123456789abcdef"[b & 15];
+    return hex;
+  }() << "\"\n";
+  ::chmod(own_key.c_str(), 0600);
+  auto sign_only = replay_over_hub({"--key-file", own_key.string(), "--sign-only"});
+  const auto lines = lines_to_end(*sign_only);
+  EXPECT_EQ(exit_code(sign_only), 0) << log();
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find("\"state_hash\":\"fake-3\""), std::string::npos) << lines.back();
+  EXPECT_GE(daemon.fake.verified(), 3);
+  EXPECT_EQ(daemon.fake.verified(), daemon.fake.batches());
+  // The key file is never overwritten.
+  const auto again = run_replay({"--generate-key-file", keys_.string()});
+  EXPECT_EQ(exit_code(again), 2) << log();
+  EXPECT_EQ(messages::KeyRing::parse(
+                [&] {
+                  std::ifstream in(keys_);
+                  return std::string(std::istreambuf_iterator<char>(in), {});
+                }(),
+                keys_.string())
+                ->find("replay")
+                ->bytes,
+            replay_key_.bytes);
 }
 
 }  // namespace

@@ -46,6 +46,20 @@ inline DetailConfig b1_config(const std::string& life_extra = "every_batches = 0
   return result.config->details.at(0);
 }
 
+/// The inputs of the cross-process tests: B1 on the demo grid with a 3 mm life criterion
+/// without band (synchronous estimates at states 0, 10, 20 take a few seconds) and checkpoints
+/// every 4 batches; a history of 24 batches of 1000 cycles (every fourth at 4.2 kN, else 4 kN).
+inline void write_cross_process_inputs(const std::string& config, const std::string& history) {
+  std::ofstream(config) << b1_text(
+      "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
+                             {"band = \"a2_scatter\"", "band = \"none\""},
+                             {"a2_relative_scatter = 0.2", ""},
+                             {"every_batches = 100", "every_batches = 4"}});
+  std::ofstream h(history);
+  h << "p_max_N,r,angle_rad,count\n";
+  for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+}
+
 inline std::shared_ptr<const DetailModel> b1_model(const DetailConfig& config) {
   auto model = DetailModel::build(config);
   EXPECT_TRUE(model.ok()) << model.error().message();

@@ -106,22 +106,29 @@ class CrossProcess : public ::testing::Test {
     ASSERT_TRUE(hub_) << "no LCM hub of this test listening (see " << (dir_ / "hub.log") << ")";
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
     ASSERT_TRUE(wait_for_loopback_port(port_, kWaitS)) << "the LCM hub did not come up on " << url_;
-    // B1 on the demo grid; a 3 mm life criterion without band keeps the synchronous estimates
-    // (states 0, 10, 20) to a few seconds; checkpoints every 4 batches.
+    // B1, 3 mm life criterion, 24 batches (testing::write_cross_process_inputs).
     config_ = (dir_ / "b1.toml").string();
-    std::ofstream(config_) << testing::b1_text(
-        "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
-                               {"band = \"a2_scatter\"", "band = \"none\""},
-                               {"a2_relative_scatter = 0.2", ""},
-                               {"every_batches = 100", "every_batches = 4"}});
     history_ = (dir_ / "history.csv").string();
-    std::ofstream h(history_);
-    h << "p_max_N,r,angle_rad,count\n";
-    for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+    testing::write_cross_process_inputs(config_, history_);
   }
   void TearDown() override {
     hub_.reset();
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
+  }
+
+  /// A key file (replay, peritwin) and config_ plus an [auth] table naming it; returns the path
+  /// of that config. Call through ASSERT_NO_FATAL_FAILURE.
+  void authenticate() {
+    keys_ = (dir_ / "keys.toml").string();
+    Process keygen({std::string(PERITWIN_BIN_DIR) + "/peritwin-replay", "--generate-key-file",
+                    keys_, "--key-ids", "replay,peritwin"},
+                   (dir_ / "keygen.log").string());
+    const auto status = keygen.wait_for(kWaitS);
+    ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+        << read_file(dir_ / "keygen.log");
+    const std::string text = read_file(config_);
+    config_ = (dir_ / "b1-auth.toml").string();
+    std::ofstream(config_) << text << "\n[auth]\nkey_file = \"keys.toml\"\n";
   }
 
   std::unique_ptr<Process> daemon(const std::string& log) {
@@ -131,13 +138,17 @@ class CrossProcess : public ::testing::Test {
                                  "--deterministic", "--no-results", "--log-level", "debug"},
         (dir_ / log).string());
   }
-  std::unique_ptr<Process> replay(bool in_process) {
+  std::unique_ptr<Process> replay(bool in_process, const std::string& key_file = {}) {
     std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay",
                                   "--config",
                                   config_,
                                   "--history",
                                   history_,
                                   "--json"};
+    if (!key_file.empty()) {
+      argv.emplace_back("--key-file");
+      argv.push_back(key_file);
+    }
     if (in_process) {
       argv.push_back("--in-process");
     } else {
@@ -164,7 +175,7 @@ class CrossProcess : public ::testing::Test {
     EXPECT_EQ(WEXITSTATUS(*status), 0);
   }
 
-  std::string java_, url_, config_, history_;
+  std::string java_, url_, config_, history_, keys_;
   int port_ = 0;
   fs::path dir_;
   std::unique_ptr<Process> hub_;
@@ -197,6 +208,34 @@ TEST_F(CrossProcess, DaemonOverTcpqEqualsInProcess) {
   }
   EXPECT_EQ(compared, reference.size() - 2);  // states 1..K (state 0 and the summary aside)
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+}
+
+TEST_F(CrossProcess, AuthenticatedDaemonEqualsInProcessAndRefusesAnUnsignedProducer) {
+  // The daemon with [auth], the replay signing its batches and verifying every STATE: the same
+  // final state as the in-process run. A replay without the key is refused (CODE_AUTH, exit 3),
+  // and the model does not move.
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_GE(reference.size(), 20u);
+  ASSERT_NO_FATAL_FAILURE(authenticate());
+  auto d = daemon("daemon.log");
+  auto signed_run = replay(false, keys_);
+  const auto lines = lines_to_end(*signed_run);
+  const auto status = signed_run->wait_for(kWaitS);
+  ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+      << read_file(dir_ / "replay.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());
+
+  auto unsigned_run = replay(false);
+  lines_to_end(*unsigned_run);
+  const auto refused = unsigned_run->wait_for(kWaitS);
+  ASSERT_TRUE(refused && WIFEXITED(*refused)) << read_file(dir_ / "replay.log");
+  EXPECT_EQ(WEXITSTATUS(*refused), 3) << read_file(dir_ / "replay.log");
+  EXPECT_NE(read_file(dir_ / "replay.log").find("unsigned"), std::string::npos)
+      << read_file(dir_ / "replay.log");
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+  EXPECT_NE(read_file(dir_ / "daemon.log").find("authentication on"), std::string::npos);
 }
 
 TEST_F(CrossProcess, SigkillMidHistoryResumesToTheSameFinalState) {

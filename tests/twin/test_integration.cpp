@@ -9,13 +9,19 @@
 
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <filesystem>
+#include <fstream>
+#include <limits>
 #include <map>
+#include <mutex>
 #include <thread>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "replay/replay_tool.h"
 #include "tests/support/twin_fixtures.h"
+#include "twin/io/checkpoint_io.h"
 #include "twin/service/daemon.h"
 
 namespace peritwin::twin {
@@ -133,7 +139,11 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   send({"b1-ct", "p", 1, {ok}});                     // applied
   send({"b1-ct", "p", 1, {ok}});                     // duplicate
   send({"b1-ct", "p", 5, {ok}});                     // gap
-  for (int i = 0; i < 50 && (rejects.size() < 5 || states.size() < 3); ++i) daemon.poll(20);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  while ((rejects.size() < 5 || states.size() < 3) && std::chrono::steady_clock::now() < deadline) {
+    daemon.poll(20);
+  }
+  daemon.tick();
   ASSERT_EQ(rejects.size(), 5u);
   using R = peritwin_msgs::reject_t;
   EXPECT_EQ(rejects[0].code, R::CODE_DECODE);
@@ -219,6 +229,7 @@ TEST_F(MemqTest, OneTwinPerDetailEachOnItsOwnChannels) {
   send({"b2-cts", "a", 1, {{6000, 0.1, 0.3, 500}}});
   send({"b1-ct", "a", 2, {{4000, 0.1, 0, 1000}}});
   for (int i = 0; i < 20; ++i) daemon.poll(10);
+  daemon.tick();  // the workers apply off the LCM thread: wait for them
   EXPECT_EQ(daemon.twin(0).detail_id(), "b1-ct");
   EXPECT_EQ(daemon.twin(0).state_seq(), 2);
   EXPECT_EQ(daemon.twin(0).engine().total_cycles(), 2000);
@@ -287,46 +298,410 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   daemon.stop();
 }
 
-TEST_F(MemqTest, StatusCountsTheBatchesWaitingAndTheAgeOfTheOldest) {
-  const TwinConfig config = config_of(b1_text());
+TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat) {
+  // Two details on one daemon. Detail b1-ct's worker is held inside its first batch (the test
+  // hook stands in for a batch that takes minutes); meanwhile b2-cts applies its batches and
+  // publishes its states, and STATUS keeps coming for both: b1-ct's says how long it has been
+  // busy and how many batches wait behind it.
+  const std::string b2 =
+      testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
+  // b1-ct turns "degraded" once its batch has run for 0.2 s ([detail.limits] max_batch_seconds).
+  const TwinConfig config = config_of(
+      b1_text("every_batches = 0", {{"max_batch_seconds = 60.0", "max_batch_seconds = 0.2"}}) +
+      "\n" + b2);
+  std::mutex hold_mutex;
+  std::condition_variable hold_cv;
+  bool held = false, release = false;
+  options_.status_period_s = 0.05;
+  options_.before_apply = [&](const std::string& detail) {
+    if (detail != "b1-ct") return;
+    std::unique_lock lock(hold_mutex);
+    held = true;
+    hold_cv.notify_all();
+    hold_cv.wait(lock, [&] { return release; });
+  };
   lcm::LCM lcm("memq://");
-  options_.status_period_s = 0.0;  // a STATUS after every applied batch
   Daemon daemon(lcm, config, options_);
   const Status started = daemon.start();
   ASSERT_TRUE(started.ok()) << message_of(started);
-  std::vector<peritwin_msgs::status_t> statuses;
   struct Sink {
-    std::vector<peritwin_msgs::status_t>* statuses;
+    std::map<std::string, std::vector<peritwin_msgs::status_t>> statuses;
+    std::map<std::string, std::vector<peritwin_msgs::damage_state_t>> states;
     void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
-      statuses->push_back(*m);
+      statuses[m->detail_id].push_back(*m);
     }
-  } sink{&statuses};
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Sink::status, &sink);
-  const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
-  for (std::int64_t seq = 1; seq <= 3; ++seq) {
-    const auto m = batch_message({"b1-ct", "p", seq, {{4000, 0.1, 0, 10}}}, 0);
-    lcm.publish(load, &m);
+    void state(const lcm::ReceiveBuffer*, const std::string&,
+               const peritwin_msgs::damage_state_t* m) {
+      states[m->detail_id].push_back(*m);
+    }
+  } sink;
+  lcm.subscribe(messages::channel_regex(messages::Kind::kStatus), &Sink::status, &sink);
+  lcm.subscribe(messages::channel_regex(messages::Kind::kState), &Sink::state, &sink);
+  auto send = [&](const Batch& b) {
+    const auto m = batch_message(b, 0);
+    lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
+  };
+  for (std::int64_t seq = 1; seq <= 3; ++seq) send({"b1-ct", "p", seq, {{4000, 0.1, 0, 10}}});
+  for (std::int64_t seq = 1; seq <= 3; ++seq) send({"b2-cts", "p", seq, {{6000, 0.1, 0.3, 10}}});
+
+  // Wait (deadline of minutes, no timing assertion) until b2-cts has published state 3 and
+  // b1-ct's STATUS has reported a busy batch with the two others waiting, twice.
+  auto b1_busy_reports = [&] {
+    int n = 0;
+    for (const auto& s : sink.statuses["b1-ct"]) n += s.busy_s > 0.2 && s.pending == 2 ? 1 : 0;
+    return n;
+  };
+  auto b2_done = [&] {
+    const auto& v = sink.states["b2-cts"];
+    return !v.empty() && v.back().state_seq == 3;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  while ((!b2_done() || b1_busy_reports() < 2) && std::chrono::steady_clock::now() < deadline) {
+    daemon.poll(20);
   }
-  while (lcm.handleTimeout(0) > 0) {  // received into the inbox, not yet applied
+  {
+    std::lock_guard lock(hold_mutex);
+    ASSERT_TRUE(held);
   }
-  std::this_thread::sleep_for(std::chrono::milliseconds(30));
-  daemon.tick();  // applies the three, a STATUS after each
+  EXPECT_TRUE(b2_done());
+  ASSERT_GE(b1_busy_reports(), 2);
+  // b1-ct has published nothing but its initial state... (subscribed after start: none at all)
+  for (const auto& s : sink.states["b1-ct"]) EXPECT_EQ(s.state_seq, 0);
+  // ...and its busy time grows from one heartbeat to the next while b2-cts stays idle.
+  std::vector<double> busy;
+  for (const auto& s : sink.statuses["b1-ct"]) {
+    if (s.pending == 2) busy.push_back(s.busy_s);
+  }
+  EXPECT_GT(busy.back(), busy.front());
+  EXPECT_EQ(sink.statuses["b2-cts"].back().busy_s, 0.0);
+  EXPECT_EQ(sink.statuses["b2-cts"].back().last_seq, 3);
+  EXPECT_EQ(sink.statuses["b2-cts"].back().health, "ok");
+  const auto& waiting = sink.statuses["b1-ct"].back();
+  EXPECT_EQ(waiting.health, "degraded");  // busy_s > max_batch_seconds
+  EXPECT_EQ(waiting.last_seq, 0);
+  EXPECT_GT(waiting.lag_s, 0.0);  // the oldest waiting batch has waited since it was received
+  EXPECT_LT(waiting.lag_s, kGiveUpS);
+  {
+    std::lock_guard lock(hold_mutex);
+    release = true;
+  }
+  hold_cv.notify_all();
+  daemon.tick();  // b1-ct applies its three
+  EXPECT_EQ(daemon.twin(0).state_seq(), 3);
+  EXPECT_EQ(daemon.twin(1).state_seq(), 3);
+  daemon.stop();
+}
+
+/// What a hostile producer and the real one see on the REJECT and STATE channels.
+struct Observer {
+  std::vector<peritwin_msgs::reject_t> rejects;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  std::vector<peritwin_msgs::status_t> statuses;
+  void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+    rejects.push_back(*m);
+  }
+  void state(const lcm::ReceiveBuffer*, const std::string&,
+             const peritwin_msgs::damage_state_t* m) {
+    states.push_back(*m);
+  }
+  void status(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::status_t* m) {
+    statuses.push_back(*m);
+  }
+  void subscribe(lcm::LCM& lcm) {
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Observer::reject, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Observer::state, this);
+    lcm.subscribe(messages::channel("b1-ct", messages::Kind::kStatus), &Observer::status, this);
+  }
+};
+
+/// Publishes, lets the daemon apply everything, and delivers what it published.
+void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::load_batch_t>& sent) {
+  for (const auto& m : sent) lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
   while (lcm.handleTimeout(0) > 0) {
   }
-  ASSERT_GE(statuses.size(), 3u);
-  // After batch k of 3: 3 − k still wait, the oldest of them received >= 30 ms ago.
-  for (int k = 1; k <= 3; ++k) {
-    const auto& s = statuses[static_cast<std::size_t>(k - 1)];
-    EXPECT_EQ(s.last_seq, k);
-    EXPECT_EQ(s.pending, 3 - k);
-    if (k < 3) {
-      EXPECT_GE(s.lag_s, 0.030);
-      EXPECT_LT(s.lag_s, kGiveUpS);  // a sanity bound, not a timing one
-    } else {
-      EXPECT_EQ(s.lag_s, 0.0);
-    }
-    EXPECT_EQ(s.health, "ok");
+  daemon.tick();
+  while (lcm.handleTimeout(0) > 0) {
   }
+}
+
+/// Runs a daemon over `batches` (in-process LCM) and stops it: one checkpoint, at stop.
+void run_and_stop(const TwinConfig& config, const DaemonOptions& options,
+                  const std::vector<Batch>& batches) {
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options);
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
+  for (const auto& b : batches) {
+    const auto m = batch_message(b, 0);
+    lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
+  }
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  daemon.tick();
+  daemon.stop();
+  ASSERT_EQ(daemon.twin(0).state_seq(), static_cast<std::int64_t>(batches.size()));
+}
+
+fs::path checkpoint_file(const fs::path& state_dir, std::uint64_t seq) {
+  return checkpoint_path(state_dir / "b1-ct", "checkpoint", seq);
+}
+
+TEST_F(MemqTest, CheckpointsThatAllFailRefuseTheStartUnlessFreshStart) {
+  const TwinConfig config = config_of(b1_text());
+  run_and_stop(config, options_, history(3));
+  const fs::path good = checkpoint_file(options_.state_dir, 3);
+  ASSERT_TRUE(fs::exists(good));
+  // Corrupt the one checkpoint (a byte in its middle) and add two that are not HDF5 at all.
+  {
+    std::fstream f(good, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(good) / 2));
+    f.put('\x5a');
+  }
+  for (const std::uint64_t seq : {4u, 5u}) {
+    std::ofstream(checkpoint_file(options_.state_dir, seq), std::ios::binary) << "not a checkpoint";
+  }
+  lcm::LCM lcm("memq://");
+  {
+    Daemon daemon(lcm, config, options_);
+    const Status started = daemon.start();
+    ASSERT_FALSE(started.ok());
+    const std::string why = started.error().message();
+    EXPECT_NE(why.find("none of the 3 checkpoint(s)"), std::string::npos) << why;
+    for (const std::uint64_t seq : {3u, 4u, 5u}) {
+      EXPECT_NE(why.find(checkpoint_file(options_.state_dir, seq).string()), std::string::npos)
+          << why;
+    }
+    EXPECT_NE(why.find("--fresh-start"), std::string::npos) << why;
+  }
+  options_.fresh_start = true;
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, ACheckpointWhoseContentDisagreesWithItsNameIsNotResumed) {
+  // A valid checkpoint of another history (2 batches) renamed to a newer seq (9): skipped, the
+  // daemon resumes from the newest one whose name and content agree; alone, it stops the start.
+  const TwinConfig config = config_of(b1_text());
+  const auto batches = history(4);
+  run_and_stop(config, options_, {batches.begin(), batches.begin() + 2});
+  const fs::path other = dir_ / "other-history.h5";
+  fs::copy_file(checkpoint_file(options_.state_dir, 2), other);
+  fs::remove_all(options_.state_dir);
+  run_and_stop(config, options_, {batches.begin(), batches.begin() + 3});
+  fs::copy_file(other, checkpoint_file(options_.state_dir, 9));
+  lcm::LCM lcm("memq://");
+  {
+    Daemon daemon(lcm, config, options_);
+    const Status started = daemon.start();
+    ASSERT_TRUE(started.ok()) << message_of(started);
+    EXPECT_EQ(daemon.twin(0).state_seq(), 3);
+    daemon.stop();
+  }
+  fs::remove(checkpoint_file(options_.state_dir, 3));
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_FALSE(started.ok());
+  EXPECT_NE(started.error().message().find("holds state_seq 2 but its file name says 9"),
+            std::string::npos)
+      << started.error().message();
+}
+
+TEST_F(MemqTest, AStateDirThatCannotBeWrittenStopsTheStartBeforeAnyState) {
+  // Root may write to a mode-0555 directory, so the state dir of the detail is made a regular
+  // file: nothing can be created in it, for root or anyone.
+  const TwinConfig config = config_of(b1_text());
+  fs::create_directories(options_.state_dir);
+  std::ofstream(options_.state_dir / "b1-ct") << "in the way";
+  lcm::LCM lcm("memq://");
+  int states = 0;
+  struct Sink {
+    int* states;
+    void on(const lcm::ReceiveBuffer*, const std::string&) { ++*states; }
+  } sink{&states};
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_FALSE(started.ok());
+  EXPECT_NE(started.error().message().find("is not writable"), std::string::npos)
+      << started.error().message();
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(states, 0);
+}
+
+TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
+  // checkpointed_seq follows the checkpoints: 0 before the first, then the seq of the newest.
+  const TwinConfig config =
+      config_of(b1_text("every_batches = 0", {{"every_batches = 100", "every_batches = 2"}}));
+  ASSERT_EQ(config.details[0].checkpoint.every_batches, 2);
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  std::vector<peritwin_msgs::load_batch_t> sent;
+  for (const auto& b : history(3)) sent.push_back(batch_message(b, 0));
+  exchange(lcm, daemon, sent);
+  const auto& states = seen.states;
+  ASSERT_EQ(states.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    ASSERT_EQ(states[k].num_sources, 1);
+    ASSERT_EQ(states[k].checkpointed_seq.size(), 1u);
+    EXPECT_EQ(states[k].applied_seq[0], static_cast<std::int64_t>(k + 1));
+  }
+  EXPECT_EQ(states[0].checkpointed_seq[0], 0);
+  EXPECT_EQ(states[1].checkpointed_seq[0], 2);  // checkpoint written before this STATE
+  EXPECT_EQ(states[2].checkpointed_seq[0], 2);
+  daemon.stop();  // checkpoint 3, and a STATE saying so
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(states.size(), 4u);
+  EXPECT_EQ(states.back().checkpointed_seq[0], 3);
+}
+
+TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
+  // The hostile producer of issue 14 publishes source "replay", seq 1 before the real replay.
+  // With [auth] its batch is refused (unsigned, wrongly signed, unknown source), the model is
+  // untouched, and the real seq 1 is applied; STATE and REJECT carry the daemon's tag.
+  const fs::path key_file = dir_ / "keys.toml";
+  const std::vector<std::string> ids = {"replay", "peritwin"};
+  ASSERT_TRUE(messages::write_key_file(key_file, ids).ok());
+  const TwinConfig config =
+      config_of(b1_text() + "\n[auth]\nkey_file = \"" + key_file.string() + "\"\n");
+  ASSERT_TRUE(config.auth.has_value());
+  const auto keys = messages::KeyRing::load(key_file);
+  ASSERT_TRUE(keys.ok());
+  const messages::AuthKey& replay_key = *keys->find("replay");
+  const messages::AuthKey& daemon_key = *keys->find("peritwin");
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const Batch real = history(1).front();
+  auto unsigned_hijack = batch_message(real, 0);
+  unsigned_hijack.blocks[0].p_max *= 1.5;  // a different load under the real (source, seq)
+  auto forged = unsigned_hijack;
+  messages::AuthKey wrong;
+  wrong.bytes.fill(0x42);
+  messages::sign(forged, wrong);
+  auto intruder = batch_message({"b1-ct", "intruder", 1, real.blocks}, 0);
+  messages::sign(intruder, replay_key);  // a stolen key does not make another source
+  exchange(lcm, daemon, {unsigned_hijack, forged, intruder});
+  ASSERT_EQ(seen.rejects.size(), 3u);
+  const std::vector<std::string> what = {"auth_tag", "auth_tag", "source_id"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(seen.rejects[k].code, peritwin_msgs::reject_t::CODE_AUTH) << k;
+    EXPECT_EQ(seen.rejects[k].what, what[k]) << seen.rejects[k].why;
+    EXPECT_TRUE(messages::verify(seen.rejects[k], daemon_key).ok()) << k;
+  }
+  EXPECT_NE(seen.rejects[0].why.find("unsigned"), std::string::npos);
+  EXPECT_NE(seen.rejects[1].why.find("wrong tag"), std::string::npos);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  EXPECT_EQ(daemon.twin(0).applied_seq("replay"), 0);
+
+  auto genuine = batch_message(real, 0);
+  messages::sign(genuine, replay_key);
+  exchange(lcm, daemon, {genuine});
+  ASSERT_FALSE(seen.states.empty());
+  const auto& state = seen.states.back();
+  EXPECT_EQ(state.state_seq, 1);
+  EXPECT_EQ(applied_seq(state, "replay"), 1);
+  EXPECT_TRUE(messages::verify(state, daemon_key).ok());
+  EXPECT_EQ(state.state_hash, in_process_hashes(config, {real}).at(1));
+  for (int i = 0; i < 200 && (seen.statuses.empty() || seen.statuses.back().auth_rejects < 3);
+       ++i) {
+    daemon.poll(10);
+    while (lcm.handleTimeout(0) > 0) {
+    }
+  }
+  ASSERT_FALSE(seen.statuses.empty());
+  EXPECT_EQ(seen.statuses.back().auth_rejects, 3);
+  EXPECT_EQ(seen.statuses.back().errors, 3);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, WithoutAuthTheFirstToPublishASeqOwnsIt) {
+  // The documented behaviour without [auth] (messages/README.md, Authentication): exactly-once
+  // trusts (source, seq), so a hijacker's seq 1 is applied and the real seq 1 is then a
+  // duplicate. Unsigned STATE.
+  const TwinConfig config = config_of(b1_text());
+  ASSERT_FALSE(config.auth.has_value());
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const Batch real = history(1).front();
+  auto hijack = batch_message(real, 0);
+  hijack.blocks[0].p_max *= 1.5;
+  exchange(lcm, daemon, {hijack, batch_message(real, 0)});
+  ASSERT_EQ(seen.rejects.size(), 1u);
+  EXPECT_EQ(seen.rejects[0].code, peritwin_msgs::reject_t::CODE_DUPLICATE);
+  EXPECT_EQ(daemon.twin(0).state_seq(), 1);
+  EXPECT_NE(daemon.twin(0).state_hash_hex(), in_process_hashes(config, {real}).at(1));
+  EXPECT_EQ(seen.states.back().tag_length, 0);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, OverflowingCountsAndAbsurdLoadsAreInvalidOverLcm) {
+  // Issue 14's hostile cases over the bus: count INT64_MAX (wrapped total_cycles), 2^50 + 1
+  // (final failure in one batch) and p_max = 1e308 (210 s in one batch): INVALID with the field,
+  // nothing applied.
+  const TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  const auto hash = daemon.twin(0).state_hash_hex();
+  exchange(lcm, daemon,
+           {batch_message(
+                {"b1-ct", "p", 1, {{4000, 0.1, 0, std::numeric_limits<std::int64_t>::max()}}}, 0),
+            batch_message({"b1-ct", "p", 1, {{4000, 0.1, 0, kMaxBatchCycles + 1}}}, 0),
+            batch_message({"b1-ct", "p", 1, {{1e308, 0.1, 0, 1}}}, 0)});
+  ASSERT_EQ(seen.rejects.size(), 3u);
+  const std::vector<std::string> what = {"blocks[0].count", "blocks[0].count", "blocks[0].p_max"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(seen.rejects[k].code, peritwin_msgs::reject_t::CODE_INVALID) << k;
+    EXPECT_EQ(seen.rejects[k].what, what[k]) << seen.rejects[k].why;
+  }
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  EXPECT_EQ(daemon.twin(0).engine().total_cycles(), 0);
+  EXPECT_EQ(daemon.twin(0).state_hash_hex(), hash);
+  daemon.stop();
+}
+
+TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch) {
+  // 40 invalid batches at once against max_rejects_per_second = 1 (over 10 s): STATUS counts
+  // them all, reports the rate and says "degraded"; the model is untouched.
+  const TwinConfig config = config_of(b1_text(
+      "every_batches = 0", {{"max_rejects_per_second = 10.0", "max_rejects_per_second = 1.0"}}));
+  options_.status_period_s = 0.0;
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  Observer seen;
+  seen.subscribe(lcm);
+  std::vector<peritwin_msgs::load_batch_t> flood;
+  for (int k = 0; k < 40; ++k)
+    flood.push_back(batch_message({"b1-ct", "p", 1, {{4000, 2.0, 0, 1}}}, 0));
+  exchange(lcm, daemon, flood);
+  daemon.poll(0);  // a heartbeat after the flood
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(seen.rejects.size(), 40u);
+  ASSERT_FALSE(seen.statuses.empty());
+  const auto& s = seen.statuses.back();
+  EXPECT_EQ(s.errors, 40);
+  // 40 in the 10-s window (fewer only if this machine stalled for seconds in between).
+  EXPECT_LE(s.reject_rate, 4.0);
+  EXPECT_GT(s.reject_rate, 1.0);
+  EXPECT_EQ(s.health, "degraded");
+  EXPECT_EQ(daemon.twin(0).state_seq(), 0);
   daemon.stop();
 }
 

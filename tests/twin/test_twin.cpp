@@ -118,6 +118,71 @@ TEST_F(TwinTest, EveryRejectReasonLeavesTheModelUntouched) {
   EXPECT_EQ(twin->counters().rejected, static_cast<std::int64_t>(cases.size()) - 1);
 }
 
+TEST_F(TwinTest, FirstBreakLoadIsWhereTheStaticCriterionFirstBreaksABond) {
+  // An independent check of first_break_load(): one cycle just below it breaks no bond by
+  // overload (000 Eq. 7-8, phase III), one cycle just above breaks at least one. One cycle does
+  // too little fatigue damage to break a bond any other way.
+  const double p1 = make_twin(model_)->first_break_load();
+  ASSERT_TRUE(std::isfinite(p1));
+  // B1 at 4 kN runs for ~47,500 cycles: its first overload must be well above that.
+  EXPECT_GT(p1, 4000.0);
+  auto overloads = [&](double p) {
+    auto twin = make_twin(model_);
+    EXPECT_TRUE(twin->apply(batch(1, {{p, 0.1, 0.0, 1}})).applied()) << p;
+    std::int64_t n = 0;
+    for (const auto& e : twin->engine().break_events()) {
+      n += e.cause == BreakCause::overload ? 1 : 0;
+    }
+    return n;
+  };
+  EXPECT_EQ(overloads(0.999 * p1), 0);
+  EXPECT_GE(overloads(1.001 * p1), 1);
+}
+
+TEST_F(TwinTest, LoadsAboveMaxPAreInvalidAndLeaveTheModelUntouched) {
+  // Default bound: 10x the first-break load. A units slip (kN written as N: 4e6 for 4 kN) and
+  // the 1e308 of the hostile producer are refused with the bound in the reason.
+  auto twin = make_twin(model_);
+  ASSERT_DOUBLE_EQ(twin->max_p(), kDefaultMaxPOverFirstBreak * twin->first_break_load());
+  ASSERT_TRUE(twin->apply(batch(1, {kBlock})).applied());
+  const auto hash = twin->state_hash();
+  for (const double p : {1.0001 * twin->max_p(), 4e6, 1e308}) {
+    const Outcome o = twin->apply(batch(2, {kBlock, {p, 0.1, 0.0, 1}}));
+    EXPECT_EQ(o.verdict, Verdict::invalid) << p;
+    EXPECT_EQ(o.what, "blocks[1].p_max");
+    EXPECT_NE(o.why.find("max_p"), std::string::npos) << o.why;
+    EXPECT_EQ(twin->state_hash(), hash);
+  }
+
+  // A configured bound replaces the default.
+  auto config = b1_config("every_batches = 0", {{"# max_p = 40000.0", "max_p = 5000.0"}});
+  ASSERT_EQ(config.limits.max_p, 5000.0);
+  auto bounded = make_twin(b1_model(config));
+  EXPECT_EQ(bounded->max_p(), 5000.0);
+  const Outcome o = bounded->apply(batch(1, {{5000.5, 0.1, 0.0, 1}}));
+  EXPECT_EQ(o.verdict, Verdict::invalid);
+  EXPECT_NE(o.why.find("max_p = 5000 N"), std::string::npos) << o.why;
+  EXPECT_TRUE(bounded->apply(batch(1, {{5000.0, 0.1, 0.0, 1}})).applied());
+}
+
+TEST_F(TwinTest, ANewSourceBeyondMaxSourcesIsRefusedAndTheKnownOnesGoOn) {
+  auto config = b1_config("every_batches = 0", {{"max_sources = 16", "max_sources = 2"}});
+  auto twin = make_twin(b1_model(config));
+  const LoadBlock small{4000.0, 0.1, 0.0, 10};
+  ASSERT_TRUE(twin->apply({"b1-ct", "a", 1, {small}}).applied());
+  ASSERT_TRUE(twin->apply({"b1-ct", "b", 1, {small}}).applied());
+  const auto hash = twin->state_hash();
+  const Outcome o = twin->apply({"b1-ct", "c", 1, {small}});
+  EXPECT_EQ(o.verdict, Verdict::limit);
+  EXPECT_EQ(o.what, "source_id");
+  EXPECT_NE(o.why.find("max_sources"), std::string::npos) << o.why;
+  EXPECT_EQ(twin->state_hash(), hash);
+  EXPECT_EQ(twin->applied().size(), 2u);
+  EXPECT_TRUE(twin->apply({"b1-ct", "a", 2, {small}}).applied());
+  // The default is 16: 3,000 new ids could not grow STATE and the checkpoint without bound.
+  EXPECT_EQ(b1_config().limits.max_sources, 16);
+}
+
 TEST_F(TwinTest, FailedDetailRejectsNewBatches) {
   // A tiny critical crack length: the first crack growth ends the life.
   auto model = b1_model(b1_config(

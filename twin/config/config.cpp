@@ -2,18 +2,24 @@
 // twin/config/config_toml.h; the sections of the schema are read in config_parse.cpp.
 #include "twin/config/config.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <system_error>
 
+#include "messages/batch.h"
 #include "twin/config/config_toml.h"
 
 namespace peritwin::twin {
@@ -24,6 +30,14 @@ std::string format_number(double value) {
   std::array<char, 64> buffer{};
   const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
   return ec == std::errc{} ? std::string(buffer.data(), end) : std::string("?");
+}
+
+std::string format_count(double value) {
+  if (!std::isfinite(value)) return "unbounded";
+  if (value < 1e6) return std::to_string(static_cast<long long>(std::llround(value)));
+  std::array<char, 32> buffer{};
+  std::snprintf(buffer.data(), buffer.size(), "%.3g", value);
+  return buffer.data();
 }
 
 std::string_view type_name(toml::node_type type) {
@@ -343,7 +357,63 @@ std::optional<ConfigError> unsafe_non_ascii(std::string_view t, const std::strin
 
 }  // namespace
 
-ConfigResult parse_config(std::string_view text, std::string_view file_name) {
+
+bool is_valid_source_id(std::string_view id) {
+  // messages/batch.cpp's rule for load_batch_t.source_id (check_batch).
+  if (id.empty() || id.size() > messages::kMaxSourceIdLength) return false;
+  return std::all_of(id.begin(), id.end(), [](char c) { return c >= 0x21 && c <= 0x7e; });
+}
+
+std::uint64_t default_memory_limit() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page_size = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_size <= 0) return std::uint64_t{8} << 30U;
+  const auto physical = static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size);
+  return physical / 4 * 3;
+}
+
+std::optional<std::uint64_t> parse_byte_size(std::string_view text) {
+  std::uint64_t value = 0;
+  const char* begin = text.data();
+  const char* end = text.data() + text.size();
+  const auto [stop, ec] = std::from_chars(begin, end, value);
+  if (ec != std::errc{} || stop == begin) return std::nullopt;
+  std::string suffix(stop, end);
+  std::transform(suffix.begin(), suffix.end(), suffix.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  unsigned shift = 0;
+  if (!suffix.empty() && suffix != "B") {
+    const std::string_view units = "KMGT";
+    const auto unit = units.find(suffix.front());
+    const std::string_view rest = std::string_view(suffix).substr(1);
+    if (unit == std::string_view::npos || !(rest.empty() || rest == "B" || rest == "IB")) {
+      return std::nullopt;
+    }
+    shift = 10U * static_cast<unsigned>(unit + 1);
+  }
+  if (value == 0 || value > (std::numeric_limits<std::uint64_t>::max() >> shift)) {
+    return std::nullopt;
+  }
+  return value << shift;
+}
+
+std::string format_bytes(double bytes) {
+  if (!std::isfinite(bytes)) return "an unbounded amount";
+  if (bytes < 1024.0) return std::to_string(static_cast<long long>(std::llround(bytes))) + " B";
+  const char* units[] = {"KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  double v = bytes / 1024.0;
+  std::size_t u = 0;
+  while (v >= 1024.0 && u + 1 < std::size(units)) {
+    v /= 1024.0;
+    ++u;
+  }
+  std::array<char, 48> buffer{};
+  std::snprintf(buffer.data(), buffer.size(), "%.3g %s", v, units[u]);
+  return buffer.data();
+}
+
+ConfigResult parse_config(std::string_view text, std::string_view file_name,
+                          const ConfigLimits& limits) {
   ConfigResult result;
   const std::string file(file_name);
   if (auto e = unsafe_non_ascii(text, file)) {
@@ -353,6 +423,9 @@ ConfigResult parse_config(std::string_view text, std::string_view file_name) {
   try {
     const toml::table root = toml::parse(text, file_name);
     config_internal::Context ctx{file, {}};
+    ctx.default_memory_limit = limits.max_memory_bytes == 0;
+    ctx.max_memory_bytes =
+        ctx.default_memory_limit ? default_memory_limit() : limits.max_memory_bytes;
     TwinConfig config = config_internal::parse_document(ctx, root);
     std::stable_sort(ctx.errors.begin(), ctx.errors.end(), [](const auto& a, const auto& b) {
       return a.line != b.line ? a.line < b.line : a.column < b.column;
@@ -373,7 +446,7 @@ ConfigResult parse_config(std::string_view text, std::string_view file_name) {
   return result;
 }
 
-ConfigResult load_config(const std::string& file) {
+ConfigResult load_config(const std::string& file, const ConfigLimits& limits) {
   const auto failure = [&file](std::string reason) {
     ConfigResult result;
     result.errors.push_back({file, 0, 0, "", "cannot read the file: " + reason});
@@ -388,7 +461,7 @@ ConfigResult load_config(const std::string& file) {
     std::ostringstream text;
     text << in.rdbuf();
     if (in.bad()) return failure("read error");
-    return parse_config(text.str(), file);
+    return parse_config(text.str(), file, limits);
   } catch (...) {
     return failure("unexpected error");
   }

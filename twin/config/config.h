@@ -12,8 +12,9 @@
 //                        outline R [{x_min, y_min, x_max, y_max}, ...] (m, at least one),
 //                        holes [] [{centre, radius}], notches [] [{from, to}] (segments, m),
 //                        rigid_regions [] [region, ...], no_fail_zones [] [region, ...]
-//   [detail.grid] R      dx R (m, > 0, <= the smaller side of the body's bounding box),
-//                        horizon_ratio 3.015 (δ/Δx, >= 1)
+//   [detail.grid] R      dx R (m, > 0, <= the smaller side of the body's bounding box; see
+//                        "Resource bounds" below), horizon_ratio 3.015 (δ/Δx, 1 <= ratio <= 10:
+//                        peridynamic fatigue calibrations use 3-4; a family holds ~π·ratio² bonds)
 //   [detail.model]       kind "state_based" | "bond_based", kernel "constant" | "conical" |
 //                        "gaussian" (state-based: constant only), plane "plane_stress" |
 //                        "plane_strain", surface_correction true
@@ -62,6 +63,30 @@
 //                        only with "compact_tension"
 //   [detail.checkpoint]  every_batches 100 (>= 0, 0 = off), every_seconds 300 (s, >= 0, 0 = off;
 //                        wall clock: it decides when a checkpoint is written, never a number)
+//   [detail.limits]      max_p (N, > 0; default: 10× the load at which the virgin detail's peak
+//                        bond stretch reaches the critical stretch, see twin/model; derived by the
+//                        daemon when absent), max_batch_seconds 60 (s, > 0: STATUS health turns
+//                        "degraded" while one batch takes longer), max_sources 16 (integer >= 1:
+//                        distinct load sources per detail; a batch from a new source beyond it is
+//                        rejected), max_rejects_per_second 10 (> 0: health turns "degraded" while
+//                        the rejects, duplicates not counted, exceed this rate averaged over the
+//                        last 10 s)
+//
+//   [auth]               top level, at most once, optional (without it the daemon runs
+//                        unauthenticated): key_file R (path of the key file, resolved against the
+//                        config file's directory when relative; read by the messages' auth
+//                        module, not here), sources [] (allowed source ids; empty = every source
+//                        that has a key in the key file), daemon_key "peritwin" (the key id the
+//                        daemon signs its STATE and REJECT messages with). Source ids and key ids
+//                        are 1 to 64 printable ASCII characters without blanks (the rule of
+//                        messages/batch.h, kMaxSourceIdLength); a source may be listed once.
+//
+// Resource bounds: after parsing, estimate_resources (twin/config/resources.h) estimates each
+// detail's nodes, bonds and memory from its area, dx and horizon_ratio, without discretizing
+// anything (docs/limits.md). A config whose details, each or all together, exceed
+// ConfigLimits::max_memory_bytes (the daemon's --max-memory, default 75 % of physical memory), or
+// one of whose details would overflow the solver's 32-bit indices, is refused with the error at
+// detail[i].grid.dx (the largest detail's for the total).
 //
 // Integers are accepted where a real number is expected, not the other way round; every real
 // must be finite. Unknown keys, wrong types, missing required keys and impossible values are
@@ -167,6 +192,15 @@ struct CheckpointConfig {
   double every_seconds = 300.0;      ///< wall-clock period, 0 = off
 };
 
+/// [detail.limits]: the bounds the daemon enforces per detail (see the schema above).
+struct LimitsConfig {
+  /// Largest accepted P_max (N); absent: the daemon derives it from the model (twin/model).
+  std::optional<double> max_p;
+  double max_batch_seconds = 60.0;       ///< s; health "degraded" while one batch takes longer
+  std::int64_t max_sources = 16;         ///< distinct load sources of the detail
+  double max_rejects_per_second = 10.0;  ///< over the last 10 s, duplicates not counted
+};
+
 struct DetailConfig {
   std::string id;     ///< as written, e.g. "b1-ct"
   std::string token;  ///< channel token: upper case, '-' -> '_', e.g. "B1_CT"
@@ -185,14 +219,52 @@ struct DetailConfig {
   LifeConfig life;
   StressIntensityConfig stress_intensity;
   CheckpointConfig checkpoint;
+  LimitsConfig limits;
   SourceRef where;  ///< the [[detail]] table
 
   [[nodiscard]] double horizon() const { return horizon_ratio * dx; }
 };
 
+/// [auth]: authenticated load and state messages (the key file is read by messages' auth module).
+struct AuthConfig {
+  /// As resolved: a relative key_file is joined to the config file's directory (made absolute).
+  std::string key_file;
+  /// Allowed source ids, each valid by is_valid_source_id; empty = every source with a key.
+  std::vector<std::string> sources;
+  /// Key id of the daemon's own STATE and REJECT signatures.
+  std::string daemon_key = "peritwin";
+  SourceRef where;  ///< the [auth] table
+};
+
 struct TwinConfig {
   std::vector<DetailConfig> details;
+  std::optional<AuthConfig> auth;  ///< absent: unauthenticated
 };
+
+/// A source id (or key id): 1 to kMaxSourceIdLength (64) printable ASCII characters without
+/// blanks — the rule check_batch applies to load_batch_t.source_id (messages/batch.cpp, where it is
+/// not exported; keep the two in step).
+[[nodiscard]] bool is_valid_source_id(std::string_view id);
+
+/// What parse_config and load_config refuse besides schema errors.
+struct ConfigLimits {
+  /// The most memory all details together may need by estimate_resources (bytes); 0 = the
+  /// default, default_memory_limit(); UINT64_MAX = no memory bound (a tool that builds no model,
+  /// e.g. peritwin-replay over LCM; the 32-bit index bound still applies).
+  std::uint64_t max_memory_bytes = 0;
+};
+
+/// 75 % of the machine's physical memory (sysconf(_SC_PHYS_PAGES) · sysconf(_SC_PAGE_SIZE)); 8 GiB
+/// when sysconf cannot tell.
+[[nodiscard]] std::uint64_t default_memory_limit();
+
+/// A byte count as given on a command line: digits with an optional suffix K, M, G or T (powers of
+/// 1024, upper or lower case, an optional trailing "B" or "iB"), e.g. "8G", "512M", "1048576";
+/// nothing unless it is such a number > 0 that fits in 64 bits.
+[[nodiscard]] std::optional<std::uint64_t> parse_byte_size(std::string_view text);
+
+/// A byte count for people, 3 digits in binary units: "512 B", "3.4 KiB", "1.5 GiB", "2.2 PiB".
+[[nodiscard]] std::string format_bytes(double bytes);
 
 /// Either a config (errors empty) or every error found (config empty).
 struct ConfigResult {
@@ -203,10 +275,12 @@ struct ConfigResult {
   [[nodiscard]] std::string error_text() const;
 };
 
-/// Reads and parses a file; errors name it as given.
-[[nodiscard]] ConfigResult load_config(const std::string& file);
-/// Parses TOML text; errors name `file_name` (need not exist).
-[[nodiscard]] ConfigResult parse_config(std::string_view text, std::string_view file_name);
+/// Reads and parses a file; errors name it as given. Refuses what `limits` bounds.
+[[nodiscard]] ConfigResult load_config(const std::string& file, const ConfigLimits& limits = {});
+/// Parses TOML text; errors name `file_name` (need not exist; [auth] key_file is resolved against
+/// its directory). Refuses what `limits` bounds.
+[[nodiscard]] ConfigResult parse_config(std::string_view text, std::string_view file_name,
+                                        const ConfigLimits& limits = {});
 
 /// The supports and load terms of a detail bound to the nodes of its discretization. A point
 /// selects its nearest node, a region every node inside it; a selection without nodes is an error

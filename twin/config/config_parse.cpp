@@ -2,14 +2,21 @@
 // with the TableReader of twin/config/config_toml.h.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
+#include <system_error>
 
+#include "messages/batch.h"
 #include "messages/channels.h"
 #include "twin/config/config_toml.h"
+#include "twin/config/resources.h"
 
 namespace peritwin::twin::config_internal {
 
 namespace {
+
+/// horizon_ratio's upper bound (config.h): fatigue calibrations use 3 to 4.
+constexpr double kMaxHorizonRatio = 10.0;
 
 enum class Bound { any, positive, non_negative };
 
@@ -173,9 +180,15 @@ void read_grid(Context& ctx, const toml::table& t, const std::string& path, cons
     }
   }
   d.horizon_ratio = r.number("horizon_ratio", 3.015);
-  r.check("horizon_ratio", d.horizon_ratio >= 1,
-          "must be >= 1: the horizon δ = horizon_ratio·dx may not be smaller than dx (got " +
-              format_number(d.horizon_ratio) + ")");
+  if (r.check("horizon_ratio", d.horizon_ratio >= 1,
+              "must be >= 1: the horizon δ = horizon_ratio·dx may not be smaller than dx (got " +
+                  format_number(d.horizon_ratio) + ")")) {
+    r.check("horizon_ratio", d.horizon_ratio <= kMaxHorizonRatio,
+            "must be <= " + format_number(kMaxHorizonRatio) +
+                ": peridynamic fatigue calibrations use 3 to 4 (000: δ = 3.015Δx), and a node's "
+                "family grows as π·horizon_ratio² bonds (314 at 10), the factor with it (got " +
+                format_number(d.horizon_ratio) + ")");
+  }
   r.finish();
 }
 
@@ -225,10 +238,13 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, d
                                          {"kinetic", FatigueLaw::kinetic}},
                                         std::nullopt);
   // Default φ0: the damage along a straight split at this horizon (000 Sec. 4.4's 0.398 at
-  // δ = 3.015Δx); a bad horizon_ratio has its own error.
-  const double default_phi0 = horizon_ratio >= 1.0 && std::isfinite(horizon_ratio)
-                                  ? phase_switch_damage_for_horizon(horizon_ratio)
-                                  : fatigue::kPhaseSwitchDamage2D;
+  // δ = 3.015Δx). It discretizes a (2·ceil(ratio) + 4)² square with that horizon, so it is only
+  // computed when phi0 is not given and the ratio is within its bounds (a bad horizon_ratio has
+  // its own error): at horizon_ratio = 1000 it took 3.4 GB and 43 s.
+  const bool default_computable =
+      !r.has("phi0") && horizon_ratio >= 1.0 && horizon_ratio <= kMaxHorizonRatio;
+  const double default_phi0 = default_computable ? phase_switch_damage_for_horizon(horizon_ratio)
+                                                 : fatigue::kPhaseSwitchDamage2D;
   f.phase_switch_damage = r.number("phi0", default_phi0);
   r.check("phi0", f.phase_switch_damage > 0 && f.phase_switch_damage < 1,
           "must lie in (0, 1) (got " + format_number(f.phase_switch_damage) + ")");
@@ -451,13 +467,80 @@ void read_checkpoint(Context& ctx, const toml::table& t, const std::string& path
   r.finish();
 }
 
+void read_limits(Context& ctx, const toml::table& t, const std::string& path, LimitsConfig& l) {
+  TableReader r(ctx, t, path);
+  if (r.has("max_p")) l.max_p = req(r, "max_p", Bound::positive);
+  r.node("max_p", false);
+  l.max_batch_seconds = opt(r, "max_batch_seconds", l.max_batch_seconds, Bound::positive);
+  l.max_sources = r.integer("max_sources", l.max_sources);
+  r.check("max_sources", l.max_sources >= 1,
+          "must be >= 1 (got " + std::to_string(l.max_sources) + ")");
+  l.max_rejects_per_second =
+      opt(r, "max_rejects_per_second", l.max_rejects_per_second, Bound::positive);
+  r.finish();
+}
+
+/// `file` as written in the config, or joined to the config file's directory when relative; made
+/// absolute (against the working directory) so that it names the same file from anywhere.
+std::string resolve_path(const std::string& file, const std::string& config_file) {
+  namespace fs = std::filesystem;
+  fs::path p(file);
+  if (p.is_relative()) p = fs::path(config_file).parent_path() / p;
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p, ec);
+  return (ec ? p : absolute).lexically_normal().string();
+}
+
+/// Reads [auth]; key_file relative to the directory of the config file (ctx.file).
+AuthConfig read_auth(Context& ctx, const toml::table& t, const std::string& path) {
+  AuthConfig a;
+  a.where = ctx.ref(t, path);
+  TableReader r(ctx, t, path);
+  if (const auto file = r.string("key_file")) {
+    if (r.check("key_file", !file->empty(), "must not be empty") &&
+        r.check("key_file", file->find('\0') == std::string::npos,
+                "must not contain a NUL character")) {
+      a.key_file = resolve_path(*file, ctx.file);
+    }
+  }
+  const std::string id_rule = " is not a valid id: 1 to " +
+                              std::to_string(messages::kMaxSourceIdLength) +
+                              " printable ASCII characters without blanks";
+  if (const toml::array* sources = r.array("sources", false)) {
+    for (std::size_t i = 0; i < sources->size(); ++i) {
+      const toml::node& n = (*sources)[i];
+      const std::string element = r.path_of("sources") + "[" + std::to_string(i) + "]";
+      const auto* s = n.as_string();
+      if (s == nullptr) {
+        ctx.error(n.source(), element,
+                  "expected a string, got " + std::string(type_name(n.type())));
+        continue;
+      }
+      const std::string& id = s->get();
+      if (!is_valid_source_id(id)) {
+        ctx.error(n.source(), element, "\"" + id + "\"" + id_rule);
+      } else if (std::find(a.sources.begin(), a.sources.end(), id) != a.sources.end()) {
+        ctx.error(n.source(), element, "\"" + id + "\" is listed twice");
+      } else {
+        a.sources.push_back(id);
+      }
+    }
+  }
+  a.daemon_key = r.string("daemon_key", a.daemon_key);
+  r.check("daemon_key", is_valid_source_id(a.daemon_key), "\"" + a.daemon_key + "\"" + id_rule);
+  r.finish();
+  return a;
+}
+
 /// Source of `key` inside table `t` (the table's own source when absent).
 const toml::source_region& source_of(const toml::table& t, std::string_view key) {
   const toml::node* n = t.get(key);
   return n != nullptr ? n->source() : t.source();
 }
 
-DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& path) {
+/// Reads one [[detail]]; `estimate` gets its resources when its geometry and grid are valid.
+DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& path,
+                         std::optional<ResourceEstimate>* estimate) {
   DetailConfig d;
   d.where = ctx.ref(t, path);
   TableReader r(ctx, t, path);
@@ -474,8 +557,11 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     outline_ok = read_geometry(ctx, *g, r.path_of("geometry"), d.geometry);
   }
   const Rectangle box = d.geometry.bounding_box();  // used only when the outline is valid
+  bool sized = false;  // geometry and grid valid: the resources can be estimated
   if (const auto* g = r.table("grid", true)) {
+    const std::size_t before_grid = ctx.errors.size();
     read_grid(ctx, *g, r.path_of("grid"), outline_ok ? &box : nullptr, d);
+    sized = outline_ok && ctx.errors.size() == before_grid && d.geometry.validate().ok();
   }
   const std::size_t errors_before = ctx.errors.size();
   if (const auto* m = r.table("model", false)) read_model(ctx, *m, r.path_of("model"), d.model);
@@ -510,8 +596,74 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
   if (const auto* c = r.table("checkpoint", false)) {
     read_checkpoint(ctx, *c, r.path_of("checkpoint"), d.checkpoint);
   }
+  if (const auto* l = r.table("limits", false)) read_limits(ctx, *l, r.path_of("limits"), d.limits);
   r.finish();
+  if (sized) *estimate = estimate_resources(d);
   return d;
+}
+
+/// A detail whose resources were estimated, and where its [detail.grid] dx was written.
+struct Sized {
+  const toml::table* detail = nullptr;
+  std::string path;  ///< "detail[i]"
+  ResourceEstimate estimate;
+};
+
+/// "3720 nodes, 49875 bonds, 4 fatigue engines with a Cholesky factor of 6.6e+06 entries each".
+std::string describe(const ResourceEstimate& e) {
+  return format_count(e.nodes) + " nodes, " + format_count(e.bonds) + " bonds, " +
+         std::to_string(e.engines) + (e.engines == 1 ? " fatigue engine" : " fatigue engines") +
+         " with a Cholesky factor of " + format_count(e.factor_nonzeros) + " entries" +
+         (e.engines == 1 ? "" : " each");
+}
+
+/// The error at detail[i].grid.dx.
+void refuse(Context& ctx, const Sized& s, std::string reason) {
+  const toml::table* grid = s.detail->get_as<toml::table>("grid");
+  const toml::source_region& where = grid != nullptr ? source_of(*grid, "dx") : s.detail->source();
+  ctx.error(where, s.path + ".grid.dx", std::move(reason));
+}
+
+/// The resource bounds (config.h, "Resource bounds"): per detail the memory limit, else the
+/// solver's 32-bit indices; then, if no detail was refused, all details together (named at the
+/// largest).
+void check_resources(Context& ctx, const std::vector<Sized>& sized) {
+  const std::string remedy =
+      ": use a larger dx (nodes grow as 1/dx², the factor as log(1/dx)/dx²) or a smaller "
+      "horizon_ratio";
+  const double limit = static_cast<double>(ctx.max_memory_bytes);
+  const std::string limit_text =
+      format_bytes(limit) + (ctx.default_memory_limit
+                                 ? " (the default, 75 % of physical memory; --max-memory sets it)"
+                                 : " (--max-memory)");
+  bool refused = false;
+  double total = 0.0;
+  const Sized* largest = nullptr;
+  for (const Sized& s : sized) {
+    const ResourceEstimate& e = s.estimate;
+    total += e.bytes;
+    if (largest == nullptr || e.bytes > largest->estimate.bytes) largest = &s;
+    const double index =
+        std::max({2.0 * e.bonds, e.unknowns, e.matrix_nonzeros, e.factor_nonzeros});
+    if (ctx.max_memory_bytes > 0 && e.bytes > limit) {
+      refuse(ctx, s,
+             "the detail would need an estimated " + format_bytes(e.bytes) + " (" + describe(e) +
+                 "), more than the memory limit " + limit_text + remedy + ", or raise the limit");
+      refused = true;
+    } else if (index > kMaxSolverIndex) {
+      refuse(ctx, s,
+             "the detail is too large for the solver's 32-bit indices (at most " +
+                 format_count(kMaxSolverIndex) + " entries): estimated " + describe(e) + remedy);
+      refused = true;
+    }
+  }
+  if (!refused && largest != nullptr && ctx.max_memory_bytes > 0 && total > limit) {
+    refuse(ctx, *largest,
+           "the " + std::to_string(sized.size()) + " details would need an estimated " +
+               format_bytes(total) + " together, more than the memory limit " + limit_text +
+               "; this, the largest, needs " + format_bytes(largest->estimate.bytes) + " (" +
+               describe(largest->estimate) + ")" + remedy + ", or raise the limit");
+  }
 }
 
 }  // namespace
@@ -521,10 +673,13 @@ TwinConfig parse_document(Context& ctx, const toml::table& root) {
   TableReader r(ctx, root, "");
   std::map<std::string, std::size_t> tokens;       // channel token -> first detail
   std::map<std::string, std::size_t> directories;  // output directory -> first detail
+  std::vector<Sized> sized;                        // details whose resources were estimated
   each_table(r, "detail", true, "an array of tables ([[detail]])",
              [&](const toml::table& t, const std::string& path) {
                const std::size_t i = config.details.size();
-               DetailConfig d = read_detail(ctx, t, path);
+               std::optional<ResourceEstimate> estimate;
+               DetailConfig d = read_detail(ctx, t, path, &estimate);
+               if (estimate) sized.push_back({&t, path, *estimate});
                if (!d.token.empty()) {
                  const auto [it, fresh] = tokens.emplace(d.token, i);
                  if (!fresh) {
@@ -546,7 +701,9 @@ TwinConfig parse_document(Context& ctx, const toml::table& root) {
                }
                config.details.push_back(std::move(d));
              });
+  if (const auto* a = r.table("auth", false)) config.auth = read_auth(ctx, *a, "auth");
   r.finish();
+  check_resources(ctx, sized);
   return config;
 }
 

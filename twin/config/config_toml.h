@@ -20,10 +20,15 @@ namespace peritwin::twin::config_internal {
 
 /// Shortest round-trip decimal form of a double ("0.001", "6.8e+10").
 std::string format_number(double value);
+/// A count for people: exact below 10^6 ("49902"), else 3 digits ("1.41e+11").
+std::string format_count(double value);
 
 struct Context {
   std::string file;
   std::vector<ConfigError> errors;
+  /// The most memory all details together may need (bytes, ConfigLimits resolved); 0 = unbounded.
+  std::uint64_t max_memory_bytes = 0;
+  bool default_memory_limit = false;  ///< max_memory_bytes is default_memory_limit()
   void error(const toml::source_region& where, std::string path, std::string reason);
   [[nodiscard]] SourceRef ref(const toml::node& node, std::string path) const;
 };

@@ -1,5 +1,9 @@
 #include "twin/model/twin.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
 #include <string_view>
 
 #include "solver/core/fnv1a.h"
@@ -19,7 +23,75 @@ Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailModel> 
         ": the virgin model cannot be solved: " + twin->engine_->failure_reason());
   }
   twin->refresh();
+  twin->first_break_load_ = ::peritwin::twin::first_break_load(*twin->model_, *twin->engine_);
+  if (const auto& configured = twin->model_->config().limits.max_p) {
+    twin->max_p_ = *configured;
+    twin->max_p_configured_ = true;
+  } else {
+    twin->max_p_ = kDefaultMaxPOverFirstBreak * twin->first_break_load_;  // +inf without s_c
+  }
   return twin;
+}
+
+double first_break_load(const DetailModel& model, const FatigueEngine& engine) {
+  const DetailConfig& config = model.config();
+  const FatigueSettings& f = config.fatigue;
+  double s_ref = 0.0;
+  if (f.law == FatigueLaw::bilinear) {
+    s_ref = f.bilinear.sc;  // 003 Eq. (44)
+  } else if (f.critical_stretch > 0.0) {
+    s_ref = f.critical_stretch;
+  } else if (config.material.fracture_toughness > 0.0) {
+    s_ref = critical_stretch(config.material, model.disc().horizon);  // 000 Eq. (8)
+  }
+  if (!(s_ref > 0.0)) return std::numeric_limits<double>::infinity();
+  // Stretch of bond b under P at angle α: P·(s_b + cos α·c_b + sin α·n_b) from the basis
+  // solutions; over α its tensile peak is P·(s_b + hypot(c_b, n_b)) (static failure is tensile,
+  // s >= s_c).
+  const StaticSolver& solver = engine.solver();
+  const auto& s = solver.basis_stretch(basis_constant);
+  const auto& c = solver.basis_stretch(basis_cos);
+  const auto& n = solver.basis_stretch(basis_sin);
+  const auto& intact = solver.intact();
+  auto at = [](const std::vector<double>& v, std::size_t b) { return b < v.size() ? v[b] : 0.0; };
+  double peak = 0.0;
+  for (std::size_t b = 0; b < intact.size(); ++b) {
+    if (intact[b] == 0) continue;
+    peak = std::max(peak, at(s, b) + std::hypot(at(c, b), at(n, b)));
+  }
+  return peak > 0.0 ? s_ref / peak : std::numeric_limits<double>::infinity();
+}
+
+namespace {
+
+std::string format_load(double p) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", p);
+  return text;
+}
+
+}  // namespace
+
+Outcome Twin::check_limits(const Batch& batch) const {
+  for (std::size_t i = 0; i < batch.blocks.size(); ++i) {
+    const double p = batch.blocks[i].p_max;
+    if (p > max_p_) {
+      return {Verdict::invalid, "blocks[" + std::to_string(i) + "].p_max",
+              "p_max = " + format_load(p) + " N is above the detail's bound max_p = " +
+                  format_load(max_p_) + " N ([detail.limits] max_p" +
+                  (max_p_configured_ ? ")"
+                                     : "; by default 10x the load at which the virgin detail's "
+                                       "peak bond stretch reaches the critical stretch)")};
+    }
+  }
+  const auto max_sources = static_cast<std::size_t>(model_->config().limits.max_sources);
+  if (!applied_.contains(batch.source_id) && applied_.size() >= max_sources) {
+    return {Verdict::limit, "source_id",
+            "the detail already has " + std::to_string(applied_.size()) +
+                " load sources, the most [detail.limits] max_sources allows; source \"" +
+                batch.source_id + "\" is new"};
+  }
+  return {};
 }
 
 std::int64_t Twin::applied_seq(const std::string& source) const {
@@ -36,6 +108,7 @@ void Twin::refresh() {
 
 Outcome Twin::apply(const Batch& batch) {
   Outcome o = check_batch(batch, detail_id());
+  if (o.applied()) o = check_limits(batch);
   if (!o.applied()) {
     ++counters_.rejected;
     return o;

@@ -45,6 +45,16 @@ using messages::Verdict;
 
 enum class LifeMode { synchronous, external };
 
+/// The load P (N) at which the virgin detail's peak bond stretch reaches the critical stretch:
+/// s_ref / max over intact bonds of (s_b + hypot(c_b, n_b)), the basis stretches per newton
+/// (the tensile peak over the load angle α). s_ref is the bilinear law's sc (003 Eq. 44), the
+/// configured critical stretch, or 000 Eq. (8) from K_c; +Inf when none is known.
+double first_break_load(const DetailModel& model, const FatigueEngine& engine);
+
+/// [detail.limits] max_p defaults to this many times first_break_load(): a batch above it is far
+/// beyond any overload the detail survives, more likely a units slip (kN for N) than a load.
+inline constexpr double kDefaultMaxPOverFirstBreak = 10.0;
+
 /// Counters since this Twin object was created (not part of the state, not checkpointed).
 struct TwinCounters {
   std::int64_t applied = 0;
@@ -74,7 +84,15 @@ class Twin {
   static Expected<std::unique_ptr<Twin>> create(std::shared_ptr<const DetailModel> model,
                                                 Options options);
 
+  /// Applies a batch, or says why not: check_batch, then check_limits, then exactly-once.
   Outcome apply(const Batch& batch);
+  /// The detail's bounds ([detail.limits]): every p_max <= max_p() (INVALID), at most
+  /// max_sources distinct sources (LIMIT for a new one beyond it).
+  [[nodiscard]] Outcome check_limits(const Batch& batch) const;
+  /// The peak-load bound in force (N): [detail.limits] max_p, or kDefaultMaxPOverFirstBreak x
+  /// first_break_load(); +Inf when neither is known.
+  [[nodiscard]] double max_p() const { return max_p_; }
+  [[nodiscard]] double first_break_load() const { return first_break_load_; }
 
   [[nodiscard]] const DetailModel& model() const { return *model_; }
   [[nodiscard]] const std::shared_ptr<const DetailModel>& model_ptr() const { return model_; }
@@ -121,8 +139,12 @@ class Twin {
   /// (the model signature changed with it). An older checkpoint is refused with both versions.
   static constexpr std::int64_t kCheckpointFormat = 3;
   [[nodiscard]] CheckpointData to_checkpoint() const;
-  /// Restores a checkpoint of the same model (signature checked). On failure the twin must be
-  /// discarded.
+  /// Whether `data` is a checkpoint this twin can restore: format version, detail id, model
+  /// signature and (when given) the state_seq its file name promises. Reads no state.
+  [[nodiscard]] Status check_checkpoint(const CheckpointData& data,
+                                        std::optional<std::int64_t> state_seq) const;
+  /// Restores a checkpoint of the same model (check_checkpoint first). On failure the twin must
+  /// be discarded.
   Status restore(const CheckpointData& data);
 
   /// Whether a field of the twin's table enters state_hash().
@@ -163,6 +185,9 @@ class Twin {
   LifeEstimate life_;
   RollingSpectrum spectrum_;
   TwinCounters counters_;
+  double first_break_load_ = 0.0;
+  double max_p_ = 0.0;
+  bool max_p_configured_ = false;
 };
 
 }  // namespace peritwin::twin

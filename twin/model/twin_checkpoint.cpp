@@ -210,7 +210,8 @@ CheckpointData Twin::to_checkpoint() const {
   return d;
 }
 
-Status Twin::restore(const CheckpointData& d) {
+Status Twin::check_checkpoint(const CheckpointData& d,
+                              std::optional<std::int64_t> state_seq) const {
   auto fail = [&](const std::string& why) -> Status {
     return peritwin::failure("checkpoint of detail " + detail_id() + ": " + why);
   };
@@ -220,23 +221,40 @@ Status Twin::restore(const CheckpointData& d) {
                 ", the version this build reads; resume it with the build that wrote it, or move "
                 "it away to start afresh");
   }
+  const auto detail = d.strings.find("detail_id");
+  if (detail == d.strings.end()) return fail("missing entries: detail_id");
+  if (detail->second != detail_id()) return fail("it belongs to detail \"" + detail->second + "\"");
+  const auto signature = d.i64_scalars.find("signature");
+  if (signature == d.i64_scalars.end()) return fail("missing entries: signature");
+  if (std::bit_cast<std::uint64_t>(signature->second) != model_->signature()) {
+    return fail(
+        "it was written for a different model (the detail's geometry, grid, material, "
+        "boundary or fatigue parameters changed since); move it away to start afresh");
+  }
+  if (state_seq) {
+    const auto stored = d.i64_scalars.find("state_seq");
+    if (stored == d.i64_scalars.end()) return fail("missing entries: state_seq");
+    if (stored->second != *state_seq) {
+      return fail("it holds state_seq " + std::to_string(stored->second) +
+                  " but its file name says " + std::to_string(*state_seq) +
+                  " (renamed or copied from elsewhere?)");
+    }
+  }
+  return {};
+}
+
+Status Twin::restore(const CheckpointData& d) {
+  auto fail = [&](const std::string& why) -> Status {
+    return peritwin::failure("checkpoint of detail " + detail_id() + ": " + why);
+  };
+  if (const Status matches = check_checkpoint(d, std::nullopt); !matches) return matches;
   CheckpointReader reader{d, {}, {}};
-  std::string detail;
-  std::int64_t signature = 0;
-  reader.get("detail_id", detail);
-  reader.get("signature", signature);
   EngineState engine;
   for_each_field(engine, [&](std::string_view key, auto& field) { reader.get(key, field); });
   for_each_own_field(*this,
                      [&](std::string_view key, auto& field, Hashed) { reader.get(key, field); });
   if (!reader.missing.empty()) return fail("missing entries: " + reader.missing);
   if (!reader.bad.empty()) return fail(reader.bad);
-  if (detail != detail_id()) return fail("it belongs to detail \"" + detail + "\"");
-  if (std::bit_cast<std::uint64_t>(signature) != model_->signature()) {
-    return fail(
-        "it was written for a different model (the detail's geometry, grid, material, "
-        "boundary or fatigue parameters changed since); move it away to start afresh");
-  }
   for (const auto& e : engine.events) {
     if (e.bond >= model_->disc().num_bonds()) return fail("event bond out of range");
   }

@@ -1,10 +1,17 @@
 #include "twin/service/daemon.h"
 
+#include <poll.h>
 #include <spdlog/spdlog.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <condition_variable>
 #include <deque>
+#include <map>
+#include <thread>
 
 #include "messages/channels.h"
 #include "solver/core/blas_kernel.h"
@@ -15,12 +22,57 @@ namespace peritwin::twin {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
+
 constexpr std::string_view kCheckpointPrefix = "checkpoint";
 constexpr std::size_t kCheckpointsKept = 3;
+/// A worker with nothing to apply still wakes this often for its chores (finished life
+/// estimates, timed checkpoints, the reject log summary).
+constexpr auto kWorkerChoresPeriod = std::chrono::milliseconds(100);
+/// Window of STATUS reject_rate and of the reject log summary.
+constexpr double kRejectRateWindowS = 10.0;
+constexpr double kRejectLogPeriodS = 1.0;
 
-double seconds(std::chrono::steady_clock::duration d) {
-  return std::chrono::duration<double>(d).count();
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
+      .count();
 }
+
+template <class Message>
+std::vector<std::uint8_t> encode(const Message& m) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+const char* verdict_name(Verdict v) {
+  switch (v) {
+    case Verdict::applied:
+      return "applied";
+    case Verdict::decode:
+      return "decode";
+    case Verdict::invalid:
+      return "invalid";
+    case Verdict::wrong_detail:
+      return "wrong detail";
+    case Verdict::duplicate:
+      return "duplicate";
+    case Verdict::gap:
+      return "gap";
+    case Verdict::failed:
+      return "failed";
+    case Verdict::internal:
+      return "internal";
+    case Verdict::auth:
+      return "auth";
+    case Verdict::limit:
+      return "limit";
+  }
+  return "?";
+}
+
 }  // namespace
 
 std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
@@ -33,24 +85,96 @@ struct Daemon::Received {
   std::int64_t recv_utime = 0;  ///< LCM's receive time, us since the Unix epoch
 };
 
+struct Daemon::Outgoing {
+  std::string channel;
+  std::vector<std::uint8_t> bytes;
+  std::int64_t recv_utime = 0;  ///< of the batch this STATE answers (latency), 0 otherwise
+};
+
+/// Messages the workers want published, taken out by the LCM thread; an eventfd wakes it.
+class Daemon::Outbox {
+ public:
+  Outbox() : wake_fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {}
+  ~Outbox() {
+    if (wake_fd_ >= 0) ::close(wake_fd_);
+  }
+  Outbox(const Outbox&) = delete;
+  Outbox& operator=(const Outbox&) = delete;
+
+  void push(Outgoing m) {
+    {
+      std::lock_guard lock(mutex_);
+      queue_.push_back(std::move(m));
+    }
+    if (wake_fd_ >= 0) {
+      const std::uint64_t one = 1;
+      [[maybe_unused]] const auto n = ::write(wake_fd_, &one, sizeof one);
+    }
+  }
+  std::deque<Outgoing> take() {
+    if (wake_fd_ >= 0) {
+      std::uint64_t count = 0;
+      [[maybe_unused]] const auto n = ::read(wake_fd_, &count, sizeof count);
+    }
+    std::lock_guard lock(mutex_);
+    return std::exchange(queue_, {});
+  }
+  [[nodiscard]] int wake_fd() const { return wake_fd_; }
+
+ private:
+  int wake_fd_;
+  std::mutex mutex_;
+  std::deque<Outgoing> queue_;
+};
+
 struct Daemon::Detail {
+  // Set up by start(); afterwards only the worker thread touches these (and stop(), after the
+  // worker has been joined).
   Daemon* daemon = nullptr;
   std::unique_ptr<Twin> twin;
   std::unique_ptr<DetailOutputs> outputs;
-  std::unique_ptr<LifeWorker> worker;
+  std::unique_ptr<LifeWorker> life;
   lcm::Subscription* subscription = nullptr;
-  std::string state_channel, field_channel, reject_channel, status_channel;
+  std::string id, state_channel, field_channel, reject_channel, status_channel;
   std::filesystem::path state_dir;
   std::int64_t checkpoint_seq = -1;  ///< state_seq of the newest checkpoint on disk
-  std::chrono::steady_clock::time_point last_checkpoint;
-  std::int64_t errors = 0;     ///< rejected (not duplicates), undecodable and dropped batches
-  std::deque<Received> inbox;  ///< received, not yet applied, in arrival order
+  SeqBySource checkpointed;          ///< applied seq per source of that checkpoint
+  Clock::time_point last_checkpoint;
+  Clock::time_point reject_log_window;  ///< start of the current 1-s reject log window
+  std::int64_t rejects_unlogged = 0;    ///< rejects in the window after its first one
+  std::map<std::string, std::int64_t> unlogged_by_kind;
+  double max_batch_seconds = 60.0;
+  double max_rejects_per_second = 10.0;
+
+  // Shared between the LCM thread and the worker, under `mutex`.
+  std::mutex mutex;
+  std::condition_variable wake;                ///< the worker: a batch arrived, or stop
+  std::condition_variable idle;                ///< tick(): the inbox ran empty
+  std::deque<Received> inbox;                  ///< received, not yet applied, in arrival order
+  std::deque<Clock::time_point> reject_times;  ///< rejects of the last kRejectRateWindowS
+  bool applying = false;
+  bool stop_requested = false;
+
+  // Written by the worker, read by the heartbeat.
+  std::atomic<std::int64_t> busy_since_ns{0};  ///< steady clock; 0 = idle
+  std::atomic<std::int64_t> state_seq{0};
+  std::atomic<std::int64_t> errors{0};  ///< rejected (not duplicates), undecodable, dropped
+  std::atomic<std::int64_t> auth_rejects{0};
+  std::atomic<std::int64_t> duplicates{0};
+  std::atomic<std::int64_t> gaps{0};
+  std::atomic<bool> failed{false};           ///< final failure reached
+
+  std::thread worker;
 };
 
 Daemon::Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options)
-    : lcm_(lcm), config_(std::move(config)), options_(std::move(options)) {}
+    : lcm_(lcm),
+      config_(std::move(config)),
+      options_(std::move(options)),
+      outbox_(std::make_unique<Outbox>()) {}
 
 Daemon::~Daemon() {
+  stop_workers();
   for (auto& d : details_) {
     if (d->subscription != nullptr) lcm_.unsubscribe(d->subscription);
   }
@@ -59,283 +183,559 @@ Daemon::~Daemon() {
 const Twin& Daemon::twin(std::size_t i) const { return *details_.at(i)->twin; }
 const DetailOutputs* Daemon::outputs(std::size_t i) const { return details_.at(i)->outputs.get(); }
 
+std::string Daemon::error() const {
+  std::lock_guard lock(error_mutex_);
+  return error_;
+}
+
 void Daemon::fail(std::string why) {
   spdlog::critical("{}", why);
-  if (error_.empty()) error_ = std::move(why);
+  {
+    std::lock_guard lock(error_mutex_);
+    if (error_.empty()) error_ = std::move(why);
+  }
+  failed_.store(true);
+  for (auto& d : details_) {
+    std::lock_guard lock(d->mutex);
+    d->wake.notify_all();
+    d->idle.notify_all();
+  }
 }
 
 Status Daemon::start() {
-  started_ = last_status_ = std::chrono::steady_clock::now();
+  started_ = last_status_ = Clock::now();
   spdlog::info(
       "BLAS kernel: {} (states are bit-identical on the same kernel; "
       "OPENBLAS_CORETYPE pins it)",
       blas_kernel_name());
-  const Twin::Options twin_options{
-      options_.deterministic ? LifeMode::synchronous : LifeMode::external, true};
+  if (Status keys = load_keys(); !keys) return keys;
   for (const DetailConfig& config : config_.details) {
-    auto d = std::make_unique<Detail>();
-    const auto t0 = std::chrono::steady_clock::now();
-    auto built = DetailModel::build(config);
-    if (!built) {
-      return failure(built.error().message());
-    }
-    const std::shared_ptr<const DetailModel> model = *built;
-    auto twin = Twin::create(model, twin_options);
-    if (!twin) {
-      return failure(twin.error().message());
-    }
-    d->twin = std::move(*twin);
-    spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
-                 model->disc().num_nodes(), model->disc().num_bonds(),
-                 seconds(std::chrono::steady_clock::now() - t0));
-    d->state_dir = detail_state_dir(options_.state_dir, config.id);
-    if (options_.checkpoints) {
-      std::vector<std::string> skipped;
-      auto found = newest_valid_checkpoint(d->state_dir, kCheckpointPrefix, &skipped);
-      for (const auto& s : skipped) spdlog::warn("[{}] skipping checkpoint {}", config.id, s);
-      if (found) {
-        if (const Status restored = d->twin->restore(found->data); !restored) {
-          return failure(found->file.path.string() + ": " + restored.error().message());
-        }
-        d->checkpoint_seq = d->twin->state_seq();
-        spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", config.id,
-                     found->file.path.string(), d->twin->state_seq(),
-                     d->twin->engine().total_cycles(), d->twin->state_hash_hex());
-        const auto written = found->data.strings.find("blas_kernel");
-        if (written != found->data.strings.end() && written->second != blas_kernel_name()) {
-          spdlog::warn(
-              "[{}] the checkpoint was written on BLAS kernel {}, this process runs {}: the run "
-              "goes on correctly, but its states now agree with an uninterrupted run only to "
-              "rounding, not bit for bit (set OPENBLAS_CORETYPE={} to match)",
-              config.id, written->second, blas_kernel_name(), written->second);
-        }
-      } else {
-        spdlog::info("[{}] no checkpoint in {}: starting from the virgin state", config.id,
-                     d->state_dir.string());
-      }
-    }
-    d->last_checkpoint = std::chrono::steady_clock::now();
-    if (options_.deterministic) d->twin->catch_up_life();
-    if (options_.results) d->outputs = std::make_unique<DetailOutputs>(*d->twin);
-    if (!options_.deterministic && config.life.every_batches > 0) {
-      d->worker = std::make_unique<LifeWorker>();
-    }
-    d->state_channel = messages::channel(config.id, messages::Kind::kState);
-    d->field_channel = messages::channel(config.id, messages::Kind::kField);
-    d->reject_channel = messages::channel(config.id, messages::Kind::kReject);
-    d->status_channel = messages::channel(config.id, messages::Kind::kStatus);
-    d->daemon = this;
-    d->subscription = lcm_.subscribeFunction(
-        messages::channel(config.id, messages::Kind::kLoad),
-        +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* detail) {
-          detail->daemon->on_load(*detail, rbuf);
-        },
-        d.get());
-    if (d->subscription == nullptr) {
-      return failure("cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad));
-    }
-    d->subscription->setQueueCapacity(options_.queue_capacity);
-    details_.push_back(std::move(d));
+    if (Status s = start_detail(config); !s) return s;
   }
   for (auto& d : details_) {
     submit_life(*d);
     publish_state(*d);
     publish_fields(*d);
-    publish_status(*d, "ok");
+  }
+  flush_outbox();
+  heartbeat(true);
+  for (auto& d : details_) {
+    Detail* detail = d.get();
+    d->worker = std::thread([this, detail] { run_worker(*detail); });
   }
   return {};
 }
 
-void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
-  if (!error_.empty()) return;
-  if (d.inbox.size() >= static_cast<std::size_t>(std::max(1, options_.queue_capacity))) {
-    ++d.errors;
-    spdlog::warn("[{}] inbox full ({} batches): a batch of {} bytes is dropped",
-                 d.twin->detail_id(), d.inbox.size(), rbuf->data_size);
-    return;
+Status Daemon::load_keys() {
+  if (!config_.auth) {
+    spdlog::warn(
+        "no [auth] in the config: load batches are not authenticated and STATE/REJECT are not "
+        "signed, so anyone on the bus can feed or impersonate this twin (messages/README.md, "
+        "Authentication)");
+    return {};
   }
-  const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
-  d.inbox.push_back({{data, data + rbuf->data_size}, rbuf->recv_utime});
+  const AuthConfig& auth = *config_.auth;
+  auto keys = messages::KeyRing::load(auth.key_file);
+  if (!keys) return failure("[auth] key_file: " + keys.error().message());
+  keys_ = std::move(*keys);
+  daemon_key_ = keys_->find(auth.daemon_key);
+  if (daemon_key_ == nullptr) {
+    return failure("[auth] daemon_key: the key file " + auth.key_file + " has no key \"" +
+                   auth.daemon_key + "\" to sign STATE and REJECT with");
+  }
+  if (!auth.sources.empty()) {
+    for (const auto& source : auth.sources) {
+      if (keys_->find(source) == nullptr) {
+        return failure("[auth] sources: the key file " + auth.key_file +
+                       " has no key for source \"" + source + "\"");
+      }
+    }
+    allowed_sources_ = auth.sources;
+  } else {
+    // Every key but the daemon's own: a producer never needs the daemon's key.
+    for (const auto& id : keys_->ids()) {
+      if (id != auth.daemon_key) allowed_sources_.push_back(id);
+    }
+  }
+  std::sort(allowed_sources_.begin(), allowed_sources_.end());
+  spdlog::info("authentication on: {} source(s) allowed, STATE and REJECT signed with key \"{}\"",
+               allowed_sources_.size(), auth.daemon_key);
+  return {};
+}
+
+Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
+  const std::string& source = decoded.batch->source_id;
+  if (!std::binary_search(allowed_sources_.begin(), allowed_sources_.end(), source)) {
+    return {Verdict::auth, "source_id",
+            "source \"" + source + "\" is not allowed: no key for it in the daemon's key file" +
+                (config_.auth->sources.empty() ? std::string() : " or not in [auth] sources")};
+  }
+  if (decoded.auth_tag.empty()) {
+    return {Verdict::auth, "auth_tag",
+            "unsigned: this daemon requires an HMAC-SHA256 tag with the key of source \"" + source +
+                "\""};
+  }
+  if (!messages::tag_matches(*keys_->find(source), r.bytes.data(), decoded.signed_size,
+                             decoded.auth_tag)) {
+    return {Verdict::auth, "auth_tag",
+            "wrong tag: not signed with the key of source \"" + source + "\""};
+  }
+  return {};
+}
+
+Status Daemon::start_detail(const DetailConfig& config) {
+  auto d = std::make_unique<Detail>();
+  d->id = config.id;
+  const auto t0 = Clock::now();
+  auto built = DetailModel::build(config);
+  if (!built) return failure(built.error().message());
+  const std::shared_ptr<const DetailModel> model = *built;
+  const Twin::Options twin_options{
+      options_.deterministic ? LifeMode::synchronous : LifeMode::external, true};
+  auto twin = Twin::create(model, twin_options);
+  if (!twin) return failure(twin.error().message());
+  d->twin = std::move(*twin);
+  spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
+               model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0));
+  d->max_batch_seconds = config.limits.max_batch_seconds;
+  d->max_rejects_per_second = config.limits.max_rejects_per_second;
+  if (config.limits.max_p) {
+    spdlog::info("[{}] bounds: p_max <= {:.6g} N ([detail.limits] max_p), {} sources", config.id,
+                 d->twin->max_p(), config.limits.max_sources);
+  } else if (std::isfinite(d->twin->max_p())) {
+    spdlog::info(
+        "[{}] bounds: p_max <= {:.6g} N (default: {:g} x {:.6g} N, the load at which the virgin "
+        "detail's peak bond stretch reaches the critical stretch), {} sources",
+        config.id, d->twin->max_p(), kDefaultMaxPOverFirstBreak, d->twin->first_break_load(),
+        config.limits.max_sources);
+  } else {
+    spdlog::warn(
+        "[{}] no bound on p_max: the model knows no critical stretch (no K_c, no critical "
+        "stretch); set [detail.limits] max_p",
+        config.id);
+  }
+  d->state_dir = detail_state_dir(options_.state_dir, config.id);
+  if (options_.checkpoints) {
+    if (Status resumed = resume(*d); !resumed) return resumed;
+    // Before the first STATE: a state dir we cannot write to would lose every batch applied
+    // from here on at the next crash.
+    try {
+      std::filesystem::create_directories(d->state_dir);
+      const auto probe = d->state_dir / ".writable";
+      write_file_atomically(probe, "peritwin", true);
+      std::filesystem::remove(probe);
+    } catch (const std::exception& e) {
+      return failure("[" + config.id + "] the state dir " + d->state_dir.string() +
+                     " is not writable, so no checkpoint could be kept: " + e.what());
+    }
+  }
+  d->last_checkpoint = d->reject_log_window = Clock::now();
+  if (options_.deterministic) d->twin->catch_up_life();
+  if (options_.results) d->outputs = std::make_unique<DetailOutputs>(*d->twin);
+  if (!options_.deterministic && config.life.every_batches > 0) {
+    d->life = std::make_unique<LifeWorker>();
+  }
+  d->state_channel = messages::channel(config.id, messages::Kind::kState);
+  d->field_channel = messages::channel(config.id, messages::Kind::kField);
+  d->reject_channel = messages::channel(config.id, messages::Kind::kReject);
+  d->status_channel = messages::channel(config.id, messages::Kind::kStatus);
+  d->state_seq = d->twin->state_seq();
+  d->failed = d->twin->failure() != Failure::none;
+  d->daemon = this;
+  Detail* detail = d.get();
+  details_.push_back(std::move(d));
+  detail->subscription = lcm_.subscribeFunction(
+      messages::channel(config.id, messages::Kind::kLoad),
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* target) {
+        target->daemon->on_load(*target, rbuf);
+      },
+      detail);
+  if (detail->subscription == nullptr) {
+    return failure("cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad));
+  }
+  detail->subscription->setQueueCapacity(options_.queue_capacity);
+  return {};
+}
+
+Status Daemon::resume(Detail& d) {
+  const auto files = list_checkpoints(d.state_dir, kCheckpointPrefix);
+  if (files.empty()) {
+    spdlog::info("[{}] no checkpoint in {}: starting from the virgin state", d.id,
+                 d.state_dir.string());
+    return {};
+  }
+  std::vector<std::string> refused;
+  for (const auto& file : files) {
+    CheckpointData data;
+    try {
+      data = read_checkpoint(file.path);
+    } catch (const CheckpointError& e) {
+      refused.emplace_back(e.what());
+      continue;
+    }
+    if (const Status matches = d.twin->check_checkpoint(data, static_cast<std::int64_t>(file.seq));
+        !matches) {
+      refused.push_back(file.path.string() + ": " + matches.error().message());
+      continue;
+    }
+    for (const auto& r : refused) spdlog::warn("[{}] skipping checkpoint {}", d.id, r);
+    if (const Status restored = d.twin->restore(data); !restored) {
+      return failure(file.path.string() + ": " + restored.error().message());
+    }
+    d.checkpoint_seq = d.twin->state_seq();
+    d.checkpointed = d.twin->applied();
+    spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", d.id,
+                 file.path.string(), d.twin->state_seq(), d.twin->engine().total_cycles(),
+                 d.twin->state_hash_hex());
+    const auto written = data.strings.find("blas_kernel");
+    if (written != data.strings.end() && written->second != blas_kernel_name()) {
+      spdlog::warn(
+          "[{}] the checkpoint was written on BLAS kernel {}, this process runs {}: the run "
+          "goes on correctly, but its states now agree with an uninterrupted run only to "
+          "rounding, not bit for bit (set OPENBLAS_CORETYPE={} to match)",
+          d.id, written->second, blas_kernel_name(), written->second);
+    }
+    return {};
+  }
+  std::string why = "[" + d.id + "] none of the " + std::to_string(files.size()) +
+                    " checkpoint(s) in " + d.state_dir.string() + " is valid:";
+  for (const auto& r : refused) why += "\n  " + r;
+  if (options_.fresh_start) {
+    spdlog::warn("{}", why);
+    spdlog::warn("[{}] --fresh-start: starting from the virgin state", d.id);
+    return {};
+  }
+  return failure(why +
+                 "\nStarting from the virgin state would silently forget every applied cycle: "
+                 "repair or move the files away, or start with --fresh-start");
+}
+
+void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
+  if (failed()) return;
+  {
+    std::lock_guard lock(d.mutex);
+    if (d.inbox.size() < static_cast<std::size_t>(std::max(1, options_.queue_capacity))) {
+      const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+      d.inbox.push_back({{data, data + rbuf->data_size}, rbuf->recv_utime});
+      d.wake.notify_one();
+      return;
+    }
+    d.reject_times.push_back(Clock::now());
+  }
+  ++d.errors;
+  spdlog::warn("[{}] inbox full ({} batches): a batch of {} bytes is dropped", d.id,
+               options_.queue_capacity, rbuf->data_size);
+}
+
+void Daemon::run_worker(Detail& d) {
+  for (;;) {
+    std::optional<Received> received;
+    {
+      std::unique_lock lock(d.mutex);
+      d.wake.wait_for(lock, kWorkerChoresPeriod,
+                      [&] { return d.stop_requested || !d.inbox.empty() || failed(); });
+      if (failed()) break;
+      if (!d.inbox.empty()) {
+        received = std::move(d.inbox.front());
+        d.inbox.pop_front();
+        d.applying = true;
+      } else if (d.stop_requested) {
+        break;
+      }
+    }
+    if (received) {
+      d.busy_since_ns = now_ns();
+      if (options_.before_apply) options_.before_apply(d.id);
+      apply_received(d, *received);
+      d.busy_since_ns = 0;
+      std::lock_guard lock(d.mutex);
+      d.applying = false;
+      if (d.inbox.empty()) d.idle.notify_all();
+    }
+    if (failed()) break;
+    worker_chores(d);
+  }
+  std::lock_guard lock(d.mutex);
+  d.applying = false;
+  d.idle.notify_all();
+}
+
+void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
+                    const Outcome& outcome) {
+  if (outcome.verdict != Verdict::duplicate) {
+    ++d.errors;
+    if (outcome.verdict == Verdict::auth) ++d.auth_rejects;
+    const auto now = Clock::now();
+    {
+      std::lock_guard lock(d.mutex);
+      d.reject_times.push_back(now);
+    }
+    // One line per detail per second: the first reject in full, the rest as a count.
+    if (seconds(now - d.reject_log_window) >= kRejectLogPeriodS) {
+      log_reject_summary(d);  // of the previous window, if any
+      d.reject_log_window = now;
+      spdlog::warn("[{}] reject ({}) {}#{}: {}: {}", d.id, verdict_name(outcome.verdict), source,
+                   seq, outcome.what, outcome.why);
+    } else {
+      ++d.rejects_unlogged;
+      ++d.unlogged_by_kind[verdict_name(outcome.verdict)];
+    }
+  } else {
+    spdlog::debug("[{}] duplicate: {}", d.id, outcome.why);
+  }
+  auto m = reject_message(d.id, source, seq, outcome, now_utime());
+  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
+  outbox_->push({d.reject_channel, encode(m), 0});
 }
 
 void Daemon::apply_received(Detail& d, const Received& r) {
   Twin& twin = *d.twin;
   const Decoded decoded = decode_batch(r.bytes.data(), r.bytes.size());
   if (!decoded.batch) {
-    ++d.errors;
-    spdlog::warn("[{}] reject (decode): {}", twin.detail_id(), decoded.error.why);
-    const auto m = reject_message(twin.detail_id(), "", -1, decoded.error, now_utime());
-    lcm_.publish(d.reject_channel, &m);
+    reject(d, "", -1, decoded.error);
     return;
   }
   const Batch& batch = *decoded.batch;
+  if (keys_) {
+    if (const Outcome denied = authenticate(r, decoded); !denied.applied()) {
+      reject(d, batch.source_id, batch.seq, denied);
+      return;
+    }
+  }
   Outcome outcome;
   try {
     outcome = twin.apply(batch);
   } catch (const std::exception& e) {
     // The engine threw half-way through the batch: the model can no longer be trusted. Stop
     // without checkpointing it; a restart resumes from the last checkpoint.
-    outcome = {Verdict::internal, "message", e.what()};
-    const auto m =
-        reject_message(twin.detail_id(), batch.source_id, batch.seq, outcome, now_utime());
-    lcm_.publish(d.reject_channel, &m);
-    fail("[" + twin.detail_id() + "] internal error applying seq " + std::to_string(batch.seq) +
-         " of \"" + batch.source_id + "\": " + e.what());
+    reject(d, batch.source_id, batch.seq, {Verdict::internal, "message", e.what()});
+    fail("[" + d.id + "] internal error applying seq " + std::to_string(batch.seq) + " of \"" +
+         batch.source_id + "\": " + e.what());
     return;
   }
+  d.duplicates = twin.counters().duplicates;
+  d.gaps = twin.counters().gaps;
   if (!outcome.applied()) {
-    if (outcome.verdict == Verdict::duplicate) {
-      spdlog::debug("[{}] duplicate: {}", twin.detail_id(), outcome.why);
-    } else {
-      ++d.errors;
-      spdlog::warn("[{}] reject ({}): {}", twin.detail_id(), outcome.what, outcome.why);
-    }
-    const auto m =
-        reject_message(twin.detail_id(), batch.source_id, batch.seq, outcome, now_utime());
-    lcm_.publish(d.reject_channel, &m);
+    reject(d, batch.source_id, batch.seq, outcome);
     // Duplicates and gaps: tell the producer where to resume.
     if (outcome.verdict == Verdict::duplicate || outcome.verdict == Verdict::gap) {
       publish_state(d);
     }
     return;
   }
-  publish_state(d);
-  if (options_.record_latency) {
-    // From LCM's receive time (wall clock, us): includes the wait in the inbox.
-    latencies_.push_back(1e-6 * static_cast<double>(now_utime() - r.recv_utime));
-  }
-  spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", twin.detail_id(),
+  d.state_seq = twin.state_seq();
+  spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", d.id,
                 batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
                 twin.broken_bonds());
   if (twin.failure() != Failure::none) {
-    spdlog::warn("[{}] end of life at state_seq {} ({} cycles): {}", twin.detail_id(),
-                 twin.state_seq(), twin.engine().total_cycles(),
+    d.failed = true;
+    spdlog::warn("[{}] end of life at state_seq {} ({} cycles): {}", d.id, twin.state_seq(),
+                 twin.engine().total_cycles(),
                  twin.failure() == Failure::singular ? "final failure (singular stiffness)"
                                                      : "end criterion met");
   }
+  // Checkpoint before the STATE, so that the STATE says what is durable (checkpointed_seq).
+  const auto every = twin.model().config().checkpoint.every_batches;
+  if (every > 0 && twin.state_seq() % every == 0) checkpoint(d, "every_batches");
+  publish_state(d, r.recv_utime);
   const auto every_field = twin.model().config().output.field_every_batches;
   if (every_field > 0 && twin.state_seq() % every_field == 0) publish_fields(d);
   if (d.outputs) d.outputs->record(twin);
-  const auto every = twin.model().config().checkpoint.every_batches;
-  if (every > 0 && twin.state_seq() % every == 0) checkpoint(d, "every_batches");
   submit_life(d);
 }
 
-void Daemon::publish_state(Detail& d) {
-  const auto m = state_message(*d.twin, now_utime());
-  lcm_.publish(d.state_channel, &m);
+void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {
+  auto m = state_message(*d.twin, now_utime(), d.checkpointed);
+  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
+  outbox_->push({d.state_channel, encode(m), recv_utime});
 }
 
 void Daemon::publish_fields(Detail& d) {
-  for (const auto& m : field_messages(*d.twin, now_utime())) lcm_.publish(d.field_channel, &m);
+  for (const auto& m : field_messages(*d.twin, now_utime())) {
+    outbox_->push({d.field_channel, encode(m), 0});
+  }
 }
 
-void Daemon::publish_status(Detail& d, const char* health) {
+bool Daemon::publish_status(Detail& d, const char* health) {
   peritwin_msgs::status_t m{};
   m.utime = now_utime();
-  m.detail_id = d.twin->detail_id();
-  m.health =
-      d.twin->failure() != Failure::none && std::string_view(health) == "ok" ? "failed" : health;
-  m.last_seq = d.twin->state_seq();
-  m.pending = static_cast<std::int32_t>(d.inbox.size());
-  m.lag_s =
-      d.inbox.empty()
-          ? 0.0
-          : std::max(0.0, 1e-6 * static_cast<double>(now_utime() - d.inbox.front().recv_utime));
-  if (m.lag_s > options_.degraded_lag_s && m.health == "ok") m.health = "degraded";
-  m.uptime_s = seconds(std::chrono::steady_clock::now() - started_);
+  m.detail_id = d.id;
+  m.health = health;
+  m.last_seq = d.state_seq;
+  const auto now = Clock::now();
+  std::int64_t oldest_utime = 0;
+  {
+    std::lock_guard lock(d.mutex);
+    m.pending = static_cast<std::int32_t>(d.inbox.size());
+    if (!d.inbox.empty()) oldest_utime = d.inbox.front().recv_utime;
+    while (!d.reject_times.empty() && seconds(now - d.reject_times.front()) > kRejectRateWindowS) {
+      d.reject_times.pop_front();
+    }
+    m.reject_rate = static_cast<double>(d.reject_times.size()) / kRejectRateWindowS;
+  }
+  m.lag_s = oldest_utime == 0
+                ? 0.0
+                : std::max(0.0, 1e-6 * static_cast<double>(now_utime() - oldest_utime));
+  const std::int64_t busy_since = d.busy_since_ns;
+  m.busy_s =
+      busy_since == 0 ? 0.0 : std::max(0.0, 1e-9 * static_cast<double>(now_ns() - busy_since));
+  m.uptime_s = seconds(now - started_);
   m.errors = d.errors;
-  m.duplicates = d.twin->counters().duplicates;
-  m.gaps = d.twin->counters().gaps;
-  lcm_.publish(d.status_channel, &m);
+  m.duplicates = d.duplicates;
+  m.gaps = d.gaps;
+  m.auth_rejects = d.auth_rejects;
+  if (m.health == "ok") {
+    if (d.failed) {
+      m.health = "failed";
+    } else if (m.busy_s > d.max_batch_seconds || m.reject_rate > d.max_rejects_per_second ||
+               m.lag_s > options_.degraded_lag_s || failed()) {
+      m.health = "degraded";
+    }
+  }
+  return lcm_.publish(d.status_channel, &m) == 0;
+}
+
+void Daemon::flush_outbox() {
+  for (auto& m : outbox_->take()) {
+    lcm_.publish(m.channel, m.bytes.data(), static_cast<unsigned>(m.bytes.size()));
+    if (options_.record_latency && m.recv_utime > 0) {
+      // From LCM's receive time (wall clock, us): includes the wait in the inbox.
+      latencies_.push_back(1e-6 * static_cast<double>(now_utime() - m.recv_utime));
+    }
+  }
+}
+
+void Daemon::heartbeat(bool force) {
+  const auto now = Clock::now();
+  if (!force && seconds(now - last_status_) < options_.status_period_s) return;
+  last_status_ = now;
+  for (auto& d : details_) publish_status(*d, "ok");
+}
+
+void Daemon::worker_chores(Detail& d) {
+  submit_life(d);
+  const auto now = Clock::now();
+  const double every = d.twin->model().config().checkpoint.every_seconds;
+  if (every > 0 && seconds(now - d.last_checkpoint) >= every) {
+    const std::int64_t before = d.checkpoint_seq;
+    checkpoint(d, "every_seconds");
+    if (d.checkpoint_seq != before) publish_state(d);  // checkpointed_seq moved
+  }
+  if (seconds(now - d.reject_log_window) >= kRejectLogPeriodS) log_reject_summary(d);
+}
+
+void Daemon::log_reject_summary(Detail& d) {
+  if (d.rejects_unlogged > 0) {
+    std::string kinds;
+    for (const auto& [kind, n] : d.unlogged_by_kind) {
+      kinds += (kinds.empty() ? "" : ", ") + std::to_string(n) + " " + kind;
+    }
+    spdlog::warn("[{}] {} more reject(s) in the last {:.0f} s ({})", d.id, d.rejects_unlogged,
+                 kRejectLogPeriodS, kinds);
+    d.rejects_unlogged = 0;
+    d.unlogged_by_kind.clear();
+  }
 }
 
 void Daemon::checkpoint(Detail& d, const char* why) {
-  d.last_checkpoint = std::chrono::steady_clock::now();
+  d.last_checkpoint = Clock::now();
   if (!options_.checkpoints || d.checkpoint_seq == d.twin->state_seq()) return;
   const auto path = checkpoint_path(d.state_dir, kCheckpointPrefix,
                                     static_cast<std::uint64_t>(d.twin->state_seq()));
   try {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     std::filesystem::create_directories(d.state_dir);
     write_checkpoint(path, d.twin->to_checkpoint());
     prune_checkpoints(d.state_dir, kCheckpointPrefix, kCheckpointsKept);
     d.checkpoint_seq = d.twin->state_seq();
+    d.checkpointed = d.twin->applied();
     ++checkpoints_written_;
-    spdlog::info("[{}] checkpoint ({}): {} in {:.3f} s", d.twin->detail_id(), why, path.string(),
-                 seconds(std::chrono::steady_clock::now() - t0));
+    spdlog::info("[{}] checkpoint ({}): {} in {:.3f} s", d.id, why, path.string(),
+                 seconds(Clock::now() - t0));
   } catch (const std::exception& e) {
-    fail("[" + d.twin->detail_id() + "] cannot write checkpoint " + path.string() + ": " +
-         e.what());
+    fail("[" + d.id + "] cannot write checkpoint " + path.string() + ": " + e.what());
   }
 }
 
 void Daemon::submit_life(Detail& d) {
-  if (!d.worker) return;
-  if (auto e = d.worker->take()) {
+  if (!d.life) return;
+  if (auto e = d.life->take()) {
     d.twin->set_life(*e);
-    spdlog::info("[{}] remaining life at state_seq {}: {:.0f} cycles [{:.0f}, {:.0f}]",
-                 d.twin->detail_id(), e->state_seq, e->central, e->low, e->high);
+    spdlog::info("[{}] remaining life at state_seq {}: {:.0f} cycles [{:.0f}, {:.0f}]", d.id,
+                 e->state_seq, e->central, e->low, e->high);
     publish_state(d);
   }
-  if (d.twin->failure() == Failure::none && !d.worker->busy() &&
+  if (d.twin->failure() == Failure::none && !d.life->busy() &&
       d.twin->life().state_seq != d.twin->state_seq()) {
-    d.worker->submit(d.twin->life_job());
+    d.life->submit(d.twin->life_job());
   }
 }
 
 void Daemon::tick() {
   for (auto& d : details_) {
-    while (!d->inbox.empty() && error_.empty()) {
-      const Received r = std::move(d->inbox.front());
-      d->inbox.pop_front();
-      apply_received(*d, r);
-      chores();  // a heartbeat is due even while a backlog is being worked off
-    }
+    std::unique_lock lock(d->mutex);
+    d->idle.wait(lock, [&] { return (d->inbox.empty() && !d->applying) || failed(); });
   }
-  chores();
-}
-
-void Daemon::chores() {
-  const auto now = std::chrono::steady_clock::now();
-  const bool status_due = seconds(now - last_status_) >= options_.status_period_s;
-  if (status_due) last_status_ = now;
-  for (auto& d : details_) {
-    submit_life(*d);
-    const double every = d->twin->model().config().checkpoint.every_seconds;
-    if (every > 0 && seconds(now - d->last_checkpoint) >= every) checkpoint(*d, "every_seconds");
-    if (status_due) publish_status(*d, error_.empty() ? "ok" : "degraded");
-  }
+  flush_outbox();
+  heartbeat(false);
 }
 
 bool Daemon::poll(int timeout_ms) {
-  if (!error_.empty()) return false;
-  errno = 0;
-  int handled = handle_lcm(lcm_, timeout_ms);
-  // Take everything already waiting on the socket, so that STATUS can count it.
-  for (int n = 0; handled > 0 && n < options_.queue_capacity; ++n) handled = handle_lcm(lcm_, 0);
-  if (handled < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
-    fail("LCM failed while receiving");
-    return false;
+  if (failed()) return false;
+  flush_outbox();
+  heartbeat(false);
+  const int lcm_fd = lcm_.getFileno();
+  pollfd fds[2] = {{outbox_->wake_fd(), POLLIN, 0}, {lcm_fd, POLLIN, 0}};
+  const nfds_t n = lcm_fd >= 0 ? 2 : 1;
+  const int ready = ::poll(fds, n, std::max(0, timeout_ms));
+  if (ready > 0 && n == 2 && (fds[1].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
+    errno = 0;
+    int handled = handle_lcm(lcm_, 0);
+    // Take everything already waiting on the socket, so that STATUS can count it.
+    for (int k = 0; handled > 0 && k < options_.queue_capacity; ++k) handled = handle_lcm(lcm_, 0);
+    if (handled < 0 && errno != EINTR) {  // EINTR: a signal, not a failure
+      fail("LCM failed while receiving");
+      return false;
+    }
   }
-  tick();
-  return error_.empty();
+  flush_outbox();
+  heartbeat(false);
+  return !failed();
+}
+
+void Daemon::stop_workers() {
+  for (auto& d : details_) {
+    {
+      std::lock_guard lock(d->mutex);
+      d->stop_requested = true;
+    }
+    d->wake.notify_all();
+  }
+  for (auto& d : details_) {
+    if (d->worker.joinable()) d->worker.join();
+  }
 }
 
 void Daemon::stop() {
   if (stopped_) return;
   stopped_ = true;
+  stop_workers();  // each applies what it has received first
   for (auto& d : details_) {
-    d->worker.reset();  // cancels a running estimate
-    if (error_.empty()) checkpoint(*d, "stop");
+    d->life.reset();  // cancels a running estimate
+    if (!failed()) {
+      const std::int64_t before = d->checkpoint_seq;
+      checkpoint(*d, "stop");
+      if (d->checkpoint_seq != before) publish_state(*d);  // now durable
+    }
     if (d->outputs) d->outputs->finish(*d->twin);
-    publish_status(*d, "stopping");
     spdlog::info(
         "[{}] stopped at state_seq {}: {} cycles, {} broken bonds, crack {:.2f} mm, "
         "state_hash {}",
-        d->twin->detail_id(), d->twin->state_seq(), d->twin->engine().total_cycles(),
-        d->twin->broken_bonds(), 1e3 * d->twin->cracks().main_length(), d->twin->state_hash_hex());
+        d->id, d->twin->state_seq(), d->twin->engine().total_cycles(), d->twin->broken_bonds(),
+        1e3 * d->twin->cracks().main_length(), d->twin->state_hash_hex());
   }
+  flush_outbox();
+  for (auto& d : details_) publish_status(*d, "stopping");
 }
 
 }  // namespace peritwin::twin

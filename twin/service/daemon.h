@@ -3,27 +3,48 @@
 // for every batch not applied, FIELD (throttled, chunked) and STATUS (heartbeat, 1 s).
 // Checkpoints: <state_dir>/<id>/checkpoint-<state_seq>.h5, atomically, every
 // checkpoint.every_batches applied batches or checkpoint.every_seconds (wall clock; only when the
-// state changed) and at stop(); start() resumes from the newest valid one. The three newest are
-// kept. Results per detail: see twin/io/detail_outputs.h.
+// state changed) and at stop(); start() resumes from the newest valid one whose content matches
+// its name (detail, model, state_seq), and refuses to start when checkpoints exist and none is
+// valid (unless fresh_start). The three newest are kept. Results per detail: see
+// twin/io/detail_outputs.h.
 //
-// Received batches go into a per-detail inbox (raw bytes + LCM receive time) and are applied in
-// order by tick(); poll() first drains every message already waiting on the LCM socket, so STATUS
-// can report how many batches wait (pending) and the age of the oldest one (lag_s) — LCM's own
-// subscription queue is not observable through its API.
+// Authentication ([auth] in the config; messages/README.md, "Authentication"): every batch must
+// come from an allowed source with that source's HMAC-SHA256 tag, else REJECT CODE_AUTH (model
+// untouched, counted in STATUS auth_rejects); STATE and REJECT are signed with [auth] daemon_key.
+// Without [auth] the daemon runs unauthenticated and says so once at start.
 //
-// The service runs on the thread that calls poll() (LCM handlers run inside it). It is the
-// daemon's core and also runs in-process in tests (memq://) and in the ingest benchmark.
-// Modes: deterministic (remaining life synchronously at fixed state_seq points, reproducible) or
-// not (a worker thread per detail; estimates are published with the seq they belong to).
+// Threads (docs/design.md, "Threads of the daemon"):
+//  * the LCM thread — whoever calls poll() or tick() — is the only one that touches LCM: it
+//    receives batches into the per-detail inboxes (raw bytes + LCM receive time), publishes what
+//    the detail workers queued in the outbox, and publishes STATUS from its own timer, whatever
+//    the workers are doing;
+//  * one worker thread per detail applies that detail's batches in arrival order (decode,
+//    authenticate, apply, STATE/REJECT, results, checkpoints, remaining-life hand-over). A long
+//    batch on one detail delays no other detail and no heartbeat; STATUS says how long the
+//    current batch has been running (busy_s) and turns "degraded" past
+//    [detail.limits] max_batch_seconds.
+// Each detail's state is a pure function of its config and the batches in its arrival order:
+// threads change when a state is published, never what it is.
+//
+// The service is the daemon's core and also runs in-process in tests (memq://) and in the ingest
+// benchmark. Modes: deterministic (remaining life synchronously at fixed state_seq points,
+// reproducible) or not (a LifeWorker thread per detail; estimates are published with the seq
+// they belong to).
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "messages/auth.h"
+#include "messages/codec.h"
 #include "twin/config/config.h"
 #include "twin/io/detail_outputs.h"
 #include "twin/model/twin.h"
@@ -36,6 +57,9 @@ struct DaemonOptions {
   bool deterministic = false;
   bool results = true;  ///< HDF5/XDMF results and PNGs
   bool checkpoints = true;
+  /// Start from the virgin state even when every checkpoint on disk is invalid (they are left
+  /// where they are; the first new checkpoint prunes them by seq).
+  bool fresh_start = false;
   /// LCM subscription queue and the daemon's inbox per detail (messages); LCM's default is 30.
   /// A batch arriving at a full inbox is dropped (counted as an error): the producer sees the gap
   /// and resends.
@@ -43,58 +67,83 @@ struct DaemonOptions {
   double degraded_lag_s = 10.0;  ///< STATUS says "degraded" when the oldest waiting batch is older
   double status_period_s = 1.0;
   bool record_latency = false;  ///< keep receipt -> STATE publish latencies (benchmark)
+  /// Test hook: called on a detail's worker thread before each received batch is applied.
+  std::function<void(const std::string& detail_id)> before_apply;
 };
 
 class Daemon {
  public:
   Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options);
-  ~Daemon();
+  ~Daemon();  ///< stops the workers (without the final checkpoint: call stop() for that)
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  /// Builds every detail's model and twin, resumes from checkpoints, opens results, subscribes,
-  /// publishes the initial states; or why not (config-like problems such as an unsupported law
-  /// are reported the same way; the caller decides the exit code).
+  /// Builds every detail's model and twin, resumes from checkpoints, checks that the state dir is
+  /// writable, opens results, subscribes, publishes the initial states and starts the workers;
+  /// or why not (the caller decides the exit code).
   Status start();
-  /// Handles LCM messages for up to `timeout_ms` and does the periodic chores (status, timed
-  /// checkpoints, finished life estimates). Returns false after a runtime failure (see error()).
+  /// Handles LCM messages for up to `timeout_ms`, publishes what the workers queued, and the
+  /// heartbeat when due. Returns quickly whatever the workers do. False after a runtime failure
+  /// (see error()).
   bool poll(int timeout_ms);
-  /// Applies the batches received so far, in order, and does the periodic chores; call it after
-  /// lcm.handle() when someone else drives LCM.
+  /// Waits until every batch received so far is applied and published (and the heartbeat when
+  /// due); for callers that drive LCM themselves (lcm.handle(), then tick()).
   void tick();
-  /// Final checkpoints, results and PNGs, a "stopping" status. Idempotent.
+  /// Applies what was received, then final checkpoints, results and PNGs, a "stopping" status.
+  /// Idempotent.
   void stop();
 
-  [[nodiscard]] const std::string& error() const { return error_; }
+  [[nodiscard]] std::string error() const;
   [[nodiscard]] std::size_t num_details() const { return details_.size(); }
+  /// The twin of detail i; read it only while its worker is idle (after tick() or stop()).
   [[nodiscard]] const Twin& twin(std::size_t i) const;
   [[nodiscard]] const DetailOutputs* outputs(std::size_t i) const;
   /// LCM receive time -> STATE publish latencies (s) of applied batches, when record_latency.
   [[nodiscard]] const std::vector<double>& latencies() const { return latencies_; }
-  [[nodiscard]] std::int64_t checkpoints_written() const { return checkpoints_written_; }
+  [[nodiscard]] std::int64_t checkpoints_written() const { return checkpoints_written_.load(); }
 
  private:
   struct Detail;
   struct Received;
+  struct Outgoing;
+  class Outbox;
+  Status load_keys();
+  /// With [auth]: the batch's source is allowed and its tag is the source key's; else AUTH.
+  [[nodiscard]] Outcome authenticate(const Received& r, const messages::Decoded& decoded) const;
+  Status start_detail(const DetailConfig& config);
+  Status resume(Detail& d);
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  void run_worker(Detail& d);
   void apply_received(Detail& d, const Received& r);
-  void chores();
-  void publish_state(Detail& d);
+  void reject(Detail& d, const std::string& source, std::int64_t seq, const Outcome& outcome);
+  void worker_chores(Detail& d);
+  void log_reject_summary(Detail& d);
+  void publish_state(Detail& d, std::int64_t recv_utime = 0);
   void publish_fields(Detail& d);
-  void publish_status(Detail& d, const char* health);
+  bool publish_status(Detail& d, const char* health);
+  void flush_outbox();
+  void heartbeat(bool force);
   void checkpoint(Detail& d, const char* why);
   void submit_life(Detail& d);
+  void stop_workers();
   void fail(std::string why);
+  [[nodiscard]] bool failed() const { return failed_.load(); }
 
   lcm::LCM& lcm_;
   TwinConfig config_;
   DaemonOptions options_;
   std::vector<std::unique_ptr<Detail>> details_;
+  std::unique_ptr<Outbox> outbox_;
+  std::optional<messages::KeyRing> keys_;          ///< [auth] key_file; none = unauthenticated
+  const messages::AuthKey* daemon_key_ = nullptr;  ///< signs STATE and REJECT
+  std::vector<std::string> allowed_sources_;       ///< sorted; with keys_ only
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_status_;
   std::vector<double> latencies_;
-  std::int64_t checkpoints_written_ = 0;
+  std::atomic<std::int64_t> checkpoints_written_{0};
+  mutable std::mutex error_mutex_;
   std::string error_;
+  std::atomic<bool> failed_{false};
   bool stopped_ = false;
 };
 

@@ -1,11 +1,13 @@
 // peritwin: the twin daemon. See README.md and twin/service/daemon.h.
 //
 //   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
-//            [--deterministic] [--no-results]
+//            [--deterministic] [--no-results] [--fresh-start] [--max-memory BYTES]
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
-// applying a batch; the last checkpoint is left as it was).
+// applying a batch; the last checkpoint is left as it was; checkpoints exist and none is valid,
+// without --fresh-start; the state dir is not writable). A tcpq hub that is down is not a
+// failure: the daemon waits for it and reconnects with backoff (twin/service/hub_connection.h).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -15,8 +17,10 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "messages/auth.h"
 #include "twin/config/config.h"
 #include "twin/service/daemon.h"
+#include "twin/service/hub_connection.h"
 
 namespace {
 
@@ -33,7 +37,7 @@ constexpr int kExitRuntime = 3;
 int main(int argc, char** argv) {
   CLI::App app{"peritwin: structural-health-monitoring digital twin daemon (LCM in/out)"};
   std::string config_file, lcm_url, state_dir = "state", log_level = "info";
-  bool deterministic = false, no_results = false;
+  bool deterministic = false, no_results = false, fresh_start = false;
   app.add_option("--config", config_file, "detail configuration (TOML)")->required();
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   app.add_option("--state-dir", state_dir, "checkpoint directory (default: state)");
@@ -43,6 +47,16 @@ int main(int argc, char** argv) {
                "remaining life synchronously at fixed state_seq points (reproducible outputs; "
                "use with a lockstep replay)");
   app.add_flag("--no-results", no_results, "write no HDF5 results or PNG pictures");
+  app.add_flag("--fresh-start", fresh_start,
+               "start from the virgin state when checkpoints exist but none is valid (by "
+               "default the daemon then refuses to start, naming each file and why)");
+  std::string max_memory;
+  app.add_option("--max-memory", max_memory,
+                 "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
+                 "(e.g. 8G; default 75 % of physical memory)")
+      ->check([](const std::string& s) {
+        return peritwin::twin::parse_byte_size(s) ? "" : "not a byte size > 0 (e.g. 8G): " + s;
+      });
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -55,7 +69,8 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
   spdlog::set_level(spdlog::level::from_str(log_level));
 
-  const auto loaded = peritwin::twin::load_config(config_file);
+  const auto loaded = peritwin::twin::load_config(
+      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0)});
   if (!loaded.ok()) {
     for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
     return kExitUsage;
@@ -64,6 +79,13 @@ int main(int argc, char** argv) {
     // e.g. bilinear parameters out of range
     if (const auto settings = peritwin::twin::solver_settings(detail); !settings) {
       spdlog::error("config: {}", settings.error().message());
+      return kExitUsage;
+    }
+  }
+  if (const auto& auth = loaded.config->auth) {
+    // A key file that is missing, open to others or malformed is a config error: nothing starts.
+    if (const auto keys = peritwin::messages::KeyRing::load(auth->key_file); !keys) {
+      spdlog::error("config: [auth] key_file: {}", keys.error().message());
       return kExitUsage;
     }
   }
@@ -78,15 +100,22 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   try {
-    lcm::LCM lcm(lcm_url);
-    if (!lcm.good()) {
-      spdlog::critical("cannot open LCM at \"{}\"", lcm_url.empty() ? "(LCM default)" : lcm_url);
-      return kExitRuntime;
+    peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
+    const std::unique_ptr<lcm::LCM> connection = hub.open();
+    if (!connection) {
+      if (!hub.error().empty()) {
+        spdlog::critical("{}", hub.error());
+        return kExitRuntime;
+      }
+      spdlog::info("signal {} received while waiting for the LCM hub: stopping", g_signal.load());
+      return kExitOk;
     }
+    lcm::LCM& lcm = *connection;
     peritwin::twin::DaemonOptions options;
     options.state_dir = state_dir;
     options.deterministic = deterministic;
     options.results = !no_results;
+    options.fresh_start = fresh_start;
     peritwin::twin::Daemon daemon(lcm, *loaded.config, options);
     spdlog::info("peritwin: {} detail(s) from {}, LCM \"{}\", state in {}, {} mode",
                  loaded.config->details.size(), config_file,
@@ -98,7 +127,13 @@ int main(int argc, char** argv) {
     }
     spdlog::info("ready");
     while (g_signal.load() == 0) {
-      if (!daemon.poll(100)) break;
+      if (!hub.connected()) {
+        hub.reconnect(lcm);
+      } else if (!daemon.poll(100)) {
+        break;
+      } else {
+        hub.check(lcm);
+      }
     }
     if (const int s = g_signal.load(); s != 0) {
       spdlog::info("signal {} received: checkpointing and stopping", s);
