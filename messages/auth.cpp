@@ -13,6 +13,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "solver/core/toml_text.h"
+
 namespace peritwin::messages {
 
 static_assert(kAuthKeyBytes == crypto_auth_hmacsha256_KEYBYTES);
@@ -137,6 +139,11 @@ Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_
   };
   std::vector<Problem> problems;
   KeyRing ring;
+  if (const auto bad = core::find_unsafe_toml_character(text)) {
+    return Error{core::one_line(file_name) + ":" + std::to_string(bad->line),
+                 "TOML syntax error: non-ASCII character " + bad->where + " (column " +
+                     std::to_string(bad->column) + ")"};
+  }
   try {
     const toml::table root = toml::parse(text, file_name);
     const toml::table* keys = nullptr;
@@ -228,7 +235,10 @@ Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_
       reason += " (and " + std::to_string(problems.size() - 1) + " more error" +
                 (problems.size() > 2 ? "s" : "") + ")";
     }
-    return Error{file_name + ":" + std::to_string(problems.front().line), reason};
+    // One line whatever the file name or toml++'s echo of the text holds (found by
+    // fuzz_key_file: "expected 'true', saw 't<newline>'").
+    return Error{core::one_line(file_name) + ":" + std::to_string(problems.front().line),
+                 core::one_line(reason)};
   }
   std::sort(ring.keys_.begin(), ring.keys_.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -394,14 +404,18 @@ Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t f
                                 " of this message set version"};
   }
   // A signed message ends with tag_length = kAuthTagBytes and the tag. The tag is checked before
-  // the "unsigned" trailer: a tag may end in four zero bytes.
-  if (size >= 8 + kTrailerBytes &&
-      read_be(data + size - kTrailerBytes, 4) == static_cast<std::uint64_t>(kAuthTagBytes) &&
+  // the "unsigned" trailer: a tag may end in four zero bytes. A payload that reads both ways (a
+  // 32-byte tag trailer whose last four bytes are zero, which does not match) is called a wrong
+  // tag: only decoding could tell, and a forged tag is the likelier reading (fuzz_state found it).
+  const bool tag_trailer =
+      size >= 8 + kTrailerBytes &&
+      read_be(data + size - kTrailerBytes, 4) == static_cast<std::uint64_t>(kAuthTagBytes);
+  if (tag_trailer &&
       tag_matches(key, data, size - kTrailerBytes,
                   std::span<const std::uint8_t>(data + size - kAuthTagBytes, kAuthTagBytes))) {
     return {};
   }
-  if (read_be(data + size - 4, 4) == 0) return unsigned_error();
+  if (!tag_trailer && read_be(data + size - 4, 4) == 0) return unsigned_error();
   return wrong_tag_error();
 }
 

@@ -96,7 +96,10 @@ Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key);
 /// decoding anything: field "message", reason "wrong fingerprint: not a <type_name> of this
 /// message set version" (or a payload shorter than a fingerprint and a tag length), or field
 /// "auth_tag" with "unsigned" / "wrong tag" as verify(). For the encoding of a message M this
-/// equals verify(M). Use the template.
+/// equals verify(M) in ok(), and in the reason unless the bytes read both ways, which only
+/// decoding could tell: M's wrong tag ends in four zero bytes (called "unsigned" unless it is 32
+/// bytes long), or M is unsigned and its last 36 bytes read as a 32-byte tag (called "wrong tag").
+/// Use the template.
 Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t fingerprint,
                       const char* type_name, const AuthKey& key);
 template <typename Message>

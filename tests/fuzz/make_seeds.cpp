@@ -1,14 +1,18 @@
 // peritwin-fuzz-seeds DIR: writes the generated seeds of the fuzz corpus into DIR/<target>/:
-// encoded load batches (batch, and inside LCM logs for lcm_log) and a tiny checkpoint
-// (checkpoint). Deterministic (fixed utimes, fixed content): rerun it after a change of the
-// message types or of the checkpoint layout and commit what changed (tests/fuzz/README.md).
+// encoded load batches (batch, and inside LCM logs for lcm_log), states and rejects (state,
+// reject; unsigned and signed with the fuzz targets' fixed key), a key file (key_file) and a tiny
+// checkpoint (checkpoint). Deterministic (fixed utimes, fixed content): rerun it after a change of
+// the message types or of the checkpoint layout and commit what changed (tests/fuzz/README.md).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
+#include <numeric>
 #include <string>
 #include <vector>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "twin/io/checkpoint_io.h"
@@ -66,6 +70,84 @@ void batch_seeds(const fs::path& dir) {
   write(dir / "tagged.bin", encode(batches().front().second, tag));
 }
 
+template <typename Message>
+std::vector<std::uint8_t> encode_message(const Message& m) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+/// The fuzz targets' key (fuzz_state.cpp, fuzz_reject.cpp): bytes 1, 2, ..., 32.
+peritwin::messages::AuthKey fuzz_key() {
+  peritwin::messages::AuthKey key;
+  std::iota(key.bytes.begin(), key.bytes.end(), std::uint8_t{1});
+  return key;
+}
+
+void state_seeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  peritwin_msgs::damage_state_t initial{};
+  initial.utime = 1'700'000'000'000'000;
+  initial.detail_id = "b1-ct";
+  initial.remaining_cycles = initial.remaining_cycles_low = initial.remaining_cycles_high =
+      std::numeric_limits<double>::quiet_NaN();
+  initial.remaining_life_seq = -1;
+  initial.state_hash = "0123456789abcdef";
+  write(dir / "initial.bin", encode_message(initial));
+
+  peritwin_msgs::damage_state_t s = initial;
+  s.state_seq = 12;
+  s.source_ids = {"gauge", "replay"};
+  s.applied_seq = {3, 9};
+  s.checkpointed_seq = {0, 8};
+  s.num_sources = 2;
+  s.total_cycles = 12000;
+  s.broken_bonds = 36;
+  s.max_damage = 0.41;
+  peritwin_msgs::crack_t crack{};
+  crack.notch_index = 0;
+  crack.origin_x = 0.0275;
+  crack.tip_x = 0.0285;
+  crack.length_m = crack.projected_length_m = 0.001;
+  crack.num_nodes = 4;
+  crack.phase = peritwin_msgs::crack_t::PHASE_PROPAGATION;
+  s.cracks = {crack};
+  s.num_cracks = 1;
+  s.k_i = 5.2e6;
+  s.k_ii = 0.0;
+  s.remaining_cycles = 48000;
+  s.remaining_cycles_low = 40000;
+  s.remaining_cycles_high = std::numeric_limits<double>::infinity();
+  s.remaining_life_seq = 10;
+  s.remaining_life_source = "replay";
+  write(dir / "two-sources.bin", encode_message(s));
+  peritwin::messages::sign(s, fuzz_key());
+  write(dir / "signed.bin", encode_message(s));
+}
+
+void reject_seeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  peritwin::messages::Outcome why{peritwin::messages::Verdict::invalid, "blocks[3].r",
+                                  "r = 1.2 must be < 1"};
+  auto r = peritwin::messages::reject_message("b1-ct", "replay", 7, why, 1'700'000'000'000'000);
+  write(dir / "invalid.bin", encode_message(r));
+  peritwin::messages::sign(r, fuzz_key());
+  write(dir / "signed.bin", encode_message(r));
+  write(dir / "undecodable.bin",
+        encode_message(peritwin::messages::reject_message(
+            "b1-ct", "", -1, {peritwin::messages::Verdict::decode, "message", "truncated"}, 0)));
+}
+
+void key_file_seed(const fs::path& dir) {
+  fs::create_directories(dir);
+  const std::string text =
+      "# keys of the fuzz seeds (not secret)\n[keys]\n"
+      "replay = \"0101010101010101010101010101010101010101010101010101010101010101\"\n"
+      "\"gauge.3\" = \"00112233445566778899AABBCCDDEEFF00112233445566778899aabbccddeeff\"\n"
+      "peritwin = \"ffeeddccbbaa99887766554433221100ffeeddccbbaa99887766554433221100\"\n";
+  write(dir / "three-keys.toml", std::vector<std::uint8_t>(text.begin(), text.end()));
+}
+
 void lcm_log_seed(const fs::path& file, bool with_noise) {
   std::error_code ignore;
   fs::remove(file, ignore);
@@ -121,6 +203,9 @@ int main(int argc, char** argv) {
   try {
     const fs::path dir(argv[1]);
     batch_seeds(dir / "batch");
+    state_seeds(dir / "state");
+    reject_seeds(dir / "reject");
+    key_file_seed(dir / "key_file");
     fs::create_directories(dir / "lcm_log");
     lcm_log_seed(dir / "lcm_log" / "two-batches.lcmlog", false);
     lcm_log_seed(dir / "lcm_log" / "mixed.lcmlog", true);

@@ -662,6 +662,10 @@ TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
        "after a line-ending backslash in a string"},
       {"s = \"\\\xC2\xA7\"\n", 1, 7, "after a backslash in a string"},
       {"\xFF", 1, 1, "outside a string or comment"},
+      // found by fuzz_key_file: a quote where no string can start opens none for toml++, which
+      // reads on through a bare value
+      {"a = 0\"\xD1\xB7\"\n", 1, 7, "outside a string or comment"},
+      {"a = [1 \"\xC2\xA7\"]\n", 1, 9, "outside a string or comment"},
   };
   for (const auto& [text, line, column, where] : cases) {
     SCOPED_TRACE(text);

@@ -20,6 +20,7 @@
 #include <system_error>
 
 #include "messages/batch.h"
+#include "solver/core/toml_text.h"
 #include "twin/config/config_toml.h"
 
 namespace peritwin::twin {
@@ -218,34 +219,11 @@ void TableReader::finish() {
 
 }  // namespace config_internal
 
-namespace {
-/// Appends `s` with its control characters escaped (\n, \r, \t, \xNN): a message stays one
-/// line whatever the file name, a quoted key or toml++'s echo of the input holds (found by
-/// fuzz_config: "expected 'true', saw 'tr<newline>'").
-void append_one_line(std::string& out, std::string_view s) {
-  static constexpr char kHex[] = "0123456789abcdef";
-  for (const char c : s) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\r') {
-      out += "\\r";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else if (u < 0x20 || u == 0x7f) {
-      out += "\\x";
-      out += kHex[u >> 4];
-      out += kHex[u & 0xf];
-    } else {
-      out += c;
-    }
-  }
-}
-}  // namespace
+namespace {}  // namespace
 
 std::string ConfigError::message() const {
   std::string m;
-  append_one_line(m, file);
+  core::append_one_line(m, file);
   if (line > 0) {
     m += ':';
     m += std::to_string(line);
@@ -256,10 +234,10 @@ std::string ConfigError::message() const {
   }
   if (!path.empty()) {
     m += ": ";
-    append_one_line(m, path);
+    core::append_one_line(m, path);
   }
   m += ": ";
-  append_one_line(m, reason);
+  core::append_one_line(m, reason);
   return m;
 }
 
@@ -268,95 +246,6 @@ std::string ConfigResult::error_text() const {
   for (const auto& e : errors) text += e.message() + "\n";
   return text;
 }
-
-namespace {
-
-/// Debian 12's toml++ 3.3.0 classifies code points as whitespace with a lookup that reaches
-/// TOML_UNREACHABLE, i.e. undefined behaviour, for most non-ASCII code points (upstream
-/// marzer/tomlplusplus issues 190 and 295; found here by fuzz_config). It classifies every
-/// character outside strings and comments, every character of a table header line (quoted keys
-/// included), and the character after a backslash (and after a line-ending backslash's blanks) in
-/// a multi-line basic string. A non-ASCII character in the first two places is invalid TOML anyway
-/// and in the third exotic: the first one is refused here, with its line and column, before
-/// toml++ reads the text. Strings elsewhere and comments may hold any UTF-8.
-std::optional<ConfigError> unsafe_non_ascii(std::string_view t, const std::string& file) {
-  std::uint32_t line = 1, column = 1;
-  std::size_t i = t.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // toml++ skips a UTF-8 BOM
-  auto at = [&](std::size_t k) -> unsigned char {
-    return k < t.size() ? static_cast<unsigned char>(t[k]) : 0;
-  };
-  auto next = [&] {  // columns count code points, as toml++'s do
-    if (t[i] == '\n') {
-      ++line;
-      column = 1;
-    } else if ((at(i) & 0xC0) != 0x80) {
-      ++column;
-    }
-    ++i;
-  };
-  auto refuse = [&](std::string_view where) {
-    return ConfigError{file, line, column, "",
-                       "TOML syntax error: non-ASCII character " + std::string(where)};
-  };
-  int depth = 0;           // arrays open (a value may span lines)
-  bool line_start = true;  // only blanks so far on this line
-  bool header = false;     // on a [table] or [[array]] header line
-  while (i < t.size()) {
-    const unsigned char c = at(i);
-    if (c == '#') {
-      while (i < t.size() && t[i] != '\n') next();
-      continue;
-    }
-    if (c == '"' || c == '\'') {
-      const bool basic = c == '"';
-      const bool multi = at(i + 1) == c && at(i + 2) == c;
-      for (int k = 0; k < (multi ? 3 : 1); ++k) next();
-      while (i < t.size()) {
-        const unsigned char s = at(i);
-        if (!multi && s == '\n') break;  // unterminated: toml++ says so
-        if (s == c && (!multi || (at(i + 1) == c && at(i + 2) == c))) {
-          for (int k = 0; k < (multi ? 3 : 1); ++k) next();
-          for (int k = 0; multi && k < 2 && at(i) == c; ++k) next();  // """a"""" ends with a quote
-          break;
-        }
-        if (basic && s == '\\') {
-          next();
-          if (multi && (at(i) == ' ' || at(i) == '\t' || at(i) == '\r' || at(i) == '\n')) {
-            while (at(i) == ' ' || at(i) == '\t' || at(i) == '\r' || at(i) == '\n') next();
-            if (at(i) >= 0x80) return refuse("after a line-ending backslash in a string");
-            continue;
-          }
-          if (at(i) >= 0x80) return refuse("after a backslash in a string");
-          if (i < t.size()) next();
-          continue;
-        }
-        if (s >= 0x80 && header) return refuse("in a table header");
-        next();
-      }
-      line_start = false;
-      continue;
-    }
-    if (c >= 0x80) return refuse(header ? "in a table header" : "outside a string or comment");
-    if (c == '\n') {
-      line_start = true;
-      header = false;
-    } else if (c == '[') {
-      if (line_start && depth == 0) {
-        header = true;
-      } else if (!header) {
-        ++depth;
-      }
-    } else if (c == ']' && !header && depth > 0) {
-      --depth;
-    }
-    if (c != ' ' && c != '\t' && c != '\r' && c != '\n') line_start = false;
-    next();
-  }
-  return std::nullopt;
-}
-
-}  // namespace
-
 
 bool is_valid_source_id(std::string_view id) {
   // messages/batch.cpp's rule for load_batch_t.source_id (check_batch).
@@ -416,8 +305,9 @@ ConfigResult parse_config(std::string_view text, std::string_view file_name,
                           const ConfigLimits& limits) {
   ConfigResult result;
   const std::string file(file_name);
-  if (auto e = unsafe_non_ascii(text, file)) {
-    result.errors.push_back(std::move(*e));
+  if (const auto bad = core::find_unsafe_toml_character(text)) {
+    result.errors.push_back(
+        {file, bad->line, bad->column, "", "TOML syntax error: non-ASCII character " + bad->where});
     return result;
   }
   try {
