@@ -65,8 +65,8 @@ std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& 
   std::size_t expected = pos + 32 * static_cast<std::size_t>(blocks) + 4;
   if (size < expected) {
     return "truncated payload: " + std::to_string(size) +
-           " bytes, num_blocks = " + std::to_string(blocks) + " needs " +
-           std::to_string(expected) + " with the tag length";
+           " bytes, num_blocks = " + std::to_string(blocks) + " needs " + std::to_string(expected) +
+           " with the tag length";
   }
   signed_size = expected - 4;
   const auto tag_length = static_cast<std::int32_t>(read_be(p + signed_size, 4));
@@ -127,8 +127,19 @@ class LayoutWalker {
   bool ok_ = true;
 };
 
-/// Encoded bytes of one crack_t inside a damage_state_t: int32, 7 doubles, int32, int8.
-constexpr std::size_t kCrackBytes = 4 + 7 * 8 + 4 + 1;
+/// Encoded bytes of one crack_tip_t: 5 doubles, int8.
+constexpr std::size_t kCrackTipBytes = 5 * 8 + 1;
+/// Fewest encoded bytes of one crack_t (empty origin, no tips, none absorbed): id, origin_kind,
+/// origin, notch_index, 7 doubles, num_nodes, phase, birth_cycle, num_tips, num_absorbed.
+constexpr std::size_t kMinCrackBytes = 4 + 1 + (4 + 1) + 4 + 7 * 8 + 4 + 1 + 8 + 4 + 4;
+
+/// One crack_t inside a damage_state_t.
+bool crack_layout(LayoutWalker& w) {
+  std::int32_t tips = 0, absorbed = 0;
+  return w.skip(4 + 1) && w.string() && w.skip(4 + 7 * 8 + 4 + 1 + 8) &&
+         w.count(kCrackTipBytes, tips) && w.skip(kCrackTipBytes * static_cast<std::size_t>(tips)) &&
+         w.count(4, absorbed) && w.skip(4 * static_cast<std::size_t>(absorbed));
+}
 
 bool state_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
@@ -140,9 +151,15 @@ bool state_layout(const unsigned char* p, std::size_t size) {
   for (std::int32_t i = 0; i < sources; ++i) {
     if (!w.string()) return false;
   }
-  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8) ||
-      !w.count(kCrackBytes, cracks) || !w.skip(kCrackBytes * static_cast<std::size_t>(cracks)) ||
-      !w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1) || !w.string() || !w.count(1, tag) ||
+  // total_cycles, broken_bonds, max_damage, crack_count, crack_length_m, then the cracks.
+  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8 + 4 + 8) ||
+      !w.count(kMinCrackBytes, cracks)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < cracks; ++i) {
+    if (!crack_layout(w)) return false;
+  }
+  if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1) || !w.string() || !w.count(1, tag) ||
       !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
@@ -216,7 +233,8 @@ Decoded decode_batch(const void* data, std::size_t size) {
     return out;
   }
   std::size_t signed_size = 0;
-  if (const std::string e = check_layout(static_cast<const unsigned char*>(data), size, signed_size);
+  if (const std::string e =
+          check_layout(static_cast<const unsigned char*>(data), size, signed_size);
       !e.empty()) {
     out.error = decode_error(e);
     return out;
@@ -271,9 +289,7 @@ peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::
   return m;
 }
 
-double crack_length(const peritwin_msgs::damage_state_t& state) {
-  return state.cracks.empty() ? 0.0 : state.cracks.front().length_m;
-}
+double crack_length(const peritwin_msgs::damage_state_t& state) { return state.crack_length_m; }
 
 std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source) {
   for (std::size_t i = 0; i < state.source_ids.size() && i < state.applied_seq.size(); ++i) {
@@ -289,6 +305,7 @@ std::string state_json(const peritwin_msgs::damage_state_t& s) {
   j["cycles"] = s.total_cycles;
   j["broken_bonds"] = s.broken_bonds;
   j["crack_length_m"] = crack_length(s);
+  j["crack_count"] = s.crack_count;
   j["max_damage"] = s.max_damage;
   j["k_i"] = s.k_i;
   j["remaining_cycles"] = s.remaining_cycles;

@@ -68,13 +68,13 @@ peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::
                                        std::int64_t seq, const Outcome& outcome,
                                        std::int64_t utime);
 
-/// Main crack length (m) of a state message (0 without cracks).
+/// Length (m) of the longest crack of a state message (crack_length_m; 0 without cracks).
 double crack_length(const peritwin_msgs::damage_state_t& state);
 /// Last applied seq of `source` in a state message (0 when the source is unknown).
 std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source);
 
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
-/// max_damage, k_i, remaining_cycles, remaining_low, remaining_high, remaining_life_seq,
+/// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high, remaining_life_seq,
 /// failure, state_hash. Non-finite numbers are written as null.
 std::string state_json(const peritwin_msgs::damage_state_t& state);
 /// The final summary: {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles",

@@ -110,6 +110,28 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
   return cracks;
 }
 
+FaceNodePair extrapolation_face_nodes(const Discretization& disc, Point tip, Point direction,
+                                      double r) {
+  const Point normal{-direction.y, direction.x};
+  const Point behind{tip.x - r * direction.x, tip.y - r * direction.y};
+  FaceNodePair pair;
+  pair.upper_target = {behind.x + 0.5 * disc.dx * normal.x, behind.y + 0.5 * disc.dx * normal.y};
+  pair.lower_target = {behind.x - 0.5 * disc.dx * normal.x, behind.y - 0.5 * disc.dx * normal.y};
+  pair.upper = disc.nearest_node(pair.upper_target);
+  pair.lower = disc.nearest_node(pair.lower_target);
+  return pair;
+}
+
+bool separated_by_crack(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+                        NodeIndex a, NodeIndex b) {
+  const auto k = static_cast<std::size_t>(a);
+  for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
+    const auto bond = disc.family_bonds[static_cast<std::size_t>(f)];
+    if (disc.other_end(bond, a) == b) return intact[static_cast<std::size_t>(bond)] == 0;
+  }
+  return false;
+}
+
 StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
                                                   const std::vector<double>& u, Point tip,
                                                   Point direction, double r1, double r2, double mu,
@@ -118,11 +140,9 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
   // Face jumps [u_t, u_n] (upper minus lower) at distance r behind the tip; half of it is the
   // displacement of one face relative to the crack line, u(r, π) of 001 Eq. (57)-(58).
   auto half_jump = [&](double r, double& ut, double& un, double& r_actual) {
-    const Point behind{tip.x - r * direction.x, tip.y - r * direction.y};
-    const auto up = static_cast<std::size_t>(disc.nearest_node(
-        {behind.x + 0.5 * disc.dx * normal.x, behind.y + 0.5 * disc.dx * normal.y}));
-    const auto low = static_cast<std::size_t>(disc.nearest_node(
-        {behind.x - 0.5 * disc.dx * normal.x, behind.y - 0.5 * disc.dx * normal.y}));
+    const FaceNodePair pair = extrapolation_face_nodes(disc, tip, direction, r);
+    const auto up = static_cast<std::size_t>(pair.upper);
+    const auto low = static_cast<std::size_t>(pair.lower);
     const double jx = u[2 * up] - u[2 * low];
     const double jy = u[2 * up + 1] - u[2 * low + 1];
     ut = 0.5 * (jx * direction.x + jy * direction.y);

@@ -53,6 +53,21 @@ struct StressIntensity {
   double k_i = 0.0;
   double k_ii = 0.0;
 };
+/// The node pair whose displacement jump gives the face opening at distance r behind a tip: the
+/// nodes nearest to the points r behind the tip and Δx/2 either side of the crack line.
+struct FaceNodePair {
+  NodeIndex upper = -1;
+  NodeIndex lower = -1;
+  Point upper_target;  ///< the point the upper node is nearest to
+  Point lower_target;
+};
+FaceNodePair extrapolation_face_nodes(const Discretization& disc, Point tip, Point direction,
+                                      double r);
+
+/// Whether nodes a and b are separated by the crack: a bond joins them and it is broken.
+bool separated_by_crack(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+                        NodeIndex a, NodeIndex b);
+
 StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
                                                   const std::vector<double>& u, Point tip,
                                                   Point direction, double r1, double r2, double mu,

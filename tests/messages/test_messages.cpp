@@ -109,6 +109,22 @@ void expect_equal(const msgs::crack_t& a, const msgs::crack_t& b) {
   EXPECT_SAME_FIELD(a, b, kink_angle_rad);
   EXPECT_EQ(a.num_nodes, b.num_nodes);
   EXPECT_EQ(a.phase, b.phase);
+  EXPECT_EQ(a.id, b.id);
+  EXPECT_EQ(a.origin_kind, b.origin_kind);
+  EXPECT_EQ(a.origin, b.origin);
+  EXPECT_EQ(a.birth_cycle, b.birth_cycle);
+  EXPECT_EQ(a.num_tips, b.num_tips);
+  ASSERT_EQ(a.tips.size(), b.tips.size());
+  for (std::size_t t = 0; t < a.tips.size(); ++t) {
+    EXPECT_SAME_FIELD(a.tips[t], b.tips[t], x);
+    EXPECT_SAME_FIELD(a.tips[t], b.tips[t], y);
+    EXPECT_SAME_FIELD(a.tips[t], b.tips[t], angle_rad);
+    EXPECT_SAME_FIELD(a.tips[t], b.tips[t], k_i);
+    EXPECT_SAME_FIELD(a.tips[t], b.tips[t], k_ii);
+    EXPECT_EQ(a.tips[t].k_status, b.tips[t].k_status);
+  }
+  EXPECT_EQ(a.num_absorbed, b.num_absorbed);
+  EXPECT_EQ(a.absorbed_ids, b.absorbed_ids);
 }
 
 void expect_equal(const msgs::damage_state_t& a, const msgs::damage_state_t& b) {
@@ -122,6 +138,8 @@ void expect_equal(const msgs::damage_state_t& a, const msgs::damage_state_t& b) 
   EXPECT_EQ(a.total_cycles, b.total_cycles);
   EXPECT_EQ(a.broken_bonds, b.broken_bonds);
   EXPECT_SAME_FIELD(a, b, max_damage);
+  EXPECT_EQ(a.crack_count, b.crack_count);
+  EXPECT_SAME_FIELD(a, b, crack_length_m);
   EXPECT_EQ(a.num_cracks, b.num_cracks);
   ASSERT_EQ(a.cracks.size(), b.cracks.size());
   for (std::size_t i = 0; i < a.cracks.size(); ++i) {
@@ -209,8 +227,11 @@ msgs::load_batch_t make_batch() {
 }
 
 msgs::crack_t make_crack(int i) {
-  msgs::crack_t c;
-  c.notch_index = i;
+  msgs::crack_t c{};
+  c.id = 3 + i;
+  c.origin_kind = i == 0 ? msgs::crack_t::ORIGIN_NOTCH : msgs::crack_t::ORIGIN_INTERIOR;
+  c.origin = i == 0 ? "notch pre-crack" : "interior";
+  c.notch_index = i == 0 ? 0 : -1;
   c.origin_x = 0.0125 * i;
   c.origin_y = -0.0;
   c.tip_x = 0.031415926535 + i;
@@ -220,6 +241,20 @@ msgs::crack_t make_crack(int i) {
   c.kink_angle_rad = -1.2217304763960306;
   c.num_nodes = 123 + i;
   c.phase = i == 0 ? msgs::crack_t::PHASE_PROPAGATION : msgs::crack_t::PHASE_INITIATION;
+  c.birth_cycle = kI64Max - i;
+  for (int t = 0; t <= i; ++t) {  // one tip, or two (interior)
+    msgs::crack_tip_t tip{};
+    tip.x = 0.01 * t;
+    tip.y = -0.0;
+    tip.angle_rad = 3.14159 - t;
+    tip.k_i = t == 0 ? 12.5e6 : std::numeric_limits<double>::quiet_NaN();
+    tip.k_ii = -1e-310;
+    tip.k_status = t == 0 ? msgs::crack_tip_t::K_OK : msgs::crack_tip_t::K_NEAR_SURFACE;
+    c.tips.push_back(tip);
+  }
+  c.num_tips = static_cast<std::int32_t>(c.tips.size());
+  c.absorbed_ids = std::vector<std::int32_t>(static_cast<std::size_t>(i), 7);
+  c.num_absorbed = i;
   return c;
 }
 
@@ -235,6 +270,8 @@ msgs::damage_state_t make_state() {
   m.total_cycles = 9'876'543'210;
   m.broken_bonds = 4321;
   m.max_damage = 0.5;
+  m.crack_count = 11;
+  m.crack_length_m = 0.02;
   m.cracks = {make_crack(0), make_crack(1)};
   m.num_cracks = static_cast<std::int32_t>(m.cracks.size());
   m.k_i = 1.7e7;
@@ -406,9 +443,10 @@ TEST(MessagesDecode, OtherTypeFails) {
 
 TEST(MessagesDecode, FingerprintsAreDistinct) {
   const std::vector<std::int64_t> hashes = {
-      msgs::load_block_t::getHash(),   msgs::load_batch_t::getHash(),   msgs::crack_t::getHash(),
-      msgs::damage_state_t::getHash(), msgs::damage_field_t::getHash(), msgs::reject_t::getHash(),
-      msgs::status_t::getHash()};
+      msgs::load_block_t::getHash(),   msgs::load_batch_t::getHash(),
+      msgs::crack_t::getHash(),        msgs::crack_tip_t::getHash(),
+      msgs::damage_state_t::getHash(), msgs::damage_field_t::getHash(),
+      msgs::reject_t::getHash(),       msgs::status_t::getHash()};
   for (std::size_t i = 0; i < hashes.size(); ++i) {
     for (std::size_t j = i + 1; j < hashes.size(); ++j) EXPECT_NE(hashes[i], hashes[j]);
   }

@@ -152,6 +152,8 @@ TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
   crack.length_m = 0.0125;
   s.cracks = {crack};
   s.num_cracks = 1;
+  s.crack_count = 3;
+  s.crack_length_m = 0.0125;
   s.k_i = std::numeric_limits<double>::quiet_NaN();
   s.remaining_cycles = 1.5e6;
   s.remaining_cycles_low = -std::numeric_limits<double>::infinity();
@@ -162,23 +164,14 @@ TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
   const std::string text = state_json(s);
   EXPECT_EQ(text,
             "{\"detail\":\"b1-ct\",\"state_seq\":12,\"cycles\":34567,\"broken_bonds\":89,"
-            "\"crack_length_m\":0.0125,\"max_damage\":0.25,\"k_i\":null,"
+            "\"crack_length_m\":0.0125,\"crack_count\":3,\"max_damage\":0.25,\"k_i\":null,"
             "\"remaining_cycles\":1500000.0,\"remaining_low\":null,\"remaining_high\":null,"
             "\"remaining_life_seq\":-1,\"failure\":2,\"state_hash\":\"0123abcd\"}");
   const auto j = nlohmann::ordered_json::parse(text);
-  const std::vector<std::string> documented = {"detail",
-                                               "state_seq",
-                                               "cycles",
-                                               "broken_bonds",
-                                               "crack_length_m",
-                                               "max_damage",
-                                               "k_i",
-                                               "remaining_cycles",
-                                               "remaining_low",
-                                               "remaining_high",
-                                               "remaining_life_seq",
-                                               "failure",
-                                               "state_hash"};
+  const std::vector<std::string> documented = {
+      "detail",         "state_seq",          "cycles",  "broken_bonds",     "crack_length_m",
+      "crack_count",    "max_damage",         "k_i",     "remaining_cycles", "remaining_low",
+      "remaining_high", "remaining_life_seq", "failure", "state_hash"};
   std::vector<std::string> keys;
   for (const auto& item : j.items()) keys.push_back(item.key());
   EXPECT_EQ(keys, documented);

@@ -95,15 +95,27 @@ std::vector<TimeSeriesRow> sample_rows() {
   TimeSeriesRow a;  // default NaNs for what is not computed yet
   a.state_seq = 1;
   a.total_cycles = 1000;
-  TimeSeriesRow b{2,   250000, 17,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
-                  0.1, 12.5e6, -0.3e6, 4.5e6,   3.9e6,    5.1e6};
-  TimeSeriesRow c{3,         9007199254740993LL,
-                  123456789, 0.1 + 0.2,
-                  1.0 / 3.0, -0.0,
-                  1e-300,    -3.14159,
-                  kNaN,      std::numeric_limits<double>::infinity(),
-                  0.0,       -1.0,
-                  2.5};
+  TimeSeriesRow b{2,   250000, 17,     2,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
+                  0.1, 12.5e6, -0.3e6, 4.5e6, 3.9e6,   5.1e6,    {}};
+  // Two cracks: a notch crack and an interior one with two tips (three crack rows).
+  b.cracks = {{0, 1, 1, 0, 1.25e-3, 1.125e-3, 0.0315, -0.0021, 0.1, 12.5e6, -0.3e6},
+              {0, 2, 3, 2, 2e-3, 1.9e-3, 0.01, 0.02, 3.0, kNaN, kNaN},
+              {0, 2, 3, 0, 2e-3, 1.9e-3, 0.008, 0.02, -0.1, 1e6, 2e5}};
+  TimeSeriesRow c{3,
+                  9007199254740993LL,
+                  123456789,
+                  1,
+                  0.1 + 0.2,
+                  1.0 / 3.0,
+                  -0.0,
+                  1e-300,
+                  -3.14159,
+                  kNaN,
+                  std::numeric_limits<double>::infinity(),
+                  0.0,
+                  -1.0,
+                  2.5,
+                  {}};
   return {a, b, c};
 }
 
@@ -114,6 +126,7 @@ void expect_rows_equal(const std::vector<TimeSeriesRow>& got,
     EXPECT_EQ(got[r].state_seq, want[r].state_seq);
     EXPECT_EQ(got[r].total_cycles, want[r].total_cycles);
     EXPECT_EQ(got[r].broken_bonds, want[r].broken_bonds);
+    EXPECT_EQ(got[r].crack_count, want[r].crack_count);
     const double TimeSeriesRow::*members[] = {
         &TimeSeriesRow::crack_length_m, &TimeSeriesRow::crack_projected_length_m,
         &TimeSeriesRow::tip_x,          &TimeSeriesRow::tip_y,
@@ -162,12 +175,14 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   const auto seq = raw_read<std::int64_t>(f, "/timeseries/state_seq", H5T_NATIVE_INT64);
   const auto cyc = raw_read<std::int64_t>(f, "/timeseries/total_cycles", H5T_NATIVE_INT64);
   const auto bb = raw_read<std::int64_t>(f, "/timeseries/broken_bonds", H5T_NATIVE_INT64);
+  const auto cc = raw_read<std::int64_t>(f, "/timeseries/crack_count", H5T_NATIVE_INT64);
   ASSERT_EQ(seq.size(), 3u);
   std::vector<TimeSeriesRow> got(3);
   for (std::size_t r = 0; r < 3; ++r) {
     got[r].state_seq = seq[r];
     got[r].total_cycles = cyc[r];
     got[r].broken_bonds = bb[r];
+    got[r].crack_count = cc[r];
   }
   const std::pair<const char*, double TimeSeriesRow::*> cols[] = {
       {"crack_length_m", &TimeSeriesRow::crack_length_m},
@@ -203,6 +218,20 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
 
   // The library's own reader agrees.
   expect_rows_equal(read_time_series(h5), rows);
+  // The crack rows of every row, with its state_seq, bit for bit.
+  const auto cracks = read_crack_rows(h5);
+  ASSERT_EQ(cracks.size(), rows[1].cracks.size());
+  for (std::size_t i = 0; i < cracks.size(); ++i) {
+    const CrackRow& want = rows[1].cracks[i];
+    EXPECT_EQ(cracks[i].state_seq, 2);
+    EXPECT_EQ(cracks[i].crack_id, want.crack_id);
+    EXPECT_EQ(cracks[i].origin_kind, want.origin_kind);
+    EXPECT_EQ(cracks[i].k_status, want.k_status);
+    for (auto m : {&CrackRow::length_m, &CrackRow::projected_length_m, &CrackRow::tip_x,
+                   &CrackRow::tip_y, &CrackRow::tip_angle_rad, &CrackRow::k_i, &CrackRow::k_ii}) {
+      EXPECT_TRUE(same_bits(cracks[i].*m, want.*m)) << i;
+    }
+  }
   const auto snaps = read_snapshot_list(h5);
   ASSERT_EQ(snaps.size(), 2u);
   EXPECT_EQ(read_snapshot_damage(h5, snaps[1]), d1);
@@ -253,6 +282,11 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   EXPECT_THROW(w.write_mesh(other, mesh.y), ResultsError);
   EXPECT_THROW(w.write_snapshot(4, 40, std::vector<double>(11, 0.0)), ResultsError);
 
+  w.rewind_to(1);  // resume from a checkpoint at state 1: the crack rows of state 2 go too
+  EXPECT_EQ(w.rows(), 1u);
+  EXPECT_EQ(read_crack_rows(h5).size(), 0u);
+  w.append(rows[1]);
+  EXPECT_EQ(read_crack_rows(h5).size(), 3u);
   w.rewind_to(2);  // resume from a checkpoint at state 2
   EXPECT_EQ(w.rows(), 2u);
   ASSERT_EQ(w.snapshots().size(), 1u);

@@ -44,8 +44,11 @@
 //   [detail.output]      directory "results/<id>" (relative to the daemon's working directory),
 //                        field_every_batches 10 (>= 0, 0 = never), png false
 //   [detail.life]        criterion "phase3" | "crack_length" | "connectivity",
-//                        critical_crack_length (m, > 0, grown length along the crack path from
-//                        the notch tip; R with and only with "crack_length"),
+//                        critical_crack_length (m, > 0: the length along the crack path of the
+//                        longest crack — from a notch tip, from the surface a crack started on,
+//                        tip to tip inside; R with and only with "crack_length"), crack_origin
+//                        ("" = any crack; else only cracks from this origin: "notch <name>",
+//                        "hole <index>", "outline"; only with "crack_length"),
 //                        reference_spectrum "empirical" (the rolling spectrum of the received
 //                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count
 //                        (>= 1)}, ...] (repeated until the criterion is met), band "none" |
@@ -169,6 +172,8 @@ enum class BandSource { none, a2_scatter };
 struct LifeConfig {
   LifeCriterion criterion = LifeCriterion::phase3;
   double critical_crack_length = 0.0;  ///< m, crack_length only
+  /// crack_length only: "" = the longest crack; else the longest crack whose origin is this.
+  std::string crack_origin;
   /// Empty = the rolling empirical spectrum of the received cycles ("empirical").
   std::vector<LoadBlock> reference_spectrum;  ///< each valid by check_load_block
   BandSource band = BandSource::none;

@@ -402,12 +402,15 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, Life
   l.criterion = criterion.value_or(l.criterion);
   if (criterion == LifeCriterion::crack_length) {
     l.critical_crack_length = req(r, "critical_crack_length", Bound::positive).value_or(0.0);
+    l.crack_origin = r.string("crack_origin", "");
   } else if (criterion) {
-    r.node("critical_crack_length", false);
-    r.check("critical_crack_length", !r.has("critical_crack_length"),
-            "only used with criterion = \"crack_length\"");
+    for (const char* key : {"critical_crack_length", "crack_origin"}) {
+      r.node(key, false);
+      r.check(key, !r.has(key), "only used with criterion = \"crack_length\"");
+    }
   } else {
     r.node("critical_crack_length", false);
+    r.node("crack_origin", false);
   }
   if (const toml::node* n = r.node("reference_spectrum", false); n != nullptr && n->is_string()) {
     r.check("reference_spectrum", n->as_string()->get() == "empirical",

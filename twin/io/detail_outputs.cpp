@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cmath>
 #include <system_error>
 
 #include "twin/io/damage_png.h"
@@ -15,12 +16,31 @@ TimeSeriesRow results_row(const Twin& twin) {
   row.broken_bonds = twin.broken_bonds();
   const CrackReport& r = twin.cracks();
   if (!r.cracks.empty()) {
-    const CrackMetrics& c = r.cracks.front();
+    const FoundCrack& c = r.cracks.front().crack;
     row.crack_length_m = c.length;
     row.crack_projected_length_m = c.projected_length;
-    row.tip_x = c.tip.x;
-    row.tip_y = c.tip.y;
+    row.tip_x = c.tips[0].position.x;
+    row.tip_y = c.tips[0].position.y;
     row.kink_angle_rad = c.kink_angle;
+  }
+  row.crack_count = static_cast<std::int64_t>(r.cracks.size());
+  for (const auto& rc : r.cracks) {
+    for (std::size_t t = 0; t < rc.crack.tips.size(); ++t) {
+      const auto& tip = rc.crack.tips[t];
+      CrackRow c;
+      c.state_seq = row.state_seq;
+      c.crack_id = rc.crack.id;
+      c.origin_kind = static_cast<std::int64_t>(rc.crack.origin);
+      c.k_status = static_cast<std::int64_t>(rc.k[t].status);
+      c.length_m = rc.crack.length;
+      c.projected_length_m = rc.crack.projected_length;
+      c.tip_x = tip.position.x;
+      c.tip_y = tip.position.y;
+      c.tip_angle_rad = std::atan2(tip.direction.y, tip.direction.x);
+      c.k_i = rc.k[t].k_i;
+      c.k_ii = rc.k[t].k_ii;
+      row.cracks.push_back(c);
+    }
   }
   row.k_i = r.k_i;
   row.k_ii = r.k_ii;

@@ -15,25 +15,44 @@ namespace peritwin::twin {
 namespace {
 
 constexpr const char* kFormat = "peritwin-results";
-constexpr std::int64_t kLayoutVersion = 1;
+constexpr std::int64_t kLayoutVersion = 2;
 
+template <class Row>
 struct IntColumn {
   const char* name;
-  std::int64_t TimeSeriesRow::*member;
+  std::int64_t Row::*member;
   const char* units;
+  std::int64_t fill = 0;  ///< the value of rows written before the column existed
 };
+template <class Row>
 struct DoubleColumn {
   const char* name;
-  double TimeSeriesRow::*member;
+  double Row::*member;
   const char* units;
 };
 
-constexpr std::array<IntColumn, 3> kIntColumns{{
+constexpr std::array<IntColumn<TimeSeriesRow>, 4> kIntColumns{{
     {"state_seq", &TimeSeriesRow::state_seq, "1"},
     {"total_cycles", &TimeSeriesRow::total_cycles, "cycles"},
     {"broken_bonds", &TimeSeriesRow::broken_bonds, "1"},
+    {"crack_count", &TimeSeriesRow::crack_count, "1", -1},
 }};
-constexpr std::array<DoubleColumn, 10> kDoubleColumns{{
+constexpr std::array<IntColumn<CrackRow>, 4> kCrackIntColumns{{
+    {"state_seq", &CrackRow::state_seq, "1"},
+    {"crack_id", &CrackRow::crack_id, "1"},
+    {"origin_kind", &CrackRow::origin_kind, "1"},
+    {"k_status", &CrackRow::k_status, "1"},
+}};
+constexpr std::array<DoubleColumn<CrackRow>, 7> kCrackDoubleColumns{{
+    {"length_m", &CrackRow::length_m, "m"},
+    {"projected_length_m", &CrackRow::projected_length_m, "m"},
+    {"tip_x", &CrackRow::tip_x, "m"},
+    {"tip_y", &CrackRow::tip_y, "m"},
+    {"tip_angle_rad", &CrackRow::tip_angle_rad, "rad"},
+    {"k_i", &CrackRow::k_i, "Pa*m^0.5"},
+    {"k_ii", &CrackRow::k_ii, "Pa*m^0.5"},
+}};
+constexpr std::array<DoubleColumn<TimeSeriesRow>, 10> kDoubleColumns{{
     {"crack_length_m", &TimeSeriesRow::crack_length_m, "m"},
     {"crack_projected_length_m", &TimeSeriesRow::crack_projected_length_m, "m"},
     {"tip_x", &TimeSeriesRow::tip_x, "m"},
@@ -94,7 +113,7 @@ void check_format(const h5::File& file) {
     throw ResultsError("'" + file.file_name() + "' is not a peritwin results file");
   }
   const std::int64_t layout = file.attribute_int64("layout_version");
-  if (layout != kLayoutVersion) {
+  if (layout != kLayoutVersion && layout != 1) {
     throw ResultsError("'" + file.file_name() + "' has results layout_version " +
                        std::to_string(layout) + "; this build reads " +
                        std::to_string(kLayoutVersion));
@@ -137,6 +156,8 @@ struct ResultsWriter::Impl {
   h5::File file;
   std::vector<h5::Dataset> int_columns;
   std::vector<h5::Dataset> double_columns;
+  std::vector<h5::Dataset> crack_int_columns;
+  std::vector<h5::Dataset> crack_double_columns;
   std::uint64_t rows = 0;
   std::size_t nodes = 0;
   std::vector<SnapshotInfo> snapshots;
@@ -146,6 +167,8 @@ struct ResultsWriter::Impl {
     if (!file.is_open()) throw ResultsError(std::string(what) + " after close()");
   }
   void open_columns();
+  /// Drops the crack rows after the first `limit` and those of states after `state_seq`.
+  void trim_cracks_after(std::int64_t state_seq, std::uint64_t limit);
   void write_xdmf() const;
   [[nodiscard]] std::string xdmf_grid(std::string_view name, const SnapshotInfo* snapshot) const;
 };
@@ -178,6 +201,9 @@ void ResultsWriter::Impl::open_or_create() {
     file.set_attribute("detail", options.detail);
   }
   open_columns();
+  if (file.attribute_int64("layout_version") != kLayoutVersion) {
+    file.set_attribute("layout_version", kLayoutVersion);  // upgraded by open_columns
+  }
   if (file.exists("mesh/x")) {
     nodes = static_cast<std::size_t>(file.open_dataset("mesh/x").size());
   }
@@ -187,18 +213,26 @@ void ResultsWriter::Impl::open_or_create() {
 }
 
 void ResultsWriter::Impl::open_columns() {
-  h5::Group ts = file.require_group("timeseries");
-  auto open = [&ts](const char* name, const char* units, auto tag) {
+  auto open = [](h5::Group& g, const char* name, const char* units, auto tag) {
     using T = decltype(tag);
-    if (ts.exists(name)) return ts.open_dataset(name);
-    h5::Dataset ds = ts.create_extendible<T>(name, 1024);
+    if (g.exists(name)) return g.open_dataset(name);
+    h5::Dataset ds = g.create_extendible<T>(name, 1024);
     ds.set_attribute("units", std::string_view(units));
     return ds;
   };
+  h5::Group ts = file.require_group("timeseries");
   int_columns.clear();
   double_columns.clear();
-  for (const auto& c : kIntColumns) int_columns.push_back(open(c.name, c.units, std::int64_t{}));
-  for (const auto& c : kDoubleColumns) double_columns.push_back(open(c.name, c.units, double{}));
+  for (const auto& c : kIntColumns) {
+    const bool existed = ts.exists(c.name);
+    int_columns.push_back(open(ts, c.name, c.units, std::int64_t{}));
+    if (!existed && c.fill != 0) {  // a column new in this layout: the old rows get `fill`
+      const std::uint64_t old_rows = ts.open_dataset(kIntColumns[0].name).size();
+      for (std::uint64_t i = 0; i < old_rows; ++i) int_columns.back().append(c.fill);
+    }
+  }
+  for (const auto& c : kDoubleColumns)
+    double_columns.push_back(open(ts, c.name, c.units, double{}));
   // A crash between the appends of one row leaves columns of different lengths: drop the tail.
   std::uint64_t n = int_columns.front().size();
   for (const auto& ds : int_columns) n = std::min(n, ds.size());
@@ -210,6 +244,35 @@ void ResultsWriter::Impl::open_columns() {
     if (ds.size() != n) ds.resize(n);
   }
   rows = n;
+  // The crack rows: equal lengths, and none of a row the time series does not hold (a crash
+  // after a row's crack rows and before the row).
+  h5::Group cr = file.require_group("cracks");
+  crack_int_columns.clear();
+  crack_double_columns.clear();
+  for (const auto& c : kCrackIntColumns) {
+    crack_int_columns.push_back(open(cr, c.name, c.units, std::int64_t{}));
+  }
+  for (const auto& c : kCrackDoubleColumns) {
+    crack_double_columns.push_back(open(cr, c.name, c.units, double{}));
+  }
+  std::uint64_t m = crack_int_columns.front().size();
+  for (const auto& ds : crack_int_columns) m = std::min(m, ds.size());
+  for (const auto& ds : crack_double_columns) m = std::min(m, ds.size());
+  const std::int64_t last_seq =
+      n == 0 ? -1 : int_columns.front().read<std::int64_t>().at(static_cast<std::size_t>(n - 1));
+  trim_cracks_after(last_seq, m);
+}
+
+void ResultsWriter::Impl::trim_cracks_after(std::int64_t state_seq, std::uint64_t limit) {
+  const auto seqs = crack_int_columns.front().read<std::int64_t>();
+  std::uint64_t keep = std::min<std::uint64_t>(limit, seqs.size());
+  while (keep > 0 && seqs[static_cast<std::size_t>(keep - 1)] > state_seq) --keep;
+  for (auto& ds : crack_int_columns) {
+    if (ds.size() != keep) ds.resize(keep);
+  }
+  for (auto& ds : crack_double_columns) {
+    if (ds.size() != keep) ds.resize(keep);
+  }
 }
 
 std::string ResultsWriter::Impl::xdmf_grid(std::string_view name,
@@ -308,6 +371,17 @@ void ResultsWriter::write_mesh(std::span<const double> x, std::span<const double
 
 void ResultsWriter::append(const TimeSeriesRow& row) {
   impl_->require_open("append");
+  // The crack rows first: a crash before the row is appended leaves crack rows that the next
+  // open drops (open_columns).
+  for (CrackRow c : row.cracks) {
+    c.state_seq = row.state_seq;
+    for (std::size_t i = 0; i < kCrackIntColumns.size(); ++i) {
+      impl_->crack_int_columns[i].append(c.*(kCrackIntColumns[i].member));
+    }
+    for (std::size_t i = 0; i < kCrackDoubleColumns.size(); ++i) {
+      impl_->crack_double_columns[i].append(c.*(kCrackDoubleColumns[i].member));
+    }
+  }
   for (std::size_t i = 0; i < kIntColumns.size(); ++i) {
     impl_->int_columns[i].append(row.*(kIntColumns[i].member));
   }
@@ -362,6 +436,7 @@ void ResultsWriter::rewind_to(std::int64_t state_seq) {
     for (auto& ds : im.double_columns) ds.resize(keep);
     im.rows = keep;
   }
+  im.trim_cracks_after(state_seq, std::numeric_limits<std::uint64_t>::max());
   const auto before = im.snapshots.size();
   std::erase_if(im.snapshots, [&](const SnapshotInfo& s) {
     if (s.state_seq <= state_seq) return false;
@@ -385,6 +460,8 @@ void ResultsWriter::close() {
   if (!impl_ || !impl_->file.is_open()) return;
   impl_->int_columns.clear();
   impl_->double_columns.clear();
+  impl_->crack_int_columns.clear();
+  impl_->crack_double_columns.clear();
   impl_->file.flush();
   impl_->file.close();
 }
@@ -404,7 +481,10 @@ std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path
   std::vector<std::vector<double>> doubles;
   std::size_t n = std::numeric_limits<std::size_t>::max();
   for (const auto& c : kIntColumns) {
-    ints.push_back(file.read<std::int64_t>(std::string("timeseries/") + c.name));
+    const std::string path = std::string("timeseries/") + c.name;
+    // A version-1 file has no crack_count: its rows read as `fill`.
+    ints.push_back(file.exists(path) ? file.read<std::int64_t>(path)
+                                     : std::vector<std::int64_t>(ints.front().size(), c.fill));
     n = std::min(n, ints.back().size());
   }
   for (const auto& c : kDoubleColumns) {
@@ -417,6 +497,33 @@ std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path
       rows[r].*(kIntColumns[i].member) = ints[i][r];
     for (std::size_t i = 0; i < kDoubleColumns.size(); ++i) {
       rows[r].*(kDoubleColumns[i].member) = doubles[i][r];
+    }
+  }
+  return rows;
+}
+
+std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  if (!file.exists("cracks/state_seq")) return {};  // a version-1 file
+  std::vector<std::vector<std::int64_t>> ints;
+  std::vector<std::vector<double>> doubles;
+  std::size_t n = std::numeric_limits<std::size_t>::max();
+  for (const auto& c : kCrackIntColumns) {
+    ints.push_back(file.read<std::int64_t>(std::string("cracks/") + c.name));
+    n = std::min(n, ints.back().size());
+  }
+  for (const auto& c : kCrackDoubleColumns) {
+    doubles.push_back(file.read<double>(std::string("cracks/") + c.name));
+    n = std::min(n, doubles.back().size());
+  }
+  std::vector<CrackRow> rows(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    for (std::size_t i = 0; i < kCrackIntColumns.size(); ++i) {
+      rows[r].*(kCrackIntColumns[i].member) = ints[i][r];
+    }
+    for (std::size_t i = 0; i < kCrackDoubleColumns.size(); ++i) {
+      rows[r].*(kCrackDoubleColumns[i].member) = doubles[i][r];
     }
   }
   return rows;

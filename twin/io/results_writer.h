@@ -4,12 +4,19 @@
 // (temp file + rename) after every snapshot, so both are usable at any moment.
 // Units: SI (m, rad, Pa·√m for K); cycles are counts.
 //
-// File layout (layout_version 1):
-//   /                     attributes: format = "peritwin-results", layout_version = 1, detail
+// File layout (layout_version 2; a version-1 file is upgraded in place when opened for writing:
+// its rows get crack_count = -1, unknown, and no crack rows):
+//   /                     attributes: format = "peritwin-results", layout_version = 2, detail
 //   /timeseries/<column>  extendible 1-D, one element per row; attribute "units". Columns:
-//                         state_seq, total_cycles, broken_bonds (int64); crack_length_m,
-//                         crack_projected_length_m, tip_x, tip_y, kink_angle_rad, k_i, k_ii,
-//                         remaining_cycles, remaining_low, remaining_high (float64)
+//                         state_seq, total_cycles, broken_bonds, crack_count (int64);
+//                         crack_length_m, crack_projected_length_m, tip_x, tip_y, kink_angle_rad,
+//                         k_i, k_ii (the main crack: the longest, first tip), remaining_cycles,
+//                         remaining_low, remaining_high (float64)
+//   /cracks/<column>      extendible 1-D, one element per crack tip per row (every crack of the
+//                         state, in the STATE order); attribute "units". Columns: state_seq,
+//                         crack_id, origin_kind (1 notch, 2 surface, 3 interior), k_status
+//                         (crack_tip_t.K_*) (int64); length_m, projected_length_m, tip_x, tip_y,
+//                         tip_angle_rad, k_i, k_ii (float64)
 //   /mesh/x, /mesh/y      float64[node_count] node coordinates (m); /mesh attribute node_count
 //   /fields/step_<n>/damage  float32[node_count], n = 0, 1, 2, ... zero-padded to 6 digits;
 //                         attributes state_seq, total_cycles (int64) on the dataset and its group
@@ -29,13 +36,29 @@
 
 namespace peritwin::twin {
 
+/// One crack tip of one state (the /cracks table). NaN means "not valid" (see k_status).
+struct CrackRow {
+  std::int64_t state_seq = 0;
+  std::int64_t crack_id = 0;
+  std::int64_t origin_kind = 0;  ///< 1 notch, 2 surface, 3 interior
+  std::int64_t k_status = 0;     ///< crack_tip_t.K_*
+  double length_m = 0.0;         ///< the crack's, along its path
+  double projected_length_m = 0.0;
+  double tip_x = 0.0;
+  double tip_y = 0.0;
+  double tip_angle_rad = 0.0;  ///< direction of growth at the tip
+  double k_i = std::numeric_limits<double>::quiet_NaN();
+  double k_ii = std::numeric_limits<double>::quiet_NaN();
+};
+
 /// One row of the time series. NaN means "not computed (yet)".
 struct TimeSeriesRow {
   std::int64_t state_seq = 0;     ///< state sequence number the row belongs to
   std::int64_t total_cycles = 0;  ///< cycles applied since the start
   std::int64_t broken_bonds = 0;
-  double crack_length_m = 0.0;                              ///< along the crack path
-  double crack_projected_length_m = 0.0;                    ///< projected, as the papers measure it
+  std::int64_t crack_count = 0;           ///< cracks found; -1 = unknown (rows of a version-1 file)
+  double crack_length_m = 0.0;            ///< along the crack path
+  double crack_projected_length_m = 0.0;  ///< projected, as the papers measure it
   double tip_x = std::numeric_limits<double>::quiet_NaN();  ///< crack tip (m)
   double tip_y = std::numeric_limits<double>::quiet_NaN();
   double kink_angle_rad = std::numeric_limits<double>::quiet_NaN();
@@ -44,6 +67,9 @@ struct TimeSeriesRow {
   double remaining_cycles = std::numeric_limits<double>::quiet_NaN();
   double remaining_low = std::numeric_limits<double>::quiet_NaN();
   double remaining_high = std::numeric_limits<double>::quiet_NaN();
+  /// Every crack tip of the state (written to /cracks with this row's state_seq; not read back
+  /// by read_time_series: see read_crack_rows).
+  std::vector<CrackRow> cracks;
 };
 
 struct ResultsOptions {
@@ -115,6 +141,7 @@ class ResultsWriter {
 // --- reading a results file back (tools, tests) ------------------------------------------------
 
 std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path);
+std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path);
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path);
 std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot);

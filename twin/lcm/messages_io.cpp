@@ -26,14 +26,26 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
   bool overload = false;
   for (const auto& e : engine.break_events())
     overload = overload || e.cause == BreakCause::overload;
-  for (const auto& c : report.cracks) {
+  // Every crack that has started (a notch crack without crack nodes has not), longest first;
+  // at most MAX_CRACKS listed.
+  m.crack_count = 0;
+  for (const auto& rc : report.cracks) {
+    const FoundCrack& c = rc.crack;
     if (c.length <= 0.0 && c.nodes == 0) continue;  // not initiated
-    peritwin_msgs::crack_t k;
+    ++m.crack_count;
+    if (m.crack_count == 1) m.crack_length_m = c.length;
+    if (static_cast<std::int32_t>(m.cracks.size()) >= peritwin_msgs::damage_state_t::MAX_CRACKS) {
+      continue;
+    }
+    peritwin_msgs::crack_t k{};
+    k.id = c.id;
+    k.origin_kind = static_cast<std::int8_t>(c.origin);
+    k.origin = rc.origin;
     k.notch_index = c.notch;
-    k.origin_x = c.origin.x;
-    k.origin_y = c.origin.y;
-    k.tip_x = c.tip.x;
-    k.tip_y = c.tip.y;
+    k.origin_x = c.origin_point.x;
+    k.origin_y = c.origin_point.y;
+    k.tip_x = c.tips[0].position.x;
+    k.tip_y = c.tips[0].position.y;
     k.length_m = c.length;
     k.projected_length_m = c.projected_length;
     k.kink_angle_rad = c.kink_angle;
@@ -41,6 +53,20 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
     k.phase = twin.failure() != Failure::none || overload ? peritwin_msgs::crack_t::PHASE_FINAL
               : c.length > 0.0 ? peritwin_msgs::crack_t::PHASE_PROPAGATION
                                : peritwin_msgs::crack_t::PHASE_INITIATION;
+    k.birth_cycle = c.birth_cycle;
+    for (std::size_t t = 0; t < c.tips.size(); ++t) {
+      peritwin_msgs::crack_tip_t tip{};
+      tip.x = c.tips[t].position.x;
+      tip.y = c.tips[t].position.y;
+      tip.angle_rad = std::atan2(c.tips[t].direction.y, c.tips[t].direction.x);
+      tip.k_i = rc.k[t].k_i;
+      tip.k_ii = rc.k[t].k_ii;
+      tip.k_status = static_cast<std::int8_t>(rc.k[t].status);
+      k.tips.push_back(tip);
+    }
+    k.num_tips = static_cast<std::int32_t>(k.tips.size());
+    k.absorbed_ids = c.absorbed;
+    k.num_absorbed = static_cast<std::int32_t>(k.absorbed_ids.size());
     m.cracks.push_back(k);
   }
   m.num_cracks = static_cast<std::int32_t>(m.cracks.size());

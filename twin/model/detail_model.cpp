@@ -81,6 +81,10 @@ Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConf
   CrackTrackerOptions tracker_options;
   tracker_options.phase_switch_damage = config.fatigue.phase_switch_damage;
   m->tracker_ = std::make_unique<CrackTracker>(sp.disc, config.geometry.notches, tracker_options);
+  std::vector<std::vector<Point>> notch_paths;
+  for (const auto& n : config.geometry.notches) notch_paths.push_back({n.a, n.b});
+  m->finder_ = std::make_unique<CrackFinder>(sp.disc, *m->tracker_, std::move(notch_paths),
+                                             config.fatigue.phase_switch_damage);
   for (auto c : sp.disc.bond_precut) m->precut_bonds_ += c ? 1 : 0;
 
   SignatureHash h;
@@ -135,57 +139,169 @@ std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const 
                                          specimen_.loads, s);
 }
 
+std::string DetailModel::surface_name(Point p) const {
+  // The nearest hole rim against the outline: a crack within δ + Δx of a rim started there.
+  const auto& holes = config_.geometry.holes;
+  int best = -1;
+  double best_distance = disc().horizon + disc().dx;
+  for (std::size_t i = 0; i < holes.size(); ++i) {
+    const double d =
+        std::abs(std::hypot(p.x - holes[i].centre.x, p.y - holes[i].centre.y) - holes[i].radius);
+    if (d <= best_distance) {
+      best_distance = d;
+      best = static_cast<int>(i);
+    }
+  }
+  return best >= 0 ? "hole " + std::to_string(best) : "outline";
+}
+
+const ReportedCrack* CrackReport::criterion_crack(const std::string& origin) const {
+  for (const auto& c : cracks) {
+    if (origin.empty() || c.origin == origin) return &c;  // longest first
+  }
+  return nullptr;
+}
+
+namespace {
+
+std::string origin_name(const DetailModel& model, const FoundCrack& c) {
+  switch (c.origin) {
+    case CrackOrigin::notch:
+      return "notch " + std::to_string(c.notch);
+    case CrackOrigin::surface:
+      return model.surface_name(c.origin_point);
+    case CrackOrigin::interior:
+      return "interior";
+  }
+  return "interior";
+}
+
+/// Longest first along the path; ties by id (then the snapshot order).
+void sort_longest_first(std::vector<ReportedCrack>& cracks) {
+  std::stable_sort(cracks.begin(), cracks.end(), [](const auto& a, const auto& b) {
+    if (a.crack.length != b.crack.length) return a.crack.length > b.crack.length;
+    return a.crack.id < b.crack.id;
+  });
+}
+
+double path_length(const std::vector<Point>& path) {
+  double l = 0.0;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    l += std::hypot(path[i + 1].x - path[i].x, path[i + 1].y - path[i].y);
+  }
+  return l;
+}
+
+/// Whether the displacement extrapolation (001 Eq. 62-63 at r = δ and 2δ behind the tip, the node
+/// pairs of stress_intensity_by_extrapolation) is meaningful at this tip; why not otherwise.
+KStatus extrapolation_status(const DetailModel& model, const std::vector<std::uint8_t>& intact,
+                             const CrackTipState& tip, double face_length) {
+  const Discretization& disc = model.disc();
+  const double delta = disc.horizon;
+  if (face_length < 2 * delta) return KStatus::short_crack;
+  const auto tip_node = static_cast<std::size_t>(disc.nearest_node(tip.position));
+  if (model.finder().surface_distance()[tip_node] < delta) return KStatus::near_surface;
+  if (std::hypot(tip.direction.x, tip.direction.y) < 0.5) return KStatus::short_crack;
+  for (const double r : {delta, 2 * delta}) {
+    const auto pair = extrapolation_face_nodes(disc, tip.position, tip.direction, r);
+    for (const auto& [node, target] :
+         {std::pair{pair.upper, pair.upper_target}, std::pair{pair.lower, pair.lower_target}}) {
+      const Point q = disc.position[static_cast<std::size_t>(node)];
+      // A node more than a cell from its fit point: the point lies outside the body.
+      if (std::hypot(q.x - target.x, q.y - target.y) > disc.dx) return KStatus::near_surface;
+    }
+    if (pair.upper == pair.lower || !separated_by_crack(disc, intact, pair.upper, pair.lower)) {
+      return KStatus::no_faces;
+    }
+  }
+  return KStatus::ok;
+}
+
+}  // namespace
+
 CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine,
                            const LoadBlock* last_block) {
   CrackReport report;
   const auto& damage = engine.node_damage();
   for (double phi : damage) report.max_damage = std::max(report.max_damage, phi);
-  report.cracks = model.tracker().measure(damage);
-  std::stable_sort(
-      report.cracks.begin(), report.cracks.end(),
-      [](const CrackMetrics& a, const CrackMetrics& b) { return a.length > b.length; });
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  report.k_i = report.k_ii = nan;
-  if (report.cracks.empty() || last_block == nullptr || engine.failed()) return report;
-  const CrackMetrics& main = report.cracks.front();
-  const auto& notch = model.config().geometry.notches[static_cast<std::size_t>(main.notch)];
-  const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
-  if (!(len > 0)) return report;
-  // Crack direction: the notch direction turned by the kink angle.
-  const double c = std::cos(main.kink_angle), s = std::sin(main.kink_angle);
-  const double nx = (notch.b.x - notch.a.x) / len, ny = (notch.b.y - notch.a.y) / len;
-  const Point direction{c * nx - s * ny, s * nx + c * ny};
-  const StressIntensityConfig& method = model.config().stress_intensity;
-  if (method.method == StressIntensityMethod::compact_tension) {
-    // 000 Eq. (A2) at P_max: crack length from the load line along the notch, K_II = 0. ASTM
-    // E647 gives the formula for 0.2 <= a/W < 1; outside it the value is not reported (NaN).
-    const double q =
-        (main.tip.x - method.load_line.x) * nx + (main.tip.y - method.load_line.y) * ny;
-    const double ratio = q / method.width;
-    if (ratio >= 0.2 && ratio < 1.0) {
-      report.k_i = compact_tension_delta_k(last_block->p_max, model.config().geometry.thickness,
-                                           method.width, q);
-      report.k_ii = 0.0;
+  const auto& intact = engine.solver().intact();
+  CrackFindings found = model.finder().find_with_history(damage, intact, engine.break_events());
+  report.merges = std::move(found.merges);
+  for (auto& c : found.cracks) {
+    ReportedCrack r;
+    r.origin = origin_name(model, c);
+    r.crack = std::move(c);
+    r.k.assign(r.crack.tips.size(), TipStressIntensity{});
+    report.cracks.push_back(std::move(r));
+  }
+  sort_longest_first(report.cracks);
+  if (report.cracks.empty()) return report;
+  const KStatus common = engine.failed()         ? KStatus::failed
+                         : last_block == nullptr ? KStatus::no_load
+                                                 : KStatus::ok;
+  if (common != KStatus::ok) {
+    for (auto& c : report.cracks) {
+      for (auto& k : c.k) k.status = common;
     }
     return report;
   }
-  std::vector<double> u;
-  engine.solver().displacement(last_block->p_max, last_block->alpha, u);
+  const StressIntensityConfig& method = model.config().stress_intensity;
   const auto& pd = model.pd();
   const double nu = effective_poisson_ratio(pd.material, pd.options);
   const double mu = pd.material.youngs_modulus / (2 * (1 + nu));
   const double kappa = kolosov_kappa(nu, pd.options.plane);
   const double delta = model.disc().horizon;
-  const auto k = stress_intensity_by_extrapolation(model.disc(), u, main.tip, direction, delta,
-                                                   2 * delta, mu, kappa);
-  report.k_i = k.k_i;
-  report.k_ii = k.k_ii;
+  std::vector<double> u;
+  for (std::size_t i = 0; i < report.cracks.size(); ++i) {
+    ReportedCrack& rc = report.cracks[i];
+    const FoundCrack& c = rc.crack;
+    if (method.method == StressIntensityMethod::compact_tension && c.origin == CrackOrigin::notch) {
+      // 000 Eq. (A2) at P_max for a notch crack: crack length from the load line along the notch,
+      // K_II = 0. ASTM E647 gives the formula for 0.2 <= a/W < 1; outside it: out of range.
+      const auto& notch = model.config().geometry.notches[static_cast<std::size_t>(c.notch)];
+      const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
+      const double nx = (notch.b.x - notch.a.x) / len, ny = (notch.b.y - notch.a.y) / len;
+      const Point tip = c.tips[0].position;
+      const double q = (tip.x - method.load_line.x) * nx + (tip.y - method.load_line.y) * ny;
+      const double ratio = q / method.width;
+      if (ratio >= 0.2 && ratio < 1.0) {
+        rc.k[0] = {compact_tension_delta_k(last_block->p_max, model.config().geometry.thickness,
+                                           method.width, q),
+                   0.0, KStatus::ok};
+      } else {
+        rc.k[0].status = KStatus::out_of_range;
+      }
+      continue;
+    }
+    // Behind a notch crack's tip its faces are the grown crack and the notch.
+    double faces = c.length;
+    if (c.origin == CrackOrigin::notch) {
+      const auto& n = model.config().geometry.notches[static_cast<std::size_t>(c.notch)];
+      faces += path_length({n.a, n.b});
+    }
+    for (std::size_t t = 0; t < c.tips.size(); ++t) {
+      TipStressIntensity& k = rc.k[t];
+      k.status = extrapolation_status(model, intact, c.tips[t], faces);
+      if (k.status != KStatus::ok) continue;
+      if (u.empty()) engine.solver().displacement(last_block->p_max, last_block->alpha, u);
+      const auto sif = stress_intensity_by_extrapolation(
+          model.disc(), u, c.tips[t].position, c.tips[t].direction, delta, 2 * delta, mu, kappa);
+      k.k_i = sif.k_i;
+      k.k_ii = sif.k_ii;
+    }
+  }
+  report.k_i = report.cracks[0].k[0].k_i;
+  report.k_ii = report.cracks[0].k[0].k_ii;
   return report;
 }
 
-double main_crack_length(const DetailModel& model, const std::vector<double>& node_damage) {
+double criterion_crack_length(const DetailModel& model, const std::vector<double>& node_damage,
+                              const std::vector<std::uint8_t>& intact) {
+  const std::string& origin = model.config().life.crack_origin;
   double longest = 0.0;
-  for (const auto& c : model.tracker().measure(node_damage)) longest = std::max(longest, c.length);
+  for (const auto& c : model.finder().find(node_damage, intact).cracks) {
+    if (origin.empty() || origin_name(model, c) == origin) longest = std::max(longest, c.length);
+  }
   return longest;
 }
 
@@ -194,9 +310,11 @@ Failure end_of_life(const DetailModel& model, const FatigueEngine& engine,
   if (engine.failed()) return Failure::singular;
   const LifeConfig& life = model.config().life;
   switch (life.criterion) {
-    case LifeCriterion::crack_length:
-      return report.main_length() >= life.critical_crack_length ? Failure::end_criterion
-                                                                : Failure::none;
+    case LifeCriterion::crack_length: {
+      const ReportedCrack* c = report.criterion_crack(life.crack_origin);
+      return c != nullptr && c->crack.length >= life.critical_crack_length ? Failure::end_criterion
+                                                                           : Failure::none;
+    }
     case LifeCriterion::phase3:
       for (const auto& e : engine.break_events()) {
         if (e.cause == BreakCause::overload) return Failure::end_criterion;

@@ -6,12 +6,14 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "solver/core/expected.h"
+#include "solver/crack/crack_finder.h"
 #include "solver/crack/crack_tracker.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/static/specimen.h"
@@ -40,6 +42,11 @@ class DetailModel {
   [[nodiscard]] const PdModel& pd() const { return specimen_.model; }
   [[nodiscard]] const FatigueSettings& settings() const { return settings_; }
   [[nodiscard]] const CrackTracker& tracker() const { return *tracker_; }
+  /// Finds every crack (notch, surface, interior) from the damage; its notches are the tracker's.
+  [[nodiscard]] const CrackFinder& finder() const { return *finder_; }
+  /// Where a crack that starts at `p` (not at a notch) comes from, for people: "hole <index>"
+  /// when a hole's rim is the nearest surface, else "outline".
+  [[nodiscard]] std::string surface_name(Point p) const;
   /// Bonds cut by notches at construction (not counted as broken in the published state).
   [[nodiscard]] std::int64_t precut_bonds() const { return precut_bonds_; }
   /// Byte-wise FNV-1a 64 (solver/core/fnv1a.h) over everything that defines the model's numbers
@@ -57,34 +64,65 @@ class DetailModel {
   Specimen specimen_;
   FatigueSettings settings_;
   std::unique_ptr<CrackTracker> tracker_;
+  std::unique_ptr<CrackFinder> finder_;
   std::int64_t precut_bonds_ = 0;
   std::uint64_t signature_ = 0;
 };
 
-/// Crack metrics of a state (the solver's CrackTracker, one crack per notch) and the SIFs.
+/// Why a tip's K is NaN (crack_tip_t.K_* codes).
+enum class KStatus : std::int8_t {
+  ok = 0,
+  no_load = 1,       ///< no block applied yet
+  short_crack = 2,   ///< faces shorter than 2δ behind the tip
+  near_surface = 3,  ///< tip within δ of a free surface, or a fit point outside the body
+  no_faces = 4,      ///< a node pair behind the tip is not separated by the crack
+  out_of_range = 5,  ///< the configured formula does not cover this crack
+  failed = 6,        ///< final failure
+};
+
+/// K at one crack tip under P_max of the last block; NaN unless status is ok.
+struct TipStressIntensity {
+  double k_i = std::numeric_limits<double>::quiet_NaN();
+  double k_ii = std::numeric_limits<double>::quiet_NaN();
+  KStatus status = KStatus::no_load;
+};
+
+/// One crack of a state: the finder's crack, where it comes from in words, K per tip.
+struct ReportedCrack {
+  FoundCrack crack;
+  std::string origin;                 ///< "notch <name>", "hole <index>", "outline", "interior"
+  std::vector<TipStressIntensity> k;  ///< one per crack.tips
+};
+
+/// The cracks of a state (CrackFinder with ids from the break history) and their SIFs.
 struct CrackReport {
-  std::vector<CrackMetrics> cracks;  ///< main crack (longest along the path) first
+  std::vector<ReportedCrack> cracks;  ///< longest first along the path (ties: the smaller id)
+  std::vector<CrackMerge> merges;     ///< every join so far, in cycle order
   double max_damage = 0.0;
-  /// K_I, K_II at the main crack tip under P_max of the last block (displacement extrapolation,
-  /// 001 Eq. 62-63, at r = δ and 2δ behind the tip); NaN without a notch or a block.
-  double k_i = 0.0;
-  double k_ii = 0.0;
-  [[nodiscard]] double main_length() const { return cracks.empty() ? 0.0 : cracks[0].length; }
+  /// K_I, K_II at the main crack's first tip (= cracks[0].k[0]); NaN without a crack or a block.
+  double k_i = std::numeric_limits<double>::quiet_NaN();
+  double k_ii = std::numeric_limits<double>::quiet_NaN();
+  [[nodiscard]] double main_length() const { return cracks.empty() ? 0.0 : cracks[0].crack.length; }
+  /// The crack the life criterion measures: the longest, or the longest whose origin is `origin`
+  /// (nullptr when there is none).
+  [[nodiscard]] const ReportedCrack* criterion_crack(const std::string& origin) const;
 };
 
 /// Measures the engine's current state. `last_block` (may be null) gives P_max and α for K.
 CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine,
                            const LoadBlock* last_block);
 
-/// Crack length along the path of the main (longest) crack for a damage field.
-double main_crack_length(const DetailModel& model, const std::vector<double>& node_damage);
+/// The crack length the life criterion compares (the longest crack, or the longest from the
+/// configured origin) for a damage field and the bond state it came from (snapshot: no ids).
+double criterion_crack_length(const DetailModel& model, const std::vector<double>& node_damage,
+                              const std::vector<std::uint8_t>& intact);
 
 /// damage_state_t FAILURE_* codes.
 enum class Failure : std::int8_t { none = 0, end_criterion = 1, singular = 2 };
 
 /// Whether the engine's state meets the end criterion of the detail's life config
-/// (crack_length: main crack ≥ critical; phase3: any bond broken by overload; connectivity:
-/// final failure). A singular stiffness (final failure) is always the end.
+/// (crack_length: the criterion's crack ≥ critical; phase3: any bond broken by overload;
+/// connectivity: final failure). A singular stiffness (final failure) is always the end.
 Failure end_of_life(const DetailModel& model, const FatigueEngine& engine,
                     const CrackReport& report);
 

@@ -14,7 +14,8 @@ bool same_key(const LoadBlock& a, const LoadBlock& b) {
 
 double load_range(const LoadBlock& b) { return b.p_max * (1 - b.r); }
 
-/// The first break-event cycle (from event e0 on) after which the main crack reaches `critical`,
+/// The first break-event cycle (from event e0 on) after which the criterion's crack (the longest,
+/// or the longest from [detail.life] crack_origin) reaches `critical`,
 /// replaying the events on the bond state before the block; -1 when none does.
 std::int64_t crack_length_cycle(const DetailModel& model, const FatigueEngine& engine,
                                 std::vector<std::uint8_t> intact, std::size_t e0, double critical) {
@@ -27,7 +28,7 @@ std::int64_t crack_length_cycle(const DetailModel& model, const FatigueEngine& e
       intact[static_cast<std::size_t>(events[e].bond)] = 0;
     }
     damage_index(model.disc(), intact, damage);
-    if (main_crack_length(model, damage) >= critical) return cycle;
+    if (criterion_crack_length(model, damage, intact) >= critical) return cycle;
   }
   return -1;
 }
@@ -143,7 +144,8 @@ double simulate_life(const DetailModel& model, const EngineState& state,
           break;
         case LifeCriterion::crack_length: {
           if (engine->failed() ||
-              main_crack_length(model, engine->node_damage()) >= life.critical_crack_length) {
+              criterion_crack_length(model, engine->node_damage(), engine->solver().intact()) >=
+                  life.critical_crack_length) {
             const std::int64_t cycle = crack_length_cycle(model, *engine, std::move(intact_before),
                                                           e0, life.critical_crack_length);
             if (cycle >= 0) return elapsed(cycle);
