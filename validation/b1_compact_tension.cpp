@@ -41,7 +41,10 @@ CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
   settings.incremental = incremental;
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   CrackHistory history;
-  if (!engine.initialize()) return history;
+  if (!engine.initialize()) {
+    history.failure = engine.failure_reason();
+    return history;
+  }
   const CrackTracker tracker(s.disc, s.geometry.notches);
   const double load_line = 0.25 * spec.width;
   auto record = [&] {

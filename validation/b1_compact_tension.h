@@ -25,6 +25,7 @@ struct CrackHistory {
   double wall_s = 0.0;
   std::int64_t broken_bonds = 0;
   int solves = 0;
+  std::string failure;  ///< why the first static solve failed (the run is empty), or empty
 };
 
 /// Composite Simpson rule of f over [a, b] with an even number of panels.

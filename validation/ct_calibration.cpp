@@ -81,6 +81,7 @@ CalibrationResult calibrate_a2(const CalibrationSetup& setup,
                     run.a2, run.life.a_end,
                     run.history.cycles.empty() ? 0.0 : run.history.cycles.back());
       result.failure = text;
+      if (!run.history.failure.empty()) result.failure += ": " + run.history.failure;
       result.a2 = std::nan("");
       return result;
     }
