@@ -63,6 +63,12 @@ double two_point_step(const CalibrationSetup& setup, const CalibrationRun& prev,
 
 }  // namespace
 
+double next_a2(const CalibrationSetup& setup, const std::vector<CalibrationRun>& runs) {
+  const std::size_t n = runs.size();
+  return setup.step == A2Step::two_point && n >= 2 ? two_point_step(setup, runs[n - 2], runs[n - 1])
+                                                   : eq26b_step(setup, runs[n - 1]);
+}
+
 CalibrationResult calibrate_a2(const CalibrationSetup& setup,
                                const std::function<void(const CalibrationRun&)>& on_run) {
   CalibrationResult result;
@@ -90,10 +96,7 @@ CalibrationResult calibrate_a2(const CalibrationSetup& setup,
       result.a2 = run.a2;
       return result;
     }
-    const std::size_t n = result.runs.size();
-    law.A2 = setup.step == A2Step::two_point && n >= 2
-                 ? two_point_step(setup, result.runs[n - 2], result.runs[n - 1])
-                 : eq26b_step(setup, result.runs[n - 1]);
+    law.A2 = next_a2(setup, result.runs);
   }
   result.a2 = law.A2;
   return result;

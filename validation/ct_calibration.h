@@ -80,6 +80,9 @@ struct CalibrationResult {
 LifeComparison compare_lives(const CalibrationSetup& setup, const fatigue::StrainLawParams& law,
                              double p_max, double r, CrackHistory* history = nullptr);
 
+/// The A2 to run after `runs` (at least one, each with a finite PD life) by setup.step.
+double next_a2(const CalibrationSetup& setup, const std::vector<CalibrationRun>& runs);
+
 /// 000 App. A: PD runs from setup.law.A2, each followed by the step rule, until the PD life is
 /// within tolerance of the Paris life or max_runs runs are done. `on_run` sees each run.
 CalibrationResult calibrate_a2(const CalibrationSetup& setup,

@@ -56,20 +56,20 @@ std::string b1_example_with(const std::string& snippet) {
   return text.substr(0, begin) + snippet + text.substr(end);
 }
 
-// B1 (docs/validation.md): A2 = 1301 at Δx = 1 mm, δ = 3.015Δx, from the paper's trial 1055 by
-// two Eq. (26b) steps. The tool starts from the same trial. 1 %: it stops once the PD life is
-// within 0.5 % of the Paris life, and the life moves by ~0.7 % per 1 % of A2 (30 % of it is phase
-// I, which A2 does not change), so any stopping point within tolerance lies within 0.7 % of the
-// A2 that matches exactly (1301 gives -0.06 %).
+// B1 (docs/validation.md): A2 = 1301 at Δx = 1 mm, δ = 3.015Δx. The tool's first A2 is B1's scaled
+// to the inputs, so with B1's inputs one PD run must land within its 0.5 % tolerance (docs: 1301
+// gives -0.06 %). 1 % on A2: a stopping point within 0.5 % of the life lies within ~0.7 % of the
+// exact A2, since the life moves by ~0.7 % per 1 % of A2 (30 % of it is phase I, which A2 does not
+// change). The iteration from the paper's trial 1055 (3 runs, 33-63 s on 2 loaded cores, too slow
+// for the suite) is in docs/validation.md; its step rule is tested below on its measured lives.
 TEST(Calibration, B1InputsReproduceB1sA2AndTheSnippetParses) {
-  const Outcome o = calibrate(kB1 + " --a2-trial 1055 --no-check --json");
+  const Outcome o = calibrate(kB1 + " --no-check --json");
   ASSERT_EQ(o.exit_code, 0) << o.err;
   const json line = json::parse(o.out);
   EXPECT_TRUE(line["converged"].get<bool>());
   const double a2 = line["a2"].get<double>();
   EXPECT_NEAR(a2 / 1301.0 - 1.0, 0.0, 0.01) << "A2 " << a2;
   EXPECT_LE(std::abs(line["fit"]["rel_error"].get<double>()), 0.005);
-  EXPECT_GE(line["runs"].size(), 2u);                         // from 1055 (+21 %) it must iterate
   EXPECT_EQ(line["fit"]["paris_life"].get<double>(), 47567);  // docs/validation.md, B1 at 4 kN
 
   const std::string config = b1_example_with(line["fatigue_toml"].get<std::string>());
@@ -84,6 +84,31 @@ TEST(Calibration, B1InputsReproduceB1sA2AndTheSnippetParses) {
   EXPECT_DOUBLE_EQ(fatigue.strain.m2, 2.6183);
   EXPECT_DOUBLE_EQ(fatigue.phase_switch_damage, 0.398);
   EXPECT_EQ(fatigue.static_failure, peritwin::StaticFailure::critical_stretch);
+}
+
+// The step rule on B1's measured runs from the trial 1055 (docs/validation.md): Eq. (26b) gives
+// peritwin-validate's 1282.13 after the first; the two-point model N = N1 + k/A2 through both gives
+// 1302.5, the A2 whose run is within 0.1 % of the Paris life (Eq. 26b alone: 1300.86).
+TEST(Calibration, StepRulesOnB1sMeasuredRuns) {
+  using namespace peritwin::validation;
+  CalibrationSetup setup;  // B1's Paris law
+  auto run = [](double a2, double pd) {
+    CalibrationRun r;
+    r.a2 = a2;
+    r.life.pd_life = pd;
+    r.life.paris_life = 47567;
+    return r;
+  };
+  std::vector<CalibrationRun> runs{run(1055, 57808)};
+  EXPECT_NEAR(next_a2(setup, runs), 1282.13, 0.5);
+  runs.push_back(run(1282.13, 48262));
+  EXPECT_NEAR(next_a2(setup, runs), 1302.5, 0.5);
+  setup.step = A2Step::eq26b;
+  EXPECT_NEAR(next_a2(setup, runs), 1300.86, 0.5);
+  // Two runs that define no model (longer life at the larger A2): Eq. (26b).
+  setup.step = A2Step::two_point;
+  runs[1].life.pd_life = 60000;
+  EXPECT_NEAR(next_a2(setup, runs), 1282.13 * 60000 / 47567, 0.5);
 }
 
 TEST(Calibration, BadInputIsRefusedWithExitTwo) {
