@@ -30,18 +30,21 @@ double paris_life(const CompactTensionSpec& spec, const ParisLaw& paris, double 
 
 CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
                                  const fatigue::StrainLawParams& law, double p_max, double r,
-                                 double a_stop, std::int64_t record_every, bool incremental) {
+                                 double a_stop, std::int64_t record_every, bool incremental,
+                                 const CompactTensionModel& model) {
   const auto t0 = std::chrono::steady_clock::now();
-  ModelOptions options;
-  options.kind = ModelKind::state_based;
-  const Specimen s = make_compact_tension(spec, options, dx);
+  const Specimen s = make_compact_tension(spec, model.options, dx, model.horizon_ratio);
   FatigueSettings settings;
-  settings.law = FatigueLaw::strain_range;
+  settings.law = model.law;
   settings.strain = law;
+  settings.phase_switch_damage = model.phase_switch_damage;
   settings.incremental = incremental;
   FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   CrackHistory history;
-  if (!engine.initialize()) return history;
+  if (!engine.initialize()) {
+    history.failure = engine.failure_reason();
+    return history;
+  }
   const CrackTracker tracker(s.disc, s.geometry.notches);
   const double load_line = 0.25 * spec.width;
   auto record = [&] {

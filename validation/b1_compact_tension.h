@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "solver/fatigue/fatigue_engine.h"
 #include "solver/model/fatigue_law.h"
 #include "validation/specimens.h"
 
@@ -24,6 +25,7 @@ struct CrackHistory {
   double wall_s = 0.0;
   std::int64_t broken_bonds = 0;
   int solves = 0;
+  std::string failure;  ///< why the first static solve failed (the run is empty), or empty
 };
 
 /// Composite Simpson rule of f over [a, b] with an even number of panels.
@@ -42,11 +44,22 @@ double critical_crack_length(const CompactTensionSpec& spec, double p_max);
 double paris_life(const CompactTensionSpec& spec, const ParisLaw& paris, double p_max, double r,
                   double a_end);
 
-/// Runs the PD fatigue model of B1 at (P_max, R) with the given strain-law parameters until final
-/// failure or a/W ≥ a_stop_over_w, recording the crack length after every `record_every` cycles.
+/// The PD model a CT run uses; the defaults are B1's (000 Sec. 6.1: state-based, plane stress,
+/// δ = 3.015Δx, the strain-range law, φ0 = 0.398).
+struct CompactTensionModel {
+  ModelOptions options;
+  double horizon_ratio = 3.015;               ///< δ/Δx
+  FatigueLaw law = FatigueLaw::strain_range;  ///< strain_range or energy (A1, m1, A2, m2)
+  double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;  ///< φ0, 000 Sec. 4.4
+};
+
+/// Runs the PD fatigue model of the CT coupon at (P_max, R) with the given strain-law parameters
+/// until final failure or a crack length (from the load line) ≥ a_stop, recording the crack length
+/// after every `record_every` cycles.
 CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
                                  const fatigue::StrainLawParams& law, double p_max, double r,
-                                 double a_stop, std::int64_t record_every, bool incremental);
+                                 double a_stop, std::int64_t record_every, bool incremental,
+                                 const CompactTensionModel& model = {});
 
 /// First cycle count at which the history reaches crack length a (linear interpolation), or -1.
 double cycles_at_length(const CrackHistory& history, double a);

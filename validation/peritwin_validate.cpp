@@ -14,6 +14,7 @@
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
+#include "validation/ct_calibration.h"
 
 namespace {
 
@@ -29,38 +30,38 @@ void write_csv(const std::filesystem::path& path, const CrackHistory& h) {
 }
 
 int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int iterations) {
-  const CompactTensionSpec spec;
-  const ParisLaw paris;
-  auto law = fatigue::al6061_t6_strain_params();
-  law.A2 = a2_trial;
-  const std::int64_t record_every = 250;
-  // Calibration at 4 kN, R = 0.1 (000 App. A): fit C_trial over the stable growth range and
-  // rescale A2 by C_exp/C_trial (000 Eq. 26b), iterated.
-  const double p_cal = 4000, r_cal = 0.1;
-  const double a_end_cal = critical_crack_length(spec, p_cal);
-  CrackHistory h;
-  for (int it = 0; it < iterations; ++it) {
-    h = run_compact_tension(spec, dx, law, p_cal, r_cal, a_end_cal + 0.002, record_every, true);
-    const double c_rate = fitted_paris_constant(spec, h, p_cal, r_cal, paris.m,
-                                                spec.initial_crack + 0.001, a_end_cal - 0.001);
-    const double c_trial = integral_paris_constant(spec, h, paris, p_cal, r_cal, a_end_cal);
+  // Calibration at 4 kN, R = 0.1 (000 App. A): Eq. (26b) in integral form after each of
+  // `iterations` runs (validation/ct_calibration.h, the loop peritwin-calibrate runs too).
+  CalibrationSetup setup;
+  setup.dx = dx;
+  setup.law = fatigue::al6061_t6_strain_params();
+  setup.law.A2 = a2_trial;
+  setup.step = A2Step::eq26b;
+  setup.tolerance = 0.0;
+  setup.max_runs = iterations;
+  const CompactTensionSpec& spec = setup.coupon;
+  const ParisLaw& paris = setup.paris;
+  int it = 0;
+  const CalibrationResult calibration = calibrate_a2(setup, [&](const CalibrationRun& run) {
+    const double c_rate = fitted_paris_constant(spec, run.history, setup.p_max, setup.r, paris.m,
+                                                spec.initial_crack + 0.001, run.life.a_end - 0.001);
     std::fprintf(stderr,
                  "calibration %d: A2 %.6g C_trial %.4g (rate fit over the growth only: %.4g) "
                  "(%.1f s, %lld bonds)\n",
-                 it, law.A2, c_trial, c_rate, h.wall_s, static_cast<long long>(h.broken_bonds));
-    if (!std::isfinite(c_trial)) return 1;
-    law.A2 = fatigue::a2_calibrated(law.A2, paris.c, c_trial);
-  }
+                 it++, run.a2, paris.c * run.life.paris_life / run.life.pd_life, c_rate,
+                 run.life.wall_s, static_cast<long long>(run.life.broken_bonds));
+  });
+  if (!std::isfinite(calibration.a2)) return 1;
+  auto law = setup.law;
+  law.A2 = calibration.a2;
+  CrackHistory h;
   struct Case {
     double p_max, r;
     bool calibration;
   };
   for (const Case c : {Case{4000, 0.1, true}, Case{5000, 0.1, false}, Case{6000, 0.1, false},
                        Case{5000, 0.3, false}}) {
-    const double a_end = critical_crack_length(spec, c.p_max);
-    h = run_compact_tension(spec, dx, law, c.p_max, c.r, a_end + 0.002, record_every, true);
-    const double pd_life = cycles_at_length(h, a_end);
-    const double ref = paris_life(spec, paris, c.p_max, c.r, a_end);
+    const LifeComparison life = compare_lives(setup, law, c.p_max, c.r, &h);
     char name[64];
     std::snprintf(name, sizeof name, "b1_p%.0f_r%.1f.csv", c.p_max, c.r);
     write_csv(out_dir / name, h);
@@ -71,10 +72,10 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
     line["calibration"] = c.calibration;
     line["a2"] = tools::significant(law.A2, 6);
     line["dx_m"] = tools::significant(dx, 6);
-    line["critical_crack_m"] = tools::fixed(a_end, 6);
-    line["pd_life"] = tools::whole(pd_life);
-    line["paris_life"] = tools::whole(ref);
-    line["rel_error"] = tools::fixed(pd_life / ref - 1, 4);
+    line["critical_crack_m"] = tools::fixed(life.a_end, 6);
+    line["pd_life"] = tools::whole(life.pd_life);
+    line["paris_life"] = tools::whole(life.paris_life);
+    line["rel_error"] = tools::fixed(life.relative_error(), 4);
     line["wall_s"] = tools::fixed(h.wall_s, 1);
     tools::print_line(line);
     std::fflush(stdout);

@@ -114,6 +114,11 @@
 
 namespace peritwin::twin {
 
+/// [detail.grid] horizon_ratio's bounds (δ/Δx): δ may not be smaller than Δx; above 10 a node's
+/// family (~π·ratio² bonds) and the factor grow for no use (fatigue calibrations use 3 to 4).
+inline constexpr double kMinHorizonRatio = 1.0;
+inline constexpr double kMaxHorizonRatio = 10.0;
+
 /// One configuration error. line/column are 1-based; 0 = not known (e.g. the file is unreadable).
 struct ConfigError {
   std::string file;

@@ -15,9 +15,6 @@ namespace peritwin::twin::config_internal {
 
 namespace {
 
-/// horizon_ratio's upper bound (config.h): fatigue calibrations use 3 to 4.
-constexpr double kMaxHorizonRatio = 10.0;
-
 enum class Bound { any, positive, non_negative };
 
 bool satisfies(double v, Bound bound) {
@@ -180,7 +177,7 @@ void read_grid(Context& ctx, const toml::table& t, const std::string& path, cons
     }
   }
   d.horizon_ratio = r.number("horizon_ratio", 3.015);
-  if (r.check("horizon_ratio", d.horizon_ratio >= 1,
+  if (r.check("horizon_ratio", d.horizon_ratio >= kMinHorizonRatio,
               "must be >= 1: the horizon δ = horizon_ratio·dx may not be smaller than dx (got " +
                   format_number(d.horizon_ratio) + ")")) {
     r.check("horizon_ratio", d.horizon_ratio <= kMaxHorizonRatio,
@@ -242,7 +239,7 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, d
   // computed when phi0 is not given and the ratio is within its bounds (a bad horizon_ratio has
   // its own error): at horizon_ratio = 1000 it took 3.4 GB and 43 s.
   const bool default_computable =
-      !r.has("phi0") && horizon_ratio >= 1.0 && horizon_ratio <= kMaxHorizonRatio;
+      !r.has("phi0") && horizon_ratio >= kMinHorizonRatio && horizon_ratio <= kMaxHorizonRatio;
   const double default_phi0 = default_computable ? phase_switch_damage_for_horizon(horizon_ratio)
                                                  : fatigue::kPhaseSwitchDamage2D;
   f.phase_switch_damage = r.number("phi0", default_phi0);

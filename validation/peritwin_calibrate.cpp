@@ -1,0 +1,500 @@
+// peritwin-calibrate: the fatigue parameters of the strain-range law (000 Eq. 14-20) for a user's
+// material, grid and PD model, printed as a ready-to-paste [detail.fatigue] table.
+//   A1, m1 (phase I): fitted to strain-life points by 000 Eq. (23), or from 000 Eq. (48b)'s inputs,
+//     or given; without any, B1's (Al 6061-T6, 000 Eq. 48), said so in the snippet.
+//   m2 = M (000 Eq. 25).
+//   A2 (phase II, grid dependent): 000 App. A on an ASTM E647 CT coupon (B1's specimen scaled to
+//     W, with the user's material): PD runs at the calibration load, A2 rescaled until the PD life
+//     to K_max = K_c equals the Paris life in integral form (validation/ct_calibration.h).
+// Then the PD life against the Paris life at other loads (the prediction check of B1).
+// Exit codes: 0 calibrated, 2 bad usage or input, 3 the calibration failed (did not converge, or
+// the PD crack never reached K_max = K_c).
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "solver/fatigue/fatigue_engine.h"
+#include "tools/cli_checks.h"
+#include "tools/json_line.h"
+#include "twin/config/config.h"
+#include "validation/ct_calibration.h"
+
+namespace {
+
+using namespace peritwin;
+using namespace peritwin::validation;
+
+constexpr int kExitOk = 0;
+constexpr int kExitUsage = 2;
+constexpr int kExitFailed = 3;
+
+/// A finite number in the open interval (lo, hi).
+CLI::Validator finite_open(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!cli::parse_double(text, v) || !std::isfinite(v)) return "not a finite number: " + text;
+        if (!(v > lo && v < hi)) {
+          return "must lie in (" + cli::shortest(lo) + ", " + cli::shortest(hi) + "), got " + text;
+        }
+        return {};
+      },
+      "FLOAT in (" + cli::shortest(lo) + ", " + cli::shortest(hi) + ")");
+}
+
+/// A real for TOML: 7 significant digits, always with a '.' or an exponent.
+std::string toml_number(double v) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.7g", v);
+  std::string s = text;
+  if (s.find_first_of(".en") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string format(const char* fmt, auto... args) {
+  char text[512];
+  std::snprintf(text, sizeof text, fmt, args...);
+  return text;
+}
+
+/// Where A1, m1 and ε∞ came from.
+struct PhaseOne {
+  fatigue::StrainLawParams law = fatigue::al6061_t6_strain_params();
+  std::string source;
+  bool from_b1 = true;
+};
+
+/// "EPS:N" strain-life points.
+std::optional<std::vector<std::pair<double, double>>> parse_points(
+    const std::vector<std::string>& items, std::string& error) {
+  std::vector<std::pair<double, double>> points;
+  for (const auto& item : items) {
+    const auto colon = item.find(':');
+    double eps = 0.0, n = 0.0;
+    if (colon == std::string::npos || !cli::parse_double(item.substr(0, colon), eps) ||
+        !cli::parse_double(item.substr(colon + 1), n) || !(eps > 0 && eps < 1) ||
+        !(n >= 1 && std::isfinite(n))) {
+      error = "--sn-curve " + item +
+              ": expected EPS:N, a strain range 0 < EPS < 1 and cycles N >= 1 (e.g. 0.004:2e5)";
+      return std::nullopt;
+    }
+    points.emplace_back(eps, n);
+  }
+  return points;
+}
+
+struct Inputs {
+  CalibrationSetup setup;
+  double paris_c_given = 0.0;
+  std::string paris_units = "mm-MPa";
+  std::string law_name = "strain_range";
+  std::string model_name = "state_based";
+  std::string plane_name = "plane_stress";
+  std::string kernel_name = "constant";
+  std::vector<double> check_factors{1.25, 1.5};
+  PhaseOne phase_one;
+};
+
+std::string fatigue_snippet(const Inputs& in, const CalibrationResult& cal,
+                            const std::vector<LifeComparison>& checks) {
+  const CalibrationSetup& s = in.setup;
+  const auto& law = in.phase_one.law;
+  const auto& fit = cal.runs.back().life;
+  const auto& m = s.coupon.material;
+  std::string t;
+  t += "# peritwin-calibrate: A2 by 000 App. A (integral form) on an ASTM E647 CT coupon\n";
+  t += format("#   W = %g mm, B = %g mm, a0 = %g mm, at P_max = %g N, R = %g\n",
+              s.coupon.width * 1e3, s.coupon.thickness * 1e3, s.coupon.initial_crack * 1e3, s.p_max,
+              s.r);
+  t += format(
+      "#   material E = %g Pa, nu = %g, K_c = %g Pa*sqrt(m); Paris C = %g mm/cycle "
+      "(dK in MPa*sqrt(m)), M = %g\n",
+      m.youngs_modulus, m.poisson_ratio, m.fracture_toughness, s.paris.c, s.paris.m);
+  t += format(
+      "#   valid for [detail.grid] dx = %g, horizon_ratio = %g and [detail.model] kind = "
+      "\"%s\", plane = \"%s\", kernel = \"%s\"%s\n",
+      s.dx, s.model.horizon_ratio, in.model_name.c_str(), in.plane_name.c_str(),
+      in.kernel_name.c_str(),
+      s.model.options.surface_correction ? "" : ", surface_correction = false");
+  t += "#   (another horizon at the same ratio: rescale A2 by 000 Eq. 29; otherwise recalibrate)\n";
+  t += format(
+      "#   fit: PD life %.0f vs Paris life %.0f cycles (%+.2f %%) to a = %.2f mm "
+      "(K_max = K_c)\n",
+      fit.pd_life, fit.paris_life, 100 * fit.relative_error(), fit.a_end * 1e3);
+  for (const auto& c : checks) {
+    t += format("#   check: P_max = %g N, R = %g: PD %.0f vs Paris %.0f cycles (%+.2f %%)\n",
+                c.p_max, c.r, c.pd_life, c.paris_life, 100 * c.relative_error());
+  }
+  t += "[detail.fatigue]\n";
+  t += format("law = \"%s\"\n", in.law_name.c_str());
+  t += format("phi0 = %s  # phase I -> II switch (000 Sec. 4.4) used in the calibration\n",
+              toml_number(s.model.phase_switch_damage).c_str());
+  t += "static_failure = \"critical_stretch\"  # phase III as calibrated (000 Eq. 7-8)\n";
+  t += format("A1 = %s  # %s\n", toml_number(law.A1).c_str(), in.phase_one.source.c_str());
+  t += format("m1 = %s\n", toml_number(law.m1).c_str());
+  t += format("eps_inf = %s  # phase I fatigue limit (000 Eq. 17)\n",
+              toml_number(law.eps_inf).c_str());
+  t += format("A2 = %s  # calibrated with the A1, m1 above: change them, recalibrate A2\n",
+              toml_number(cal.a2).c_str());
+  t += format("m2 = %s  # = Paris M (000 Eq. 25)\n", toml_number(law.m2).c_str());
+  t += "eps_inf_prop = 0.0  # propagation-phase limit (002 Eq. 12) off, as calibrated\n";
+  return t;
+}
+
+tools::JsonLine life_json(const LifeComparison& l) {
+  tools::JsonLine j;
+  j["p_max"] = tools::significant(l.p_max, 6);
+  j["r"] = tools::fixed(l.r, 4);
+  j["critical_crack_m"] = tools::fixed(l.a_end, 6);
+  j["pd_life"] = tools::whole(l.pd_life);
+  j["paris_life"] = tools::whole(l.paris_life);
+  j["rel_error"] = tools::fixed(l.relative_error(), 4);
+  j["wall_s"] = tools::fixed(l.wall_s, 1);
+  return j;
+}
+
+tools::JsonLine result_json(const Inputs& in, const CalibrationResult& cal,
+                            const std::vector<LifeComparison>& checks, double wall_s,
+                            const std::string& snippet) {
+  const CalibrationSetup& s = in.setup;
+  const auto& law = in.phase_one.law;
+  tools::JsonLine j;
+  j["tool"] = "peritwin-calibrate";
+  j["youngs_modulus_pa"] = s.coupon.material.youngs_modulus;
+  j["poisson_ratio"] = s.coupon.material.poisson_ratio;
+  j["fracture_toughness_pa_sqrt_m"] = s.coupon.material.fracture_toughness;
+  j["paris_c_given"] = in.paris_c_given;
+  j["paris_units"] = in.paris_units;
+  j["paris_c_mm_mpa"] = s.paris.c;
+  j["paris_m"] = s.paris.m;
+  j["dx_m"] = s.dx;
+  j["horizon_ratio"] = s.model.horizon_ratio;
+  j["model"] = in.model_name;
+  j["plane"] = in.plane_name;
+  j["kernel"] = in.kernel_name;
+  j["surface_correction"] = s.model.options.surface_correction;
+  j["law"] = in.law_name;
+  j["width_m"] = s.coupon.width;
+  j["thickness_m"] = s.coupon.thickness;
+  j["initial_crack_m"] = s.coupon.initial_crack;
+  j["p_max"] = s.p_max;
+  j["r"] = s.r;
+  j["tolerance"] = s.tolerance;
+  j["converged"] = cal.converged;
+  j["a2"] = tools::significant(cal.a2, 7);
+  j["a1"] = law.A1;
+  j["m1"] = law.m1;
+  j["eps_inf"] = law.eps_inf;
+  j["m2"] = law.m2;
+  j["phi0"] = s.model.phase_switch_damage;
+  j["a1_m1_source"] = in.phase_one.source;
+  tools::JsonLine runs = tools::JsonLine::array();
+  for (const auto& run : cal.runs) {
+    tools::JsonLine r = life_json(run.life);
+    r["a2"] = tools::significant(run.a2, 7);
+    runs.push_back(r);
+  }
+  j["runs"] = runs;
+  if (!cal.runs.empty()) j["fit"] = life_json(cal.runs.back().life);
+  tools::JsonLine check = tools::JsonLine::array();
+  for (const auto& c : checks) check.push_back(life_json(c));
+  j["checks"] = check;
+  j["failure"] = cal.failure;
+  j["wall_s"] = tools::fixed(wall_s, 1);
+  j["fatigue_toml"] = snippet;
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "peritwin-calibrate: the strain-range fatigue law's parameters (000 Eq. 14-20) for your "
+      "material, grid and PD model, as a [detail.fatigue] table to paste into a detail config.\n"
+      "A2 (phase II, depends on dx and the horizon) is calibrated by 000 App. A: PD runs of an "
+      "ASTM E647 compact-tension coupon (B1's, scaled to --width, with your material) at the "
+      "calibration load, A2 rescaled until the PD life to K_max = K_c equals the life the Paris "
+      "law gives (integral form, docs/validation.md). m2 = Paris M (000 Eq. 25). A1, m1 (phase I) "
+      "come from strain-life data (000 Eq. 23) if you give any, else B1's Al 6061-T6 values (000 "
+      "Eq. 48). Then the PD and Paris lives at other loads as a check.\n"
+      "Units: SI (Pa, m, N) except the Paris constant C, whose units --paris-units states.\n"
+      "Exit codes: 0 calibrated, 2 bad input, 3 calibration failed."};
+  Inputs in;
+  CalibrationSetup& s = in.setup;
+  Material& mat = s.coupon.material;
+  // Material.
+  app.add_option("-E,--youngs-modulus", mat.youngs_modulus, "Young's modulus E (Pa)")
+      ->required()
+      ->check(cli::finite_positive());
+  app.add_option("--nu,--poisson-ratio", mat.poisson_ratio, "Poisson's ratio (-1 < nu < 0.5)")
+      ->required()
+      ->check(finite_open(-1.0, 0.5));
+  app.add_option("--K-c,--fracture-toughness", mat.fracture_toughness,
+                 "fracture toughness K_c (Pa*sqrt(m)); the lives run to K_max = K_c")
+      ->required()
+      ->check(cli::finite_positive());
+  // Paris law.
+  double paris_c = 0.0;
+  app.add_option("--paris-c", paris_c,
+                 "Paris constant C of da/dN = C dK^M, in the units of --paris-units")
+      ->required()
+      ->check(cli::finite_positive());
+  app.add_option("--paris-m", s.paris.m, "Paris exponent M (dimensionless; m2 = M)")
+      ->required()
+      ->check(cli::finite_in(1.0, 10.0));
+  app.add_option("--paris-units", in.paris_units,
+                 "units of C: mm-MPa (default; mm/cycle with dK in MPa*sqrt(m), as 000 Eq. A4), "
+                 "m-Pa (m/cycle with dK in Pa*sqrt(m), SI), m-MPa (m/cycle with dK in "
+                 "MPa*sqrt(m))")
+      ->check(CLI::IsMember({"mm-MPa", "m-Pa", "m-MPa"}));
+  // Grid and model.
+  app.add_option("--dx", s.dx, "grid spacing dx (m) of the detail the parameters are for")
+      ->required()
+      ->check(cli::finite_in(1e-5, 0.01));
+  app.add_option("--horizon-ratio", s.model.horizon_ratio,
+                 "horizon over grid spacing delta/dx (default 3.015; the config's bounds)")
+      ->check(cli::finite_in(twin::kMinHorizonRatio, twin::kMaxHorizonRatio));
+  app.add_option("--model", in.model_name, "PD model: state_based (default) | bond_based")
+      ->check(CLI::IsMember({"state_based", "bond_based"}));
+  app.add_option("--plane", in.plane_name, "plane_stress (default) | plane_strain")
+      ->check(CLI::IsMember({"plane_stress", "plane_strain"}));
+  app.add_option("--kernel", in.kernel_name,
+                 "bond-based micromodulus kernel: constant (default) | conical | gaussian")
+      ->check(CLI::IsMember({"constant", "conical", "gaussian"}));
+  app.add_flag_callback(
+      "--no-surface-correction", [&] { s.model.options.surface_correction = false; },
+      "[detail.model] surface_correction = false");
+  app.add_option("--law", in.law_name,
+                 "fatigue law the parameters are for: strain_range (default) | energy (000 Sec. 4, "
+                 "same A1, m1, A2, m2)")
+      ->check(CLI::IsMember({"strain_range", "energy"}));
+  double phi0 = 0.0;
+  app.add_option("--phi0", phi0,
+                 "phase-switch damage (default: the config's, the split damage at the horizon "
+                 "ratio, 0.398 at 3.015)")
+      ->check(cli::finite_in(0.01, 0.99));
+  // Coupon and load.
+  app.add_option("--width", s.coupon.width, "CT coupon width W (m), default 0.050 as B1; a0 = 0.3W")
+      ->check(cli::finite_in(0.005, 1.0));
+  double thickness = 0.0;
+  app.add_option("--thickness", thickness, "CT coupon thickness B (m), default 0.2W (B1: 10 mm)")
+      ->check(cli::finite_in(1e-4, 1.0));
+  double p_max = 0.0;
+  app.add_option("--p-max", p_max,
+                 "calibration P_max (N); default: K_max at a0 at B1's fraction of K_c (0.206), "
+                 "i.e. 4 kN * (K_c/48.7 MPa*sqrt(m)) * (B/10 mm) * sqrt(W/50 mm)")
+      ->check(cli::finite_positive());
+  app.add_option("--r", s.r, "calibration load ratio R = P_min/P_max (default 0.1)")
+      ->check(cli::finite_in(0.0, 0.9));
+  // Phase I.
+  std::vector<std::string> sn_points;
+  app.add_option("--sn-curve", sn_points,
+                 "strain-life point EPS:N (cyclic strain range, cycles to failure), repeated or "
+                 "comma-separated, >= 2: A1, m1 by the least squares of 000 Eq. (23)")
+      ->delimiter(',');
+  double m1 = 0.0, a1 = 0.0, intercept = 0.0;
+  auto* m1_opt = app.add_option("--m1", m1, "phase I exponent m1 (with --a1 or --sn-intercept)")
+                     ->check(cli::finite_positive());
+  auto* a1_opt = app.add_option("--a1", a1, "phase I coefficient A1 (with --m1)")
+                     ->check(cli::finite_positive());
+  auto* intercept_opt =
+      app.add_option("--sn-intercept", intercept,
+                     "000 Eq. (48b): the fitted log10 intercept -log10(A1)/m1 (with --m1)")
+          ->check(cli::finite_in(-100, 100));
+  auto* limit_opt = app.add_option("--fatigue-limit", s.law.eps_inf,
+                                   "phase I fatigue limit eps_inf (000 Eq. 17, 23b; default 0)")
+                        ->check(cli::finite_in(0.0, 0.5));
+  // Calibration.
+  double a2_trial = 0.0;
+  app.add_option("--a2-trial", a2_trial,
+                 "first A2 (default: B1's 1301 scaled by C, E, M and the horizon)")
+      ->check(cli::finite_positive());
+  app.add_option("--tolerance", s.tolerance,
+                 "stop when |PD life / Paris life - 1| <= this (default 0.005)")
+      ->check(cli::finite_in(1e-4, 0.2));
+  app.add_option("--max-runs", s.max_runs, "PD runs at most (default 8)")->check(CLI::Range(1, 50));
+  app.add_option("--check-loads", in.check_factors,
+                 "prediction checks at these multiples of P_max (default 1.25,1.5)")
+      ->delimiter(',')
+      ->check(cli::finite_in(0.2, 5.0));
+  bool no_check = false;
+  app.add_flag("--no-check", no_check, "skip the prediction checks");
+  bool dry_run = false;
+  app.add_flag("--dry-run", dry_run,
+               "check the inputs, print what would be run (A1, m1, load, Paris life, first A2) "
+               "and stop before the PD runs");
+  bool json = false;
+  app.add_flag("--json", json, "print one JSON line (inputs, runs, results, the TOML) instead");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? kExitOk : kExitUsage;
+  }
+  auto usage = [](const std::string& what) {
+    std::fprintf(stderr, "peritwin-calibrate: %s\n", what.c_str());
+    return kExitUsage;
+  };
+
+  // Model options (the config's rules: state-based takes the constant kernel only).
+  ModelOptions& options = s.model.options;
+  options.kind = in.model_name == "bond_based" ? ModelKind::bond_based : ModelKind::state_based;
+  options.plane =
+      in.plane_name == "plane_strain" ? PlaneCondition::plane_strain : PlaneCondition::plane_stress;
+  options.kernel = in.kernel_name == "conical"    ? Kernel::conical
+                   : in.kernel_name == "gaussian" ? Kernel::gaussian
+                                                  : Kernel::constant;
+  if (const Status st = validate(mat, options); !st) return usage(message_of(st));
+  s.model.law = in.law_name == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+  s.model.phase_switch_damage =
+      phi0 > 0 ? phi0 : phase_switch_damage_for_horizon(s.model.horizon_ratio);
+
+  // Coupon: B1's proportions at W.
+  s.coupon.initial_crack = 0.3 * s.coupon.width;
+  s.coupon.thickness = thickness > 0 ? thickness : s.coupon.width / 5;
+  if (const auto problem = coupon_grid_problem(s.coupon, s.dx)) return usage(*problem);
+
+  // Paris law in ParisLaw's units.
+  in.paris_c_given = paris_c;
+  const ParisUnits units = in.paris_units == "m-Pa"    ? ParisUnits::m_per_cycle_pa
+                           : in.paris_units == "m-MPa" ? ParisUnits::m_per_cycle_mpa
+                                                       : ParisUnits::mm_per_cycle_mpa;
+  s.paris.c = paris_c_in_mm_mpa(paris_c, s.paris.m, units);
+
+  // Phase I: A1, m1, ε∞.
+  PhaseOne& one = in.phase_one;
+  const double eps_inf = s.law.eps_inf;
+  if (!sn_points.empty()) {
+    if (m1_opt->count() + a1_opt->count() + intercept_opt->count() > 0) {
+      return usage("--sn-curve fits A1 and m1: leave out --m1, --a1 and --sn-intercept");
+    }
+    std::string error;
+    const auto points = parse_points(sn_points, error);
+    if (!points) return usage(error);
+    std::vector<double> eps, cycles;
+    for (const auto& [e, n] : *points) {
+      eps.push_back(e);
+      cycles.push_back(n);
+    }
+    const fatigue::Phase1Fit fit = fatigue::fit_phase1(eps, cycles, eps_inf);
+    if (!fit.ok) {
+      return usage(
+          "--sn-curve: no fit of 000 Eq. (23): give >= 2 points with distinct N, every strain "
+          "range above --fatigue-limit, and strain falling as N grows");
+    }
+    one.law.A1 = fit.A1;
+    one.law.m1 = fit.m1;
+    one.source = format("fitted to %zu strain-life points (000 Eq. 23%s)", points->size(),
+                        eps_inf > 0 ? "b" : "a");
+    one.from_b1 = false;
+  } else if (m1_opt->count() > 0) {
+    if (a1_opt->count() + intercept_opt->count() != 1) {
+      return usage("--m1 goes with exactly one of --a1 and --sn-intercept");
+    }
+    one.law.m1 = m1;
+    one.law.A1 = a1_opt->count() > 0 ? a1 : fatigue::a1_from_log_intercept(m1, intercept);
+    one.source = a1_opt->count() > 0 ? "given" : "000 Eq. (48b) from m1 and the log10 intercept";
+    one.from_b1 = false;
+  } else if (a1_opt->count() + intercept_opt->count() > 0) {
+    return usage("--a1 and --sn-intercept need --m1");
+  } else {
+    if (limit_opt->count() > 0) {
+      return usage("--fatigue-limit belongs to your strain-life data: give --sn-curve or --m1 too");
+    }
+    one.source = "B1's (Al 6061-T6, 000 Eq. 48c/48a): no strain-life data given";
+  }
+  one.law.eps_inf = eps_inf;
+  one.law.m2 = fatigue::m2_from_paris_exponent(s.paris.m);
+  one.law.eps_inf_prop = 0.0;
+  one.law.A2 =
+      a2_trial > 0 ? a2_trial : a2_first_trial(s.coupon, s.paris, s.dx, s.model.horizon_ratio);
+  if (const Status st = fatigue::validate(one.law); !st) return usage(message_of(st));
+  s.law = one.law;
+
+  // Load; the Paris life there tells a C in the wrong units.
+  s.p_max = p_max > 0 ? p_max : default_calibration_load(s.coupon);
+  const double a_end = critical_crack_length(s.coupon, s.p_max);
+  if (!(a_end > s.coupon.initial_crack + 5 * s.dx)) {
+    return usage(
+        format("at P_max = %g N the crack reaches K_max = K_c after %.3g m of growth, "
+               "less than 5 dx: lower --p-max",
+               s.p_max, a_end - s.coupon.initial_crack));
+  }
+  const double n_paris = paris_life(s.coupon, s.paris, s.p_max, s.r, a_end);
+  if (!(n_paris >= 100 && n_paris <= 1e9)) {
+    return usage(
+        format("the Paris law gives %.3g cycles at P_max = %g N, R = %g (from a0 to "
+               "K_max = K_c): outside 100 to 1e9 — check --paris-c and --paris-units "
+               "(C = %g %s is %g mm/cycle with dK in MPa*sqrt(m))",
+               n_paris, s.p_max, s.r, paris_c, in.paris_units.c_str(), s.paris.c));
+  }
+  s.record_every = std::max<std::int64_t>(250, static_cast<std::int64_t>(n_paris / 200));
+
+  if (dry_run) {
+    CalibrationResult none;
+    none.a2 = s.law.A2;
+    tools::JsonLine line = result_json(in, none, {}, 0.0, "");
+    line["a2"] = nullptr;  // not calibrated
+    line["dry_run"] = true;
+    line["first_a2"] = tools::significant(s.law.A2, 7);
+    line["paris_life"] = tools::whole(n_paris);
+    line["critical_crack_m"] = tools::fixed(a_end, 6);
+    line["record_every"] = s.record_every;
+    if (json) {
+      tools::print_line(line);
+    } else {
+      std::printf("%s\n", line.dump(2).c_str());
+    }
+    return kExitOk;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::fprintf(stderr,
+               "peritwin-calibrate: CT W = %g mm, B = %g mm, dx = %g mm (about %.0f nodes), "
+               "P_max = %g N, R = %g, Paris life %.0f cycles; first A2 %.6g\n",
+               s.coupon.width * 1e3, s.coupon.thickness * 1e3, s.dx * 1e3,
+               1.5 * s.coupon.width * s.coupon.width / (s.dx * s.dx), s.p_max, s.r, n_paris,
+               s.law.A2);
+  int run_index = 0;
+  CalibrationResult cal = calibrate_a2(s, [&](const CalibrationRun& run) {
+    std::fprintf(stderr,
+                 "run %d: A2 %.6g: PD life %.0f vs Paris life %.0f (%+.2f %%), %.1f s, %lld "
+                 "bonds broken\n",
+                 ++run_index, run.a2, run.life.pd_life, run.life.paris_life,
+                 100 * run.life.relative_error(), run.life.wall_s,
+                 static_cast<long long>(run.life.broken_bonds));
+  });
+  if (!cal.converged && cal.failure.empty()) {
+    cal.failure = format(
+        "no A2 within %g of the Paris life after %d runs (next A2 would be %.6g)%s", s.tolerance,
+        s.max_runs, cal.a2,
+        one.from_b1 ? "" : "; if A2 keeps growing, phase I (A1, m1) alone outlasts the Paris life");
+  }
+  std::vector<LifeComparison> checks;
+  if (cal.converged && !no_check) {
+    fatigue::StrainLawParams law = s.law;
+    law.A2 = cal.a2;
+    for (const double f : in.check_factors) {
+      checks.push_back(compare_lives(s, law, f * s.p_max, s.r));
+      const auto& c = checks.back();
+      std::fprintf(stderr,
+                   "check: P_max %g N: PD life %.0f vs Paris life %.0f (%+.2f %%), %.1f s\n",
+                   c.p_max, c.pd_life, c.paris_life, 100 * c.relative_error(), c.wall_s);
+    }
+  }
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::string snippet = cal.converged ? fatigue_snippet(in, cal, checks) : std::string{};
+  if (json) tools::print_line(result_json(in, cal, checks, wall_s, snippet));
+  if (!cal.converged) {
+    std::fprintf(stderr, "peritwin-calibrate: calibration failed: %s\n", cal.failure.c_str());
+    return kExitFailed;
+  }
+  if (!json) {
+    std::printf("%s", snippet.c_str());
+    std::printf("# calibration: %zu PD runs, %.1f s in all\n", cal.runs.size(), wall_s);
+  }
+  return kExitOk;
+}
