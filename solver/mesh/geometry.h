@@ -57,6 +57,17 @@ struct Segment {
 /// p1-p2 counts, so a bond ending on a crack line is cut; collinear overlap counts as a cut).
 bool segments_cross(Point p1, Point p2, Point q1, Point q2);
 
+/// Distance from p to the segment a-b (m).
+double distance_to_segment(Point p, Point a, Point b);
+
+/// The boundary piece nearest to a point: the outline (index of the outline entry), a hole (index),
+/// or a notch (index), with the distance (m).
+struct SurfacePlace {
+  enum class Kind { outline, hole, notch } kind = Kind::outline;
+  int index = 0;
+  double distance = 0.0;
+};
+
 struct DetailGeometry {
   std::vector<Rectangle> outline;     ///< union of rectangles = the body before holes
   std::vector<Circle> holes;          ///< material removed
@@ -68,6 +79,12 @@ struct DetailGeometry {
 
   [[nodiscard]] bool is_material(Point p) const;
   [[nodiscard]] Rectangle bounding_box() const;
+  /// The surface nearest to p. The outline's surface is the boundary of the union of its entries:
+  /// a rectangle's edge counts only where no other rectangle covers its outward side (an edge
+  /// shared by two rectangles, or inside another, is not surface). A hole's surface is its
+  /// circle, a notch's its segment (both faces). Ties go to the outline, then holes, then notches,
+  /// each by the lowest index; with no surface at all: {outline, -1, +inf}.
+  [[nodiscard]] SurfacePlace nearest_surface(Point p) const;
   /// OK, or a message naming what is wrong.
   [[nodiscard]] Status validate() const;
 };
