@@ -148,7 +148,8 @@ CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine
   report.k_i = report.k_ii = nan;
   if (report.cracks.empty() || last_block == nullptr || engine.failed()) return report;
   const CrackMetrics& main = report.cracks.front();
-  const auto& notch = model.config().geometry.notches[static_cast<std::size_t>(main.notch)];
+  const Segment notch =
+      model.config().geometry.notches[static_cast<std::size_t>(main.notch)].last_segment();
   const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
   if (!(len > 0)) return report;
   // Crack direction: the notch direction turned by the kink angle.
