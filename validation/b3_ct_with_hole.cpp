@@ -62,7 +62,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   const double w = kWidth;
   DetailGeometry g;
   g.thickness = kThickness;
-  g.outline = {{0.0, -0.6 * w, 1.25 * w, 0.6 * w}};
+  g.outline = {Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w}};
   const Circle hole{{0.25 * w + 0.017, 0.005}, 0.0035};
   g.holes = {hole};
   const Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
@@ -73,7 +73,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   g.no_fail_zones = {Region::of(Circle{upper_pin.centre, upper_pin.radius + 2 * horizon}),
                      Region::of(Circle{lower_pin.centre, lower_pin.radius + 2 * horizon})};
   const Point tip{0.25 * w + kInitialCrack, 0.0};
-  g.notches = {{{-dx, 0.0}, tip}};
+  g.notches = {{"pre-crack", {{-dx, 0.0}, tip}}};
   const Discretization disc = discretize(g, dx, horizon);
   // SAE 1020: E = 205 GPa, ν = 0.29, plane strain (002 uses plane strain), state-based model.
   ModelOptions options;

@@ -35,7 +35,7 @@ void critical_bond_energy_checks() {
   const double dx = 0.001;
   DetailGeometry geometry;
   geometry.thickness = 0.002;
-  geometry.outline = {{0.0, 0.0, 40 * dx, 40 * dx}};
+  geometry.outline = {Rectangle{0.0, 0.0, 40 * dx, 40 * dx}};
   const Discretization d = discretize(geometry, dx, 3.015 * dx);
   ModelOptions options;
   options.kind = ModelKind::bond_based;

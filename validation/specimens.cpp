@@ -25,12 +25,12 @@ Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions
   s.name = "B1-CT";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back({0.0, -0.6 * w, 1.25 * w, 0.6 * w});
+  s.geometry.outline.push_back(Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w});
   const Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
   const Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
   s.geometry.rigid_regions = {Region::of(upper_pin), Region::of(lower_pin)};
   s.initial_crack_tip = {0.25 * w + spec.initial_crack, 0.0};
-  s.geometry.notches.push_back({{-dx, 0.0}, s.initial_crack_tip});
+  s.geometry.notches.push_back({"pre-crack", {{-dx, 0.0}, s.initial_crack_tip}});
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   for (const double side : {1.0, -1.0}) {
@@ -187,9 +187,9 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
   s.name = "B2-CTS";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back({0.0, -0.5 * spec.height, spec.width, 0.5 * spec.height});
+  s.geometry.outline.push_back(Rectangle{0.0, -0.5 * spec.height, spec.width, 0.5 * spec.height});
   s.initial_crack_tip = {spec.crack_length, 0.0};
-  s.geometry.notches.push_back({{-dx, 0.0}, s.initial_crack_tip});
+  s.geometry.notches.push_back({"pre-crack", {{-dx, 0.0}, s.initial_crack_tip}});
   const double xc = 0.5 * spec.width;
   const double r = 0.5 * spec.hole_diameter;
   const double xs[3] = {xc - 0.5 * spec.hole_spacing, xc, xc + 0.5 * spec.hole_spacing};
@@ -279,9 +279,9 @@ Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& opt
   s.name = "K-field plate";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back({-l, -l, l, l});
+  s.geometry.outline.push_back(Rectangle{-l, -l, l, l});
   s.initial_crack_tip = {0.0, 0.0};
-  s.geometry.notches.push_back({{-l - dx, 0.0}, s.initial_crack_tip});
+  s.geometry.notches.push_back({"pre-crack", {{-l - dx, 0.0}, s.initial_crack_tip}});
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
   s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   const double area = dx * spec.thickness;

@@ -9,7 +9,7 @@
 
 namespace peritwin {
 
-CrackTracker::CrackTracker(const Discretization& disc, std::vector<Segment> notches,
+CrackTracker::CrackTracker(const Discretization& disc, std::vector<Notch> notches,
                            CrackTrackerOptions options)
     : disc_(disc), notches_(std::move(notches)), options_(options) {
   if (options_.kink_distance <= 0.0) options_.kink_distance = 8.0 * disc.horizon / 3.0;
@@ -22,7 +22,7 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
   // plus what a perturbed grid can add to a pair's distance (2√2·amplitude·Δx).
   const double link = (1.5 + 2.0 * std::numbers::sqrt2 * disc_.perturbation.amplitude) * disc_.dx;
   for (std::size_t n = 0; n < notches_.size(); ++n) {
-    const Segment& notch = notches_[n];
+    const Segment notch = notches_[n].last_segment();  // the tip is its end b
     const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
     const Point dir{(notch.b.x - notch.a.x) / len, (notch.b.y - notch.a.y) / len};
     CrackMetrics crack;

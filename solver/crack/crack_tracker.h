@@ -35,14 +35,14 @@ struct CrackTrackerOptions {
 
 class CrackTracker {
  public:
-  CrackTracker(const Discretization& disc, std::vector<Segment> notches,
+  CrackTracker(const Discretization& disc, std::vector<Notch> notches,
                CrackTrackerOptions options = {});
   /// One entry per notch, in notch order (length 0 when nothing has grown yet).
   [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage) const;
 
  private:
   const Discretization& disc_;
-  std::vector<Segment> notches_;
+  std::vector<Notch> notches_;
   CrackTrackerOptions options_;
 };
 

@@ -153,7 +153,11 @@ Discretization discretize(const DetailGeometry& geometry, double dx, double hori
         const double factor = partial_volume_factor(length, horizon, dx);
         if (!(length <= reach && factor > 0.0)) continue;
         bool cut = false;
-        for (const auto& n : geometry.notches) cut = cut || segments_cross(pa, pb, n.a, n.b);
+        for (const auto& n : geometry.notches) {
+          for (std::size_t s = 0; s + 1 < n.path.size(); ++s) {
+            cut = cut || segments_cross(pa, pb, n.path[s], n.path[s + 1]);
+          }
+        }
         d.bond_i.push_back(std::min(a, b));
         d.bond_j.push_back(std::max(a, b));
         const double sign = a < b ? 1.0 : -1.0;

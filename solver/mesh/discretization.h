@@ -68,7 +68,8 @@ struct Discretization {
 };
 
 /// Builds nodes on the grid (perturbed as asked) clipped to the geometry, families within δ
-/// weighted by the partial volumes of 001 Eq. (36), cuts bonds crossing the notches. horizon = δ in
+/// weighted by the partial volumes of 001 Eq. (36), cuts bonds crossing any segment of
+/// a notch path. horizon = δ in
 /// metres. Throws std::invalid_argument for a perturbation amplitude outside [0, 0.25).
 Discretization discretize(const DetailGeometry& geometry, double dx, double horizon,
                           const GridPerturbation& perturbation = {});

@@ -1,29 +1,17 @@
-// Geometry of one monitored structural detail: an outline made of rectangles, circular holes,
-// notches/pre-cracks (segments that cut bonds), rigid regions and no-fail zones.
+// Geometry of one monitored structural detail: an outline made of rectangles, polygons (straight
+// edges, circular arcs, fillets: solver/mesh/polygon.h) and circles, holes, notches/pre-cracks
+// (polylines that cut bonds), rigid regions and no-fail zones.
 // Units: SI (m) throughout.
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "solver/core/expected.h"
+#include "solver/mesh/polygon.h"
 
 namespace peritwin {
-
-struct Point {
-  double x = 0.0;
-  double y = 0.0;
-};
-
-struct Rectangle {
-  double x_min = 0.0;
-  double y_min = 0.0;
-  double x_max = 0.0;
-  double y_max = 0.0;
-  [[nodiscard]] bool contains(Point p) const {
-    return p.x >= x_min && p.x <= x_max && p.y >= y_min && p.y <= y_max;
-  }
-};
 
 struct Circle {
   Point centre;
@@ -35,32 +23,71 @@ struct Circle {
   }
 };
 
-/// A region is a rectangle or a circle (rigid regions, no-fail zones, load regions).
+/// A rectangle, a circle or a polygon, each closed (a point on its boundary is inside): outline
+/// entries, holes, rigid regions, no-fail zones, load and support regions.
 struct Region {
-  enum class Shape { rectangle, circle } shape = Shape::rectangle;
+  enum class Shape { rectangle, circle, polygon } shape = Shape::rectangle;
   Rectangle rectangle;
   Circle circle;
+  Polygon polygon;
+
+  Region() = default;
+  Region(Rectangle r) : rectangle(r) {}                  // NOLINT(google-explicit-constructor)
+  Region(Circle c) : shape(Shape::circle), circle(c) {}  // NOLINT(google-explicit-constructor)
+  Region(Polygon p)
+      : shape(Shape::polygon), polygon(std::move(p)) {}  // NOLINT(google-explicit-constructor)
+  static Region of(Rectangle r) { return Region(r); }
+  static Region of(Circle c) { return Region(c); }
+  static Region of(Polygon p) { return Region(std::move(p)); }
+
   [[nodiscard]] bool contains(Point p) const {
-    return shape == Shape::rectangle ? rectangle.contains(p) : circle.contains(p);
+    switch (shape) {
+      case Shape::rectangle:
+        return rectangle.contains(p);
+      case Shape::circle:
+        return circle.contains(p);
+      case Shape::polygon:
+        return polygon.contains(p);
+    }
+    return false;
   }
-  static Region of(Rectangle r) { return Region{Shape::rectangle, r, {}}; }
-  static Region of(Circle c) { return Region{Shape::circle, {}, c}; }
+  [[nodiscard]] Rectangle bounding_box() const;
+  /// Distance from p to the region's boundary (m).
+  [[nodiscard]] double boundary_distance(Point p) const;
+  /// Area (m²).
+  [[nodiscard]] double area() const;
 };
 
-/// A notch or pre-crack: every bond whose segment crosses it is cut.
+/// A two-point notch or pre-crack segment (what Notch::last_segment gives).
 struct Segment {
   Point a;
   Point b;
 };
 
-/// True when the open segments p1-p2 and q1-q2 properly intersect (touching at an end point of
-/// p1-p2 counts, so a bond ending on a crack line is cut; collinear overlap counts as a cut).
-bool segments_cross(Point p1, Point p2, Point q1, Point q2);
+/// A notch or pre-crack: a polyline from the mouth to the tip; every bond crossing any of its
+/// segments is cut.
+struct Notch {
+  std::string name;         ///< from the config's `name`, default "notch <index>"
+  std::vector<Point> path;  ///< >= 2 points, from the mouth to the tip
+  [[nodiscard]] Point tip() const { return path.back(); }
+  /// Unit vector of the last segment (towards the tip).
+  [[nodiscard]] Point direction() const;
+  /// The last segment, {path[n-2], tip}.
+  [[nodiscard]] Segment last_segment() const { return {path[path.size() - 2], path.back()}; }
+};
+
+/// The boundary piece nearest to a point: the outline (index of the outline entry), a hole (index),
+/// or a notch (index), with the distance (m).
+struct SurfacePlace {
+  enum class Kind { outline, hole, notch } kind = Kind::outline;
+  int index = 0;
+  double distance = 0.0;
+};
 
 struct DetailGeometry {
-  std::vector<Rectangle> outline;     ///< union of rectangles = the body before holes
-  std::vector<Circle> holes;          ///< material removed
-  std::vector<Segment> notches;       ///< cut every bond that crosses them
+  std::vector<Region> outline;        ///< union of its entries = the body before holes
+  std::vector<Region> holes;          ///< material removed (circles or polygons)
+  std::vector<Notch> notches;         ///< cut every bond that crosses them
   std::vector<Region> rigid_regions;  ///< material with E_rigid = rigid_factor * E (000 Sec. 6.1)
   std::vector<Region> no_fail_zones;  ///< bonds touching these never break (002 Sec. 7)
   double thickness = 1.0;             ///< plate thickness h (m)
@@ -68,6 +95,14 @@ struct DetailGeometry {
 
   [[nodiscard]] bool is_material(Point p) const;
   [[nodiscard]] Rectangle bounding_box() const;
+  /// The surface nearest to p. The outline's surface is the boundary of the union of its entries:
+  /// a rectangle's edge counts only where no other rectangle covers its outward side (an edge
+  /// shared by two rectangles, or inside another, is not surface); a polygon's or circle's
+  /// boundary counts wherever it lies, so the union's boundary is exact for rectangles and for
+  /// entries that do not overlap. A hole's surface is its boundary, a notch's its polyline (both
+  /// faces). Ties go to the outline, then holes, then notches,
+  /// each by the lowest index; with no surface at all: {outline, -1, +inf}.
+  [[nodiscard]] SurfacePlace nearest_surface(Point p) const;
   /// OK, or a message naming what is wrong.
   [[nodiscard]] Status validate() const;
 };

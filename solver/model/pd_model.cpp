@@ -278,8 +278,8 @@ double straight_crack_face_damage(double horizon_ratio) {
   // y = 0 (between two rows) from edge to edge.
   const double half = std::ceil(horizon_ratio) + 2.0;
   DetailGeometry plate;
-  plate.outline.push_back({-half, -half, half, half});
-  plate.notches.push_back({{-half - 1.0, 0.0}, {half + 1.0, 0.0}});
+  plate.outline.push_back(Rectangle{-half, -half, half, half});
+  plate.notches.push_back({"split", {{-half - 1.0, 0.0}, {half + 1.0, 0.0}}});
   const Discretization disc = discretize(plate, 1.0, horizon_ratio);
   std::vector<std::uint8_t> intact(disc.bond_precut.size());
   for (std::size_t b = 0; b < intact.size(); ++b) intact[b] = disc.bond_precut[b] ? 0 : 1;

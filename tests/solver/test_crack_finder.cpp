@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
 
 #include "solver/crack/crack_finder.h"
 #include "solver/model/pd_model.h"
@@ -23,11 +24,13 @@ struct Plate {
 /// 40 × 20 mm plate (Δx = 0.5 mm, δ = 3.015Δx) with the given holes and notches.
 std::unique_ptr<Plate> make_plate(std::vector<Circle> holes, std::vector<Segment> notches = {}) {
   auto p = std::make_unique<Plate>();
-  p->geometry.outline = {{0.0, -0.01, 0.04, 0.01}};
-  p->geometry.holes = std::move(holes);
-  p->geometry.notches = notches;
+  p->geometry.outline = {Rectangle{0.0, -0.01, 0.04, 0.01}};
+  p->geometry.holes.assign(holes.begin(), holes.end());
+  for (std::size_t n = 0; n < notches.size(); ++n) {
+    p->geometry.notches.push_back({"notch " + std::to_string(n), {notches[n].a, notches[n].b}});
+  }
   p->disc = discretize(p->geometry, kDx, 3.015 * kDx);
-  p->tracker = std::make_unique<CrackTracker>(p->disc, notches);
+  p->tracker = std::make_unique<CrackTracker>(p->disc, p->geometry.notches);
   std::vector<std::vector<Point>> paths;
   for (const auto& n : notches) paths.push_back({n.a, n.b});
   p->finder = std::make_unique<CrackFinder>(p->disc, *p->tracker, paths, 0.398);

@@ -22,8 +22,8 @@ struct Grid {
 
 Grid make_grid(const GridPerturbation& perturbation = {}) {
   Grid g;
-  g.geometry.outline = {{0.0, -0.02, 0.04, 0.02}};
-  g.geometry.notches = {{{-0.001, 0.0}, {0.01, 0.0}}};
+  g.geometry.outline = {Rectangle{0.0, -0.02, 0.04, 0.02}};
+  g.geometry.notches = {{"notch 0", {{-0.001, 0.0}, {0.01, 0.0}}}};
   g.disc = discretize(g.geometry, 0.0005, 3.015 * 0.0005, perturbation);
   return g;
 }

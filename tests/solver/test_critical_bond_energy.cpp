@@ -35,7 +35,7 @@ TEST(CriticalBondEnergy, CrackCrossingCountIsThePapersThirtySix) {
     const double dx = 0.001;
     DetailGeometry g;
     g.thickness = 0.002;
-    g.outline = {{0.0, 0.0, 40 * dx, 40 * dx}};
+    g.outline = {Rectangle{0.0, 0.0, 40 * dx, 40 * dx}};
     const Discretization d = discretize(g, dx, m * dx);
     const auto crossing = bonds_crossing(d, 20 * dx, 15 * dx, 10 * dx);
     EXPECT_EQ(2.0 * static_cast<double>(crossing.size()) / 10.0, crack_crossing_interactions(m))

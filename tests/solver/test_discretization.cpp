@@ -36,8 +36,8 @@ TEST(Discretization, BondsEqualBruteForcePairSearch) {
   // A plate with a hole: the cell-list families must equal an O(N²) search over all node pairs
   // within δ.
   DetailGeometry g;
-  g.outline = {{0.0, 0.0, 0.02, 0.01}, {0.02, 0.0, 0.03, 0.004}};
-  g.holes = {{{0.01, 0.005}, 0.002}};
+  g.outline = {Rectangle{0.0, 0.0, 0.02, 0.01}, Rectangle{0.02, 0.0, 0.03, 0.004}};
+  g.holes = {Circle{{0.01, 0.005}, 0.002}};
   const double dx = 0.0005;
   const Discretization d = discretize(g, dx, 3.015 * dx);
   const auto expected = pairs_within_horizon(d);
@@ -62,8 +62,8 @@ TEST(Discretization, PerturbedGridKeepsTheBruteForceFamiliesAndIsReproducible) {
   // grid point, the families equal the O(N²) search over the true distances, the weights are
   // 001 Eq. (36) of the true length, and the same seed gives the same nodes bit for bit.
   DetailGeometry g;
-  g.outline = {{0.0, 0.0, 0.02, 0.01}};
-  g.holes = {{{0.01, 0.005}, 0.002}};
+  g.outline = {Rectangle{0.0, 0.0, 0.02, 0.01}};
+  g.holes = {Circle{{0.01, 0.005}, 0.002}};
   const double dx = 0.0005;
   const GridPerturbation grid{0.2, 42};
   const Discretization d = discretize(g, dx, 3.015 * dx, grid);
@@ -111,8 +111,8 @@ TEST(Discretization, PreCrackCutsExactlyTheCrossingBonds) {
   // the vertical bonds at x = 0.5 and 1.5 (2), and the diagonals between rows y = ±0.5 crossing
   // y = 0 at x = 1.0 (two of them) and x = 2.0 (two of them): 6 bonds.
   DetailGeometry g;
-  g.outline = {{0.0, -2.0, 4.0, 2.0}};
-  g.notches = {{{-1.0, 0.0}, {2.2, 0.0}}};
+  g.outline = {Rectangle{0.0, -2.0, 4.0, 2.0}};
+  g.notches = {{"notch 0", {{-1.0, 0.0}, {2.2, 0.0}}}};
   const Discretization d = discretize(g, 1.0, 1.5);
   EXPECT_EQ(d.num_nodes(), 16);
   int cut = 0;
@@ -125,10 +125,10 @@ TEST(Discretization, PreCrackCutsExactlyTheCrossingBonds) {
 TEST(Geometry, ValidationNamesTheProblem) {
   DetailGeometry g;
   EXPECT_NE(message_of(g.validate()).find("outline"), std::string::npos);
-  g.outline = {{0.0, 0.0, 1.0, 1.0}};
-  g.holes = {{{5.0, 5.0}, 0.1}};
+  g.outline = {Rectangle{0.0, 0.0, 1.0, 1.0}};
+  g.holes = {Circle{{5.0, 5.0}, 0.1}};
   EXPECT_NE(message_of(g.validate()).find("outside"), std::string::npos);
-  g.holes = {{{0.5, 0.5}, 0.1}};
+  g.holes = {Circle{{0.5, 0.5}, 0.1}};
   EXPECT_EQ(message_of(g.validate()), "");
 }
 

@@ -25,8 +25,8 @@ using CenterCrack = Specimen;  // geometry, discretization, model, supports, loa
 CenterCrack make_center_crack(double width, double a, double dx, double horizon, Kernel kernel) {
   CenterCrack p;
   p.geometry.thickness = 0.001;
-  p.geometry.outline = {{-0.5 * width, -width, 0.5 * width, width}};
-  p.geometry.notches = {{{-a, 0.0}, {a, 0.0}}};
+  p.geometry.outline = {Rectangle{-0.5 * width, -width, 0.5 * width, width}};
+  p.geometry.notches = {{"crack", {{-a, 0.0}, {a, 0.0}}}};
   p.disc = discretize(p.geometry, dx, horizon);
   ModelOptions o;
   o.kind = ModelKind::bond_based;

@@ -25,7 +25,7 @@ inline TensionPlate make_tension_plate(const Material& material, const ModelOpti
                                        const GridPerturbation& grid = {}) {
   TensionPlate p;
   p.geometry.thickness = 0.002;
-  p.geometry.outline = {{0.0, -0.5 * height, length, 0.5 * height}};
+  p.geometry.outline = {Rectangle{0.0, -0.5 * height, length, 0.5 * height}};
   p.disc = discretize(p.geometry, dx, 3.015 * dx, grid);
   p.model = build_model(p.disc, material, options, p.geometry.rigid_factor);
   const Region left = Region::of(Rectangle{0.0, -height, dx, height});
@@ -45,8 +45,8 @@ inline Specimen make_notched_plate(ModelKind kind, bool notched = true, int colu
   Specimen p;
   const double dx = 0.001;
   p.geometry.thickness = 0.005;
-  p.geometry.outline = {{0.0, -0.5 * rows * dx, columns * dx, 0.5 * rows * dx}};
-  if (notched) p.geometry.notches = {{{-dx, 0.0}, {0.25 * columns * dx, 0.0}}};
+  p.geometry.outline = {Rectangle{0.0, -0.5 * rows * dx, columns * dx, 0.5 * rows * dx}};
+  if (notched) p.geometry.notches = {{"notch", {{-dx, 0.0}, {0.25 * columns * dx, 0.0}}}};
   p.disc = discretize(p.geometry, dx, 3.015 * dx);
   ModelOptions o;
   o.kind = kind;

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <string>
 #include <string_view>
 #include <tuple>
@@ -156,14 +158,18 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.token, "B1_CT");
   const DetailGeometry& g = d.geometry;
   ASSERT_EQ(g.outline.size(), 1u);
-  EXPECT_EQ(xy({g.outline[0].x_min, g.outline[0].y_min}), XY(0.0, -0.030));
-  EXPECT_EQ(xy({g.outline[0].x_max, g.outline[0].y_max}), XY(0.0625, 0.030));
+  ASSERT_EQ(g.outline[0].shape, Region::Shape::rectangle);
+  const Rectangle& o = g.outline[0].rectangle;
+  EXPECT_EQ(xy({o.x_min, o.y_min}), XY(0.0, -0.030));
+  EXPECT_EQ(xy({o.x_max, o.y_max}), XY(0.0625, 0.030));
   EXPECT_EQ(g.thickness, 0.010);
   EXPECT_EQ(g.rigid_factor, 200.0);
   EXPECT_TRUE(g.holes.empty());
   ASSERT_EQ(g.notches.size(), 1u);
-  EXPECT_EQ(xy(g.notches[0].a), XY(-0.001, 0.0));
-  EXPECT_EQ(xy(g.notches[0].b), XY(0.0275, 0.0));
+  ASSERT_EQ(g.notches[0].path.size(), 2u);
+  EXPECT_EQ(g.notches[0].name, "notch 0");
+  EXPECT_EQ(xy(g.notches[0].path[0]), XY(-0.001, 0.0));
+  EXPECT_EQ(xy(g.notches[0].tip()), XY(0.0275, 0.0));
   EXPECT_EQ(d.stress_intensity.method, StressIntensityMethod::compact_tension);
   EXPECT_EQ(d.stress_intensity.width, 0.050);
   EXPECT_EQ(xy(d.stress_intensity.load_line), XY(0.0125, 0.0));
@@ -263,13 +269,13 @@ TEST(Config, B2Example) {
   const DetailConfig& d = r.config->details[0];
   EXPECT_EQ(d.id, "b2-cts");
   EXPECT_EQ(d.token, "B2_CTS");
-  const Rectangle& o = d.geometry.outline.at(0);
+  const Rectangle& o = d.geometry.outline.at(0).rectangle;
   EXPECT_EQ(xy({o.x_min, o.y_min}), XY(0.0, -0.045));
   EXPECT_EQ(xy({o.x_max, o.y_max}), XY(0.090, 0.045));
   EXPECT_EQ(d.geometry.thickness, 0.010);
   ASSERT_EQ(d.geometry.notches.size(), 1u);
-  EXPECT_EQ(xy(d.geometry.notches[0].a), XY(0.0, 0.0));
-  EXPECT_EQ(xy(d.geometry.notches[0].b), XY(0.045, 0.0));
+  EXPECT_EQ(xy(d.geometry.notches[0].path.at(0)), XY(0.0, 0.0));
+  EXPECT_EQ(xy(d.geometry.notches[0].tip()), XY(0.045, 0.0));
   const double xs[] = {0.010, 0.045, 0.080};
   ASSERT_EQ(d.geometry.rigid_regions.size(), 6u);
   for (int k = 0; k < 6; ++k) {
@@ -780,6 +786,71 @@ TEST(ConfigErrors, FileAndDocumentLevel) {
   const ConfigResult binary = parse_config(std::string("\0\xff\xfe[[", 5), "bin.toml");
   EXPECT_FALSE(binary.ok());
   EXPECT_EQ(binary.errors.size(), 1u);
+}
+
+}  // namespace
+}  // namespace peritwin::twin
+
+namespace peritwin::twin {
+namespace {
+
+TEST(ConfigGeometry, PolygonOutlineWithArcAndFilletAndNotchPolyline) {
+  Doc doc = plate();
+  // A 10 x 5 mm plate drawn as a polygon: the right end a semicircle of radius 2.5 mm about
+  // (10, 2.5) mm, the lower left corner rounded with r = 1 mm.
+  doc.replace("outline", R"(outline = [{ polygon = [{ at = [0.0, 0.0], fillet = 0.001 }, )"
+                         R"([0.010, 0.0], { to = [0.010, 0.005], arc_centre = [0.010, 0.0025], )"
+                         R"(direction = "ccw" }, [0.0, 0.005]] }])");
+  doc.insert_after("holes", R"(notches = [{ path = [[0.0, 0.001], [0.001, 0.001], )"
+                            R"([0.002, 0.0015]], name = "weld toe" }, )"
+                            R"({ from = [0.0, 0.004], to = [0.001, 0.004] }])");
+  const ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const DetailGeometry& g = r.config->details[0].geometry;
+  ASSERT_EQ(g.outline.size(), 1u);
+  ASSERT_EQ(g.outline[0].shape, Region::Shape::polygon);
+  // 50 mm² + the half disc π·2.5²/2 − the fillet's (1 − π/4)·1² = 59.6029 mm².
+  EXPECT_NEAR(g.outline[0].area(),
+              50e-6 + std::numbers::pi * 6.25e-6 / 2 - (1 - std::numbers::pi / 4) * 1e-6, 1e-18);
+  EXPECT_DOUBLE_EQ(g.bounding_box().x_max, 0.0125);
+  ASSERT_EQ(g.notches.size(), 2u);
+  EXPECT_EQ(g.notches[0].name, "weld toe");
+  ASSERT_EQ(g.notches[0].path.size(), 3u);
+  EXPECT_EQ(xy(g.notches[0].tip()), XY(0.002, 0.0015));
+  const Point d = g.notches[0].direction();  // (1, 0.5)/√1.25
+  EXPECT_NEAR(d.x, 1 / std::sqrt(1.25), 1e-15);
+  EXPECT_NEAR(d.y, 0.5 / std::sqrt(1.25), 1e-15);
+  EXPECT_EQ(g.notches[1].name, "notch 1");
+  // A node on the arc's far end (12.5, 2.5) mm would be material; one beyond it is not.
+  EXPECT_TRUE(g.is_material({0.0125, 0.0025}));
+  EXPECT_FALSE(g.is_material({0.01251, 0.0025}));
+}
+
+TEST(ConfigGeometry, PolygonErrorsNameTheVertex) {
+  Doc doc = plate();
+  // A bow tie: the edge to vertex [3] crosses the edge to vertex [1].
+  doc.replace("outline",
+              R"(outline = [{ x_min = 0.0, y_min = 0.0, x_max = 0.010, y_max = 0.005 },)");
+  doc.insert_after("outline",
+                   R"(  { polygon = [[0.0, 0.0], [0.01, 0.005], [0.01, 0.0], [0.0, 0.005]] }])");
+  expect_one_error(parse(doc), 6, "detail[0].geometry.outline[1].polygon[3]",
+                   "the boundary crosses itself");
+  doc = plate();
+  doc.replace("outline", R"(outline = [{ polygon = [[0.0, 0.0], [0.010, 0.0], )"
+                         R"({ at = [0.010, 0.005], fillet = 0.006 }, [0.0, 0.005]] }])");
+  expect_one_error(parse(doc), 5, "detail[0].geometry.outline[0].polygon[2]", "the fillets need");
+  doc = plate();
+  doc.replace("outline",
+              R"(outline = [{ polygon = [[0.0, 0.0], [0.010, 0.0], )"
+              R"({ to = [0.010, 0.005], arc_centre = [0.011, 0.0025] }, [0.0, 0.005]] }])");
+  expect_one_error(parse(doc), 5, "detail[0].geometry.outline[0].polygon[2].direction",
+                   "missing required key");
+  doc = plate();
+  doc.replace("outline", R"(outline = [{ polygon = [[0.0, 0.0], [0.010, 0.0]] }])");
+  expect_one_error(parse(doc), 5, "detail[0].geometry.outline[0].polygon", "at least 3 vertices");
+  doc = plate();
+  doc.insert_after("holes", R"(notches = [{ path = [[0.0, 0.001]] }])");
+  expect_one_error(parse(doc), 7, "detail[0].geometry.notches[0].path", "at least 2 points");
 }
 
 }  // namespace

@@ -152,25 +152,28 @@ std::string TableReader::string(std::string_view key, std::string fallback) {
   return has(key) ? string(key).value_or(std::move(fallback)) : (node(key, false), fallback);
 }
 
-std::optional<Point> TableReader::point(std::string_view key) {
-  const toml::node* n = node(key, true);
-  if (n == nullptr) return std::nullopt;
-  const std::string path = path_of(key);
-  const toml::array* a = n->as_array();
+std::optional<Point> point_of(Context& ctx, const toml::node& n, const std::string& path) {
+  const toml::array* a = n.as_array();
   if (a == nullptr) {
-    wrong_type(ctx_, *n, path, "an array [x, y]");
+    wrong_type(ctx, n, path, "an array [x, y]");
     return std::nullopt;
   }
   if (a->size() != 2) {
-    ctx_.error(
-        n->source(), path,
+    ctx.error(
+        n.source(), path,
         "expected an array [x, y] of 2 numbers, got " + std::to_string(a->size()) + " elements");
     return std::nullopt;
   }
-  const auto x = as_number(ctx_, (*a)[0], path + "[0]");
-  const auto y = as_number(ctx_, (*a)[1], path + "[1]");
+  const auto x = as_number(ctx, (*a)[0], path + "[0]");
+  const auto y = as_number(ctx, (*a)[1], path + "[1]");
   if (!x || !y) return std::nullopt;
   return Point{*x, *y};
+}
+
+std::optional<Point> TableReader::point(std::string_view key) {
+  const toml::node* n = node(key, true);
+  if (n == nullptr) return std::nullopt;
+  return point_of(ctx_, *n, path_of(key));
 }
 
 Point TableReader::point(std::string_view key, Point fallback) {

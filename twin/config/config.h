@@ -3,14 +3,24 @@
 // examples/b1-ct-al6061.toml and examples/b2-cts-al6061.toml are complete, commented examples.
 //
 // Schema (R = required, otherwise the default is given; "region" is an inline table that is
-// either a rectangle {x_min, y_min, x_max, y_max} or a circle {centre = [x, y], radius}; points
-// and vectors are arrays [x, y]):
+// a rectangle {x_min, y_min, x_max, y_max}, a circle {centre = [x, y], radius} or a polygon
+// {polygon = [vertex, ...]}; points and vectors are arrays [x, y]). A polygon
+// (solver/mesh/polygon.h) has >= 3 vertices, each [x, y], {at = [x, y], fillet = r} (the corner
+// rounded by an arc of radius r tangent to both edges, which must be straight and long enough for
+// it) or {to = [x, y], arc_centre = [x, y], direction = "ccw" | "cw"} (the edge arriving at it is a
+// circular arc about arc_centre, counterclockwise or clockwise; both ends equidistant from it to
+// 1e-6); the boundary closes from the last vertex to the first and may not cross itself. Every
+// shape is closed: a node exactly on an edge or arc is inside it (so on an outline it is material,
+// on a hole it is not).
 //
 //   [[detail]]           id R (1-32 chars [A-Za-z0-9_-], unique after upper-casing and '-'->'_'),
 //                        description ""
 //   [detail.geometry] R  thickness R (m, > 0), rigid_factor 200 (E_rigid/E, >= 1),
-//                        outline R [{x_min, y_min, x_max, y_max}, ...] (m, at least one),
-//                        holes [] [{centre, radius}], notches [] [{from, to}] (segments, m),
+//                        outline R [region, ...] (m, at least one; the body is their union,
+//                          e.g. rectangles, or a polygon with arcs and fillets),
+//                        holes [] [region, ...] (circles or polygons), notches [] [{from, to} |
+//                          {path = [[x, y], ...]} (a polyline of >= 2 points from the mouth to the
+//                          tip; every bond crossing any segment is cut), name "notch <index>"],
 //                        rigid_regions [] [region, ...], no_fail_zones [] [region, ...]
 //   [detail.grid] R      dx R (m, > 0, <= the smaller side of the body's bounding box; see
 //                        "Resource bounds" below), horizon_ratio 3.015 (δ/Δx, 1 <= ratio <= 10:
@@ -47,7 +57,7 @@
 //                        critical_crack_length (m, > 0: the length along the crack path of the
 //                        longest crack — from a notch tip, from the surface a crack started on,
 //                        tip to tip inside; R with and only with "crack_length"), crack_origin
-//                        ("" = any crack; else only cracks from this origin: "notch <name>",
+//                        ("" = any crack; else only cracks from this origin: a notch's name,
 //                        "hole <index>", "outline"; only with "crack_length"),
 //                        reference_spectrum "empirical" (the rolling spectrum of the received
 //                        cycles) | [{p_max (N, > 0), r (< 1), alpha (rad, default 0), count

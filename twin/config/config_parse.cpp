@@ -2,6 +2,7 @@
 // with the TableReader of twin/config/config_toml.h.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <system_error>
@@ -85,25 +86,103 @@ std::optional<Circle> read_circle(TableReader& r) {
   return Circle{*centre, *radius};
 }
 
-/// {x_min, y_min, x_max, y_max} or {centre = [x, y], radius}.
+constexpr std::string_view kVertexForms =
+    "a vertex [x, y], { at = [x, y], fillet = r } or { to = [x, y], arc_centre = [x, y], "
+    "direction = \"ccw\" | \"cw\" }";
+
+/// One polygon vertex: [x, y] | { at = [x, y], fillet = r } (a corner, rounded when r > 0) |
+/// { to = [x, y], arc_centre = [x, y], direction = "ccw" | "cw" } (the edge arriving at it is an
+/// arc).
+std::optional<PolygonVertex> read_vertex(Context& ctx, const toml::node& n,
+                                         const std::string& path) {
+  if (n.is_array()) {
+    const auto p = point_of(ctx, n, path);
+    if (!p) return std::nullopt;
+    return PolygonVertex{*p, PolygonVertex::Edge::straight, {}, 0.0};
+  }
+  const toml::table* t = n.as_table();
+  if (t == nullptr) {
+    ctx.error(
+        n.source(), path,
+        "expected " + std::string(kVertexForms) + ", got " + std::string(type_name(n.type())));
+    return std::nullopt;
+  }
+  TableReader r(ctx, *t, path);
+  std::optional<PolygonVertex> vertex;
+  if (r.has("to") || r.has("arc_centre") || r.has("direction")) {
+    const auto to = r.point("to");
+    const auto centre = r.point("arc_centre");
+    const auto direction = r.choice<PolygonVertex::Edge>(
+        "direction", {{"ccw", PolygonVertex::Edge::arc_ccw}, {"cw", PolygonVertex::Edge::arc_cw}},
+        std::nullopt);
+    for (const char* key : {"at", "fillet"}) {
+      r.node(key, false);
+      r.check(key, !r.has(key),
+              "not in an arc vertex (an arc's end takes no fillet; its point is \"to\")");
+    }
+    if (to && centre && direction) vertex = PolygonVertex{*to, *direction, *centre, 0.0};
+  } else {
+    const auto at = r.point("at");
+    const double fillet = opt(r, "fillet", 0.0, Bound::non_negative);
+    if (at) vertex = PolygonVertex{*at, PolygonVertex::Edge::straight, {}, fillet};
+  }
+  r.finish();
+  return vertex;
+}
+
+/// polygon = [vertex, ...] of the table read by r, validated by Polygon::make (errors at
+/// "<path>.polygon[k]", k the vertex to blame).
+std::optional<Polygon> read_polygon(Context& ctx, TableReader& r) {
+  const toml::array* a = r.array("polygon", true);
+  if (a == nullptr) return std::nullopt;
+  const std::string path = r.path_of("polygon");
+  std::vector<PolygonVertex> vertices;
+  bool ok = true;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    if (const auto v = read_vertex(ctx, (*a)[i], path + "[" + std::to_string(i) + "]")) {
+      vertices.push_back(*v);
+    } else {
+      ok = false;
+    }
+  }
+  if (!ok) return std::nullopt;
+  auto polygon = Polygon::make(std::move(vertices));
+  if (!polygon) {
+    const Error& e = polygon.error();
+    const toml::node* where = a;
+    if (e.field.size() > 2 && e.field.front() == '[') {
+      const std::size_t k = std::strtoull(e.field.c_str() + 1, nullptr, 10);
+      if (k < a->size()) where = &(*a)[k];
+    }
+    ctx.error(where->source(), path + e.field, e.reason);
+    return std::nullopt;
+  }
+  return std::move(polygon).value();
+}
+
+/// {x_min, y_min, x_max, y_max}, {centre = [x, y], radius} or {polygon = [vertex, ...]}.
 std::optional<Region> read_region(Context& ctx, const toml::table& t, const std::string& path) {
   TableReader r(ctx, t, path);
   std::optional<Region> region;
-  if (r.has("centre") || r.has("radius")) {
+  if (r.has("polygon")) {
+    if (auto p = read_polygon(ctx, r)) region = Region::of(std::move(*p));
+  } else if (r.has("centre") || r.has("radius")) {
     if (const auto c = read_circle(r)) region = Region::of(*c);
   } else if (r.has("x_min") || r.has("y_min") || r.has("x_max") || r.has("y_max")) {
     if (const auto rect = read_rectangle(r)) region = Region::of(*rect);
   } else {
-    for (const auto* key : {"x_min", "y_min", "x_max", "y_max", "centre", "radius"}) {
+    for (const auto* key : {"x_min", "y_min", "x_max", "y_max", "centre", "radius", "polygon"}) {
       r.node(key, false);
     }
-    r.error("expected a rectangle {x_min, y_min, x_max, y_max} or a circle {centre, radius}");
+    r.error(
+        "expected a rectangle {x_min, y_min, x_max, y_max}, a circle {centre, radius} or a "
+        "polygon {polygon = [vertex, ...]}");
   }
   r.finish();
   return region;
 }
 
-bool inside_outline(const std::vector<Rectangle>& outline, Point p) {
+bool inside_outline(const std::vector<Region>& outline, Point p) {
   return std::any_of(outline.begin(), outline.end(), [p](const auto& r) { return r.contains(p); });
 }
 
@@ -115,40 +194,72 @@ bool read_geometry(Context& ctx, const toml::table& t, const std::string& path, 
   g.rigid_factor = r.number("rigid_factor", 200.0);
   r.check("rigid_factor", g.rigid_factor >= 1, "must be >= 1 (E_rigid / E)");
   bool outline_ok = r.has("outline");
-  each_table(r, "outline", true, "an array of rectangles", [&](const auto& e, const auto& p) {
-    TableReader er(ctx, e, p);
-    if (const auto rect = read_rectangle(er)) {
-      g.outline.push_back(*rect);
-    } else {
-      outline_ok = false;
-    }
-    er.finish();
-  });
+  each_table(r, "outline", true, "an array of rectangles, polygons or circles",
+             [&](const auto& e, const auto& p) {
+               if (auto region = read_region(ctx, e, p)) {
+                 g.outline.push_back(std::move(*region));
+               } else {
+                 outline_ok = false;
+               }
+             });
   outline_ok = outline_ok && !g.outline.empty();
-  each_table(r, "holes", false, "an array of circles", [&](const auto& e, const auto& p) {
-    TableReader er(ctx, e, p);
-    if (const auto c = read_circle(er)) {
-      g.holes.push_back(*c);
-      if (outline_ok) {  // DetailGeometry::validate's test, for this hole alone
-        DetailGeometry probe;
-        probe.outline = g.outline;
-        probe.holes = {*c};
-        std::string why = message_of(probe.validate());
-        if (const auto colon = why.find(": "); why.starts_with("holes[") && colon != why.npos) {
-          why = why.substr(colon + 2);
+  each_table(
+      r, "holes", false, "an array of circles or polygons", [&](const auto& e, const auto& p) {
+        const std::size_t before = ctx.errors.size();
+        auto hole = read_region(ctx, e, p);
+        if (!hole) return;
+        if (outline_ok && ctx.errors.size() == before) {
+          // DetailGeometry::validate's test, for this hole alone
+          DetailGeometry probe;
+          probe.outline = g.outline;
+          probe.holes = {*hole};
+          std::string why = message_of(probe.validate());
+          if (const auto colon = why.find(": "); why.starts_with("holes[") && colon != why.npos) {
+            why = why.substr(colon + 2);
+          }
+          if (!why.empty()) ctx.error(e.source(), p, why);
         }
-        if (!why.empty()) er.error(why);
-      }
-    }
-    er.finish();
-  });
-  each_table(r, "notches", false, "an array of segments", [&](const auto& e, const auto& p) {
+        g.holes.push_back(std::move(*hole));
+      });
+  each_table(r, "notches", false, "an array of notches", [&](const auto& e, const auto& p) {
     TableReader er(ctx, e, p);
-    const auto a = er.point("from");
-    const auto b = er.point("to");
-    if (a && b && er.check("to", a->x != b->x || a->y != b->y, "must differ from \"from\"")) {
-      g.notches.push_back({*a, *b});
+    Notch notch;
+    notch.name = er.string("name", "notch " + std::to_string(g.notches.size()));
+    bool ok = true;
+    if (er.has("path")) {
+      for (const char* key : {"from", "to"}) {
+        er.node(key, false);
+        ok = er.check(key, !er.has(key), "give either \"path\" or \"from\" and \"to\"") && ok;
+      }
+      if (const toml::array* a = er.array("path", true)) {
+        const std::string points = er.path_of("path");
+        for (std::size_t i = 0; i < a->size(); ++i) {
+          const std::string at = points + "[" + std::to_string(i) + "]";
+          const auto q = point_of(ctx, (*a)[i], at);
+          if (!q) {
+            ok = false;
+          } else if (!notch.path.empty() && q->x == notch.path.back().x &&
+                     q->y == notch.path.back().y) {
+            ctx.error((*a)[i].source(), at, "repeats the previous point");
+            ok = false;
+          } else {
+            notch.path.push_back(*q);
+          }
+        }
+        ok = er.check("path", a->size() >= 2,
+                      "needs at least 2 points, from the mouth to the tip (got " +
+                          std::to_string(a->size()) + ")") &&
+             ok;
+      } else {
+        ok = false;
+      }
+    } else {
+      const auto a = er.point("from");
+      const auto b = er.point("to");
+      ok = a && b && er.check("to", a->x != b->x || a->y != b->y, "must differ from \"from\"");
+      if (ok) notch.path = {*a, *b};
     }
+    if (ok) g.notches.push_back(std::move(notch));
     er.finish();
   });
   for (const auto* key : {"rigid_regions", "no_fail_zones"}) {

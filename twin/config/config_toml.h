@@ -33,6 +33,9 @@ struct Context {
   [[nodiscard]] SourceRef ref(const toml::node& node, std::string path) const;
 };
 
+/// [x, y] of two real numbers at `path` (errors reported).
+std::optional<Point> point_of(Context& ctx, const toml::node& n, const std::string& path);
+
 class TableReader {
  public:
   TableReader(Context& ctx, const toml::table& table, std::string path);

@@ -186,7 +186,8 @@ BodyMeasure sweep(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
   m.cells = finite_or_huge(ax.count * ay.count);
   std::vector<double> xs;
   xs.reserve(2 * g.outline.size());
-  for (const auto& r : g.outline) {
+  for (const auto& entry : g.outline) {
+    const Rectangle& r = entry.rectangle;
     xs.push_back(r.x_min);
     xs.push_back(r.x_max);
   }
@@ -198,7 +199,8 @@ BodyMeasure sweep(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
   for (std::size_t k = 0; k + 1 < xs.size(); ++k) {
     const double xa = xs[k], xb = xs[k + 1];
     current.clear();
-    for (const auto& r : g.outline) {
+    for (const auto& entry : g.outline) {
+      const Rectangle& r = entry.rectangle;
       if (r.x_min <= xa && r.x_max >= xb) current.push_back({r.y_min, r.y_max});
     }
     std::sort(current.begin(), current.end(),
@@ -223,7 +225,7 @@ BodyMeasure sweep(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
     nodes += columns * rows;
     m.perimeter += symmetric_difference(previous, current);
     for (std::size_t h = 0; h < g.holes.size(); ++h) {
-      const Circle& c = g.holes[h];
+      const Circle& c = g.holes[h].circle;
       if (c.centre.x + c.radius <= xa || c.centre.x - c.radius >= xb) continue;
       for (const auto& i : current) {
         hole_area[h] += disc_rectangle_area(c.radius, xa - c.centre.x, xb - c.centre.x,
@@ -235,7 +237,7 @@ BodyMeasure sweep(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
   m.perimeter += symmetric_difference(previous, {});
   double removed = 0.0;
   for (std::size_t h = 0; h < g.holes.size(); ++h) {
-    const double r = g.holes[h].radius;
+    const double r = g.holes[h].circle.radius;
     removed += hole_area[h] / (ax.dx * ay.dx);
     // The circumference inside the body, as the inside share of the hole's area.
     const double full = std::numbers::pi * r * r;
@@ -246,6 +248,38 @@ BodyMeasure sweep(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
   return m;
 }
 
+/// Outlines with polygons or circles, or polygon holes: nodes from the areas (the entries' sum less
+/// the holes', an over-estimate where entries overlap), boundary from their perimeters.
+BodyMeasure shape_measure(const DetailGeometry& g, const Axis& ax, const Axis& ay) {
+  BodyMeasure m;
+  m.cells = finite_or_huge(ax.count * ay.count);
+  double area = 0.0;
+  double perimeter = 0.0;
+  const auto length = [](const Region& r) {
+    switch (r.shape) {
+      case Region::Shape::rectangle:
+        return 2.0 *
+               ((r.rectangle.x_max - r.rectangle.x_min) + (r.rectangle.y_max - r.rectangle.y_min));
+      case Region::Shape::circle:
+        return 2.0 * std::numbers::pi * r.circle.radius;
+      case Region::Shape::polygon:
+        return r.polygon.perimeter();
+    }
+    return 0.0;
+  };
+  for (const Region& r : g.outline) {
+    area += r.area();
+    perimeter += length(r);
+  }
+  for (const Region& h : g.holes) {
+    area -= h.area();
+    perimeter += length(h);
+  }
+  m.nodes = std::min(m.cells, finite_or_huge(std::max(0.0, area) / (ax.dx * ay.dx)));
+  m.perimeter = finite_or_huge(perimeter);
+  return m;
+}
+
 BodyMeasure measure_body(const DetailConfig& d) {
   const Rectangle box = d.geometry.bounding_box();
   // discretize()'s grid: nx = floor(width/dx + 1e-9) columns from the box's lower left corner.
@@ -253,6 +287,12 @@ BodyMeasure measure_body(const DetailConfig& d) {
   const Axis ay{box.y_min, d.dx, finite_or_huge(std::floor((box.y_max - box.y_min) / d.dx + 1e-9))};
   const auto rectangles = static_cast<double>(d.geometry.outline.size());
   const auto holes = static_cast<double>(d.geometry.holes.size());
+  const bool rectangles_and_circles =
+      std::all_of(d.geometry.outline.begin(), d.geometry.outline.end(),
+                  [](const Region& r) { return r.shape == Region::Shape::rectangle; }) &&
+      std::all_of(d.geometry.holes.begin(), d.geometry.holes.end(),
+                  [](const Region& r) { return r.shape == Region::Shape::circle; });
+  if (!rectangles_and_circles) return shape_measure(d.geometry, ax, ay);
   if (2.0 * rectangles * rectangles * (1.0 + holes) > kMaxSweepSteps) {
     return box_measure(box, ax, ay);
   }

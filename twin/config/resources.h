@@ -7,7 +7,9 @@
 //
 // The model (docs/limits.md has the derivation and the measured ratios):
 //  - nodes: the grid's cell centres inside the union of the outline rectangles, counted per
-//    rectangle slab exactly as discretize() places them, less each hole's area / Δx².
+//    rectangle slab exactly as discretize() places them, less each hole's area / Δx²; when the
+//    outline has polygons or circles or a hole is a polygon: the entries' areas less the holes'
+//    over Δx², the perimeter their boundaries' lengths (over-estimates where entries overlap).
 //  - bonds: ½·(N·F − (P/Δx)·S), F the lattice offsets within δ (an interior node's family, 28 at
 //    δ = 3.015Δx), S = Σ q over the offsets (p, q) with q > 0 (the family members a node loses per
 //    Δx of a straight edge, summed over the rows near it: 18 at 3.015Δx), P the body's perimeter.

@@ -82,7 +82,7 @@ Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConf
   tracker_options.phase_switch_damage = config.fatigue.phase_switch_damage;
   m->tracker_ = std::make_unique<CrackTracker>(sp.disc, config.geometry.notches, tracker_options);
   std::vector<std::vector<Point>> notch_paths;
-  for (const auto& n : config.geometry.notches) notch_paths.push_back({n.a, n.b});
+  for (const auto& n : config.geometry.notches) notch_paths.push_back(n.path);
   m->finder_ = std::make_unique<CrackFinder>(sp.disc, *m->tracker_, std::move(notch_paths),
                                              config.fatigue.phase_switch_damage);
   for (auto c : sp.disc.bond_precut) m->precut_bonds_ += c ? 1 : 0;
@@ -140,19 +140,12 @@ std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const 
 }
 
 std::string DetailModel::surface_name(Point p) const {
-  // The nearest hole rim against the outline: a crack within δ + Δx of a rim started there.
-  const auto& holes = config_.geometry.holes;
-  int best = -1;
-  double best_distance = disc().horizon + disc().dx;
-  for (std::size_t i = 0; i < holes.size(); ++i) {
-    const double d =
-        std::abs(std::hypot(p.x - holes[i].centre.x, p.y - holes[i].centre.y) - holes[i].radius);
-    if (d <= best_distance) {
-      best_distance = d;
-      best = static_cast<int>(i);
-    }
-  }
-  return best >= 0 ? "hole " + std::to_string(best) : "outline";
+  // The nearest piece of the free surface (geometry.h nearest_surface): a hole's rim, else the
+  // outline. A notch's faces count as the outline here: a crack that starts on them is not the
+  // notch's (that one starts at its tip).
+  const SurfacePlace place = config_.geometry.nearest_surface(p);
+  if (place.kind == SurfacePlace::Kind::hole) return "hole " + std::to_string(place.index);
+  return "outline";
 }
 
 const ReportedCrack* CrackReport::criterion_crack(const std::string& origin) const {
@@ -166,8 +159,8 @@ namespace {
 
 std::string origin_name(const DetailModel& model, const FoundCrack& c) {
   switch (c.origin) {
-    case CrackOrigin::notch:
-      return "notch " + std::to_string(c.notch);
+    case CrackOrigin::notch:  // "notch <index>" unless the config names it
+      return model.config().geometry.notches[static_cast<std::size_t>(c.notch)].name;
     case CrackOrigin::surface:
       return model.surface_name(c.origin_point);
     case CrackOrigin::interior:
@@ -258,9 +251,9 @@ CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine
     if (method.method == StressIntensityMethod::compact_tension && c.origin == CrackOrigin::notch) {
       // 000 Eq. (A2) at P_max for a notch crack: crack length from the load line along the notch,
       // K_II = 0. ASTM E647 gives the formula for 0.2 <= a/W < 1; outside it: out of range.
-      const auto& notch = model.config().geometry.notches[static_cast<std::size_t>(c.notch)];
-      const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
-      const double nx = (notch.b.x - notch.a.x) / len, ny = (notch.b.y - notch.a.y) / len;
+      const Point d =
+          model.config().geometry.notches[static_cast<std::size_t>(c.notch)].direction();
+      const double nx = d.x, ny = d.y;
       const Point tip = c.tips[0].position;
       const double q = (tip.x - method.load_line.x) * nx + (tip.y - method.load_line.y) * ny;
       const double ratio = q / method.width;
@@ -277,7 +270,7 @@ CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine
     double faces = c.length;
     if (c.origin == CrackOrigin::notch) {
       const auto& n = model.config().geometry.notches[static_cast<std::size_t>(c.notch)];
-      faces += path_length({n.a, n.b});
+      faces += path_length(n.path);
     }
     for (std::size_t t = 0; t < c.tips.size(); ++t) {
       TipStressIntensity& k = rc.k[t];

@@ -90,7 +90,7 @@ struct TipStressIntensity {
 /// One crack of a state: the finder's crack, where it comes from in words, K per tip.
 struct ReportedCrack {
   FoundCrack crack;
-  std::string origin;                 ///< "notch <name>", "hole <index>", "outline", "interior"
+  std::string origin;                 ///< the notch's name, "hole <index>", "outline", "interior"
   std::vector<TipStressIntensity> k;  ///< one per crack.tips
 };
 

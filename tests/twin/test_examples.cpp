@@ -1,0 +1,90 @@
+// The detail examples drawn with holes and arcs (examples/strip-with-hole.toml, examples/lug.toml)
+// run to end of life on their coarse grids, and their first fatigue damage lies where a fatigue
+// crack starts in such details: at the hole's rim, perpendicular to the load (the net section).
+// Located from the broken bonds, not from the crack tracker. On these grids every bond breaks by
+// fatigue (no phase III overload), so the end of life the twin reports is the separation of the
+// part (Failure::singular: the stiffness is singular once a piece comes loose); either final
+// failure counts. Measured (Release, 2 shared cores): strip 1910 fatigue breaks, all in the net
+// section, first at (100, 25) mm on the rim, separation at 68 797 cycles, 36 s; lug 613 breaks,
+// 490 in the net section, first at (62.5, −8) mm on the rim, 18 272 cycles, 13 s.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <string>
+
+#include "tests/support/twin_fixtures.h"
+
+namespace peritwin::twin {
+namespace {
+
+struct LifeRun {
+  Failure failure = Failure::none;
+  std::int64_t cycles = 0;
+  Point first_break;  ///< midpoint of the first bond broken by fatigue
+  int fatigue_breaks = 0;
+  int net_section_breaks = 0;  ///< fatigue breaks within 45° of ±y about the hole centre
+};
+
+/// Batches of 5000 cycles at p_max, R = 0.1, until the twin fails (at most 1000 batches).
+LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_centre) {
+  auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/" + example);
+  EXPECT_TRUE(parsed.ok()) << parsed.error_text();
+  LifeRun run;
+  if (!parsed.ok()) return run;
+  const DetailConfig config = parsed.config->details.at(0);
+  const auto model = testing::b1_model(config);
+  auto twin = testing::make_twin(model);
+  for (std::int64_t seq = 1; seq <= 1000 && twin->failure() == Failure::none; ++seq) {
+    EXPECT_TRUE(twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, 5000}}}).applied());
+  }
+  run.failure = twin->failure();
+  run.cycles = twin->engine().total_cycles();
+  const Discretization& disc = model->disc();
+  for (const BreakEvent& e : twin->engine().break_events()) {
+    if (e.cause != BreakCause::fatigue) continue;
+    const Point a = disc.position[static_cast<std::size_t>(disc.bond_i[e.bond])];
+    const Point b = disc.position[static_cast<std::size_t>(disc.bond_j[e.bond])];
+    const Point mid{0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
+    if (run.fatigue_breaks++ == 0) run.first_break = mid;
+    if (std::abs(mid.x - hole_centre.x) <= std::abs(mid.y - hole_centre.y)) {
+      ++run.net_section_breaks;
+    }
+  }
+  return run;
+}
+
+TEST(DetailExamples, StripWithHoleCracksAtTheHoleTopAndBottom) {
+  const Point centre{0.100, 0.030};
+  const LifeRun run = run_to_end_of_life("strip-with-hole.toml", 20000.0, centre);
+  EXPECT_NE(run.failure, Failure::none);
+  ASSERT_GT(run.fatigue_breaks, 0);
+  // The first break: at the rim (radius 5 mm) within a horizon (6 mm), above or below the centre.
+  const double r = std::hypot(run.first_break.x - centre.x, run.first_break.y - centre.y);
+  EXPECT_GE(r, 0.005 - 0.002);
+  EXPECT_LE(r, 0.005 + 0.006);
+  EXPECT_LE(std::abs(run.first_break.x - centre.x), std::abs(run.first_break.y - centre.y));
+  EXPECT_GT(run.net_section_breaks, run.fatigue_breaks / 2);
+  std::cout << "strip: end of life at " << run.cycles << " cycles, " << run.fatigue_breaks
+            << " fatigue breaks (" << run.net_section_breaks << " in the net section), first at ("
+            << run.first_break.x << ", " << run.first_break.y << ")\n";
+}
+
+TEST(DetailExamples, LugCracksAtTheHoleInTheNetSection) {
+  const Point centre{0.060, 0.0};
+  const LifeRun run = run_to_end_of_life("lug.toml", 8000.0, centre);
+  EXPECT_NE(run.failure, Failure::none);
+  ASSERT_GT(run.fatigue_breaks, 0);
+  // The first break: at the rim (radius 8 mm) within a horizon (3 mm), above or below the centre.
+  const double r = std::hypot(run.first_break.x - centre.x, run.first_break.y - centre.y);
+  EXPECT_GE(r, 0.008 - 0.001);
+  EXPECT_LE(r, 0.008 + 0.003);
+  EXPECT_LE(std::abs(run.first_break.x - centre.x), std::abs(run.first_break.y - centre.y));
+  EXPECT_GT(run.net_section_breaks, run.fatigue_breaks / 2);
+  std::cout << "lug: end of life at " << run.cycles << " cycles, " << run.fatigue_breaks
+            << " fatigue breaks (" << run.net_section_breaks << " in the net section), first at ("
+            << run.first_break.x << ", " << run.first_break.y << ")\n";
+}
+
+}  // namespace
+}  // namespace peritwin::twin
