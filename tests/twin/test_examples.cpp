@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <string>
 
 #include "tests/support/twin_fixtures.h"
@@ -24,10 +25,14 @@ struct LifeRun {
   Point first_break;  ///< midpoint of the first bond broken by fatigue
   int fatigue_breaks = 0;
   int net_section_breaks = 0;  ///< fatigue breaks within 45° of ±y about the hole centre
+  /// The cracks of every state before the end of life (CrackReport after each batch).
+  std::vector<CrackReport> reports;
+  std::vector<std::int64_t> report_cycles;
 };
 
 /// Batches of 5000 cycles at p_max, R = 0.1, until the twin fails (at most 1000 batches).
-LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_centre) {
+LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_centre,
+                           std::int64_t batch_cycles = 5000) {
   auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/" + example);
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
   LifeRun run;
@@ -36,7 +41,12 @@ LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_
   const auto model = testing::b1_model(config);
   auto twin = testing::make_twin(model);
   for (std::int64_t seq = 1; seq <= 1000 && twin->failure() == Failure::none; ++seq) {
-    EXPECT_TRUE(twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, 5000}}}).applied());
+    EXPECT_TRUE(
+        twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, batch_cycles}}}).applied());
+    if (twin->failure() == Failure::none) {
+      run.reports.push_back(twin->cracks());
+      run.report_cycles.push_back(twin->engine().total_cycles());
+    }
   }
   run.failure = twin->failure();
   run.cycles = twin->engine().total_cycles();
@@ -65,6 +75,25 @@ TEST(DetailExamples, StripWithHoleCracksAtTheHoleTopAndBottom) {
   EXPECT_LE(r, 0.005 + 0.006);
   EXPECT_LE(std::abs(run.first_break.x - centre.x), std::abs(run.first_break.y - centre.y));
   EXPECT_GT(run.net_section_breaks, run.fatigue_breaks / 2);
+  // The cracks the twin reports (CrackFinder): two at the hole, one above and one below it,
+  // each growing monotonically under its id from state to state.
+  bool both = false;
+  std::map<std::int32_t, double> last_length;
+  for (const CrackReport& report : run.reports) {
+    int above = 0, below = 0;
+    for (const auto& rc : report.cracks) {
+      if (rc.origin != "hole 0") continue;
+      (rc.crack.origin_point.y > centre.y ? above : below) += 1;
+      const auto [it, fresh] = last_length.emplace(rc.crack.id, rc.crack.length);
+      if (!fresh) {
+        EXPECT_GE(rc.crack.length, it->second) << "crack " << rc.crack.id;
+        it->second = rc.crack.length;
+      }
+    }
+    both = both || (above >= 1 && below >= 1);
+  }
+  EXPECT_TRUE(both) << "never a crack both above and below the hole";
+  EXPECT_GE(last_length.size(), 2u);
   std::cout << "strip: end of life at " << run.cycles << " cycles, " << run.fatigue_breaks
             << " fatigue breaks (" << run.net_section_breaks << " in the net section), first at ("
             << run.first_break.x << ", " << run.first_break.y << ")\n";
@@ -81,6 +110,29 @@ TEST(DetailExamples, LugCracksAtTheHoleInTheNetSection) {
   EXPECT_LE(r, 0.008 + 0.003);
   EXPECT_LE(std::abs(run.first_break.x - centre.x), std::abs(run.first_break.y - centre.y));
   EXPECT_GT(run.net_section_breaks, run.fatigue_breaks / 2);
+  // Ids and lengths are functions of the damage history: batches of 2500 cycles give the same
+  // cracks as batches of 5000 at every common cycle count (the engine's exact block stepping).
+  const LifeRun halves = run_to_end_of_life("lug.toml", 8000.0, centre, 2500);
+  int compared = 0;
+  for (std::size_t i = 0; i < run.reports.size(); ++i) {
+    for (std::size_t j = 0; j < halves.reports.size(); ++j) {
+      if (halves.report_cycles[j] != run.report_cycles[i]) continue;
+      const auto& a = run.reports[i].cracks;
+      const auto& b = halves.reports[j].cracks;
+      ASSERT_EQ(a.size(), b.size()) << "at " << run.report_cycles[i] << " cycles";
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        EXPECT_EQ(a[k].crack.id, b[k].crack.id);
+        EXPECT_EQ(a[k].crack.length, b[k].crack.length);
+        EXPECT_EQ(a[k].crack.birth_cycle, b[k].crack.birth_cycle);
+        EXPECT_EQ(a[k].origin, b[k].origin);
+      }
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 1);
+  std::size_t with_cracks = 0;
+  for (const auto& report : run.reports) with_cracks += report.cracks.empty() ? 0 : 1;
+  EXPECT_GT(with_cracks, 0u);
   std::cout << "lug: end of life at " << run.cycles << " cycles, " << run.fatigue_breaks
             << " fatigue breaks (" << run.net_section_breaks << " in the net section), first at ("
             << run.first_break.x << ", " << run.first_break.y << ")\n";
