@@ -41,8 +41,7 @@ LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_
   const auto model = testing::b1_model(config);
   auto twin = testing::make_twin(model);
   for (std::int64_t seq = 1; seq <= 1000 && twin->failure() == Failure::none; ++seq) {
-    EXPECT_TRUE(
-        twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, batch_cycles}}}).applied());
+    EXPECT_TRUE(twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, batch_cycles}}}).applied());
     if (twin->failure() == Failure::none) {
       run.reports.push_back(twin->cracks());
       run.report_cycles.push_back(twin->engine().total_cycles());

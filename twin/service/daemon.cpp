@@ -158,11 +158,14 @@ struct Daemon::Detail {
   // Written by the worker, read by the heartbeat.
   std::atomic<std::int64_t> busy_since_ns{0};  ///< steady clock; 0 = idle
   std::atomic<std::int64_t> state_seq{0};
+  /// Crack events already logged (worker thread only): the largest crack id, the merges.
+  std::int32_t logged_crack_id = 0;
+  std::size_t logged_merges = 0;
   std::atomic<std::int64_t> errors{0};  ///< rejected (not duplicates), undecodable, dropped
   std::atomic<std::int64_t> auth_rejects{0};
   std::atomic<std::int64_t> duplicates{0};
   std::atomic<std::int64_t> gaps{0};
-  std::atomic<bool> failed{false};           ///< final failure reached
+  std::atomic<bool> failed{false};  ///< final failure reached
 
   std::thread worker;
 };
@@ -263,6 +266,25 @@ Status Daemon::load_keys() {
   return {};
 }
 
+void Daemon::log_crack_events(Detail& d) {
+  // New cracks (ids grow in birth order) and joins, once each: what an engineer watching the log
+  // wants to hear about. After a restart the ones before it are logged again, once.
+  const CrackReport& report = d.twin->cracks();
+  std::int32_t newest = d.logged_crack_id;
+  for (const auto& rc : report.cracks) {
+    if (rc.crack.id > d.logged_crack_id && rc.crack.nodes > 0) {
+      spdlog::info("[{}] crack {} found at {} (started at {} cycles): {:.2f} mm", d.id, rc.crack.id,
+                   rc.origin, rc.crack.birth_cycle, 1e3 * rc.crack.length);
+      newest = std::max(newest, rc.crack.id);
+    }
+  }
+  d.logged_crack_id = newest;
+  for (; d.logged_merges < report.merges.size(); ++d.logged_merges) {
+    const CrackMerge& m = report.merges[d.logged_merges];
+    spdlog::info("[{}] crack {} joined crack {} at {} cycles", d.id, m.absorbed, m.kept, m.cycle);
+  }
+}
+
 Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
   const std::string& source = decoded.batch->source_id;
   if (!std::binary_search(allowed_sources_.begin(), allowed_sources_.end(), source)) {
@@ -341,6 +363,7 @@ Status Daemon::start_detail(const DetailConfig& config) {
   d->status_channel = messages::channel(config.id, messages::Kind::kStatus);
   d->state_seq = d->twin->state_seq();
   d->failed = d->twin->failure() != Failure::none;
+  log_crack_events(*d);
   d->daemon = this;
   Detail* detail = d.get();
   details_.push_back(std::move(d));
@@ -527,6 +550,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", d.id,
                 batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
                 twin.broken_bonds());
+  log_crack_events(d);
   if (twin.failure() != Failure::none) {
     d.failed = true;
     spdlog::warn("[{}] end of life at state_seq {} ({} cycles): {}", d.id, twin.state_seq(),

@@ -125,6 +125,8 @@ class Daemon {
   void heartbeat(bool force);
   void checkpoint(Detail& d, const char* why);
   void submit_life(Detail& d);
+  /// Logs the cracks found and joined since the last call (one line each).
+  static void log_crack_events(Detail& d);
   void stop_workers();
   void fail(std::string why);
   [[nodiscard]] bool failed() const { return failed_.load(); }
