@@ -8,6 +8,8 @@
 #include <queue>
 #include <stdexcept>
 
+#include "solver/model/pd_model.h"
+
 namespace peritwin {
 
 namespace {
@@ -38,23 +40,6 @@ class Components {
  private:
   std::vector<std::size_t> parent_;
 };
-
-/// Node damage of one node exactly as damage_index (pd_model.cpp) computes it: the same sums in
-/// the same order, so a threshold decision here equals one on the engine's damage.
-double node_damage_of(const Discretization& disc, const std::vector<std::uint8_t>& intact,
-                      std::size_t k) {
-  double total = 0.0;
-  double alive = 0.0;
-  for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
-    const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
-    const double w =
-        disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(disc.other_end(
-                                         static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
-    total += w;
-    if (intact[b]) alive += w;
-  }
-  return total > 0 ? 1.0 - alive / total : 0.0;  // 000 Eq. (13)
-}
 
 Point unit(Point v) {
   const double n = std::hypot(v.x, v.y);
@@ -326,7 +311,8 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
     replayed[b] = 0;
     for (const NodeIndex end : {disc_.bond_i[b], disc_.bond_j[b]}) {
       const auto k = static_cast<std::size_t>(end);
-      if (!crack[k] && node_damage_of(disc_, replayed, k) >= phi0_) becomes_crack(k, e.cycle);
+      // The engine's own damage_index arithmetic: a threshold decision here equals one there.
+      if (!crack[k] && node_damage_index(disc_, replayed, k) >= phi0_) becomes_crack(k, e.cycle);
     }
   }
   // Components in id order: notch n's is n; the others follow by id.

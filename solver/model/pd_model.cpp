@@ -255,19 +255,22 @@ void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& i
                   std::vector<double>& damage) {
   const auto nn = static_cast<std::size_t>(disc.num_nodes());
   damage.assign(nn, 0.0);
-  for (std::size_t k = 0; k < nn; ++k) {
-    double total = 0.0;
-    double alive = 0.0;
-    for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
-      const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
-      const double w =
-          disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(disc.other_end(
-                                           static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
-      total += w;
-      if (intact[b]) alive += w;
-    }
-    damage[k] = total > 0 ? 1.0 - alive / total : 0.0;  // 000 Eq. (13)
+  for (std::size_t k = 0; k < nn; ++k) damage[k] = node_damage_index(disc, intact, k);
+}
+
+double node_damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+                         std::size_t k) {
+  double total = 0.0;
+  double alive = 0.0;
+  for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
+    const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
+    const double w =
+        disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(disc.other_end(
+                                         static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
+    total += w;
+    if (intact[b]) alive += w;
   }
+  return total > 0 ? 1.0 - alive / total : 0.0;  // 000 Eq. (13)
 }
 
 double straight_crack_face_damage(double horizon_ratio) {

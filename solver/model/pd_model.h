@@ -109,5 +109,8 @@ double straight_crack_face_damage(double horizon_ratio);
 /// Damage index φ_k = 1 − Σ ψ·β·V / Σ β·V over the family (000 Eq. 13).
 void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
                   std::vector<double>& damage);
+/// The same for one node k (damage_index computes every node with it: equal bits).
+double node_damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+                         std::size_t k);
 
 }  // namespace peritwin
