@@ -270,6 +270,13 @@ void Daemon::log_crack_events(Detail& d) {
   // New cracks (ids grow in birth order) and joins, once each: what an engineer watching the log
   // wants to hear about. After a restart the ones before it are logged again, once.
   const CrackReport& report = d.twin->cracks();
+  // Joins of cracks this log has named; one born and joined within the same batch was never
+  // reported on its own and its join is not news.
+  for (; d.logged_merges < report.merges.size(); ++d.logged_merges) {
+    const CrackMerge& m = report.merges[d.logged_merges];
+    if (m.absorbed > d.logged_crack_id) continue;
+    spdlog::info("[{}] crack {} joined crack {} at {} cycles", d.id, m.absorbed, m.kept, m.cycle);
+  }
   std::int32_t newest = d.logged_crack_id;
   for (const auto& rc : report.cracks) {
     if (rc.crack.id > d.logged_crack_id && rc.crack.nodes > 0) {
@@ -279,10 +286,6 @@ void Daemon::log_crack_events(Detail& d) {
     }
   }
   d.logged_crack_id = newest;
-  for (; d.logged_merges < report.merges.size(); ++d.logged_merges) {
-    const CrackMerge& m = report.merges[d.logged_merges];
-    spdlog::info("[{}] crack {} joined crack {} at {} cycles", d.id, m.absorbed, m.kept, m.cycle);
-  }
 }
 
 Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
