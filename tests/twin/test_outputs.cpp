@@ -305,6 +305,40 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   EXPECT_EQ(xdmf.find("<Time Value=\"30\"/>"), std::string::npos);
 }
 
+TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
+  // A results file of layout 1 (before the crack table): no /timeseries/crack_count, no /cracks.
+  const fs::path h5 = dir_ / "old.h5";
+  const auto rows = sample_rows();
+  {
+    ResultsWriter w(h5, {.detail = "old"});
+    w.append(rows[0]);
+  }
+  {
+    h5::File f(h5, h5::File::Mode::read_write);
+    f.remove("timeseries/crack_count");
+    f.remove("cracks");
+    f.set_attribute("layout_version", std::int64_t{1});
+  }
+  // Readable as it is: its rows' crack_count reads -1 (unknown), no crack rows.
+  const auto before = read_time_series(h5);
+  ASSERT_EQ(before.size(), 1u);
+  EXPECT_EQ(before[0].crack_count, -1);
+  EXPECT_TRUE(read_crack_rows(h5).empty());
+  // Continued by a writer: upgraded to layout 2, the old row kept (crack_count -1), new rows whole.
+  {
+    ResultsWriter w(h5, {.detail = "old"});
+    EXPECT_EQ(w.rows(), 1u);
+    w.append(rows[1]);
+  }
+  const auto after = read_time_series(h5);
+  ASSERT_EQ(after.size(), 2u);
+  EXPECT_EQ(after[0].crack_count, -1);
+  EXPECT_EQ(after[0].total_cycles, rows[0].total_cycles);
+  EXPECT_EQ(after[1].crack_count, rows[1].crack_count);
+  EXPECT_EQ(read_crack_rows(h5).size(), rows[1].cracks.size());
+  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 2);
+}
+
 TEST_F(OutputsTest, UnreadableResultsFileIsMovedAside) {
   const fs::path h5 = dir_ / "x.h5";
   spit(h5, "not an HDF5 file at all");
