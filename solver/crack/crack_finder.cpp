@@ -190,6 +190,21 @@ bool CrackFinder::in_notch_zone(std::size_t k, std::size_t n) const {
   return false;
 }
 
+template <class Visit>
+void CrackFinder::for_each_link(std::size_t k, const std::vector<std::uint8_t>& crack,
+                                Visit&& visit) const {
+  for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
+    const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
+    if (disc_.bond_length[static_cast<std::size_t>(b)] > link_) continue;
+    const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)));
+    if (crack[j]) visit(j);
+  }
+  const auto nn = static_cast<std::size_t>(disc_.num_nodes());
+  for (std::size_t n = 0; n < notch_tips_.size(); ++n) {
+    if (in_notch_zone(k, n)) visit(nn + n);
+  }
+}
+
 std::vector<std::uint8_t> CrackFinder::crack_nodes(const std::vector<double>& node_damage,
                                                    const std::vector<std::uint8_t>& intact) const {
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
@@ -214,16 +229,7 @@ CrackFindings CrackFinder::find(const std::vector<double>& node_damage,
   const auto crack = crack_nodes(node_damage, intact);
   Components sets(nn + notches);
   for (std::size_t k = 0; k < nn; ++k) {
-    if (!crack[k]) continue;
-    for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
-      const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
-      if (disc_.bond_length[static_cast<std::size_t>(b)] > link_) continue;
-      const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)));
-      if (crack[j]) sets.join(k, j);
-    }
-    for (std::size_t n = 0; n < notches; ++n) {
-      if (in_notch_zone(k, n)) sets.join(k, nn + n);
-    }
+    if (crack[k]) for_each_link(k, crack, [&](std::size_t other) { sets.join(k, other); });
   }
   // Component indices: notch n's is n (a notch whose zone joined an earlier notch's crack has
   // none of its own); the others from N_notches on, in the order of their lowest node.
@@ -254,7 +260,6 @@ CrackFindings CrackFinder::find(const std::vector<double>& node_damage,
 }
 
 CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_damage,
-                                             const std::vector<std::uint8_t>& intact,
                                              std::span<const BreakEvent> events) const {
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   const std::size_t notches = notch_tips_.size();
@@ -292,15 +297,7 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
   };
   auto becomes_crack = [&](std::size_t k, std::int64_t cycle) {
     crack[k] = 1;
-    for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
-      const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
-      if (disc_.bond_length[static_cast<std::size_t>(b)] > link_) continue;
-      const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)));
-      if (crack[j]) join(k, j, cycle);
-    }
-    for (std::size_t n = 0; n < notches; ++n) {
-      if (in_notch_zone(k, n)) join(k, nn + n, cycle);
-    }
+    for_each_link(k, crack, [&](std::size_t other) { join(k, other, cycle); });
     const std::size_t r = sets.root(k);
     if (id[r] == 0) id[r] = next_id++;   // a crack of its own
     if (birth[r] < 0) birth[r] = cycle;  // its first crack node (a notch's crack too)
@@ -358,7 +355,6 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
   std::erase_if(findings.cracks, [&](const FoundCrack& c) {
     return c.origin == CrackOrigin::notch && !listed[static_cast<std::size_t>(c.notch)];
   });
-  (void)intact;  // the replay ends at it (the caller passes the engine's matching pair)
   return findings;
 }
 

@@ -81,9 +81,9 @@ class CrackFinder {
                                    const std::vector<std::uint8_t>& intact) const;
 
   /// The same cracks with ids, birth cycles and merges, from the break events (in engine order)
-  /// that led from the virgin (pre-cut) state to `intact`.
+  /// that led from the virgin (pre-cut) state to the state of `node_damage`: the replay rebuilds
+  /// the bond state, so no intact flags are needed.
   [[nodiscard]] CrackFindings find_with_history(const std::vector<double>& node_damage,
-                                                const std::vector<std::uint8_t>& intact,
                                                 std::span<const BreakEvent> events) const;
 
   /// Distance from each node to the nearest free surface (outline, hole; not a notch), estimated
@@ -97,6 +97,11 @@ class CrackFinder {
   /// Whether node k lies in notch n's zone: its tip zone (CrackTracker's seeds) or within δ of
   /// its path (its faces).
   [[nodiscard]] bool in_notch_zone(std::size_t k, std::size_t n) const;
+  /// Calls visit(j) for every node j that crack node k links to: crack nodes j joined to k by a
+  /// bond no longer than link(), and notch n's virtual node (num_nodes() + n) when k lies in its
+  /// zone. One rule for the snapshot and the history paths.
+  template <class Visit>
+  void for_each_link(std::size_t k, const std::vector<std::uint8_t>& crack, Visit&& visit) const;
   /// Crack nodes: φ ≥ φ0 and a broken bond that no notch cut.
   [[nodiscard]] std::vector<std::uint8_t> crack_nodes(
       const std::vector<double>& node_damage, const std::vector<std::uint8_t>& intact) const;

@@ -127,7 +127,7 @@ TEST(CrackFinder, TwoCracksAtAHoleAreFoundWithTheirLengthsTipsAndDirections) {
   }
   // The history gives the same cracks with ids 1, 2 (no notch) in order of birth: the upper cut
   // broke first.
-  const auto history = p->finder->find_with_history(damage, intact, events);
+  const auto history = p->finder->find_with_history(damage, events);
   ASSERT_EQ(history.cracks.size(), 2u);
   EXPECT_EQ(history.cracks[0].id, 1);
   EXPECT_EQ(history.cracks[1].id, 2);
@@ -160,12 +160,12 @@ TEST(CrackFinder, CracksThatMeetBecomeOneKeepingTheOlderId) {
   {
     auto part = virgin(p->disc);
     for (std::size_t e = 0; e < first_cut; ++e) part[static_cast<std::size_t>(events[e].bond)] = 0;
-    const auto h = p->finder->find_with_history(damage_of(p->disc, part), part,
-                                                std::span(events).first(first_cut));
+    const auto h =
+        p->finder->find_with_history(damage_of(p->disc, part), std::span(events).first(first_cut));
     ASSERT_EQ(h.cracks.size(), 1u);
     EXPECT_EQ(h.cracks[0].id, 1);
   }
-  const auto h = p->finder->find_with_history(damage, intact, events);
+  const auto h = p->finder->find_with_history(damage, events);
   ASSERT_EQ(h.cracks.size(), 1u);
   EXPECT_EQ(h.cracks[0].id, 1);
   EXPECT_EQ(h.cracks[0].absorbed, std::vector<std::int32_t>{2});
@@ -191,7 +191,7 @@ TEST(CrackFinder, InteriorCrackHasTwoTipsAndIsIdentifiedByItsHistory) {
   std::vector<BreakEvent> events;
   cut(p->disc, {0.017, 0.0}, {0.023, 0.0}, 5, intact, events);
   const auto damage = damage_of(p->disc, intact);
-  const auto h = p->finder->find_with_history(damage, intact, events);
+  const auto h = p->finder->find_with_history(damage, events);
   ASSERT_EQ(h.cracks.size(), 1u);
   const auto& c = h.cracks[0];
   EXPECT_EQ(c.origin, CrackOrigin::interior);
@@ -215,7 +215,7 @@ TEST(CrackFinder, NotchCrackEqualsTheTrackersAndAHoleCrackIsSeparate) {
   cut(p->disc, {0.01, 0.0}, {0.016, 0.0}, 10, intact, events);
   cut(p->disc, {0.032, 0.0059}, {0.032, 0.008}, 50, intact, events);
   const auto damage = damage_of(p->disc, intact);
-  const auto h = p->finder->find_with_history(damage, intact, events);
+  const auto h = p->finder->find_with_history(damage, events);
   ASSERT_EQ(h.cracks.size(), 2u);
   const auto tracked = p->tracker->measure(damage);
   EXPECT_EQ(h.cracks[0].id, 1);

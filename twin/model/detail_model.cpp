@@ -218,7 +218,7 @@ CrackReport measure_cracks(const DetailModel& model, const FatigueEngine& engine
   const auto& damage = engine.node_damage();
   for (double phi : damage) report.max_damage = std::max(report.max_damage, phi);
   const auto& intact = engine.solver().intact();
-  CrackFindings found = model.finder().find_with_history(damage, intact, engine.break_events());
+  CrackFindings found = model.finder().find_with_history(damage, engine.break_events());
   report.merges = std::move(found.merges);
   for (auto& c : found.cracks) {
     ReportedCrack r;
