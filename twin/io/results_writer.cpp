@@ -65,6 +65,38 @@ constexpr std::array<DoubleColumn<TimeSeriesRow>, 10> kDoubleColumns{{
     {"remaining_high", &TimeSeriesRow::remaining_high, "cycles"},
 }};
 
+/// A column table's open datasets: its int columns, then its double columns.
+struct TableColumns {
+  std::vector<h5::Dataset> ints;
+  std::vector<h5::Dataset> doubles;
+  /// Rows every column holds (a crash between the appends of one row leaves some longer).
+  [[nodiscard]] std::uint64_t shortest() const {
+    std::uint64_t n = std::numeric_limits<std::uint64_t>::max();
+    for (const auto& ds : ints) n = std::min(n, ds.size());
+    for (const auto& ds : doubles) n = std::min(n, ds.size());
+    return n;
+  }
+  /// Cuts every column to n rows.
+  void resize(std::uint64_t n) {
+    for (auto& ds : ints) {
+      if (ds.size() != n) ds.resize(n);
+    }
+    for (auto& ds : doubles) {
+      if (ds.size() != n) ds.resize(n);
+    }
+  }
+  template <class Row, std::size_t NI, std::size_t ND>
+  void append(const Row& row, const std::array<IntColumn<Row>, NI>& int_columns,
+              const std::array<DoubleColumn<Row>, ND>& double_columns) {
+    for (std::size_t i = 0; i < NI; ++i) ints[i].append(row.*(int_columns[i].member));
+    for (std::size_t i = 0; i < ND; ++i) doubles[i].append(row.*(double_columns[i].member));
+  }
+  void clear() {
+    ints.clear();
+    doubles.clear();
+  }
+};
+
 std::string step_name(std::int64_t index) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "step_%06lld", static_cast<long long>(index));
@@ -154,10 +186,8 @@ struct ResultsWriter::Impl {
   ResultsOptions options;
   std::optional<std::filesystem::path> recovered_from;
   h5::File file;
-  std::vector<h5::Dataset> int_columns;
-  std::vector<h5::Dataset> double_columns;
-  std::vector<h5::Dataset> crack_int_columns;
-  std::vector<h5::Dataset> crack_double_columns;
+  TableColumns series;  ///< /timeseries
+  TableColumns cracks;  ///< /cracks
   std::uint64_t rows = 0;
   std::size_t nodes = 0;
   std::vector<SnapshotInfo> snapshots;
@@ -221,58 +251,41 @@ void ResultsWriter::Impl::open_columns() {
     return ds;
   };
   h5::Group ts = file.require_group("timeseries");
-  int_columns.clear();
-  double_columns.clear();
+  series.clear();
   for (const auto& c : kIntColumns) {
     const bool existed = ts.exists(c.name);
-    int_columns.push_back(open(ts, c.name, c.units, std::int64_t{}));
+    series.ints.push_back(open(ts, c.name, c.units, std::int64_t{}));
     if (!existed && c.fill != 0) {  // a column new in this layout: the old rows get `fill`
       const std::uint64_t old_rows = ts.open_dataset(kIntColumns[0].name).size();
-      for (std::uint64_t i = 0; i < old_rows; ++i) int_columns.back().append(c.fill);
+      for (std::uint64_t i = 0; i < old_rows; ++i) series.ints.back().append(c.fill);
     }
   }
   for (const auto& c : kDoubleColumns)
-    double_columns.push_back(open(ts, c.name, c.units, double{}));
+    series.doubles.push_back(open(ts, c.name, c.units, double{}));
   // A crash between the appends of one row leaves columns of different lengths: drop the tail.
-  std::uint64_t n = int_columns.front().size();
-  for (const auto& ds : int_columns) n = std::min(n, ds.size());
-  for (const auto& ds : double_columns) n = std::min(n, ds.size());
-  for (auto& ds : int_columns) {
-    if (ds.size() != n) ds.resize(n);
-  }
-  for (auto& ds : double_columns) {
-    if (ds.size() != n) ds.resize(n);
-  }
-  rows = n;
+  rows = series.shortest();
+  series.resize(rows);
   // The crack rows: equal lengths, and none of a row the time series does not hold (a crash
   // after a row's crack rows and before the row).
   h5::Group cr = file.require_group("cracks");
-  crack_int_columns.clear();
-  crack_double_columns.clear();
+  cracks.clear();
   for (const auto& c : kCrackIntColumns) {
-    crack_int_columns.push_back(open(cr, c.name, c.units, std::int64_t{}));
+    cracks.ints.push_back(open(cr, c.name, c.units, std::int64_t{}));
   }
   for (const auto& c : kCrackDoubleColumns) {
-    crack_double_columns.push_back(open(cr, c.name, c.units, double{}));
+    cracks.doubles.push_back(open(cr, c.name, c.units, double{}));
   }
-  std::uint64_t m = crack_int_columns.front().size();
-  for (const auto& ds : crack_int_columns) m = std::min(m, ds.size());
-  for (const auto& ds : crack_double_columns) m = std::min(m, ds.size());
   const std::int64_t last_seq =
-      n == 0 ? -1 : int_columns.front().read<std::int64_t>().at(static_cast<std::size_t>(n - 1));
-  trim_cracks_after(last_seq, m);
+      rows == 0 ? -1
+                : series.ints.front().read<std::int64_t>().at(static_cast<std::size_t>(rows - 1));
+  trim_cracks_after(last_seq, cracks.shortest());
 }
 
 void ResultsWriter::Impl::trim_cracks_after(std::int64_t state_seq, std::uint64_t limit) {
-  const auto seqs = crack_int_columns.front().read<std::int64_t>();
+  const auto seqs = cracks.ints.front().read<std::int64_t>();
   std::uint64_t keep = std::min<std::uint64_t>(limit, seqs.size());
   while (keep > 0 && seqs[static_cast<std::size_t>(keep - 1)] > state_seq) --keep;
-  for (auto& ds : crack_int_columns) {
-    if (ds.size() != keep) ds.resize(keep);
-  }
-  for (auto& ds : crack_double_columns) {
-    if (ds.size() != keep) ds.resize(keep);
-  }
+  cracks.resize(keep);
 }
 
 std::string ResultsWriter::Impl::xdmf_grid(std::string_view name,
@@ -375,19 +388,9 @@ void ResultsWriter::append(const TimeSeriesRow& row) {
   // open drops (open_columns).
   for (CrackRow c : row.cracks) {
     c.state_seq = row.state_seq;
-    for (std::size_t i = 0; i < kCrackIntColumns.size(); ++i) {
-      impl_->crack_int_columns[i].append(c.*(kCrackIntColumns[i].member));
-    }
-    for (std::size_t i = 0; i < kCrackDoubleColumns.size(); ++i) {
-      impl_->crack_double_columns[i].append(c.*(kCrackDoubleColumns[i].member));
-    }
+    impl_->cracks.append(c, kCrackIntColumns, kCrackDoubleColumns);
   }
-  for (std::size_t i = 0; i < kIntColumns.size(); ++i) {
-    impl_->int_columns[i].append(row.*(kIntColumns[i].member));
-  }
-  for (std::size_t i = 0; i < kDoubleColumns.size(); ++i) {
-    impl_->double_columns[i].append(row.*(kDoubleColumns[i].member));
-  }
+  impl_->series.append(row, kIntColumns, kDoubleColumns);
   impl_->file.flush();
   ++impl_->rows;
 }
@@ -427,13 +430,12 @@ void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cy
 void ResultsWriter::rewind_to(std::int64_t state_seq) {
   impl_->require_open("rewind_to");
   Impl& im = *impl_;
-  const auto seqs = im.int_columns.front().read<std::int64_t>();
+  const auto seqs = im.series.ints.front().read<std::int64_t>();
   const auto keep = static_cast<std::uint64_t>(
       std::find_if(seqs.begin(), seqs.end(), [&](std::int64_t s) { return s > state_seq; }) -
       seqs.begin());
   if (keep != im.rows) {
-    for (auto& ds : im.int_columns) ds.resize(keep);
-    for (auto& ds : im.double_columns) ds.resize(keep);
+    im.series.resize(keep);
     im.rows = keep;
   }
   im.trim_cracks_after(state_seq, std::numeric_limits<std::uint64_t>::max());
@@ -458,10 +460,8 @@ const std::optional<std::filesystem::path>& ResultsWriter::recovered_from() cons
 
 void ResultsWriter::close() {
   if (!impl_ || !impl_->file.is_open()) return;
-  impl_->int_columns.clear();
-  impl_->double_columns.clear();
-  impl_->crack_int_columns.clear();
-  impl_->crack_double_columns.clear();
+  impl_->series.clear();
+  impl_->cracks.clear();
   impl_->file.flush();
   impl_->file.close();
 }
@@ -474,59 +474,48 @@ std::filesystem::path ResultsWriter::xdmf_path_for(const std::filesystem::path& 
 
 // --- reading -----------------------------------------------------------------------------------
 
-std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path) {
-  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
-  check_format(file);
+namespace {
+
+/// The rows of one column table (/timeseries or /cracks), as long as its shortest column. A
+/// missing int column (a version-1 file has no crack_count) reads as its `fill`.
+template <class Row, std::size_t NI, std::size_t ND>
+std::vector<Row> read_table(const h5::File& file, const std::string& group,
+                            const std::array<IntColumn<Row>, NI>& int_columns,
+                            const std::array<DoubleColumn<Row>, ND>& double_columns) {
   std::vector<std::vector<std::int64_t>> ints;
   std::vector<std::vector<double>> doubles;
   std::size_t n = std::numeric_limits<std::size_t>::max();
-  for (const auto& c : kIntColumns) {
-    const std::string path = std::string("timeseries/") + c.name;
-    // A version-1 file has no crack_count: its rows read as `fill`.
+  for (const auto& c : int_columns) {
+    const std::string path = group + "/" + c.name;
     ints.push_back(file.exists(path) ? file.read<std::int64_t>(path)
                                      : std::vector<std::int64_t>(ints.front().size(), c.fill));
     n = std::min(n, ints.back().size());
   }
-  for (const auto& c : kDoubleColumns) {
-    doubles.push_back(file.read<double>(std::string("timeseries/") + c.name));
+  for (const auto& c : double_columns) {
+    doubles.push_back(file.read<double>(group + "/" + c.name));
     n = std::min(n, doubles.back().size());
   }
-  std::vector<TimeSeriesRow> rows(n);
+  std::vector<Row> rows(n);
   for (std::size_t r = 0; r < n; ++r) {
-    for (std::size_t i = 0; i < kIntColumns.size(); ++i)
-      rows[r].*(kIntColumns[i].member) = ints[i][r];
-    for (std::size_t i = 0; i < kDoubleColumns.size(); ++i) {
-      rows[r].*(kDoubleColumns[i].member) = doubles[i][r];
-    }
+    for (std::size_t i = 0; i < NI; ++i) rows[r].*(int_columns[i].member) = ints[i][r];
+    for (std::size_t i = 0; i < ND; ++i) rows[r].*(double_columns[i].member) = doubles[i][r];
   }
   return rows;
+}
+
+}  // namespace
+
+std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  return read_table(file, "timeseries", kIntColumns, kDoubleColumns);
 }
 
 std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path) {
   const h5::File file(h5_path, h5::File::Mode::read_only, {false});
   check_format(file);
   if (!file.exists("cracks/state_seq")) return {};  // a version-1 file
-  std::vector<std::vector<std::int64_t>> ints;
-  std::vector<std::vector<double>> doubles;
-  std::size_t n = std::numeric_limits<std::size_t>::max();
-  for (const auto& c : kCrackIntColumns) {
-    ints.push_back(file.read<std::int64_t>(std::string("cracks/") + c.name));
-    n = std::min(n, ints.back().size());
-  }
-  for (const auto& c : kCrackDoubleColumns) {
-    doubles.push_back(file.read<double>(std::string("cracks/") + c.name));
-    n = std::min(n, doubles.back().size());
-  }
-  std::vector<CrackRow> rows(n);
-  for (std::size_t r = 0; r < n; ++r) {
-    for (std::size_t i = 0; i < kCrackIntColumns.size(); ++i) {
-      rows[r].*(kCrackIntColumns[i].member) = ints[i][r];
-    }
-    for (std::size_t i = 0; i < kCrackDoubleColumns.size(); ++i) {
-      rows[r].*(kCrackDoubleColumns[i].member) = doubles[i][r];
-    }
-  }
-  return rows;
+  return read_table(file, "cracks", kCrackIntColumns, kCrackDoubleColumns);
 }
 
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path) {
