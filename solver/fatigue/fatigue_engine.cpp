@@ -244,6 +244,9 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
   }
   state_.rates_valid = true;
   state_.rate_key = block;
+  // The rates do not depend on the count; kept out of the state so that it is the same however
+  // the cycles were cut into blocks (FatigueEngine::StopCheck, Twin::engine_hash).
+  state_.rate_key.count = 0;
 }
 
 std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::int64_t limit) const {
@@ -334,9 +337,15 @@ void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
   }
 }
 
-EngineStatus FatigueEngine::apply(const LoadBlock& block) {
-  if (bilinear()) return apply_bilinear(block);
+EngineStatus FatigueEngine::apply(const LoadBlock& block, const StopCheck& stop) {
+  if (bilinear()) return apply_bilinear(block, stop);
+  // Whether the breaks since event `e0` make the caller stop.
+  const auto stop_after = [&](std::size_t e0) {
+    return stop && state_.events.size() > e0 && stop(*this);
+  };
+  const std::size_t e0 = state_.events.size();
   if (state_.failed || !static_cascade(block)) return EngineStatus::final_failure;
+  if (stop_after(e0)) return EngineStatus::stopped;
   std::int64_t remaining = block.count;
   while (remaining > 0) {
     prepare_rates(block);
@@ -349,7 +358,9 @@ EngineStatus FatigueEngine::apply(const LoadBlock& block) {
     advance(block, k);
     state_.total_cycles += k;
     remaining -= k;
+    const std::size_t e = state_.events.size();
     if (!break_and_resolve(block)) return EngineStatus::final_failure;
+    if (stop_after(e)) return EngineStatus::stopped;
   }
   return EngineStatus::ok;
 }
@@ -398,23 +409,36 @@ bool same_bilinear_key(const LoadBlock& a, const LoadBlock& b) {
 }
 }  // namespace
 
-EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block) {
+EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block, const StopCheck& stop) {
   if (state_.failed) return EngineStatus::final_failure;
   if (block.count < 1) return EngineStatus::ok;
+  // One increment of dn cycles at the pending key, then the caller's stop check if it broke bonds.
+  const auto increment = [&](std::int64_t dn) {
+    const std::size_t e0 = state_.events.size();
+    if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
+    return stop && state_.events.size() > e0 && stop(*this) ? EngineStatus::stopped
+                                                             : EngineStatus::ok;
+  };
   if (state_.pending_cycles > 0 && !same_bilinear_key(state_.pending_key, block)) {
     const std::int64_t dn = state_.pending_cycles;
     state_.pending_cycles = 0;
-    if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
+    if (const EngineStatus s = increment(dn); s != EngineStatus::ok) return s;
   }
   state_.pending_key = block;
   state_.pending_key.count = 0;
-  state_.total_cycles += block.count;
-  state_.pending_cycles += block.count;
+  // The block's cycles join the pending ones increment by increment, so that total_cycles() is the
+  // end of the increment when it is integrated (and when a stop leaves the rest unapplied).
   const std::int64_t dn = settings_.cycle_increment;
-  while (state_.pending_cycles >= dn) {
-    state_.pending_cycles -= dn;
-    if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
+  std::int64_t left = block.count;
+  while (state_.pending_cycles + left >= dn) {
+    const std::int64_t take = std::max<std::int64_t>(0, dn - state_.pending_cycles);
+    left -= take;
+    state_.total_cycles += take;
+    state_.pending_cycles += take - dn;
+    if (const EngineStatus s = increment(dn); s != EngineStatus::ok) return s;
   }
+  state_.total_cycles += left;
+  state_.pending_cycles += left;
   return EngineStatus::ok;
 }
 

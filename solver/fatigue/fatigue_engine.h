@@ -49,6 +49,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -159,7 +160,9 @@ struct BreakEvent {
   BreakCause cause = BreakCause::fatigue;
 };
 
-enum class EngineStatus { ok, final_failure };
+/// What became of a block: all of it applied, final failure (singular stiffness), or stopped by
+/// the caller's StopCheck after a re-solve (the rest of the block not applied).
+enum class EngineStatus { ok, final_failure, stopped };
 
 /// Everything needed to resume an engine bit-identically (checkpoints), and what the engine keeps
 /// of its history: the engine holds one (FatigueEngine::state_) and works on it. The stiffness
@@ -236,8 +239,17 @@ class FatigueEngine {
 
   /// First static solve. Returns false (with failure_reason()) if the model is singular.
   bool initialize();
-  /// Applies a block with exact next-break stepping. Stops early on final failure.
-  EngineStatus apply(const LoadBlock& block);
+  /// Called by apply() after every group of breaks: the fatigue breaks of one cycle together with
+  /// the phase III cascade they set off, the overload cascade at the start of a block with a
+  /// higher P_max, or (bilinear law) an increment that broke a bond. true stops the block there:
+  /// total_cycles() is then the cycle of those breaks and the rest of the block is not applied.
+  /// Since splitting a block is exact, the state at a stop is that of applying exactly the cycles
+  /// up to it, whatever the blocks were (the twin's end of life, twin/model/twin.h).
+  using StopCheck = std::function<bool(const FatigueEngine&)>;
+
+  /// Applies a block with exact next-break stepping. Stops early on final failure, or when `stop`
+  /// (optional) says so after a group of breaks (EngineStatus::stopped).
+  EngineStatus apply(const LoadBlock& block, const StopCheck& stop = {});
   /// The oracle: the same block cycle by cycle. Bilinear law: flush(), then increments of one
   /// cycle (ΔN = 1, the converged reference; not bit-equal to apply()).
   EngineStatus apply_per_cycle(const LoadBlock& block);
@@ -291,7 +303,7 @@ class FatigueEngine {
   [[nodiscard]] bool bilinear() const { return settings_.law == FatigueLaw::bilinear; }
   /// One bilinear increment of dn >= 0 cycles at (P_max, α); false on final failure.
   bool bilinear_increment(const LoadBlock& key, std::int64_t dn);
-  EngineStatus apply_bilinear(const LoadBlock& block);
+  EngineStatus apply_bilinear(const LoadBlock& block, const StopCheck& stop);
   bool import_bilinear_state(const EngineState& state);
   /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key).
   void prepare_rates(const LoadBlock& block);

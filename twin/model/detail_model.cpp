@@ -298,16 +298,15 @@ double criterion_crack_length(const DetailModel& model, const std::vector<double
   return longest;
 }
 
-Failure end_of_life(const DetailModel& model, const FatigueEngine& engine,
-                    const CrackReport& report) {
+Failure end_of_life(const DetailModel& model, const FatigueEngine& engine) {
   if (engine.failed()) return Failure::singular;
   const LifeConfig& life = model.config().life;
   switch (life.criterion) {
-    case LifeCriterion::crack_length: {
-      const ReportedCrack* c = report.criterion_crack(life.crack_origin);
-      return c != nullptr && c->crack.length >= life.critical_crack_length ? Failure::end_criterion
-                                                                           : Failure::none;
-    }
+    case LifeCriterion::crack_length:
+      return criterion_crack_length(model, engine.node_damage(), engine.solver().intact()) >=
+                     life.critical_crack_length
+                 ? Failure::end_criterion
+                 : Failure::none;
     case LifeCriterion::phase3:
       for (const auto& e : engine.break_events()) {
         if (e.cause == BreakCause::overload) return Failure::end_criterion;
@@ -317,6 +316,12 @@ Failure end_of_life(const DetailModel& model, const FatigueEngine& engine,
       return Failure::none;
   }
   return Failure::none;
+}
+
+FatigueEngine::StopCheck end_of_life_check(const DetailModel& model) {
+  return [&model](const FatigueEngine& engine) {
+    return end_of_life(model, engine) != Failure::none;
+  };
 }
 
 }  // namespace peritwin::twin

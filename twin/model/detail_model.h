@@ -121,9 +121,14 @@ double criterion_crack_length(const DetailModel& model, const std::vector<double
 enum class Failure : std::int8_t { none = 0, end_criterion = 1, singular = 2 };
 
 /// Whether the engine's state meets the end criterion of the detail's life config
-/// (crack_length: the criterion's crack ≥ critical; phase3: any bond broken by overload;
-/// connectivity: final failure). A singular stiffness (final failure) is always the end.
-Failure end_of_life(const DetailModel& model, const FatigueEngine& engine,
-                    const CrackReport& report);
+/// (crack_length: the criterion's crack, criterion_crack_length(), >= critical; phase3: any bond
+/// broken by overload; connectivity: final failure). A singular stiffness (final failure) is
+/// always the end. The one rule of the live twin (checked after every group of breaks, through
+/// end_of_life_check) and of the remaining-life simulation.
+Failure end_of_life(const DetailModel& model, const FatigueEngine& engine);
+
+/// end_of_life() != none as the engine's stop check (FatigueEngine::StopCheck): an engine given it
+/// stops at the exact cycle at which the criterion is met, whatever the blocks.
+FatigueEngine::StopCheck end_of_life_check(const DetailModel& model);
 
 }  // namespace peritwin::twin

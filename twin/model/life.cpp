@@ -14,25 +14,6 @@ bool same_key(const LoadBlock& a, const LoadBlock& b) {
 
 double load_range(const LoadBlock& b) { return b.p_max * (1 - b.r); }
 
-/// The first break-event cycle (from event e0 on) after which the criterion's crack (the longest,
-/// or the longest from [detail.life] crack_origin) reaches `critical`,
-/// replaying the events on the bond state before the block; -1 when none does.
-std::int64_t crack_length_cycle(const DetailModel& model, const FatigueEngine& engine,
-                                std::vector<std::uint8_t> intact, std::size_t e0, double critical) {
-  const auto& events = engine.break_events();
-  std::vector<double> damage;
-  std::size_t e = e0;
-  while (e < events.size()) {
-    const std::int64_t cycle = events[e].cycle;
-    for (; e < events.size() && events[e].cycle == cycle; ++e) {
-      intact[static_cast<std::size_t>(events[e].bond)] = 0;
-    }
-    damage_index(model.disc(), intact, damage);
-    if (criterion_crack_length(model, damage, intact) >= critical) return cycle;
-  }
-  return -1;
-}
-
 }  // namespace
 
 void RollingSpectrum::add(const LoadBlock& block) {
@@ -106,13 +87,12 @@ double simulate_life(const DetailModel& model, const EngineState& state,
   if (spectrum.empty()) return nan;
   const auto engine = model.make_engine(a2_factor);
   if (!engine->initialize() || !engine->import_state(state)) return nan;
-  const LifeConfig& life = model.config().life;
   const std::int64_t start = engine->total_cycles();
   const auto elapsed = [&](std::int64_t cycle) { return static_cast<double>(cycle - start); };
-  if (engine->failed()) return 0.0;
-  if (end_of_life(model, *engine, measure_cracks(model, *engine, nullptr)) != Failure::none) {
-    return 0.0;
-  }
+  if (end_of_life(model, *engine) != Failure::none) return 0.0;
+  // The engine stops at the exact cycle of the criterion (end_of_life_check); connectivity (and
+  // every criterion's singular stiffness) ends in the engine's final failure.
+  const FatigueEngine::StopCheck stop = end_of_life_check(model);
   constexpr std::int64_t kMaxMultiplier = std::int64_t{1} << 40;
   std::int64_t multiplier = 1;
   while (true) {
@@ -124,38 +104,8 @@ double simulate_life(const DetailModel& model, const EngineState& state,
                         ? std::numeric_limits<std::int64_t>::max() / 2
                         : level.count * multiplier;
       const std::size_t e0 = engine->break_events().size();
-      std::vector<std::uint8_t> intact_before;
-      if (life.criterion == LifeCriterion::crack_length) intact_before = engine->solver().intact();
-      engine->apply(block);
-      const auto& events = engine->break_events();
-      if (events.size() == e0) {
-        if (engine->failed()) return elapsed(engine->total_cycles());
-        if (elapsed(engine->total_cycles()) > kMaxSimulatedCycles) {
-          return std::numeric_limits<double>::infinity();
-        }
-        continue;
-      }
-      broke = true;
-      switch (life.criterion) {
-        case LifeCriterion::phase3:
-          for (std::size_t e = e0; e < events.size(); ++e) {
-            if (events[e].cause == BreakCause::overload) return elapsed(events[e].cycle);
-          }
-          break;
-        case LifeCriterion::crack_length: {
-          if (engine->failed() ||
-              criterion_crack_length(model, engine->node_damage(), engine->solver().intact()) >=
-                  life.critical_crack_length) {
-            const std::int64_t cycle = crack_length_cycle(model, *engine, std::move(intact_before),
-                                                          e0, life.critical_crack_length);
-            if (cycle >= 0) return elapsed(cycle);
-          }
-          break;
-        }
-        case LifeCriterion::connectivity:
-          break;
-      }
-      if (engine->failed()) return elapsed(engine->total_cycles());
+      if (engine->apply(block, stop) != EngineStatus::ok) return elapsed(engine->total_cycles());
+      broke = broke || engine->break_events().size() != e0;
       if (elapsed(engine->total_cycles()) > kMaxSimulatedCycles) {
         return std::numeric_limits<double>::infinity();
       }

@@ -5,10 +5,9 @@
 //
 // Forward simulation (simulate_life):
 //  * the spectrum's blocks are applied in order, pass after pass, until the criterion is met;
-//  * exact cycle of the criterion: crack_length is refined within a block from the engine's
-//    break events (the crack only changes when bonds break), phase3 is the cycle of the first
-//    overload break, connectivity (and, for every criterion, a singular stiffness) the cycle at
-//    which the engine reached final failure;
+//  * exact cycle of the criterion: the engine stops there (end_of_life_check after every group of
+//    breaks, the live twin's rule: crack_length, phase3); connectivity (and, for every criterion,
+//    a singular stiffness) is the cycle at which the engine reached final failure;
 //  * a pass that breaks no bond doubles the counts of the next pass (exact in the engine's block
 //    stepping, it only coarsens how blocks interleave) so that lightly loaded details finish
 //    quickly; the multiplier returns to 1 after a pass with breaks;

@@ -103,7 +103,7 @@ std::int64_t Twin::broken_bonds() const { return engine_->broken_bonds() - model
 
 void Twin::refresh() {
   report_ = measure_cracks(*model_, *engine_, last_block_ ? &*last_block_ : nullptr);
-  failure_ = end_of_life(*model_, *engine_, report_);
+  failure_ = end_of_life(*model_, *engine_);
 }
 
 Outcome Twin::apply(const Batch& batch) {
@@ -134,13 +134,20 @@ Outcome Twin::apply(const Batch& batch) {
     return {Verdict::failed, "message",
             failure_ == Failure::singular
                 ? "the detail has reached final failure: " + engine_->failure_reason()
-                : std::string("the detail has reached its end-of-life criterion")};
+                : "the detail reached its end-of-life criterion at cycle " +
+                      std::to_string(end_of_life_cycle()) + "; it applies no more cycles"};
   }
+  // The engine stops at the exact cycle at which the end criterion is met (end_of_life_check):
+  // the rest of the batch is not applied (see "End of life" in twin.h).
+  const FatigueEngine::StopCheck stop = end_of_life_check(*model_);
   for (const LoadBlock& block : batch.blocks) {
-    if (engine_->failed()) break;
-    engine_->apply(block);
-    spectrum_.add(block);
-    last_block_ = block;
+    const std::int64_t before = engine_->total_cycles();
+    const EngineStatus status = engine_->apply(block, stop);
+    LoadBlock applied = block;
+    applied.count = engine_->total_cycles() - before;
+    if (applied.count > 0) spectrum_.add(applied);
+    if (applied.count > 0 || status != EngineStatus::ok) last_block_ = block;
+    if (status != EngineStatus::ok) break;
   }
   applied_[batch.source_id] = batch.seq;
   ++state_seq_;

@@ -10,6 +10,18 @@
 // leaves the model untouched. After final failure (end criterion met or singular stiffness)
 // every new batch is rejected with FAILED.
 //
+// End of life: the engine checks the detail's end criterion (end_of_life_check) after every group
+// of breaks and stops at the exact cycle at which it is met, inside a block or a batch. So
+// end_of_life_cycle(), the broken bonds and the cracks at the end of life are those of that cycle
+// for any batching of the same cycles (the engine is exact under splitting of blocks). What
+// happens to the cycles after it: the twin stops. The rest of the batch that reached the end is
+// not applied (the batch counts as applied: its seq is acknowledged and not resent) and every
+// later batch is rejected with FAILED, naming the cycle. The state published from then on is the
+// state at the end of life: the evidence an inspection needs, not a model extrapolated beyond
+// its criterion (the criterion is where the calibration and the crack-length measurement stop
+// being trusted; the structure's further loading is still counted by the producers). A twin for
+// a repaired or re-assessed detail starts from a new config.
+//
 // Remaining life (LifeMode):
 //  * synchronous (deterministic mode: replay in-process, the daemon with --deterministic): an
 //    estimate is computed inside apply() whenever state_seq is a multiple of
@@ -109,6 +121,15 @@ class Twin {
   [[nodiscard]] const FatigueEngine& engine() const { return *engine_; }
   [[nodiscard]] const CrackReport& cracks() const { return report_; }
   [[nodiscard]] Failure failure() const { return failure_; }
+  /// The cycle at which the end of life (any Failure) was reached, -1 before it: the engine
+  /// stops there (see "End of life" above).
+  [[nodiscard]] std::int64_t end_of_life_cycle() const {
+    return failure_ == Failure::none ? -1 : engine_->total_cycles();
+  }
+  /// FNV-1a 64 of the engine's state alone (FatigueEngine::state_hash: lives, doses, broken
+  /// bonds, cycles, break events, bilinear damage): a function of the cycle sequence, not of how
+  /// it was cut into blocks and batches, nor of the sources.
+  [[nodiscard]] std::uint64_t engine_hash() const { return engine_->state_hash(); }
   [[nodiscard]] const LifeEstimate& life() const { return life_; }
   [[nodiscard]] const RollingSpectrum& spectrum() const { return spectrum_; }
   [[nodiscard]] const std::optional<LoadBlock>& last_block() const { return last_block_; }
