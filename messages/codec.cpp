@@ -159,8 +159,10 @@ bool state_layout(const unsigned char* p, std::size_t size) {
   for (std::int32_t i = 0; i < cracks; ++i) {
     if (!crack_layout(w)) return false;
   }
-  if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1) || !w.string() || !w.count(1, tag) ||
-      !w.skip(static_cast<std::size_t>(tag))) {
+  // k_i, k_ii, the remaining life and its seq, its source, failure, end_of_life_cycle,
+  // state_hash, engine_hash, the tag.
+  if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1 + 8) || !w.string() || !w.string() ||
+      !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
   return w.at_end();
@@ -313,7 +315,9 @@ std::string state_json(const peritwin_msgs::damage_state_t& s) {
   j["remaining_high"] = s.remaining_cycles_high;
   j["remaining_life_seq"] = s.remaining_life_seq;
   j["failure"] = static_cast<int>(s.failure);
+  j["end_of_life_cycle"] = s.end_of_life_cycle;
   j["state_hash"] = s.state_hash;
+  j["engine_hash"] = s.engine_hash;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -324,7 +328,9 @@ std::string summary_json(const peritwin_msgs::damage_state_t& s) {
   j["broken_bonds"] = s.broken_bonds;
   j["crack_length_m"] = crack_length(s);
   j["remaining_cycles"] = s.remaining_cycles;
+  j["end_of_life_cycle"] = s.end_of_life_cycle;
   j["state_hash"] = s.state_hash;
+  j["engine_hash"] = s.engine_hash;
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

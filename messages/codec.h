@@ -75,10 +75,10 @@ std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::
 
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
 /// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high, remaining_life_seq,
-/// failure, state_hash. Non-finite numbers are written as null.
+/// failure, end_of_life_cycle, state_hash, engine_hash. Non-finite numbers are written as null.
 std::string state_json(const peritwin_msgs::damage_state_t& state);
 /// The final summary: {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles",
-/// "state_hash"}.
+/// "end_of_life_cycle","state_hash","engine_hash"}.
 std::string summary_json(const peritwin_msgs::damage_state_t& state);
 
 }  // namespace peritwin::messages
