@@ -3,6 +3,7 @@
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
 //   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
 //   peritwin-bench stream-rainflow [--samples N]     gate + RainflowCounter + CycleBlocks rate
+//                                  [--gate N] [--noise]
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
 #include <sys/resource.h>
@@ -256,13 +257,16 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
 // Samples -> hysteresis gate -> incremental rainflow -> blocks, on one core: the producer side of
 // a live stream. Synthetic samples (fixed seed): a 1 kN sine of period 50 samples plus a
 // mean-reverting random walk (steps N(0, 20 N)), the load angle a slow sine binned to 0.05 rad;
-// gate 10 N. They are generated in chunks of 2^20 outside the timed region; only push(), add()
-// and the vectors they append to (cleared per chunk, as a stream's batches would be) are timed.
-int run_stream_rainflow(std::int64_t samples, double gate) {
+// or, with `noise`, white noise (N(0, 100 N) rounded to whole newtons, angle 0): a reversal at
+// two samples of three, the worst case for the counting. They are generated in chunks of 2^20
+// outside the timed region; only push(), add() and the vectors they append to (cleared per
+// chunk, as a stream's batches would be) are timed.
+int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
   using namespace peritwin::replay;
   constexpr std::size_t kChunk = std::size_t{1} << 20;
   std::mt19937_64 rng(20261203);
   std::normal_distribution<double> step(0.0, 20.0);
+  std::normal_distribution<double> white(0.0, 100.0);
   std::vector<double> load(kChunk), alpha(kChunk);
   std::vector<CountedCycle> cycles;
   std::vector<peritwin::LoadBlock> blocks;
@@ -275,6 +279,11 @@ int run_stream_rainflow(std::int64_t samples, double gate) {
     const auto n = static_cast<std::size_t>(std::min<std::int64_t>(samples - done, kChunk));
     for (std::size_t i = 0; i < n; ++i) {
       const auto t = static_cast<double>(done + static_cast<std::int64_t>(i));
+      if (noise) {
+        load[i] = std::round(white(rng));
+        alpha[i] = 0.0;
+        continue;
+      }
       walk = 0.999 * walk + step(rng);
       load[i] = 1000.0 * std::sin(two_pi * t / 50.0) + walk;
       alpha[i] = 0.3 * std::sin(two_pi * t / 1.0e6);
@@ -299,6 +308,7 @@ int run_stream_rainflow(std::int64_t samples, double gate) {
   peritwin::tools::JsonLine line;
   line["bench"] = "stream-rainflow";
   line["samples"] = static_cast<long long>(samples);
+  line["signal"] = noise ? "white-noise" : "sine-walk";
   line["gate_N"] = gate;
   line["seconds"] = peritwin::tools::fixed(seconds, 3);
   line["samples_per_s"] = peritwin::tools::significant(rate, 4);
@@ -375,10 +385,13 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40));
   stream->add_option("--gate", stream_gate, "hysteresis gate (N, default 10)")
       ->check(peritwin::cli::finite_in(0.0, 1e9));
+  bool stream_noise = false;
+  stream->add_flag("--noise", stream_noise,
+                   "white noise instead of sine + random walk (a reversal almost every sample)");
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes);
   if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);
-  if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate);
+  if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);
   if (bil->parsed()) {
     return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,
                         reference_step, solve_tolerance);
