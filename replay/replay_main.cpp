@@ -3,7 +3,7 @@
 //   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
 //                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
 //                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
-//                   [--key-file F [--daemon-key ID | --sign-only]]
+//                   [--key-file F [--daemon-key ID | --sign-only]] [--continue | --resume]
 //   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
 // Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
@@ -11,10 +11,16 @@
 // --key-file: batches signed with the key of --source, every STATE and REJECT verified with the
 // daemon's key (messages/README.md, "Authentication"); without it anyone on the bus can forge the
 // states it reports. --generate-key-file writes a new key file (mode 0600) and exits.
+// Over LCM it first learns what the daemon has applied of --source (BatchSender::probe_applied):
+// when that is seq > 0 it refuses to run (exit 2, naming the source, the seq and the detail)
+// unless --continue (this history's batches are numbered from applied + 1: it is appended) or
+// --resume (numbered from 1 as before: the applied ones are dropped as duplicates, i.e. an
+// interrupted replay of the same history is finished exactly once).
 // Output: one line per state update (human text, or JSON with --json) on stdout, then a summary
 // line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","state_hash"} with
-// --json. Exit codes: 0 done, 2 bad usage/config/history, 3 runtime failure (LCM, no progress;
-// a tcpq hub unreachable at start or lost during the run, named in one line).
+// --json. Exit codes: 0 done, 2 bad usage/config/history or a
+// source that already has batches (without --continue/--resume), 3 runtime failure (LCM, no
+// progress; a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
@@ -23,8 +29,8 @@
 #include <iostream>
 #include <limits>
 
-#include "messages/transport.h"
 #include "messages/auth.h"
+#include "messages/transport.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
 
@@ -41,6 +47,7 @@ int main(int argc, char** argv) {
   std::string key_file, daemon_key_id = "peritwin", generate_key_file;
   std::vector<std::string> key_ids;
   bool lockstep = false, in_process = false, json = false, sign_only = false;
+  bool append = false, resume = false;
   replay::BatchingOptions batching;
   replay::ReplayOptions options;
   // Required unless --generate-key-file (checked after parsing).
@@ -83,6 +90,13 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
       ->check(CLI::PositiveNumber);
+  auto* continue_opt = app.add_flag(
+      "--continue", append,
+      "the daemon already has batches of --source: number this history's after them (append)");
+  app.add_flag("--resume", resume,
+               "the daemon already has batches of --source from this same history: number them "
+               "from 1 again, the applied ones are duplicates (finish an interrupted replay)")
+      ->excludes(continue_opt);
   app.add_option("--give-up-after", options.give_up_after_s,
                  "seconds without progress before failing (default 120)")
       ->check(peritwin::cli::finite_positive());
@@ -226,6 +240,35 @@ int main(int argc, char** argv) {
     replay::ReplayResult r;
     bool lost = false;
     {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
+      std::int64_t applied = 0;
+      {
+        replay::BatchSender probe(lcm, detail->id, source_id, options, auth);
+        probe.on_state(print);
+        const auto learned = probe.probe_applied([] { return g_signal.load() == 0; });
+        if (!learned) {
+          std::cerr << "peritwin-replay: "
+                    << (messages::transport_up(lcm) ? "" : "LCM hub " + lcm_url + ": ")
+                    << learned.error().message() << "\n";
+          return kExitRuntime;
+        }
+        applied = *learned;
+      }
+      if (applied > 0 && !append && !resume) {
+        std::cerr << "peritwin-replay: source '" << source_id << "' already has batches up to seq "
+                  << applied << " applied on detail " << detail->id
+                  << "; use --continue to append this history after them, --resume to finish an "
+                     "interrupted replay of the same history, or a new --source\n";
+        return kExitUsage;
+      }
+      if (applied > 0 && append) {
+        batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching,
+                                            applied + 1);
+        std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
+                  << applied + static_cast<std::int64_t>(batches.size()) << "\n";
+      } else if (applied > 0) {
+        std::cerr << "peritwin-replay: --resume: seqs 1 to " << applied
+                  << " are already applied, sending from " << applied + 1 << "\n";
+      }
       replay::LcmReplayer replayer(lcm, std::move(batches), options, std::move(auth));
       r = replayer.run(print, [] { return g_signal.load() == 0; });
       lost = !messages::transport_up(lcm);

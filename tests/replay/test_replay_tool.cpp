@@ -16,9 +16,9 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <thread>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -498,7 +498,7 @@ TEST_F(ReplayAuthBinary, UnsignedOrWronglySignedStateExitsThree) {
     EXPECT_EQ(exit_code(r), 3) << log();
     for (const auto& line : lines) EXPECT_EQ(line.find("fake-"), std::string::npos) << line;
     const std::string expected = std::string(
-                                     "peritwin-replay: PERITWIN_B1_CT_STATE: state_seq 1 of "
+                                     "peritwin-replay: PERITWIN_B1_CT_STATE: state_seq 0 of "
                                      "detail \"b1-ct\": ") +
                                  why + " (not from the holder of daemon key \"peritwin\")\n";
     EXPECT_NE(log().find(expected), std::string::npos) << log();
@@ -510,7 +510,8 @@ TEST_F(ReplayAuthBinary, AuthRejectExitsThreeWithTheDaemonsReason) {
   auto r = replay_over_hub({"--key-file", keys_.string()});
   lines_to_end(*r);
   EXPECT_EQ(exit_code(r), 3) << log();
-  EXPECT_NE(log().find("peritwin-replay: the daemon refused batch 1 of source \"replay\" "
+  // The first batch it sends is the probe of what the daemon holds (BatchSender::probe_applied).
+  EXPECT_NE(log().find("peritwin-replay: the daemon refused the probe batch of source \"replay\" "
                        "(CODE_AUTH): auth_tag: wrong tag for source \"replay\"\n"),
             std::string::npos)
       << log();
