@@ -51,6 +51,39 @@ TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
   EXPECT_TRUE(make_twin_batches({}, "b1-ct", "src", {}).empty());
 }
 
+TEST(ReplayBatches, ContinueNumbersFromTheGivenSeq) {
+  const std::vector<LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
+  const auto batches = make_twin_batches(blocks, "b1-ct", "src", {1024, 1000}, 6);
+  ASSERT_EQ(batches.size(), 3u);
+  EXPECT_EQ(batches[0].seq, 6);
+  EXPECT_EQ(batches[2].seq, 8);
+}
+
+TEST(ReplayBatches, StreamBatcherClosesBySampleTime) {
+  // 2 s of sample time per batch; blocks arrive between ticks.
+  Batcher batcher("b1-ct", "s", 1, {1024, 1000, 2.0});
+  std::vector<twin::Batch> out;
+  batcher.tick(10.0, out);  // opens at t = 10
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.tick(11.5, out);
+  EXPECT_TRUE(out.empty());
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.tick(12.0, out);  // 2 s: closed with both blocks, the next one opens at 12
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].blocks.size(), 2u);
+  EXPECT_EQ(out[0].seq, 1);
+  batcher.tick(14.0, out);  // nothing in it: no empty batch
+  EXPECT_EQ(out.size(), 1u);
+  batcher.add({4000, 0.1, 0, 999}, out);
+  batcher.add({4000, 0.1, 0, 1}, out);  // the cycle rule still closes it
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[1].seq, 2);
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.flush(out);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(batcher.next_seq(), 4);
+}
+
 TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
   const std::vector<LoadBlock> good{{4000, 0.1, 0, 1}};
   EXPECT_TRUE(check_blocks(good).ok());
