@@ -2,6 +2,8 @@
 //   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
 //   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
+//   peritwin-bench stream-rainflow [--samples N]     gate + RainflowCounter + CycleBlocks rate
+//                                  [--gate N] [--noise]
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
 #include <sys/resource.h>
@@ -15,9 +17,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
+#include "replay/cycle_blocks.h"
+#include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/static/static_solver.h"
 #include "tools/cli_checks.h"
@@ -249,6 +254,74 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   return 0;
 }
 
+// Samples -> hysteresis gate -> incremental rainflow -> blocks, on one core: the producer side of
+// a live stream. Synthetic samples (fixed seed): a 1 kN sine of period 50 samples plus a
+// mean-reverting random walk (steps N(0, 20 N)), the load angle a slow sine binned to 0.05 rad;
+// or, with `noise`, white noise (N(0, 100 N) rounded to whole newtons, angle 0): a reversal at
+// two samples of three, the worst case for the counting. They are generated in chunks of 2^20
+// outside the timed region; only push(), add() and the vectors they append to (cleared per
+// chunk, as a stream's batches would be) are timed.
+int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
+  using namespace peritwin::replay;
+  constexpr std::size_t kChunk = std::size_t{1} << 20;
+  std::mt19937_64 rng(20261203);
+  std::normal_distribution<double> step(0.0, 20.0);
+  std::normal_distribution<double> white(0.0, 100.0);
+  std::vector<double> load(kChunk), alpha(kChunk);
+  std::vector<CountedCycle> cycles;
+  std::vector<peritwin::LoadBlock> blocks;
+  RainflowCounter counter(gate);
+  CycleBlocks converter({0.05, true});
+  double walk = 0.0, seconds = 0.0;
+  std::int64_t done = 0, n_blocks = 0;
+  const double two_pi = 2.0 * std::acos(-1.0);
+  while (done < samples) {
+    const auto n = static_cast<std::size_t>(std::min<std::int64_t>(samples - done, kChunk));
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto t = static_cast<double>(done + static_cast<std::int64_t>(i));
+      if (noise) {
+        load[i] = std::round(white(rng));
+        alpha[i] = 0.0;
+        continue;
+      }
+      walk = 0.999 * walk + step(rng);
+      load[i] = 1000.0 * std::sin(two_pi * t / 50.0) + walk;
+      alpha[i] = 0.3 * std::sin(two_pi * t / 1.0e6);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < n; ++i) counter.push(load[i], alpha[i], cycles);
+    for (const CountedCycle& c : cycles) converter.add(c, blocks);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    n_blocks += static_cast<std::int64_t>(blocks.size());
+    cycles.clear();
+    blocks.clear();
+    done += static_cast<std::int64_t>(n);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  counter.finish(ResidueRule::half, cycles);
+  for (const CountedCycle& c : cycles) converter.add(c, blocks);
+  seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  n_blocks += static_cast<std::int64_t>(blocks.size());
+  const auto& stats = counter.stats();
+  const double rate = seconds > 0.0 ? static_cast<double>(samples) / seconds : 0.0;
+  constexpr double kGoal = 5e7;  // samples/s on one core (the goal)
+  peritwin::tools::JsonLine line;
+  line["bench"] = "stream-rainflow";
+  line["samples"] = static_cast<long long>(samples);
+  line["signal"] = noise ? "white-noise" : "sine-walk";
+  line["gate_N"] = gate;
+  line["seconds"] = peritwin::tools::fixed(seconds, 3);
+  line["samples_per_s"] = peritwin::tools::significant(rate, 4);
+  line["reversals"] = static_cast<long long>(stats.reversals);
+  line["cycles"] = static_cast<long long>(stats.full_cycles + stats.half_cycles);
+  line["half_cycles"] = static_cast<long long>(stats.half_cycles);
+  line["blocks"] = static_cast<long long>(n_blocks);
+  line["goal_samples_per_s"] = kGoal;
+  line["ratio_to_goal"] = peritwin::tools::fixed(rate / kGoal, 2);
+  peritwin::tools::print_line(line);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -304,9 +377,21 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 64));
   bil->add_option("--tolerance", solve_tolerance, "PCG tolerance (energy norm, relative)")
       ->check(peritwin::cli::finite_positive());
+  auto* stream =
+      app.add_subcommand("stream-rainflow", "samples -> gate -> rainflow -> blocks, one core");
+  std::int64_t stream_samples = 100'000'000;
+  double stream_gate = 10.0;
+  stream->add_option("--samples", stream_samples, "synthetic samples (default 1e8)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40));
+  stream->add_option("--gate", stream_gate, "hysteresis gate (N, default 10)")
+      ->check(peritwin::cli::finite_in(0.0, 1e9));
+  bool stream_noise = false;
+  stream->add_flag("--noise", stream_noise,
+                   "white noise instead of sine + random walk (a reversal almost every sample)");
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes);
   if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);
+  if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);
   if (bil->parsed()) {
     return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,
                         reference_step, solve_tolerance);

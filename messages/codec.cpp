@@ -446,7 +446,8 @@ std::string state_json(const peritwin_msgs::damage_state_t& s) {
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-std::string summary_json(const peritwin_msgs::damage_state_t& s) {
+std::string summary_json(const peritwin_msgs::damage_state_t& s,
+                         const std::vector<SummaryObject>& extra) {
   nlohmann::ordered_json j;
   j["detail"] = s.detail_id;
   j["cycles"] = s.total_cycles;
@@ -456,6 +457,18 @@ std::string summary_json(const peritwin_msgs::damage_state_t& s) {
   j["end_of_life_cycle"] = s.end_of_life_cycle;
   j["state_hash"] = s.state_hash;
   j["engine_hash"] = s.engine_hash;
+  for (const SummaryObject& object : extra) {
+    nlohmann::ordered_json o = nlohmann::ordered_json::object();
+    for (const auto& [key, value] : object.numbers) {
+      // Whole numbers as integers ("3", not "3.0"); halves and the rest as doubles.
+      if (std::abs(value) < 0x1p53 && value == std::floor(value)) {
+        o[key] = static_cast<std::int64_t>(value);
+      } else {
+        o[key] = value;
+      }
+    }
+    j[object.name] = std::move(o);
+  }
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 

@@ -16,6 +16,7 @@
 #include <peritwin_msgs/reject_t.hpp>
 #include <peritwin_msgs/status_t.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "messages/batch.h"
@@ -119,8 +120,15 @@ std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::
 /// remaining_life_seq, failure, end_of_life_cycle, state_hash, engine_hash. Non-finite numbers are
 /// written as null.
 std::string state_json(const peritwin_msgs::damage_state_t& state);
+/// An object of numbers a tool appends to its summary line: "name": {"key": value, ...} in the
+/// given order (e.g. the replay's "skipped_cycles" for a series).
+struct SummaryObject {
+  std::string name;
+  std::vector<std::pair<std::string, double>> numbers;
+};
 /// The final summary: {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles",
-/// "end_of_life_cycle","state_hash","engine_hash"}.
-std::string summary_json(const peritwin_msgs::damage_state_t& state);
+/// "end_of_life_cycle","state_hash","engine_hash"}, then the `extra` objects in order.
+std::string summary_json(const peritwin_msgs::damage_state_t& state,
+                         const std::vector<SummaryObject>& extra = {});
 
 }  // namespace peritwin::messages

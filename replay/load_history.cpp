@@ -7,11 +7,9 @@
 #include <initializer_list>
 #include <limits>
 #include <optional>
-#include <set>
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
-#include <tuple>
 
 namespace peritwin::replay {
 
@@ -57,8 +55,10 @@ std::string join(const std::vector<std::string_view>& fields) {
   return out;
 }
 
-// A finite double spanning the whole field, or the reason why not.
-std::variant<double, std::string> parse_number(std::string_view field, std::string_view name) {
+// A double spanning the whole field, finite unless `allow_nonfinite` ("nan", "inf", "-inf",
+// "infinity"), or the reason why not.
+std::variant<double, std::string> parse_number(std::string_view field, std::string_view name,
+                                               bool allow_nonfinite = false) {
   if (field.empty()) return cat({"empty field '", name, "'"});
   double value = 0.0;
   const auto [end, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
@@ -68,7 +68,7 @@ std::variant<double, std::string> parse_number(std::string_view field, std::stri
   if (ec != std::errc() || end != field.data() + field.size()) {
     return cat({"malformed number '", field, "' in '", name, "'"});
   }
-  if (!std::isfinite(value)) {
+  if (!std::isfinite(value) && !allow_nonfinite) {
     return cat({"non-finite value '", field, "' in '", name, "'"});
   }
   return value;
@@ -193,44 +193,6 @@ std::string ParseError::message() const {
   return file + ":" + std::to_string(line) + ": " + reason;
 }
 
-BlockConversion cycles_to_blocks(const Reversals& reversals, std::span<const RainflowCycle> cycles,
-                                 std::span<const double> angle_by_sample) {
-  BlockConversion out;
-  out.stats.reversals = reversals.values.size();
-  std::set<std::tuple<double, double, double>> pending_half;  // keys with one unpaired half
-  for (const RainflowCycle& c : cycles) {
-    const bool half = c.count < 1.0;
-    (half ? out.stats.half_cycles : out.stats.full_cycles) += 1;
-    const double a = reversals.values.at(c.first);
-    const double b = reversals.values.at(c.last);
-    const std::size_t at_max = a >= b ? c.first : c.last;
-    const double p_max = a >= b ? a : b;
-    const double p_min = a >= b ? b : a;
-    if (p_max <= 0.0) {
-      out.stats.compressive_cycles += c.count;
-      continue;
-    }
-    double alpha = 0.0;
-    if (!angle_by_sample.empty()) {
-      const std::size_t sample = reversals.sample_index.at(at_max);
-      if (sample >= angle_by_sample.size()) {
-        throw std::invalid_argument(
-            "cycles_to_blocks: angle_by_sample is shorter than the history");
-      }
-      alpha = angle_by_sample[sample];
-    }
-    const LoadBlock block{p_max, p_min / p_max, alpha, 1};
-    if (half) {
-      const auto key = std::make_tuple(block.p_max, block.r, block.alpha);
-      if (pending_half.erase(key) == 1) continue;  // completes the whole cycle emitted earlier
-      pending_half.insert(key);
-    }
-    out.blocks.push_back(block);
-  }
-  out.stats.rounded_up_half_cycles = pending_half.size();
-  return out;
-}
-
 std::vector<LoadBlock> merge_consecutive(std::span<const LoadBlock> blocks) {
   std::vector<LoadBlock> out;
   for (const LoadBlock& b : blocks) {
@@ -247,11 +209,29 @@ std::vector<LoadBlock> merge_consecutive(std::span<const LoadBlock> blocks) {
   return out;
 }
 
-BlockConversion series_to_blocks(const LoadSeries& series) {
-  const Reversals reversals = extract_reversals(series.load_n);
-  const std::vector<RainflowCycle> cycles = rainflow_count(reversals.values);
-  BlockConversion out = cycles_to_blocks(reversals, cycles, series.angle_rad);
-  out.blocks = merge_consecutive(out.blocks);
+BlockConversion series_to_blocks(const LoadSeries& series, const SeriesRules& rules) {
+  const std::size_t n = series.load_n.size();
+  if (!series.angle_rad.empty() && series.angle_rad.size() != n) {
+    throw std::invalid_argument("series_to_blocks: " + std::to_string(series.angle_rad.size()) +
+                                " angles for " + std::to_string(n) + " loads");
+  }
+  RainflowCounter counter(rules.gate);
+  CycleBlocks converter({rules.alpha_bin, rules.compressed_bonds_fatigue});
+  std::vector<CountedCycle> cycles;
+  std::vector<LoadBlock> blocks;
+  const auto convert = [&] {
+    for (const CountedCycle& c : cycles) converter.add(c, blocks);
+    cycles.clear();
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    counter.push(series.load_n[i], series.angle_rad.empty() ? 0.0 : series.angle_rad[i], cycles);
+    convert();
+  }
+  counter.finish(rules.residue, cycles);
+  convert();
+  BlockConversion out{merge_consecutive(blocks), converter.stats()};
+  out.stats.reversals = counter.stats().reversals;
+  out.stats.nonfinite_samples = counter.stats().nonfinite_samples;
   return out;
 }
 
@@ -282,7 +262,7 @@ ReadResult<LoadSeries> read_series_csv(std::istream& in, const std::string& name
       [&](std::size_t line, const std::vector<std::string_view>& f) -> std::optional<std::string> {
         double v[3] = {};
         for (std::size_t i = 0; i < f.size(); ++i) {
-          auto x = parse_number(f[i], kNames[i]);
+          auto x = parse_number(f[i], kNames[i], i > 0);  // load, angle: a dropout is skipped
           if (x.index() != 0) return std::get<1>(std::move(x));
           v[i] = std::get<0>(x);
         }
@@ -324,12 +304,12 @@ ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name
 }
 
 ReadResult<BlockConversion> read_blocks(std::istream& in, const std::string& name,
-                                        HistoryFormat format) {
+                                        HistoryFormat format, const SeriesRules& rules) {
   switch (format) {
     case HistoryFormat::series: {
       auto series = read_series_csv(in, name);
       if (!series) return series.error();
-      return series_to_blocks(series.value());
+      return series_to_blocks(series.value(), rules);
     }
     case HistoryFormat::cycles: {
       auto blocks = read_cycles_csv(in, name);
@@ -360,9 +340,10 @@ ReadResult<Spectrum> read_spectrum_csv(const std::filesystem::path& file) {
       file, [](std::istream& in, const std::string& name) { return read_spectrum_csv(in, name); });
 }
 
-ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format) {
-  return read_file<BlockConversion>(file, [format](std::istream& in, const std::string& name) {
-    return read_blocks(in, name, format);
+ReadResult<BlockConversion> read_blocks(const std::filesystem::path& file, HistoryFormat format,
+                                        const SeriesRules& rules) {
+  return read_file<BlockConversion>(file, [&](std::istream& in, const std::string& name) {
+    return read_blocks(in, name, format, rules);
   });
 }
 

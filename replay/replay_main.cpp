@@ -3,6 +3,7 @@
 //   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
 //                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
 //                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
+//                   [--residue half|whole|keep] [--gate N] [--alpha-bin RAD]
 //                   [--key-file F [--daemon-key ID | --sign-only]] [--continue | --resume]
 //   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
@@ -16,9 +17,16 @@
 // unless --continue (this history's batches are numbered from applied + 1: it is appended) or
 // --resume (numbered from 1 as before: the applied ones are dropped as duplicates, i.e. an
 // interrupted replay of the same history is finished exactly once).
+// --format series: samples -> rainflow (replay/rainflow.h) -> blocks (replay/cycle_blocks.h) with
+// --gate (hysteresis, N), --residue (half: ASTM E1049-85, the default; whole: each residue range
+// a whole cycle, conservative; keep: the residue is dropped, not applied), --alpha-bin (rad) and
+// the detail's [detail.fatigue] compressed_bonds_fatigue (fully compressive cycles mirrored or
+// skipped); cycles below R = -10 are applied as the same range at R = -10.
 // Output: one line per state update (human text, or JSON with --json) on stdout, then a summary
-// line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","state_hash"} with
-// --json. Exit codes: 0 done, 2 bad usage/config/history or a
+// line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","end_of_life_cycle",
+// "state_hash","engine_hash"} with --json, for a series with "skipped_cycles": {"compressive",
+// "mirrored_compressive","remapped_below_floor","degenerate","nonfinite_samples"} (without
+// --json these counts are one line on stderr). Exit codes: 0 done, 2 bad usage/config/history or a
 // source that already has batches (without --continue/--resume), 3 runtime failure (LCM, no
 // progress; a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
@@ -48,6 +56,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> key_ids;
   bool lockstep = false, in_process = false, json = false, sign_only = false;
   bool append = false, resume = false;
+  std::string residue = "half";
+  replay::SeriesRules series_rules;
   replay::BatchingOptions batching;
   replay::ReplayOptions options;
   // Required unless --generate-key-file (checked after parsing).
@@ -55,6 +65,16 @@ int main(int argc, char** argv) {
   app.add_option("--history", history, "load history file, required");
   app.add_option("--format", format, "series|cycles|spectrum|lcm-log (default cycles)")
       ->check(CLI::IsMember({"series", "cycles", "spectrum", "lcm-log"}));
+  app.add_option("--residue", residue,
+                 "series: the rainflow residue at the end of the history: half (ASTM E1049-85, "
+                 "default), whole (each range a whole cycle, conservative) or keep (not applied)")
+      ->check(CLI::IsMember({"half", "whole", "keep"}));
+  app.add_option("--gate", series_rules.gate,
+                 "series: hysteresis gate (N); load ranges up to it are no reversals (default 0)")
+      ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
+  app.add_option("--alpha-bin", series_rules.alpha_bin,
+                 "series: round each cycle's load angle to a multiple of this (rad; 0 = none)")
+      ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
   app.add_option("--detail", detail_id, "detail id (default: the config's first detail)");
   app.add_option("--source", source_id, "source id of the batches (default replay)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
@@ -145,7 +165,11 @@ int main(int argc, char** argv) {
                    : format == "spectrum" ? replay::InputFormat::spectrum
                    : format == "lcm-log"  ? replay::InputFormat::lcm_log
                                           : replay::InputFormat::cycles;
-  const auto read = replay::read_history(history, fmt, detail->id);
+  series_rules.residue = residue == "whole"  ? replay::ResidueRule::whole
+                         : residue == "keep" ? replay::ResidueRule::keep
+                                             : replay::ResidueRule::half;
+  series_rules.compressed_bonds_fatigue = detail->fatigue.compressed_bonds_fatigue;
+  const auto read = replay::read_history(history, fmt, detail->id, series_rules);
   if (!read) {
     std::cerr << "peritwin-replay: " << read.error().message() << "\n";
     return kExitUsage;
@@ -198,6 +222,10 @@ int main(int argc, char** argv) {
                            : "")
             << "\n";
   if (!history_blocks.note.empty()) std::cerr << "peritwin-replay: " << history_blocks.note << "\n";
+  if (history_blocks.conversion && !json) {
+    std::cerr << "peritwin-replay: " << replay::describe_skipped(*history_blocks.conversion)
+              << "\n";
+  }
 
   std::int64_t last_seq = -2, last_life = -2;
   auto print = [&](const peritwin_msgs::damage_state_t& s) {
@@ -282,6 +310,12 @@ int main(int argc, char** argv) {
     }
     final_state = r.final_state;
   }
-  if (json && final_state) std::cout << twin::summary_json(*final_state) << std::endl;
+  if (json && final_state) {
+    std::vector<messages::SummaryObject> extra;
+    if (history_blocks.conversion) {
+      extra.push_back({"skipped_cycles", replay::skipped_cycles(*history_blocks.conversion)});
+    }
+    std::cout << twin::summary_json(*final_state, extra) << std::endl;
+  }
   return kExitOk;
 }

@@ -15,22 +15,23 @@
 namespace peritwin::replay {
 
 Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                                     const std::string& detail_id) {
+                                     const std::string& detail_id,
+                                     const SeriesRules& series_rules) {
   HistoryBlocks out;
   if (format != InputFormat::lcm_log) {
     const HistoryFormat f = format == InputFormat::series   ? HistoryFormat::series
                             : format == InputFormat::cycles ? HistoryFormat::cycles
                                                             : HistoryFormat::spectrum;
-    const auto read = read_blocks(file, f);
+    const auto read = read_blocks(file, f, series_rules);
     if (!read.ok()) return failure(read.error().message());
     out.blocks = read.value().blocks;
     if (format == InputFormat::series) {
       const auto& s = read.value().stats;
+      out.conversion = s;
       out.note = "rainflow: " + std::to_string(s.reversals) + " reversals, " +
                  std::to_string(s.full_cycles) + " full and " + std::to_string(s.half_cycles) +
                  " half cycles, " + std::to_string(s.rounded_up_half_cycles) +
-                 " unpaired halves rounded up, " + std::to_string(s.compressive_cycles) +
-                 " compressive cycles skipped";
+                 " unpaired halves rounded up";
     }
     return out;
   }
@@ -62,6 +63,26 @@ Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
   out.note = "LCM log: " + std::to_string(scan.value().on_channel) + " events on " + channel +
              ", " + std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
   if (out.blocks.empty()) return failure(name + ": no load blocks on " + channel);
+  return out;
+}
+
+std::vector<std::pair<std::string, double>> skipped_cycles(const ConversionStats& stats) {
+  return {{"compressive", stats.skipped.compressive},
+          {"mirrored_compressive", stats.skipped.mirrored_compressive},
+          {"remapped_below_floor", stats.skipped.remapped_below_floor},
+          {"degenerate", stats.skipped.degenerate},
+          {"nonfinite_samples", static_cast<double>(stats.nonfinite_samples)}};
+}
+
+std::string describe_skipped(const ConversionStats& stats) {
+  std::string out = "skipped cycles:";
+  const char* separator = " ";
+  for (const auto& [name, value] : skipped_cycles(stats)) {
+    char number[32];
+    std::snprintf(number, sizeof number, "%g", value);
+    out += separator + name + " " + number;
+    separator = ", ";
+  }
   return out;
 }
 

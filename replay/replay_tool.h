@@ -33,12 +33,22 @@ enum class InputFormat { series, cycles, spectrum, lcm_log };
 
 /// The blocks of a history file. lcm-log: the load_batch_t events on `detail_id`'s LOAD channel
 /// in log order, each (source, seq) once, undecodable events skipped. Errors as "file: reason".
+/// series: converted by `series_rules` (replay/load_history.h), `conversion` holds its stats.
 struct HistoryBlocks {
   std::vector<LoadBlock> blocks;
-  std::string note;  ///< e.g. rainflow statistics, for the log
+  std::string note;                           ///< e.g. rainflow statistics, for the log
+  std::optional<ConversionStats> conversion;  ///< series only
 };
 Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                                     const std::string& detail_id);
+                                     const std::string& detail_id,
+                                     const SeriesRules& series_rules = {});
+
+/// The cycles a series conversion did not apply as counted, and the samples it skipped:
+/// {"compressive", "mirrored_compressive", "remapped_below_floor", "degenerate",
+/// "nonfinite_samples"} in that order (the summary's "skipped_cycles" object).
+std::vector<std::pair<std::string, double>> skipped_cycles(const ConversionStats& stats);
+/// The same as one line: "skipped cycles: compressive 0, mirrored_compressive 1.5, ...".
+std::string describe_skipped(const ConversionStats& stats);
 /// The lcm-log case on a stream (binary); errors name `name`. Malformed logs are refused with
 /// the event's byte offset (replay/lcm_log.h), events above kMaxBatchPayload skipped unread.
 Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,

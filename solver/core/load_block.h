@@ -10,8 +10,11 @@
 //   p_max  finite and > 0 (N): the peak load of a tensile cycle;
 //   r      finite, kMinLoadRatio (−10) <= R < 1: R = P_min/P_max. R >= 1 is no cycle; R < −10
 //          means a cycle almost wholly in compression (|P_min| > 10·P_max), which the tensile
-//          fatigue laws (000 Eq. 15, 002 Eq. 12) were never calibrated for — such a history is
-//          more likely a sign or units slip than a load;
+//          fatigue laws (000 Eq. 15, 002 Eq. 12) were never calibrated for. The floor is a rule
+//          for blocks, not for histories: the replay's rainflow conversion applies a counted
+//          cycle below it as the same range ΔP = P_max − P_min at R = −10 (p_max = ΔP/11, the
+//          range being what drives 000 Eq. 15) and a fully compressive cycle as its tensile
+//          mirror (replay/cycle_blocks.h);
 //   alpha  finite (rad);
 //   count  1 <= count <= kMaxBatchCycles;
 // and a sequence of blocks applied as one unit (a batch) holds at most kMaxBatchCycles cycles in

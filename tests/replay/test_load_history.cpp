@@ -1,5 +1,6 @@
-// Tests of replay/rainflow.h and replay/load_history.h. Expected numbers come from ASTM E1049-85
-// (Sec. 5.4.4 example), from hand traces written next to each case, or from an independent
+// Tests of replay/rainflow.h, replay/cycle_blocks.h and replay/load_history.h (the incremental
+// counter's own properties: tests/replay/test_rainflow_stream.cpp). Expected numbers come from ASTM
+// E1049-85 (Sec. 5.4.4 example), from hand traces written next to each case, or from an independent
 // brute-force four-point rainflow written here.
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -28,9 +29,9 @@ namespace fs = std::filesystem;
 
 const std::vector<double> kAstmHistory = {-2, 1, -3, 5, -1, 3, -4, 4, -2};
 
-std::map<double, double> counts_by_range(const std::vector<RainflowCycle>& cycles) {
+std::map<double, double> counts_by_range(const std::vector<CountedCycle>& cycles) {
   std::map<double, double> out;
-  for (const auto& c : cycles) out[c.range] += c.count;
+  for (const auto& c : cycles) out[std::abs(c.to - c.from)] += c.count;
   return out;
 }
 
@@ -94,47 +95,32 @@ std::vector<double> random_history(std::mt19937_64& rng, std::size_t n, bool int
 // ---------------------------------------------------------------- rainflow
 
 TEST(Rainflow, AstmE1049ExampleAggregateCounts) {
-  const auto cycles = rainflow_count(kAstmHistory);
+  const auto cycles = count_cycles(kAstmHistory);
   const std::map<double, double> expected = {{3, 0.5}, {4, 1.5}, {6, 0.5}, {8, 1.0}, {9, 0.5}};
   EXPECT_EQ(counts_by_range(cycles), expected);
 }
 
 TEST(Rainflow, AstmE1049ExampleCycleByCycle) {
-  // Hand trace of Sec. 5.4.4 (indices into the reversal list).
-  struct E {
-    double range, mean, count;
-    std::size_t first, last;
-  };
-  const std::vector<E> expected = {{3, -0.5, 0.5, 0, 1}, {4, -1.0, 0.5, 1, 2}, {4, 1.0, 1.0, 4, 5},
-                                   {8, 1.0, 0.5, 2, 3},  {9, 0.5, 0.5, 3, 6},  {8, 0.0, 0.5, 6, 7},
-                                   {6, 1.0, 0.5, 7, 8}};
-  const auto cycles = rainflow_count(kAstmHistory);
-  ASSERT_EQ(cycles.size(), expected.size());
-  for (std::size_t i = 0; i < cycles.size(); ++i) {
-    SCOPED_TRACE(i);
-    EXPECT_EQ(cycles[i].range, expected[i].range);
-    EXPECT_EQ(cycles[i].mean, expected[i].mean);
-    EXPECT_EQ(cycles[i].count, expected[i].count);
-    EXPECT_EQ(cycles[i].first, expected[i].first);
-    EXPECT_EQ(cycles[i].last, expected[i].last);
-  }
+  // Hand trace of Sec. 5.4.4 on the reversals -2, 1, -3, 5, -1, 3, -4, 4, -2, in counting order.
+  const std::vector<CountedCycle> expected = {{-2, 1, 0.5, 0}, {1, -3, 0.5, 0}, {-1, 3, 1.0, 0},
+                                              {-3, 5, 0.5, 0}, {5, -4, 0.5, 0}, {-4, 4, 0.5, 0},
+                                              {4, -2, 0.5, 0}};
+  EXPECT_EQ(count_cycles(kAstmHistory), expected);
 }
 
-TEST(Rainflow, ExtractReversalsDropsMonotonePointsAndPlateaus) {
+TEST(Rainflow, MonotonePointsAndPlateausAreNoReversals) {
+  // Reversals 0 (s0), 2 (s2, first of its plateau), -1 (s5), 3 (s8). Trace: reading -1 closes
+  // the half 0-2 (step 5); finish reads 3, which closes the half 2-(-1) (step 5), residue -1-3.
+  // The angle is the sample index: each cycle's alpha is at its peak's first sample.
   const std::vector<double> x = {0, 1, 2, 2, 1, -1, -1, -1, 3, 3};
-  const Reversals r = extract_reversals(x);
-  EXPECT_EQ(r.values, (std::vector<double>{0, 2, -1, 3}));
-  EXPECT_EQ(r.sample_index, (std::vector<std::size_t>{0, 2, 5, 8}));
-  EXPECT_TRUE(extract_reversals(std::vector<double>{}).values.empty());
-  EXPECT_EQ(extract_reversals(std::vector<double>{4, 4, 4}).values, (std::vector<double>{4}));
-  EXPECT_TRUE(rainflow_count(std::vector<double>{4}).empty());
-  EXPECT_THROW((void)extract_reversals(std::vector<double>{0, NAN}), std::invalid_argument);
-}
-
-TEST(Rainflow, RejectsInputThatIsNotAReversalSequence) {
-  EXPECT_THROW((void)rainflow_count(std::vector<double>{0, 1, 2}), std::invalid_argument);
-  EXPECT_THROW((void)rainflow_count(std::vector<double>{0, 1, 1}), std::invalid_argument);
-  EXPECT_THROW((void)rainflow_count(std::vector<double>{0, INFINITY}), std::invalid_argument);
+  std::vector<double> angle(x.size());
+  std::iota(angle.begin(), angle.end(), 0.0);
+  const std::vector<CountedCycle> expected = {{0, 2, 0.5, 2}, {2, -1, 0.5, 2}, {-1, 3, 0.5, 8}};
+  EXPECT_EQ(count_cycles(x, angle), expected);
+  EXPECT_TRUE(count_cycles(std::vector<double>{}).empty());
+  EXPECT_TRUE(count_cycles(std::vector<double>{4, 4, 4}).empty());
+  EXPECT_TRUE(count_cycles(std::vector<double>{NAN, 4, INFINITY}).empty());
+  EXPECT_THROW((void)count_cycles(x, std::vector<double>{1.0}), std::invalid_argument);
 }
 
 // Against the brute-force four-point method on random histories. Both compute range and mean from
@@ -150,15 +136,13 @@ TEST(Rainflow, MatchesBruteForceFourPointOnRandomHistories) {
     SCOPED_TRACE(trial);
     const bool integer_levels = trial % 2 == 1;
     const auto x = random_history(rng, 5 + static_cast<std::size_t>(trial % 60), integer_levels);
-    const Reversals rev = extract_reversals(x);
-    ASSERT_EQ(rev.values, naive_reversals(x));
-    for (std::size_t i = 0; i < rev.values.size(); ++i) {
-      EXPECT_EQ(x[rev.sample_index[i]], rev.values[i]);
-    }
+    const std::vector<double> rev = naive_reversals(x);
     std::vector<RefCycle> got;
-    for (const auto& c : rainflow_count(rev.values)) got.push_back({c.range, c.mean, c.count});
+    for (const auto& c : count_cycles(x)) {
+      got.push_back({std::abs(c.to - c.from), 0.5 * (c.from + c.to), c.count});
+    }
     std::sort(got.begin(), got.end());
-    const auto ref = four_point_rainflow(rev.values);
+    const auto ref = four_point_rainflow(rev);
     if (!integer_levels) {
       EXPECT_EQ(got, ref);
     }
@@ -174,9 +158,7 @@ TEST(Rainflow, MatchesBruteForceFourPointOnRandomHistories) {
       d_ref += c.count * std::pow(c.range, 3);
     }
     EXPECT_EQ(got_total, ref_total);
-    for (std::size_t i = 0; i + 1 < rev.values.size(); ++i) {
-      path += std::abs(rev.values[i + 1] - rev.values[i]);
-    }
+    for (std::size_t i = 0; i + 1 < rev.size(); ++i) path += std::abs(rev[i + 1] - rev[i]);
     EXPECT_NEAR(d_got, d_ref, 1e-12 * d_ref);
     EXPECT_NEAR(counted, path, 1e-12 * path);
   }
@@ -185,8 +167,7 @@ TEST(Rainflow, MatchesBruteForceFourPointOnRandomHistories) {
 // ---------------------------------------------------------------- cycles -> blocks
 
 TEST(CyclesToBlocks, AstmExampleGivesOneBlockPerCycleWithHalvesRoundedUp) {
-  const Reversals rev = extract_reversals(kAstmHistory);
-  const BlockConversion conv = cycles_to_blocks(rev, rainflow_count(rev.values));
+  const BlockConversion conv = series_to_blocks({{}, kAstmHistory, {}});
   // Counting order of the hand trace above; every half cycle has its own key -> rounded up.
   const std::vector<LoadBlock> expected = {
       {1, -2.0, 0, 1},       {1, -3.0, 0, 1}, {3, -1.0 / 3.0, 0, 1}, {5, -3.0 / 5.0, 0, 1},
@@ -195,7 +176,7 @@ TEST(CyclesToBlocks, AstmExampleGivesOneBlockPerCycleWithHalvesRoundedUp) {
   EXPECT_EQ(conv.stats.reversals, 9u);
   EXPECT_EQ(conv.stats.full_cycles, 1u);
   EXPECT_EQ(conv.stats.half_cycles, 6u);
-  EXPECT_EQ(conv.stats.compressive_cycles, 0.0);
+  EXPECT_EQ(conv.stats.skipped, ConversionStats::SkippedCycles{});
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 6u);
 }
 
@@ -214,13 +195,16 @@ TEST(CyclesToBlocks, HalfCyclesOfTheSameKeyPairIntoWholeCycles) {
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 1u);
 }
 
-TEST(CyclesToBlocks, CompressiveCyclesAreSkippedAndCounted) {
+TEST(CyclesToBlocks, CompressiveCyclesAreSkippedWhenCompressedBondsDoNotFatigue) {
   // Reversals 0,-10,-2,-8,5 (trace): full -2/-8 (P_max -2), half 0/-10 (P_max 0), residue half
   // -10/5 -> only the last one drives fatigue: P_max 5, R -2, alpha at the sample of 5.
   LoadSeries s{{0, 1, 2, 3, 4}, {0, -10, -2, -8, 5}, {0.0, 0.1, 0.2, 0.3, 0.4}};
-  const BlockConversion conv = series_to_blocks(s);
+  SeriesRules rules;
+  rules.compressed_bonds_fatigue = false;
+  const BlockConversion conv = series_to_blocks(s, rules);
   EXPECT_EQ(conv.blocks, (std::vector<LoadBlock>{{5, -2, 0.4, 1}}));
-  EXPECT_EQ(conv.stats.compressive_cycles, 1.5);
+  EXPECT_EQ(conv.stats.skipped.compressive, 1.5);
+  EXPECT_EQ(conv.stats.skipped.mirrored_compressive, 0.0);
   EXPECT_EQ(conv.stats.full_cycles, 1u);
   EXPECT_EQ(conv.stats.half_cycles, 2u);
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 1u);
@@ -245,11 +229,13 @@ TEST(CyclesToBlocks, HalfCycleRuleNeverLosesDamage) {
     SCOPED_TRACE(trial);
     auto x = random_history(rng, 40, trial % 2 == 1);
     for (auto& v : x) v += 200.0;  // all tensile
-    const Reversals rev = extract_reversals(x);
-    const auto cycles = rainflow_count(rev.values);
-    const BlockConversion conv = cycles_to_blocks(rev, cycles);
+    const auto cycles = count_cycles(x);
+    BlockConversion conv;
+    CycleBlocks converter({});
+    for (const auto& c : cycles) converter.add(c, conv.blocks);
+    conv.stats = converter.stats();
     double d_rf = 0, d_blocks = 0;
-    for (const auto& c : cycles) d_rf += c.count * std::pow(c.range, 3);
+    for (const auto& c : cycles) d_rf += c.count * std::pow(std::abs(c.to - c.from), 3);
     std::int64_t total = 0;
     for (const auto& b : merge_consecutive(conv.blocks)) {
       d_blocks += static_cast<double>(b.count) * std::pow(b.p_max * (1.0 - b.r), 3);
@@ -378,8 +364,8 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
       {HistoryFormat::series, "time,load\n0,1\n", 1, "expected header"},
       {HistoryFormat::series, "# c\n\n" + series + "0,1,0\n1,2,0,9\n", 5,
        "expected 3 fields, got 4"},
-      {HistoryFormat::series, series + "0,1,0\n1,nan,0\n", 3, "non-finite value 'nan'"},
-      {HistoryFormat::series, series + "0,inf,0\n", 2, "non-finite value 'inf'"},
+      {HistoryFormat::series, series + "nan,1,0\n", 2, "non-finite value 'nan' in 'time_s'"},
+      {HistoryFormat::series, series + "0,1,0\ninf,1,0\n", 3, "non-finite value 'inf'"},
       {HistoryFormat::series, series + "0,1,0\n1,2x,0\n", 3, "malformed number '2x'"},
       {HistoryFormat::series, series + "0,,0\n", 2, "empty field 'load_N'"},
       {HistoryFormat::series, series + "0,1e999,0\n", 2, "out of range"},

@@ -124,6 +124,52 @@ TEST(ReplayHistory, ExampleFilesInEveryFormat) {
   EXPECT_FALSE(missing.ok());
 }
 
+// A series whose only cycle has R = -11 (the issue's "100, -1100", refused before as
+// blocks[0].r = -11 < -10) with two dropouts: applied as the same range at R = -10
+// (replay/cycle_blocks.h), the counts reach HistoryBlocks, the stderr line and the summary.
+TEST(ReplayHistory, SeriesRulesReachTheBlocksTheCountsAndTheSummary) {
+  const fs::path path =
+      fs::temp_directory_path() / ("peritwin_replay_series_" + std::to_string(::getpid()) + ".csv");
+  std::ofstream(path) << "time_s,load_N\n0,100\n1,nan\n2,-1100\n3,inf\n";
+  const auto half = read_history(path, InputFormat::series, "b1-ct");
+  ASSERT_TRUE(half.ok()) << half.error().message();
+  EXPECT_EQ(half->blocks, (std::vector<LoadBlock>{{1200.0 / 11.0, -10.0, 0.0, 1}}));
+  EXPECT_TRUE(check_blocks(half->blocks).ok());
+  ASSERT_TRUE(half->conversion.has_value());
+  EXPECT_EQ(half->conversion->skipped.remapped_below_floor, 0.5);
+  EXPECT_EQ(half->conversion->nonfinite_samples, 2u);
+  EXPECT_EQ(describe_skipped(*half->conversion),
+            "skipped cycles: compressive 0, mirrored_compressive 0, remapped_below_floor 0.5, "
+            "degenerate 0, nonfinite_samples 2");
+  peritwin_msgs::damage_state_t state{};
+  state.detail_id = "b1-ct";
+  const std::string summary =
+      twin::summary_json(state, {{"skipped_cycles", skipped_cycles(*half->conversion)}});
+  const std::string tail = R"(,"skipped_cycles":{"compressive":0,"mirrored_compressive":0,)"
+                           R"("remapped_below_floor":0.5,"degenerate":0,"nonfinite_samples":2}})";
+  ASSERT_GE(summary.size(), tail.size());
+  EXPECT_EQ(summary.substr(summary.size() - tail.size()), tail) << summary;
+  EXPECT_EQ(twin::summary_json(state).find("skipped_cycles"), std::string::npos);
+  // keep: the only range is the open residue, nothing is applied; whole: one whole cycle.
+  SeriesRules keep;
+  keep.residue = ResidueRule::keep;
+  const auto kept = read_history(path, InputFormat::series, "b1-ct", keep);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_TRUE(kept->blocks.empty());
+  SeriesRules whole;
+  whole.residue = ResidueRule::whole;
+  const auto whole_read = read_history(path, InputFormat::series, "b1-ct", whole);
+  ASSERT_TRUE(whole_read.ok());
+  EXPECT_EQ(whole_read->blocks, half->blocks);
+  EXPECT_EQ(whole_read->conversion->full_cycles, 1u);
+  EXPECT_EQ(whole_read->conversion->rounded_up_half_cycles, 0u);
+  // Other formats carry no conversion counts.
+  EXPECT_FALSE(
+      read_history(fs::path(PERITWIN_EXAMPLES_DIR) / "b1-cycles.csv", InputFormat::cycles, "b1-ct")
+          ->conversion.has_value());
+  fs::remove(path);
+}
+
 TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
   const auto path = fs::temp_directory_path() /
                     ("peritwin_replay_test_" + std::to_string(::getpid()) + ".lcmlog");
