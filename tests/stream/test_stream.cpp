@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "messages/channels.h"
@@ -231,6 +232,65 @@ TEST_F(StreamOverHub, SigkillAtRandomPointsThenRestartOnTheStateFile) {
   ASSERT_NE(last.find("\"engine_hash\""), std::string::npos) << last;
   expect_same_load(reference, last);
   EXPECT_EQ(field(last, "lost_samples"), "0") << last;  // a FILE is read again
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+TEST_F(StreamOverHub, SamplesOfAKilledPipeStreamAreReportedLost) {
+  auto d = daemon("daemon.log");
+  const fs::path state = dir_ / "stream.state", fifo = dir_ / "in.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::vector<std::string> args{
+      "--input",        fifo.string(), "--state-file",    state.string(), "--lcm-url", hub_->url(),
+      "--batch-cycles", "3",           "--give-up-after", "600"};
+  std::vector<std::string> rows;
+  {
+    std::ifstream in(kSeries);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && line[0] != 't') rows.push_back(line);
+    }
+  }
+  auto s = stream(args, "stream1.log");
+  std::ofstream out(fifo);
+  const std::size_t written = 500;
+  for (std::size_t i = 0; i < written; ++i) out << rows[i] << "\n";
+  out.flush();
+  // Every sample read (the .received count), then SIGKILL: whatever is not in the state file is
+  // lost to a pipe.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(600);
+  std::string received;
+  while (std::chrono::steady_clock::now() < deadline) {
+    received = read_file(state.string() + ".received");
+    if (!received.empty() && std::stoull(received) == written) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(std::stoull(received), written) << read_file(dir_ / "stream1.log");
+  s->signal(SIGKILL);
+  s->wait_for(kWaitS);
+  out.close();
+  const std::string saved = read_file(state);
+  const auto counts = saved.find("\ncounts ");
+  ASSERT_NE(counts, std::string::npos) << saved;
+  std::istringstream fields(saved.substr(counts + 8));
+  std::uint64_t lines = 0, persisted = 0;
+  fields >> lines >> persisted;
+  const std::uint64_t lost = written - persisted;
+
+  // The rest of the data to a restarted stream on the same state file.
+  auto again = stream(args, "stream2.log");
+  {
+    std::ofstream rest(fifo);
+    for (std::size_t i = written; i < rows.size(); ++i) rest << rows[i] << "\n";
+  }
+  const auto output = lines_to_end(*again);
+  ASSERT_EQ(exit_code(*again), 0) << read_file(dir_ / "stream2.log");
+  ASSERT_FALSE(output.empty());
+  EXPECT_EQ(field(output.back(), "lost_samples"), std::to_string(lost)) << output.back();
+  EXPECT_EQ(field(output.back(), "samples"), std::to_string(rows.size() - lost)) << output.back();
+  EXPECT_NE(read_file(dir_ / "stream2.log").find("lost_samples " + std::to_string(lost)),
+            std::string::npos)
+      << read_file(dir_ / "stream2.log");
   d->signal(SIGTERM);
   d->wait_for(kWaitS);
 }
