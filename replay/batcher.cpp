@@ -13,7 +13,12 @@ Batcher::Batcher(std::string detail_id, std::string source_id, std::int64_t firs
       options_(options) {}
 
 void Batcher::add(const LoadBlock& block, std::vector<twin::Batch>& out) {
-  current_.push_back(block);
+  if (options_.merge_identical && !current_.empty() && current_.back().p_max == block.p_max &&
+      current_.back().r == block.r && current_.back().alpha == block.alpha) {
+    current_.back().count += block.count;
+  } else {
+    current_.push_back(block);
+  }
   cycles_ += block.count;
   if (current_.size() >= std::max<std::size_t>(1, options_.max_blocks) ||
       cycles_ >= options_.max_cycles) {

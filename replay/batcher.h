@@ -23,6 +23,9 @@ struct BatchingOptions {
   std::size_t max_blocks = 1024;
   std::int64_t max_cycles = 1000;
   double max_seconds = 0.0;  ///< of sample time per batch; 0: no time rule
+  /// A block identical (p_max, r, alpha) to the open batch's last one adds its count to it (the
+  /// stream: rainflow gives 1-cycle blocks; the engine's state does not depend on the cutting).
+  bool merge_identical = false;
 };
 
 class Batcher {

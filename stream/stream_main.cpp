@@ -158,8 +158,12 @@ class InProcessTwin {
   }
   /// False (why set) when the batch is refused for another reason than the end of life.
   bool apply(const twin::Batch& b, std::string& why) {
+    if (ended_) return true;  // the end of life was reached: the rest is not applied
     const auto outcome = twin_->apply(b);
-    if (outcome.verdict == twin::Verdict::failed) return true;
+    if (outcome.verdict == twin::Verdict::failed) {
+      ended_ = true;
+      return true;
+    }
     if (!outcome.applied()) {
       why = "batch " + std::to_string(b.seq) + ": " + outcome.what + ": " + outcome.why;
       return false;
@@ -171,6 +175,7 @@ class InProcessTwin {
 
  private:
   std::unique_ptr<twin::Twin> twin_;
+  bool ended_ = false;
 };
 
 int listen_on(int port) {
@@ -233,6 +238,7 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? kExitOk : kExitUsage;
   }
   options.lockstep = lockstep;
+  batching.merge_identical = true;
   const auto rule = residue == "whole"  ? replay::ResidueRule::whole
                     : residue == "keep" ? replay::ResidueRule::keep
                                         : replay::ResidueRule::half;

@@ -84,6 +84,19 @@ TEST(ReplayBatches, StreamBatcherClosesBySampleTime) {
   EXPECT_EQ(batcher.next_seq(), 4);
 }
 
+TEST(ReplayBatches, StreamBatcherMergesIdenticalConsecutiveBlocks) {
+  BatchingOptions options{1024, 5, 0.0, true};
+  Batcher batcher("b1-ct", "s", 1, options);
+  std::vector<twin::Batch> out;
+  for (int i = 0; i < 3; ++i) batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.add({3000, 0.1, 0, 1}, out);
+  batcher.add({3000, 0.1, 0, 1}, out);  // 5 cycles: closed
+  ASSERT_EQ(out.size(), 1u);
+  ASSERT_EQ(out[0].blocks.size(), 2u);
+  EXPECT_EQ(out[0].blocks[0].count, 3);
+  EXPECT_EQ(out[0].blocks[1].count, 2);
+}
+
 TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
   const std::vector<LoadBlock> good{{4000, 0.1, 0, 1}};
   EXPECT_TRUE(check_blocks(good).ok());
