@@ -55,7 +55,10 @@ void CycleBlocks::add(const CountedCycle& c, std::vector<LoadBlock>& out) {
     block.r = p_min / p_max;
     if (block.r < kMinLoadRatio) {
       // Same range dP at R = -10: 000 Eq. (15) drives fatigue by |s(1 - R)| ~ P_max(1 - R) = dP.
-      block.p_max = (p_max - p_min) / (1.0 - kMinLoadRatio);
+      const double range = p_max - p_min;  // overflows only for |loads| near DBL_MAX
+      block.p_max = std::isfinite(range)
+                        ? range / (1.0 - kMinLoadRatio)
+                        : p_max / (1.0 - kMinLoadRatio) - p_min / (1.0 - kMinLoadRatio);
       block.r = kMinLoadRatio;
       stats_.skipped.remapped_below_floor += c.count;
     }

@@ -493,6 +493,11 @@ TEST(ConfigErrors, WrongType) {
                    "expected an integer, got a floating-point number");
 
   doc = plate();
+  doc.lines.push_back("[detail.life]");
+  doc.lines.push_back("every_cycles = -1");
+  expect_one_error(parse(doc), 25, "detail[0].life.every_cycles", "must be >= 0");
+
+  doc = plate();
   doc.replace("point = ", "point = [0.010]");
   expect_one_error(parse(doc), 20, "detail[0].load[0].point", "expected an array [x, y]");
 

@@ -131,13 +131,14 @@ class CrossProcess : public ::testing::Test {
     std::ofstream(config_) << text << "\n[auth]\nkey_file = \"keys.toml\"\n";
   }
 
-  std::unique_ptr<Process> daemon(const std::string& log) {
+  std::unique_ptr<Process> daemon(const std::string& log, const std::string& state = "state") {
     return std::make_unique<Process>(
         std::vector<std::string>{std::string(PERITWIN_BIN_DIR) + "/peritwin", "--config", config_,
-                                 "--lcm-url", url_, "--state-dir", (dir_ / "state").string(),
+                                 "--lcm-url", url_, "--state-dir", (dir_ / state).string(),
                                  "--deterministic", "--no-results", "--log-level", "debug"},
         (dir_ / log).string());
   }
+  /// The replay binary on history_ with --json, `extra` arguments appended.
   std::unique_ptr<Process> replay(bool in_process, const std::string& key_file = {},
                                   const std::vector<std::string>& extra = {}) {
     std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay",
@@ -347,6 +348,53 @@ TEST_F(CrossProcess, SecondHistoryOnTheSameSourceIsRefusedThenAppendedWithContin
   }
   history_ = all;
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+}
+
+/// `key` of a summary line: the text after "key": up to the next ',' or '}'.
+std::string json_value(const std::string& json, const std::string& key) {
+  const auto p = json.find("\"" + key + "\":");
+  if (p == std::string::npos) return {};
+  const auto from = p + key.size() + 3;
+  return json.substr(from, json.find_first_of(",}", from) - from);
+}
+
+TEST_F(CrossProcess, TheDaemonEndsTheLifeAtTheSameCycleAndEngineStateForEveryBatching) {
+  // 300 blocks of 100 cycles at 4 kN, R 0.1 (the criterion, 3 mm, is met at about 20 000
+  // cycles), no remaining-life estimates (they are not what is compared, and cost minutes here).
+  std::ofstream(config_) << testing::b1_text(
+      "every_batches = 0", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"}});
+  {
+    std::ofstream h(history_);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < 300; ++i) h << "4000,0.1,0,100\n";
+  }
+  // Reference: the whole history as one batch, in-process.
+  auto reference_run = replay(true, {}, {"--batch-cycles", "1000000", "--batch-blocks", "1000"});
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+  const std::string cycle = json_value(reference.back(), "end_of_life_cycle");
+  ASSERT_FALSE(cycle.empty()) << reference.back();
+  ASSERT_GT(std::stoll(cycle), 10000) << reference.back();
+  ASSERT_LT(std::stoll(cycle), 30000) << reference.back();
+  // Through the daemon: batches of 100 cycles (one block), 700 (7 blocks) and 5000 (50 blocks),
+  // each to a fresh daemon.
+  for (const char* per_batch : {"100", "700", "5000"}) {
+    SCOPED_TRACE(std::string(per_batch) + " cycles per batch");
+    const std::string name = std::string("daemon-") + per_batch;
+    auto d = daemon(name + ".log", name);
+    auto r = replay(false, {}, {"--batch-cycles", per_batch});
+    const auto lines = lines_to_end(*r);
+    const auto status = r->wait_for(kWaitS);
+    ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+        << "replay: " << (status ? *status : -1) << "\n"
+        << read_file(dir_ / "replay.log");
+    ASSERT_FALSE(lines.empty());
+    for (const char* key :
+         {"end_of_life_cycle", "cycles", "broken_bonds", "crack_length_m", "engine_hash"}) {
+      EXPECT_EQ(json_value(lines.back(), key), json_value(reference.back(), key)) << key;
+    }
+    ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, name + ".log"));
+  }
 }
 
 }  // namespace

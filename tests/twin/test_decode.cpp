@@ -133,11 +133,14 @@ TEST(Json, NonFiniteIsNull) {
   s.total_cycles = 0;
   s.broken_bonds = 0;
   s.remaining_cycles = std::numeric_limits<double>::infinity();
+  s.end_of_life_cycle = -1;
   s.state_hash = "00ff";
+  s.engine_hash = "11ee";
   const std::string j = summary_json(s);
   EXPECT_EQ(j,
             "{\"detail\":\"d\\\"x\",\"cycles\":0,\"broken_bonds\":0,\"crack_length_m\":0.0,"
-            "\"remaining_cycles\":null,\"state_hash\":\"00ff\"}");
+            "\"remaining_cycles\":null,\"end_of_life_cycle\":-1,\"state_hash\":\"00ff\","
+            "\"engine_hash\":\"11ee\"}");
 }
 
 TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
@@ -160,18 +163,22 @@ TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
   s.remaining_cycles_high = std::numeric_limits<double>::infinity();
   s.remaining_life_seq = -1;
   s.failure = peritwin_msgs::damage_state_t::FAILURE_SINGULAR;
+  s.end_of_life_cycle = 34000;
   s.state_hash = "0123abcd";
+  s.engine_hash = "4567ef";
   const std::string text = state_json(s);
   EXPECT_EQ(text,
             "{\"detail\":\"b1-ct\",\"state_seq\":12,\"cycles\":34567,\"broken_bonds\":89,"
             "\"crack_length_m\":0.0125,\"crack_count\":3,\"max_damage\":0.25,\"k_i\":null,"
             "\"remaining_cycles\":1500000.0,\"remaining_low\":null,\"remaining_high\":null,"
-            "\"remaining_life_seq\":-1,\"failure\":2,\"state_hash\":\"0123abcd\"}");
+            "\"remaining_life_seq\":-1,\"failure\":2,\"end_of_life_cycle\":34000,"
+            "\"state_hash\":\"0123abcd\",\"engine_hash\":\"4567ef\"}");
   const auto j = nlohmann::ordered_json::parse(text);
   const std::vector<std::string> documented = {
       "detail",         "state_seq",          "cycles",  "broken_bonds",     "crack_length_m",
       "crack_count",    "max_damage",         "k_i",     "remaining_cycles", "remaining_low",
-      "remaining_high", "remaining_life_seq", "failure", "state_hash"};
+      "remaining_high", "remaining_life_seq", "failure", "end_of_life_cycle", "state_hash",
+      "engine_hash"};
   std::vector<std::string> keys;
   for (const auto& item : j.items()) keys.push_back(item.key());
   EXPECT_EQ(keys, documented);

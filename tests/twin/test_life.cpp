@@ -117,5 +117,26 @@ TEST_F(LifeTest, SynchronousEstimatesAtFixedPointsFall) {
   EXPECT_EQ(twin->life().central, at0 - 4000);
 }
 
+TEST_F(LifeTest, EveryCyclesEstimatesWhereABatchPassesAMultipleOfItsCycles) {
+  // every_cycles = 5000 alone, batches of 700 cycles: estimates at state 0 and at the states
+  // whose batch took the count past 5000, 10000, ... (700 k crosses 5000 m at k = 8, 15, 22).
+  auto model =
+      b1_model(b1_config("every_batches = 0\nevery_cycles = 5000",
+                         {{"critical_crack_length = 0.008", "critical_crack_length = 0.002"},
+                          {"band = \"a2_scatter\"", "band = \"none\""},
+                          {"a2_relative_scatter = 0.2", ""}}));
+  ASSERT_TRUE(model);
+  ASSERT_EQ(model->config().life.every_cycles, 5000);
+  auto twin = make_twin(model, LifeMode::synchronous);
+  twin->catch_up_life();
+  EXPECT_EQ(twin->life().state_seq, 0);
+  std::vector<std::int64_t> estimated_at;
+  for (std::int64_t s = 1; s <= 22; ++s) {
+    ASSERT_TRUE(twin->apply(batch(s, {{4000, 0.1, 0, 700}})).applied());
+    if (twin->life().state_seq == s) estimated_at.push_back(s);
+  }
+  EXPECT_EQ(estimated_at, (std::vector<std::int64_t>{8, 15, 22}));
+}
+
 }  // namespace
 }  // namespace peritwin::twin

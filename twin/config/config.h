@@ -66,7 +66,9 @@
 //                        A2·(1 ± s), for the bilinear law A·(1 ± s); R with and only with
 //                        "a2_scatter"), every_batches 10 (>= 0, 0 = never: in deterministic mode an
 //                        estimate is computed synchronously whenever state_seq is a multiple of it,
-//                        state 0 included)
+//                        state 0 included), every_cycles 0 (>= 0, 0 = never: in deterministic
+//                        mode also at every state whose batch passed a multiple of it in cycles;
+//                        either schedule > 0 turns the daemon's life worker on)
 //   [detail.stress_intensity]
 //                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
 //                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
@@ -201,6 +203,12 @@ struct LifeConfig {
   double a2_relative_scatter = 0.0;  ///< a2_scatter only
   /// Deterministic mode: estimate at every state_seq that is a multiple of this (0 = never).
   std::int64_t every_batches = 10;
+  /// Deterministic mode: also estimate at every state whose batch took the cycle count past a
+  /// multiple of this (0 = never): a schedule in load, not in messages, so that a producer's
+  /// batch size (a stream's 100 ms batches, 1-cycle batches) does not set how often it runs.
+  std::int64_t every_cycles = 0;
+  /// Whether remaining life is estimated at all (either schedule on).
+  [[nodiscard]] bool estimates() const { return every_batches > 0 || every_cycles > 0; }
   [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }
 };
 

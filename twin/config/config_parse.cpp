@@ -531,6 +531,8 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, Life
   }
   l.every_batches = r.integer("every_batches", l.every_batches);
   r.check("every_batches", l.every_batches >= 0, "must be >= 0 (0 = never)");
+  l.every_cycles = r.integer("every_cycles", l.every_cycles);
+  r.check("every_cycles", l.every_cycles >= 0, "must be >= 0 (0 = never)");
   const auto band = r.choice<BandSource>(
       "band", {{"none", BandSource::none}, {"a2_scatter", BandSource::a2_scatter}}, l.band);
   l.band = band.value_or(l.band);

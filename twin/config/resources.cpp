@@ -351,9 +351,9 @@ ResourceEstimate estimate_resources(const DetailConfig& d) noexcept {
   }
 
   // Engines alive at once (twin/model/life.cpp, twin/service/daemon.cpp): the live twin's, and
-  // when remaining life is estimated (every_batches > 0) one simulation, or three with the A2
+  // when remaining life is estimated (LifeConfig::estimates()) one simulation, or three with the A2
   // band (not for the kinetic law), run in parallel.
-  const bool life = d.life.every_batches > 0;
+  const bool life = d.life.estimates();
   const bool band = d.life.band == BandSource::a2_scatter && d.fatigue.law != FatigueLaw::kinetic;
   e.engines = 1 + (life ? (band ? 3 : 1) : 0);
 

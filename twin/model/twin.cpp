@@ -140,6 +140,7 @@ Outcome Twin::apply(const Batch& batch) {
   // The engine stops at the exact cycle at which the end criterion is met (end_of_life_check):
   // the rest of the batch is not applied (see "End of life" in twin.h).
   const FatigueEngine::StopCheck stop = end_of_life_check(*model_);
+  cycles_before_state_ = engine_->total_cycles();
   for (const LoadBlock& block : batch.blocks) {
     const std::int64_t before = engine_->total_cycles();
     const EngineStatus status = engine_->apply(block, stop);
@@ -213,9 +214,15 @@ void Twin::set_life(const LifeEstimate& estimate) {
 }
 
 bool Twin::life_due() const {
-  const std::int64_t every = model_->config().life.every_batches;
-  return failure_ == Failure::none && every > 0 && state_seq_ % every == 0 &&
-         life_.state_seq != state_seq_;
+  const LifeConfig& life = model_->config().life;
+  if (failure_ != Failure::none || !life.estimates() || life_.state_seq == state_seq_) {
+    return false;
+  }
+  const std::int64_t every = life.every_cycles;
+  const bool passed_cycles =
+      every > 0 && engine_->total_cycles() / every > cycles_before_state_ / every;
+  return state_seq_ == 0 || passed_cycles ||
+         (life.every_batches > 0 && state_seq_ % life.every_batches == 0);
 }
 
 void Twin::estimate_life_now() {

@@ -25,7 +25,8 @@
 // Remaining life (LifeMode):
 //  * synchronous (deterministic mode: replay in-process, the daemon with --deterministic): an
 //    estimate is computed inside apply() whenever state_seq is a multiple of
-//    life.every_batches (catch_up_life() does it for the state the twin starts from);
+//    life.every_batches, or the batch took the cycle count past a multiple of life.every_cycles
+//    (catch_up_life() does it for the state the twin starts from);
 //  * external (the daemon's worker thread): the owner takes life_job() snapshots, runs
 //    estimate_life() elsewhere and hands the result back with set_life().
 // The estimate is not part of state_hash(); it is published with the state it was computed on.
@@ -147,7 +148,9 @@ class Twin {
   [[nodiscard]] LifeJob life_job() const;
   /// Installs an estimate unless it belongs to an older state than the current estimate.
   void set_life(const LifeEstimate& estimate);
-  /// True when a synchronous estimate is due for the current state and not computed yet.
+  /// True when a synchronous estimate is due for the current state and not computed yet: state 0,
+  /// a state_seq that is a multiple of life.every_batches, or a state whose batch took the cycle
+  /// count past a multiple of life.every_cycles.
   [[nodiscard]] bool life_due() const;
   /// Computes the estimate for the current state now (on this thread).
   void estimate_life_now();
@@ -200,6 +203,9 @@ class Twin {
   std::map<std::string, std::int64_t> applied_;
   std::string last_source_;
   std::int64_t last_seq_ = -1;
+  /// Engine cycles before the batch that made the current state (life.every_cycles); not part
+  /// of the state: a restored twin starts with its own cycle count.
+  std::int64_t cycles_before_state_ = 0;
   std::optional<LoadBlock> last_block_;
   CrackReport report_;
   Failure failure_ = Failure::none;

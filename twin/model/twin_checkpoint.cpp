@@ -261,6 +261,7 @@ Status Twin::restore(const CheckpointData& d) {
   if (!engine_->import_state(engine)) return fail("the engine state does not fit the model");
   const Failure stored = failure_;
   refresh();
+  cycles_before_state_ = engine_->total_cycles();
   if (failure_ != stored) {
     return fail("the restored state's failure code " + std::to_string(static_cast<int>(failure_)) +
                 " differs from the stored " + std::to_string(static_cast<int>(stored)));

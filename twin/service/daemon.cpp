@@ -357,7 +357,7 @@ Status Daemon::start_detail(const DetailConfig& config) {
   d->last_checkpoint = d->reject_log_window = Clock::now();
   if (options_.deterministic) d->twin->catch_up_life();
   if (options_.results) d->outputs = std::make_unique<DetailOutputs>(*d->twin);
-  if (!options_.deterministic && config.life.every_batches > 0) {
+  if (!options_.deterministic && config.life.estimates()) {
     d->life = std::make_unique<LifeWorker>();
   }
   d->state_channel = messages::channel(config.id, messages::Kind::kState);
