@@ -383,6 +383,7 @@ bool tag_matches(const AuthKey& key, const std::uint8_t* data, std::size_t size,
 void sign(peritwin_msgs::load_batch_t& m, const AuthKey& key) { sign_message(m, key); }
 void sign(peritwin_msgs::damage_state_t& m, const AuthKey& key) { sign_message(m, key); }
 void sign(peritwin_msgs::reject_t& m, const AuthKey& key) { sign_message(m, key); }
+void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key) { sign_message(m, key); }
 
 Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key) {
   return verify_message(m, key);
@@ -391,6 +392,9 @@ Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
 Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key) {
+  return verify_message(m, key);
+}
+Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
 

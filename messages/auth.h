@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <peritwin_msgs/damage_state_t.hpp>
 #include <peritwin_msgs/load_batch_t.hpp>
+#include <peritwin_msgs/load_samples_t.hpp>
 #include <peritwin_msgs/reject_t.hpp>
 #include <span>
 #include <string>
@@ -85,12 +86,14 @@ bool tag_matches(const AuthKey& key, const std::uint8_t* data, std::size_t size,
 void sign(peritwin_msgs::load_batch_t& m, const AuthKey& key);
 void sign(peritwin_msgs::damage_state_t& m, const AuthKey& key);
 void sign(peritwin_msgs::reject_t& m, const AuthKey& key);
+void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key);
 
 /// Ok if `m` carries the tag `key` gives it; otherwise the error has field "auth_tag" and reason
 /// exactly "unsigned" (tag_length 0) or "wrong tag" (any other tag, of any length).
 Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key);
 Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key);
 Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key);
+Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key);
 
 /// verify() on the encoded bytes of a message of the type with fingerprint `fingerprint`, before
 /// decoding anything: field "message", reason "wrong fingerprint: not a <type_name> of this

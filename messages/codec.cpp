@@ -121,6 +121,7 @@ class LayoutWalker {
     return skip(n);
   }
   [[nodiscard]] bool at_end() const { return ok_ && pos_ == size_; }
+  [[nodiscard]] std::size_t pos() const { return pos_; }
 
  private:
   const unsigned char* p_;
@@ -175,6 +176,36 @@ bool reject_layout(const unsigned char* p, std::size_t size) {
   return w.fingerprint(peritwin_msgs::reject_t::getHash()) && w.skip(8) && w.string() &&
          w.string() && w.skip(8 + 1) && w.string() && w.string() && w.count(1, tag) &&
          w.skip(static_cast<std::size_t>(tag)) && w.at_end();
+}
+
+/// load_samples_t: the layout (every count against the bytes left), and the size the tag covers.
+std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t& signed_size) {
+  LayoutWalker w(p, size);
+  if (!w.fingerprint(peritwin_msgs::load_samples_t::getHash())) {
+    return size < 8 ? "truncated payload: " + std::to_string(size) + " bytes"
+                    : "wrong fingerprint: not a peritwin_msgs.load_samples_t of this version";
+  }
+  if (!w.skip(8) || !w.string() || !w.string()) {
+    return "malformed or truncated utime, detail_id or source_id";
+  }
+  std::int32_t n = 0;
+  if (!w.skip(3 * 8)) return "truncated payload: ends inside seq, t0 or sample_period";
+  for (const char* array : {"p", "t", "alpha"}) {
+    if (!w.count(8, n) || !w.skip(8 * static_cast<std::size_t>(n))) {
+      return std::string("malformed or truncated ") + array + " (its count exceeds the payload)";
+    }
+  }
+  signed_size = w.pos();
+  std::int32_t tag = 0;
+  if (!w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+    return "malformed or truncated tag_length / auth_tag";
+  }
+  if (tag != 0 && tag != static_cast<std::int32_t>(kAuthTagBytes)) {
+    return "malformed tag_length " + std::to_string(tag) + " (0 or " +
+           std::to_string(kAuthTagBytes) + ")";
+  }
+  if (!w.at_end()) return "oversized payload: bytes after the message's end";
+  return {};
 }
 
 template <typename Message>
@@ -258,6 +289,99 @@ Decoded decode_batch(const void* data, std::size_t size) {
   out.batch = std::move(b);
   out.signed_size = signed_size;
   return out;
+}
+
+Outcome check_samples(const Samples& s, std::string_view detail_id) {
+  const auto invalid = [](std::string what, std::string why) {
+    return Outcome{Verdict::invalid, std::move(what), std::move(why)};
+  };
+  // detail_id, source_id and seq by the batches' rules.
+  const Outcome ids =
+      check_batch({s.detail_id, s.source_id, s.seq, {LoadBlock{1.0, 0.0, 0.0, 1}}}, detail_id);
+  if (!ids.applied()) return ids;
+  const auto n = s.p.size();
+  if (n < 1 || n > static_cast<std::size_t>(kMaxSamplesPerMessage)) {
+    return invalid("num_samples", "num_samples = " + std::to_string(n) + " must be 1 to " +
+                                      std::to_string(kMaxSamplesPerMessage));
+  }
+  if (!std::isfinite(s.t0)) return invalid("t0", "t0 must be finite");
+  if (!s.t.empty() && s.t.size() != n) {
+    return invalid("num_t", "num_t = " + std::to_string(s.t.size()) +
+                                " must be 0 or num_samples (" + std::to_string(n) + ")");
+  }
+  if (!s.alpha.empty() && s.alpha.size() != n) {
+    return invalid("num_alpha", "num_alpha = " + std::to_string(s.alpha.size()) +
+                                    " must be 0 or num_samples (" + std::to_string(n) + ")");
+  }
+  if (s.t.empty() ? !(std::isfinite(s.sample_period) && s.sample_period > 0.0)
+                  : s.sample_period != 0.0) {
+    return invalid("sample_period", s.t.empty() ? "sample_period must be finite and > 0 without t"
+                                                : "sample_period must be 0 when t gives the times");
+  }
+  for (std::size_t i = 0; i < s.t.size(); ++i) {
+    if (!std::isfinite(s.t[i]) || (i > 0 && !(s.t[i] > s.t[i - 1]))) {
+      return invalid("t[" + std::to_string(i) + "]",
+                     "sample times must be finite and strictly increasing");
+    }
+  }
+  for (std::size_t i = 0; i < s.alpha.size(); ++i) {
+    if (!std::isfinite(s.alpha[i])) {
+      return invalid("alpha[" + std::to_string(i) + "]", "alpha must be finite");
+    }
+  }
+  return {};
+}
+
+DecodedSamples decode_samples(const void* data, std::size_t size) {
+  DecodedSamples out;
+  if (size > kMaxSamplesPayload) {
+    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
+                             std::to_string(kMaxSamplesPayload));
+    return out;
+  }
+  std::size_t signed_size = 0;
+  if (const std::string e =
+          samples_layout(static_cast<const unsigned char*>(data), size, signed_size);
+      !e.empty()) {
+    out.error = decode_error(e);
+    return out;
+  }
+  peritwin_msgs::load_samples_t msg{};
+  const int used = msg.decode(data, 0, static_cast<int>(size));
+  if (used < 0 || static_cast<std::size_t>(used) != size) {
+    out.error = decode_error("not decodable as peritwin_msgs.load_samples_t");
+    return out;
+  }
+  Samples s;
+  s.detail_id = msg.detail_id;
+  s.source_id = msg.source_id;
+  s.seq = msg.seq;
+  s.t0 = msg.t0;
+  s.sample_period = msg.sample_period;
+  s.p = std::move(msg.p);
+  s.t = std::move(msg.t);
+  s.alpha = std::move(msg.alpha);
+  out.samples = std::move(s);
+  out.auth_tag = std::move(msg.auth_tag);
+  out.signed_size = signed_size;
+  return out;
+}
+
+peritwin_msgs::load_samples_t samples_message(const Samples& s, std::int64_t utime) {
+  peritwin_msgs::load_samples_t m{};
+  m.utime = utime;
+  m.detail_id = s.detail_id;
+  m.source_id = s.source_id;
+  m.seq = s.seq;
+  m.t0 = s.t0;
+  m.sample_period = s.sample_period;
+  m.p = s.p;
+  m.num_samples = static_cast<std::int32_t>(m.p.size());
+  m.t = s.t;
+  m.num_t = static_cast<std::int32_t>(m.t.size());
+  m.alpha = s.alpha;
+  m.num_alpha = static_cast<std::int32_t>(m.alpha.size());
+  return m;
 }
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime) {

@@ -12,6 +12,7 @@
 #include <peritwin_msgs/damage_field_t.hpp>
 #include <peritwin_msgs/damage_state_t.hpp>
 #include <peritwin_msgs/load_batch_t.hpp>
+#include <peritwin_msgs/load_samples_t.hpp>
 #include <peritwin_msgs/reject_t.hpp>
 #include <peritwin_msgs/status_t.hpp>
 #include <string>
@@ -19,12 +20,52 @@
 #include <vector>
 
 #include "messages/batch.h"
+#include "messages/channels.h"
 
 namespace peritwin::messages {
 
 /// Largest load_batch_t payload accepted (a full batch of kMaxBlocksPerBatch blocks with two
 /// maximal ids fits).
 inline constexpr std::size_t kMaxBatchPayload = 32 * kMaxBlocksPerBatch + 4096;
+
+/// Largest load_samples_t payload accepted: one UDP datagram of LCM 1.3.1 (65 499 bytes with the
+/// channel name and its NUL; a fragmented message is lost when its fragments arrive out of order,
+/// see damage_field_t) with the longest channel name: about 8 100 samples of p alone, 2 700 with t
+/// and alpha. And at most kMaxSamplesPerMessage samples whatever the payload.
+inline constexpr std::size_t kMaxSamplesPayload = 65'499 - kMaxChannelLength - 1;
+inline constexpr std::int32_t kMaxSamplesPerMessage = 65536;
+
+/// Raw load samples of one detail from one source (load_samples_t, message set version 5).
+struct Samples {
+  std::string detail_id;
+  std::string source_id;
+  std::int64_t seq = 0;
+  double t0 = 0.0;
+  double sample_period = 0.0;  ///< > 0 without t, 0 with it
+  std::vector<double> p;
+  std::vector<double> t;      ///< empty or one per sample
+  std::vector<double> alpha;  ///< empty or one per sample
+  /// Time of sample i: t[i], or t0 + i * sample_period.
+  [[nodiscard]] double time(std::size_t i) const {
+    return t.empty() ? t0 + static_cast<double>(i) * sample_period : t[i];
+  }
+};
+
+/// Every field of a samples message against its rules (load_samples_t.lcm), as check_batch: the
+/// verdict (wrong_detail or invalid), the field ("num_t", "t[3]", ...) and the reason.
+Outcome check_samples(const Samples& samples, std::string_view detail_id);
+
+/// A decoded samples message (layout checked first, never allocating beyond the payload; not yet
+/// checked by check_samples), or (verdict decode) why not; the signed bytes and the tag as Decoded.
+struct DecodedSamples {
+  std::optional<Samples> samples;
+  Outcome error;
+  std::size_t signed_size = 0;
+  std::vector<std::uint8_t> auth_tag;
+};
+DecodedSamples decode_samples(const void* data, std::size_t size);
+
+peritwin_msgs::load_samples_t samples_message(const Samples& samples, std::int64_t utime);
 
 /// lcm.handleTimeout(timeout_ms) with the socket tuned for LCM's TCP hub. LCM 1.3.1's Java hub
 /// (lcm.lcm.TCPService) writes every relayed message in five small unbuffered writes without

@@ -4,7 +4,7 @@
 //                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
 //                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
 //                   [--residue half|whole|keep] [--gate N] [--alpha-bin RAD]
-//                   [--key-file F [--daemon-key ID | --sign-only]]
+//                   [--key-file F [--daemon-key ID | --sign-only]] [--continue | --resume]
 //   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
 // Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
@@ -12,6 +12,11 @@
 // --key-file: batches signed with the key of --source, every STATE and REJECT verified with the
 // daemon's key (messages/README.md, "Authentication"); without it anyone on the bus can forge the
 // states it reports. --generate-key-file writes a new key file (mode 0600) and exits.
+// Over LCM it first learns what the daemon has applied of --source (BatchSender::probe_applied):
+// when that is seq > 0 it refuses to run (exit 2, naming the source, the seq and the detail)
+// unless --continue (this history's batches are numbered from applied + 1: it is appended) or
+// --resume (numbered from 1 as before: the applied ones are dropped as duplicates, i.e. an
+// interrupted replay of the same history is finished exactly once).
 // --format series: samples -> rainflow (replay/rainflow.h) -> blocks (replay/cycle_blocks.h) with
 // --gate (hysteresis, N), --residue (half: ASTM E1049-85, the default; whole: each residue range
 // a whole cycle, conservative; keep: the residue is dropped, not applied), --alpha-bin (rad) and
@@ -21,9 +26,9 @@
 // line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","end_of_life_cycle",
 // "state_hash","engine_hash"} with --json, for a series with "skipped_cycles": {"compressive",
 // "mirrored_compressive","remapped_below_floor","degenerate","nonfinite_samples"} (without
-// --json these counts are one line on stderr). Exit codes: 0 done, 2 bad usage/config/history, 3
-// runtime failure (LCM, no progress; a tcpq hub unreachable at start or lost during the run, named
-// in one line).
+// --json these counts are one line on stderr). Exit codes: 0 done, 2 bad usage/config/history or a
+// source that already has batches (without --continue/--resume), 3 runtime failure (LCM, no
+// progress; a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <csignal>
@@ -50,6 +55,7 @@ int main(int argc, char** argv) {
   std::string key_file, daemon_key_id = "peritwin", generate_key_file;
   std::vector<std::string> key_ids;
   bool lockstep = false, in_process = false, json = false, sign_only = false;
+  bool append = false, resume = false;
   std::string residue = "half";
   replay::SeriesRules series_rules;
   replay::BatchingOptions batching;
@@ -104,6 +110,13 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
       ->check(CLI::PositiveNumber);
+  auto* continue_opt = app.add_flag(
+      "--continue", append,
+      "the daemon already has batches of --source: number this history's after them (append)");
+  app.add_flag("--resume", resume,
+               "the daemon already has batches of --source from this same history: number them "
+               "from 1 again, the applied ones are duplicates (finish an interrupted replay)")
+      ->excludes(continue_opt);
   app.add_option("--give-up-after", options.give_up_after_s,
                  "seconds without progress before failing (default 120)")
       ->check(peritwin::cli::finite_positive());
@@ -255,6 +268,35 @@ int main(int argc, char** argv) {
     replay::ReplayResult r;
     bool lost = false;
     {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
+      std::int64_t applied = 0;
+      {
+        replay::BatchSender probe(lcm, detail->id, source_id, options, auth);
+        probe.on_state(print);
+        const auto learned = probe.probe_applied([] { return g_signal.load() == 0; });
+        if (!learned) {
+          std::cerr << "peritwin-replay: "
+                    << (messages::transport_up(lcm) ? "" : "LCM hub " + lcm_url + ": ")
+                    << learned.error().message() << "\n";
+          return kExitRuntime;
+        }
+        applied = *learned;
+      }
+      if (applied > 0 && !append && !resume) {
+        std::cerr << "peritwin-replay: source '" << source_id << "' already has batches up to seq "
+                  << applied << " applied on detail " << detail->id
+                  << "; use --continue to append this history after them, --resume to finish an "
+                     "interrupted replay of the same history, or a new --source\n";
+        return kExitUsage;
+      }
+      if (applied > 0 && append) {
+        batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching,
+                                            applied + 1);
+        std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
+                  << applied + static_cast<std::int64_t>(batches.size()) << "\n";
+      } else if (applied > 0) {
+        std::cerr << "peritwin-replay: --resume: seqs 1 to " << applied
+                  << " are already applied, sending from " << applied + 1 << "\n";
+      }
       replay::LcmReplayer replayer(lcm, std::move(batches), options, std::move(auth));
       r = replayer.run(print, [] { return g_signal.load() == 0; });
       lost = !messages::transport_up(lcm);

@@ -1,26 +1,13 @@
 // The replay tool's engine room: recorded histories -> batches of load blocks -> the twin, either
 // over LCM to a daemon (LcmReplayer) or in-process (run_in_process). See replay/replay_main.cpp.
 //
-// Batching (make_twin_batches): blocks are packed in history order into batches of at most
-// `max_blocks` blocks, and a batch is closed as soon as it holds `max_cycles` cycles or more.
-// Seq numbers are 1, 2, 3, ... per run, so a daemon that already applied some of them drops those
-// as duplicates and a replay is exactly-once across restarts of either side.
+// Batching: replay/batcher.h (make_twin_batches). Seq numbers are 1, 2, 3, ... per run by
+// default, so a daemon that already applied some of them drops those as duplicates and a replay is
+// exactly-once across restarts of either side (peritwin-replay --resume); --continue numbers them
+// after what the daemon has applied of the source.
 //
-// Over LCM (LcmReplayer): batches are published on PERITWIN_<DETAIL>_LOAD with at most `window`
-// batches beyond the last applied one (lockstep: window 1, i.e. wait for the daemon's STATE to
-// show seq k applied before sending k + 1). The daemon's applied seq comes from
-// PERITWIN_<DETAIL>_STATE. When it goes backwards (the daemon restarted from an older
-// checkpoint) or nothing progresses for `resend_after_s`, sending restarts at applied + 1. The
-// run ends when a STATE shows the last seq applied (or the detail failed), or fails after
-// `give_up_after_s` without progress.
-//
-// Authentication (ReplayAuth, messages/README.md "Authentication"): with a batch key every batch
-// is signed before it is published; with a daemon key every STATE and REJECT on the detail's
-// channels is checked on its bytes before it is decoded, and the first one that is unsigned or
-// wrongly signed ends the run with an error naming the channel, the message and why. A CODE_AUTH
-// reject of one of our batches ends it too (signed or not: the daemon refuses what we send).
-// Without keys nothing is signed or checked, and anyone on the bus can forge the states the run
-// reports.
+// Over LCM (LcmReplayer): a thin user of BatchSender (replay/batch_sender.h: lockstep/window,
+// resend after a daemon restart, authentication) with every batch given up front.
 #pragma once
 
 #include <cstdint>
@@ -33,6 +20,8 @@
 #include <vector>
 
 #include "messages/auth.h"
+#include "replay/batch_sender.h"
+#include "replay/batcher.h"
 #include "replay/load_history.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "twin/config/config.h"
@@ -65,29 +54,10 @@ std::string describe_skipped(const ConversionStats& stats);
 Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
                                      const std::string& detail_id);
 
-struct BatchingOptions {
-  // 1024 blocks = 32 KB of payload: below LCM 1.3.1's 64 KB UDP fragmentation limit, and large
-  // enough that a rainflow-counted history of 1-cycle blocks is not limited by round trips.
-  std::size_t max_blocks = 1024;
-  std::int64_t max_cycles = 1000;
-};
-
-std::vector<twin::Batch> make_twin_batches(const std::vector<LoadBlock>& blocks,
-                                           const std::string& detail_id,
-                                           const std::string& source_id,
-                                           const BatchingOptions& options);
-
 /// Every block of a history by the daemon's own rule (check_load_blocks), the total capped only
 /// by what int64 holds (the per-batch cap is the batches' business); the error names the first
 /// invalid block as "blocks[i].<field>".
 Status check_blocks(std::span<const LoadBlock> blocks);
-
-struct ReplayOptions {
-  bool lockstep = false;
-  std::size_t window = 256;        ///< batches in flight beyond the last applied (not lockstep)
-  double resend_after_s = 3.0;     ///< no progress for this long: resend from applied + 1
-  double give_up_after_s = 120.0;  ///< no progress for this long: fail
-};
 
 struct ReplayResult {
   bool ok = false;
@@ -97,18 +67,10 @@ struct ReplayResult {
   std::int64_t rewinds = 0;    ///< times sending restarted at applied + 1
 };
 
-/// Keys of an authenticated run (see the top of this file).
-struct ReplayAuth {
-  std::optional<messages::AuthKey> batch_key;   ///< the key of the batches' source id
-  std::optional<messages::AuthKey> daemon_key;  ///< the daemon's key, for its STATE and REJECT
-  std::string daemon_key_id;                    ///< named in errors
-};
-
 class LcmReplayer {
  public:
   LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options,
               ReplayAuth auth = {});
-  ~LcmReplayer();
   LcmReplayer(const LcmReplayer&) = delete;
   LcmReplayer& operator=(const LcmReplayer&) = delete;
 
@@ -119,22 +81,7 @@ class LcmReplayer {
                    const std::function<bool()>& idle = {});
 
  private:
-  // Raw handlers: the bytes are checked (tag, then layout) before anything is decoded.
-  void on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
-  void publish(std::int64_t seq);
-
-  lcm::LCM& lcm_;
-  std::vector<twin::Batch> batches_;
-  ReplayOptions options_;
-  ReplayAuth auth_;
-  std::string fatal_;  ///< set by a handler: a message that must end the run (auth)
-  std::string detail_id_, source_id_, load_channel_;
-  lcm::Subscription* state_sub_ = nullptr;
-  lcm::Subscription* reject_sub_ = nullptr;
-  std::vector<peritwin_msgs::damage_state_t> inbox_;
-  std::int64_t rejected_failed_ = 0;
-  std::int64_t published_ = 0;
+  BatchSender sender_;
 };
 
 /// Applies the batches to a fresh Twin of `detail` (deterministic mode: remaining life

@@ -1,5 +1,6 @@
 // peritwin-fuzz-seeds DIR: writes the generated seeds of the fuzz corpus into DIR/<target>/:
-// encoded load batches (batch, and inside LCM logs for lcm_log), states and rejects (state,
+// encoded load batches (batch, and inside LCM logs for lcm_log), samples (samples), states and
+// rejects (state,
 // reject; unsigned and signed with the fuzz targets' fixed key), a key file (key_file) and a tiny
 // checkpoint (checkpoint). Deterministic (fixed utimes, fixed content): rerun it after a change of
 // the message types or of the checkpoint layout and commit what changed (tests/fuzz/README.md).
@@ -75,6 +76,23 @@ std::vector<std::uint8_t> encode_message(const Message& m) {
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
   m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
+}
+
+/// load_samples_t seeds: evenly spaced, with times and angles, signed-looking, invalid values.
+void samples_seeds(const fs::path& dir) {
+  using peritwin::messages::Samples;
+  fs::create_directories(dir);
+  const Samples even{"b1-ct", "gauge-1", 1, 12.5, 1e-4, {400.0, 4000.0, 400.0, 4000.0}, {}, {}};
+  const Samples timed{"b1-ct",           "gauge-1",      2, 0.0, 0.0, {400.0, 4000.0, 500.0},
+                      {0.0, 0.01, 0.03}, {0.0, 0.1, 0.2}};
+  const Samples invalid{"b1-ct", "gauge-1", 0, 0.0, -1.0, {1.0, 2.0}, {1.0}, {}};
+  write(dir / "even.bin", encode_message(peritwin::messages::samples_message(even, 1)));
+  write(dir / "timed.bin", encode_message(peritwin::messages::samples_message(timed, 1)));
+  write(dir / "invalid.bin", encode_message(peritwin::messages::samples_message(invalid, 1)));
+  auto tagged = peritwin::messages::samples_message(even, 1);
+  tagged.auth_tag.assign(peritwin::messages::kAuthTagBytes, 0xa5);
+  tagged.tag_length = static_cast<std::int32_t>(tagged.auth_tag.size());
+  write(dir / "tagged.bin", encode_message(tagged));
 }
 
 /// The fuzz targets' key (fuzz_state.cpp, fuzz_reject.cpp): bytes 1, 2, ..., 32.
@@ -205,6 +223,7 @@ int main(int argc, char** argv) {
     batch_seeds(dir / "batch");
     state_seeds(dir / "state");
     reject_seeds(dir / "reject");
+    samples_seeds(dir / "samples");
     key_file_seed(dir / "key_file");
     fs::create_directories(dir / "lcm_log");
     lcm_log_seed(dir / "lcm_log" / "two-batches.lcmlog", false);

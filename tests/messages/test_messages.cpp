@@ -13,6 +13,7 @@
 #include <peritwin_msgs/damage_state_t.hpp>
 #include <peritwin_msgs/load_batch_t.hpp>
 #include <peritwin_msgs/load_block_t.hpp>
+#include <peritwin_msgs/load_samples_t.hpp>
 #include <peritwin_msgs/reject_t.hpp>
 #include <peritwin_msgs/status_t.hpp>
 #include <regex>
@@ -446,7 +447,8 @@ TEST(MessagesDecode, FingerprintsAreDistinct) {
       msgs::load_block_t::getHash(),   msgs::load_batch_t::getHash(),
       msgs::crack_t::getHash(),        msgs::crack_tip_t::getHash(),
       msgs::damage_state_t::getHash(), msgs::damage_field_t::getHash(),
-      msgs::reject_t::getHash(),       msgs::status_t::getHash()};
+      msgs::reject_t::getHash(),       msgs::status_t::getHash(),
+      msgs::load_samples_t::getHash()};
   for (std::size_t i = 0; i < hashes.size(); ++i) {
     for (std::size_t j = i + 1; j < hashes.size(); ++j) EXPECT_NE(hashes[i], hashes[j]);
   }
@@ -473,6 +475,7 @@ TEST(Channels, NamesOfEveryKind) {
   EXPECT_EQ(channel("b1-ct", Kind::kField), "PERITWIN_B1_CT_FIELD");
   EXPECT_EQ(channel("b1-ct", Kind::kReject), "PERITWIN_B1_CT_REJECT");
   EXPECT_EQ(channel("b1-ct", Kind::kStatus), "PERITWIN_B1_CT_STATUS");
+  EXPECT_EQ(channel("b1-ct", Kind::kSamples), "PERITWIN_B1_CT_SAMPLES");
 }
 
 TEST(Channels, DetailTokenIsUpperCaseWithUnderscores) {

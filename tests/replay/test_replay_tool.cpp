@@ -51,6 +51,52 @@ TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
   EXPECT_TRUE(make_twin_batches({}, "b1-ct", "src", {}).empty());
 }
 
+TEST(ReplayBatches, ContinueNumbersFromTheGivenSeq) {
+  const std::vector<LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
+  const auto batches = make_twin_batches(blocks, "b1-ct", "src", {1024, 1000}, 6);
+  ASSERT_EQ(batches.size(), 3u);
+  EXPECT_EQ(batches[0].seq, 6);
+  EXPECT_EQ(batches[2].seq, 8);
+}
+
+TEST(ReplayBatches, StreamBatcherClosesBySampleTime) {
+  // 2 s of sample time per batch; blocks arrive between ticks.
+  Batcher batcher("b1-ct", "s", 1, {1024, 1000, 2.0});
+  std::vector<twin::Batch> out;
+  batcher.tick(10.0, out);  // opens at t = 10
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.tick(11.5, out);
+  EXPECT_TRUE(out.empty());
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.tick(12.0, out);  // 2 s: closed with both blocks, the next one opens at 12
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].blocks.size(), 2u);
+  EXPECT_EQ(out[0].seq, 1);
+  batcher.tick(14.0, out);  // nothing in it: no empty batch
+  EXPECT_EQ(out.size(), 1u);
+  batcher.add({4000, 0.1, 0, 999}, out);
+  batcher.add({4000, 0.1, 0, 1}, out);  // the cycle rule still closes it
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out[1].seq, 2);
+  batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.flush(out);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_EQ(batcher.next_seq(), 4);
+}
+
+TEST(ReplayBatches, StreamBatcherMergesIdenticalConsecutiveBlocks) {
+  BatchingOptions options{1024, 5, 0.0, true};
+  Batcher batcher("b1-ct", "s", 1, options);
+  std::vector<twin::Batch> out;
+  for (int i = 0; i < 3; ++i) batcher.add({4000, 0.1, 0, 1}, out);
+  batcher.add({3000, 0.1, 0, 1}, out);
+  batcher.add({3000, 0.1, 0, 1}, out);  // 5 cycles: closed
+  ASSERT_EQ(out.size(), 1u);
+  ASSERT_EQ(out[0].blocks.size(), 2u);
+  EXPECT_EQ(out[0].blocks[0].count, 3);
+  EXPECT_EQ(out[0].blocks[1].count, 2);
+}
+
 TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
   const std::vector<LoadBlock> good{{4000, 0.1, 0, 1}};
   EXPECT_TRUE(check_blocks(good).ok());
@@ -544,7 +590,7 @@ TEST_F(ReplayAuthBinary, UnsignedOrWronglySignedStateExitsThree) {
     EXPECT_EQ(exit_code(r), 3) << log();
     for (const auto& line : lines) EXPECT_EQ(line.find("fake-"), std::string::npos) << line;
     const std::string expected = std::string(
-                                     "peritwin-replay: PERITWIN_B1_CT_STATE: state_seq 1 of "
+                                     "peritwin-replay: PERITWIN_B1_CT_STATE: state_seq 0 of "
                                      "detail \"b1-ct\": ") +
                                  why + " (not from the holder of daemon key \"peritwin\")\n";
     EXPECT_NE(log().find(expected), std::string::npos) << log();
@@ -556,7 +602,8 @@ TEST_F(ReplayAuthBinary, AuthRejectExitsThreeWithTheDaemonsReason) {
   auto r = replay_over_hub({"--key-file", keys_.string()});
   lines_to_end(*r);
   EXPECT_EQ(exit_code(r), 3) << log();
-  EXPECT_NE(log().find("peritwin-replay: the daemon refused batch 1 of source \"replay\" "
+  // The first batch it sends is the probe of what the daemon holds (BatchSender::probe_applied).
+  EXPECT_NE(log().find("peritwin-replay: the daemon refused the probe batch of source \"replay\" "
                        "(CODE_AUTH): auth_tag: wrong tag for source \"replay\"\n"),
             std::string::npos)
       << log();

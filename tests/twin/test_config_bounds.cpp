@@ -159,6 +159,53 @@ TEST(ConfigLimitsTable, BadValuesNamedWithTheirKeyPaths) {
   }
 }
 
+// [detail.sensor] -----------------------------------------------------------------------------
+
+TEST(ConfigSensorTable, DefaultsAndEveryKey) {
+  const ConfigResult none = parse_config(plate(), "plate.toml");
+  ASSERT_TRUE(none.ok()) << none.error_text();
+  const SensorConfig& d = none.config->details[0].sensor;
+  EXPECT_EQ(d.scale, 1.0);
+  EXPECT_EQ(d.offset, 0.0);
+  EXPECT_EQ(d.gate, 0.0);
+  EXPECT_EQ(d.alpha_bin, 0.0);
+  const ConfigResult r = parse_config(plate("[detail.sensor]\n"
+                                            "scale = -2.5e4\n"
+                                            "offset = 120\n"
+                                            "gate = 50.0\n"
+                                            "alpha_bin = 0.05\n"),
+                                      "plate.toml");
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const SensorConfig& s = r.config->details[0].sensor;
+  EXPECT_EQ(s.scale, -2.5e4);
+  EXPECT_EQ(s.offset, 120.0);
+  EXPECT_EQ(s.gate, 50.0);
+  EXPECT_EQ(s.alpha_bin, 0.05);
+}
+
+TEST(ConfigSensorTable, BadValuesNamedWithTheirKeyPaths) {
+  struct Case {
+    std::string line;
+    std::string path;
+    std::string reason;
+  };
+  const std::vector<Case> cases = {
+      {"scale = 0.0", "detail[0].sensor.scale", "must be != 0"},
+      {"scale = nan", "detail[0].sensor.scale", "must be a finite number"},
+      {"offset = inf", "detail[0].sensor.offset", "must be a finite number"},
+      {"gate = -1", "detail[0].sensor.gate", "must be >= 0 (got -1)"},
+      {"alpha_bin = -0.1", "detail[0].sensor.alpha_bin", "must be >= 0"},
+      {"alpha_bin = \"5 deg\"", "detail[0].sensor.alpha_bin", "expected a number, got a string"},
+      {"gain = 2", "detail[0].sensor.gain", "unknown key \"gain\""},
+  };
+  for (const Case& c : cases) {
+    const std::string text = plate("[detail.sensor]\n" + c.line + "\n");
+    const ConfigResult r = parse_config(text, "plate.toml");
+    SCOPED_TRACE(c.line);
+    expect_one_error(r, line_of(text, c.line), c.path, {c.reason});
+  }
+}
+
 // [auth] -----------------------------------------------------------------------------------------
 
 TEST(ConfigAuth, AbsentMeansUnauthenticated) {

@@ -271,10 +271,10 @@ TEST_F(CrossProcess, SigkillMidHistoryResumesToTheSameFinalState) {
   ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
       << "replay: " << (status ? *status : -1) << "\n"
       << read_file(dir_ / "replay.log");
-  // The whole history again to the second daemon: what it holds comes back as duplicates, the
-  // rest (if the first daemon was killed before the end) is applied. Either way the second
-  // daemon itself ends at the uninterrupted run's final state.
-  auto again = replay(false);
+  // The whole history again to the second daemon (--resume): what it holds comes back as
+  // duplicates, the rest (if the first daemon was killed before the end) is applied. Either way
+  // the second daemon itself ends at the uninterrupted run's final state.
+  auto again = replay(false, {}, {"--resume"});
   const auto again_lines = lines_to_end(*again);
   ASSERT_FALSE(again_lines.empty());
   EXPECT_EQ(again_lines.back(), reference.back());
@@ -286,6 +286,68 @@ TEST_F(CrossProcess, SigkillMidHistoryResumesToTheSameFinalState) {
   const std::string text = read_file(dir_ / "daemon2.log");
   EXPECT_NE(text.find("resumed from"), std::string::npos) << text;
   EXPECT_NE(text.find("state_hash " + final_hash), std::string::npos) << text;
+}
+
+TEST_F(CrossProcess, SecondHistoryOnTheSameSourceIsRefusedThenAppendedWithContinue) {
+  // Day A (5 batches) then day B (8 batches) with the default --source replay: day B would be
+  // numbered 1..8 and its first five batches dropped as duplicates. The replay refuses (exit 2,
+  // naming the source and the applied seq); --continue appends day B after day A (the same final
+  // state as the two days in one history in-process); day B again with --resume applies nothing.
+  const std::string all = history_;
+  const auto write_rows = [&](const std::string& name, int from, int to) {
+    std::ofstream h(dir_ / name);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = from; i < to; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
+    return (dir_ / name).string();
+  };
+  const std::string day_a = write_rows("day_a.csv", 0, 5), day_b = write_rows("day_b.csv", 5, 13);
+  history_ = write_rows("both.csv", 0, 13);
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+  ASSERT_NE(reference.back().find("\"cycles\":13000,"), std::string::npos) << reference.back();
+
+  auto d = daemon("daemon.log");
+  const auto run_to_end = [&](const std::string& history, const std::vector<std::string>& extra,
+                              int* exit_code) {
+    history_ = history;
+    auto r = replay(false, {}, extra);
+    auto lines = lines_to_end(*r);
+    const auto status = r->wait_for(kWaitS);
+    *exit_code = status && WIFEXITED(*status) ? WEXITSTATUS(*status) : -1;
+    return lines;
+  };
+  int code = -1;
+  auto lines = run_to_end(day_a, {}, &code);
+  ASSERT_EQ(code, 0) << read_file(dir_ / "replay.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find("\"cycles\":5000,"), std::string::npos) << lines.back();
+
+  run_to_end(day_b, {}, &code);
+  EXPECT_EQ(code, 2) << read_file(dir_ / "replay.log");
+  EXPECT_NE(read_file(dir_ / "replay.log")
+                .find("peritwin-replay: source 'replay' already has batches up to seq 5 applied on "
+                      "detail b1-ct; use --continue to append this history after them, --resume "
+                      "to finish an interrupted replay of the same history, or a new --source\n"),
+            std::string::npos)
+      << read_file(dir_ / "replay.log");
+
+  lines = run_to_end(day_b, {"--continue"}, &code);
+  ASSERT_EQ(code, 0) << read_file(dir_ / "replay.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());  // every cycle of A and B, once
+
+  lines = run_to_end(day_b, {"--resume"}, &code);
+  ASSERT_EQ(code, 0) << read_file(dir_ / "replay.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());  // nothing more applied
+  for (const auto& line : lines) {
+    if (line.find("\"state_seq\":") != std::string::npos) {
+      EXPECT_EQ(state_seq_of(line), 13) << line;
+    }
+  }
+  history_ = all;
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
 }
 
 /// `key` of a summary line: the text after "key": up to the next ',' or '}'.

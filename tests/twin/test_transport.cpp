@@ -68,7 +68,8 @@ class Transport : public ::testing::Test {
                                  "--deterministic", "--no-results"},
         (dir_ / "daemon.log").string());
   }
-  std::unique_ptr<Process> replay(bool in_process, const std::string& log = "replay.log") {
+  std::unique_ptr<Process> replay(bool in_process, const std::string& log = "replay.log",
+                                  bool resume = false) {
     std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay",
                                   "--config",
                                   config_,
@@ -81,6 +82,7 @@ class Transport : public ::testing::Test {
       for (const auto* a : {"--lcm-url", url_.c_str(), "--lockstep", "--give-up-after", kWaitArg}) {
         argv.emplace_back(a);
       }
+      if (resume) argv.emplace_back("--resume");
     }
     return std::make_unique<Process>(argv, (dir_ / log).string());
   }
@@ -96,9 +98,10 @@ class Transport : public ::testing::Test {
     EXPECT_FALSE(lines.empty());
     return lines.empty() ? std::string() : lines.back();
   }
-  /// A lockstep replay over the hub to its end: exit 0 and the in-process summary.
-  void expect_replay_reaches(const std::string& summary) {
-    auto r = replay(false);
+  /// A lockstep replay over the hub to its end: exit 0 and the in-process summary. `resume`: the
+  /// same history again after an interrupted run (--resume).
+  void expect_replay_reaches(const std::string& summary, bool resume = false) {
+    auto r = replay(false, "replay.log", resume);
     const auto lines = lines_to_end(*r);
     const auto status = r->wait_for(kWaitS);
     ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
@@ -216,8 +219,9 @@ TEST_F(Transport, HubKilledMidReplayDaemonReconnectsAndFinishes) {
   EXPECT_EQ(log.find("connection lost"), log.rfind("connection lost")) << log;
   EXPECT_EQ(log.find("resumed from"), std::string::npos) << log;  // the same process, no restart
 
-  // The whole history again: what the daemon holds comes back as duplicates, the rest is applied.
-  ASSERT_NO_FATAL_FAILURE(expect_replay_reaches(summary));
+  // The whole history again (--resume): what the daemon holds comes back as duplicates, the rest
+  // is applied.
+  ASSERT_NO_FATAL_FAILURE(expect_replay_reaches(summary, true));
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, state_hash_of(summary)));
 }
 

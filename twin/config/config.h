@@ -86,6 +86,12 @@
 //                        rejected), max_rejects_per_second 10 (> 0: health turns "degraded" while
 //                        the rejects, duplicates not counted, exceed this rate averaged over the
 //                        last 10 s)
+//   [detail.sensor]      for peritwin-stream (raw samples -> cycles; the daemon ignores it):
+//                        scale 1 (finite, != 0) and offset 0 (N, finite): the load is
+//                        P = scale * measured + offset (strain or volts to newtons), gate 0 (N,
+//                        >= 0: the rainflow hysteresis gate, load ranges up to it are no
+//                        reversals), alpha_bin 0 (rad, >= 0: each cycle's angle rounded to its
+//                        multiples; 0 = none)
 //
 //   [auth]               top level, at most once, optional (without it the daemon runs
 //                        unauthenticated): key_file R (path of the key file, resolved against the
@@ -229,6 +235,14 @@ struct LimitsConfig {
   double max_rejects_per_second = 10.0;  ///< over the last 10 s, duplicates not counted
 };
 
+/// [detail.sensor]: how peritwin-stream turns a sensor's samples into loads and cycles.
+struct SensorConfig {
+  double scale = 1.0;      ///< N per unit measured; finite, != 0
+  double offset = 0.0;     ///< N; P = scale * measured + offset
+  double gate = 0.0;       ///< N, rainflow hysteresis gate, >= 0
+  double alpha_bin = 0.0;  ///< rad, >= 0, 0 = no binning
+};
+
 struct DetailConfig {
   std::string id;     ///< as written, e.g. "b1-ct"
   std::string token;  ///< channel token: upper case, '-' -> '_', e.g. "B1_CT"
@@ -248,6 +262,7 @@ struct DetailConfig {
   StressIntensityConfig stress_intensity;
   CheckpointConfig checkpoint;
   LimitsConfig limits;
+  SensorConfig sensor;
   SourceRef where;  ///< the [[detail]] table
 
   [[nodiscard]] double horizon() const { return horizon_ratio * dx; }

@@ -593,6 +593,16 @@ void read_limits(Context& ctx, const toml::table& t, const std::string& path, Li
   r.finish();
 }
 
+void read_sensor(Context& ctx, const toml::table& t, const std::string& path, SensorConfig& s) {
+  TableReader r(ctx, t, path);
+  s.scale = opt(r, "scale", s.scale, Bound::any);
+  r.check("scale", s.scale != 0.0, "must be != 0 (P = scale * measured + offset)");
+  s.offset = opt(r, "offset", s.offset, Bound::any);
+  s.gate = opt(r, "gate", s.gate, Bound::non_negative);
+  s.alpha_bin = opt(r, "alpha_bin", s.alpha_bin, Bound::non_negative);
+  r.finish();
+}
+
 /// `file` as written in the config, or joined to the config file's directory when relative; made
 /// absolute (against the working directory) so that it names the same file from anywhere.
 std::string resolve_path(const std::string& file, const std::string& config_file) {
@@ -710,6 +720,7 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     read_checkpoint(ctx, *c, r.path_of("checkpoint"), d.checkpoint);
   }
   if (const auto* l = r.table("limits", false)) read_limits(ctx, *l, r.path_of("limits"), d.limits);
+  if (const auto* s = r.table("sensor", false)) read_sensor(ctx, *s, r.path_of("sensor"), d.sensor);
   r.finish();
   if (sized) *estimate = estimate_resources(d);
   return d;

@@ -1,0 +1,100 @@
+// peritwin-stream's engine room (stream/stream_main.cpp): samples -> [detail.sensor] scale and
+// offset -> RainflowCounter (replay/rainflow.h) -> CycleBlocks (replay/cycle_blocks.h) -> Batcher
+// (replay/batcher.h) -> batches; and the state file that makes a restart neither lose nor double a
+// cycle.
+//
+// State file (StreamState::save/restore): text, written atomically (temporary file, fsync, rename,
+// fsync of the directory) whenever batches were closed, and at the end. It holds the counter's and
+// the converter's exact states, the open batch, the next seq, the batches not yet acknowledged by
+// the daemon, the input position (lines consumed; a FILE input skips them at a restart) and the
+// counts; its last line is "checksum <FNV-1a 64 of every byte before it>". Next to it,
+// "<state file>.received" holds the number of samples read so far (rewritten in place, no fsync:
+// it survives a SIGKILL of the process, the page cache keeps it), so that a restart can report
+// the samples read after the last state was written (lost_samples) for an input it cannot re-read.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "replay/batcher.h"
+#include "replay/cycle_blocks.h"
+#include "replay/rainflow.h"
+#include "solver/core/expected.h"
+#include "twin/config/config.h"
+
+namespace peritwin::stream {
+
+struct StreamCounts {
+  std::uint64_t input_lines = 0;   ///< lines consumed from the input (header, comments included)
+  std::uint64_t samples = 0;       ///< data lines / samples taken (non-finite ones included)
+  std::uint64_t bad_lines = 0;     ///< lines that are no sample (skipped, reported)
+  std::uint64_t batches = 0;       ///< batches closed
+  std::uint64_t lost_samples = 0;  ///< samples read but never in a persisted state (restarts)
+  std::uint64_t block_cycles = 0;  ///< cycles in the closed batches
+};
+
+/// The pipeline from samples to batches, and everything a restart needs.
+class Pipeline {
+ public:
+  Pipeline(const twin::DetailConfig& detail, const std::string& source_id,
+           replay::BatchingOptions batching, std::int64_t first_seq);
+
+  /// One sample (measured value in the sensor's unit, angle in rad, time in s); closed batches
+  /// go to `out`.
+  void sample(double t, double measured, double alpha, std::vector<twin::Batch>& out);
+  /// End of the input: the residue by `rule`, then the open batch.
+  void finish(replay::ResidueRule rule, std::vector<twin::Batch>& out);
+
+  [[nodiscard]] const replay::RainflowStats& rainflow() const { return counter_.stats(); }
+  [[nodiscard]] const replay::ConversionStats& conversion() const { return blocks_.stats(); }
+  [[nodiscard]] std::int64_t next_seq() const { return batcher_.next_seq(); }
+  StreamCounts counts;
+  std::optional<double> last_time;  ///< of the last sample taken (times must increase)
+
+  /// The state text (without the unacknowledged batches and checksum: StreamState adds them).
+  [[nodiscard]] std::string save() const;
+  static Expected<Pipeline, std::string> restore(std::string_view text,
+                                                 const twin::DetailConfig& detail,
+                                                 const std::string& source_id,
+                                                 replay::BatchingOptions batching);
+
+ private:
+  void emit(std::vector<twin::Batch>& out);
+  double scale_, offset_;
+  replay::RainflowCounter counter_;
+  replay::CycleBlocks blocks_;
+  replay::Batcher batcher_;
+  std::vector<replay::CountedCycle> cycles_;
+  std::vector<LoadBlock> new_blocks_;
+};
+
+/// Writes the pipeline and the unacknowledged batches to `file` atomically (see the top).
+Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
+                  const std::vector<twin::Batch>& unacknowledged);
+struct RestoredState {
+  Pipeline pipeline;
+  std::vector<twin::Batch> unacknowledged;
+};
+/// The state in `file`, or why it is none ("<file>: checksum mismatch", "...: truncated", ...).
+Expected<RestoredState, std::string> load_state(const std::filesystem::path& file,
+                                                const twin::DetailConfig& detail,
+                                                const std::string& source_id,
+                                                replay::BatchingOptions batching);
+/// "<file>.received": samples read so far (see the top of the file).
+void write_received(const std::filesystem::path& state_file, std::uint64_t samples);
+std::optional<std::uint64_t> read_received(const std::filesystem::path& state_file);
+
+/// One input line: a sample (t, measured, alpha), nothing (blank, '#' comment, the series header
+/// "time_s,load_N[,angle_rad]") or an error (why).
+struct ParsedLine {
+  enum class Kind { sample, nothing, bad } kind = Kind::nothing;
+  double t = 0.0, p = 0.0, alpha = 0.0;
+  std::string why;
+};
+ParsedLine parse_line(std::string_view line);
+
+}  // namespace peritwin::stream

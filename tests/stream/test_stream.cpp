@@ -1,0 +1,339 @@
+// peritwin-stream end to end (the binaries): the same series through the stream (a FIFO written
+// in random pieces, a TCP connection, load_samples_t messages over LCM's hub) and through
+// peritwin-replay --format series reaches the same engine_hash and total cycles; over a hub and a
+// daemon the stream killed with SIGKILL at random points and restarted on its state file and the
+// same FILE ends at the replay's engine_hash (no cycle lost or doubled); a corrupt state file is
+// refused (exit 2 naming it); samples of a stdin stream killed between batches are reported as
+// lost_samples. Every wait on another process has a deadline of minutes; no timing is asserted.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "messages/channels.h"
+#include "messages/codec.h"
+#include "tests/support/lcm_hub.h"
+#include "tests/support/loopback_port.h"
+#include "tests/support/process.h"
+
+namespace peritwin::stream {
+namespace {
+
+namespace fs = std::filesystem;
+using peritwin::testing::Process;
+
+constexpr double kWaitS = 600.0;
+const std::string kBin = PERITWIN_BIN_DIR;
+const std::string kConfig = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml";
+const std::string kSeries = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-series.csv";
+
+std::string read_file(const fs::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::string field(const std::string& json, const std::string& key) {
+  const std::string k = "\"" + key + "\":";
+  const auto p = json.find(k);
+  if (p == std::string::npos) return {};
+  auto start = p + k.size();
+  if (json[start] == '"') ++start;
+  const auto end = json.find_first_of(",}\"", start);
+  return json.substr(start, end - start);
+}
+
+std::vector<std::string> lines_to_end(Process& p) {
+  std::vector<std::string> lines;
+  while (auto line = p.read_line(kWaitS)) lines.push_back(*line);
+  return lines;
+}
+
+int exit_code(Process& p) {
+  const auto status = p.wait_for(kWaitS);
+  return status && WIFEXITED(*status) ? WEXITSTATUS(*status) : -1;
+}
+
+class Stream : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           (std::string("peritwin_stream_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  /// The replay's summary of `series` in-process (the reference).
+  std::string replay_summary(const std::string& series) {
+    Process r({kBin + "/peritwin-replay", "--config", kConfig, "--history", series, "--format",
+               "series", "--in-process", "--json"},
+              (dir_ / "replay.log").string());
+    const auto lines = lines_to_end(r);
+    EXPECT_EQ(exit_code(r), 0) << read_file(dir_ / "replay.log");
+    return lines.empty() ? std::string() : lines.back();
+  }
+  std::unique_ptr<Process> stream(std::vector<std::string> args, const std::string& log) {
+    std::vector<std::string> argv{kBin + "/peritwin-stream", "--config", kConfig, "--json"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return std::make_unique<Process>(argv, (dir_ / log).string());
+  }
+  static void expect_same_load(const std::string& reference, const std::string& summary) {
+    ASSERT_FALSE(field(reference, "engine_hash").empty()) << reference;
+    EXPECT_EQ(field(summary, "engine_hash"), field(reference, "engine_hash")) << summary;
+    EXPECT_EQ(field(summary, "cycles"), field(reference, "cycles")) << summary;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Stream, FifoInRandomPiecesEqualsTheReplay) {
+  const std::string reference = replay_summary(kSeries);
+  const fs::path fifo = dir_ / "in.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  auto s = stream({"--input", fifo.string(), "--in-process", "--batch-cycles", "7"}, "stream.log");
+  const std::string text = read_file(kSeries);
+  {
+    std::ofstream out(fifo, std::ios::binary);  // blocks until the stream opens it
+    std::mt19937 rng(20261203);
+    std::size_t at = 0;
+    while (at < text.size()) {
+      const std::size_t n = std::uniform_int_distribution<std::size_t>(1, 900)(rng);
+      out.write(text.data() + at, static_cast<std::streamsize>(std::min(n, text.size() - at)));
+      out.flush();
+      at += n;
+      if (rng() % 8 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  expect_same_load(reference, lines.back());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  EXPECT_EQ(field(lines.back(), "lost_samples"), "0") << lines.back();
+  // Several batches: states arrived as the data came, not only at the end.
+  EXPECT_GT(lines.size(), 5u);
+}
+
+TEST_F(Stream, TcpConnectionEqualsTheReplayAfterSigterm) {
+  const std::string reference = replay_summary(kSeries);
+  const int port = peritwin::testing::free_loopback_port();
+  auto s =
+      stream({"--input", "tcp://127.0.0.1:" + std::to_string(port), "--in-process"}, "stream.log");
+  ASSERT_TRUE(peritwin::testing::wait_for_loopback_port(port, kWaitS))
+      << read_file(dir_ / "stream.log");
+  const std::string text = read_file(kSeries);
+  const std::size_t half = text.find('\n', text.size() / 2) + 1;
+  for (const auto& piece : {text.substr(0, half), text.substr(half)}) {  // two connections
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ASSERT_EQ(::write(fd, piece.data(), piece.size()), static_cast<ssize_t>(piece.size()));
+    ::close(fd);
+  }
+  // SIGTERM once every sample is in (the stream says nothing per sample: wait for its states).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(600);
+  std::vector<std::string> lines;
+  while (std::chrono::steady_clock::now() < deadline) {
+    auto line = s->read_line(1.0);
+    if (line) lines.push_back(*line);
+    if (!line) break;  // quiet for a second
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  s->signal(SIGTERM);
+  for (auto& l : lines_to_end(*s)) lines.push_back(l);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  expect_same_load(reference, lines.back());
+}
+
+TEST_F(Stream, CorruptStateFileExitsTwoNamingIt) {
+  const fs::path state = dir_ / "stream.state";
+  std::ofstream(state) << "peritwin-stream-state 1\ncounts 1 2 3\nchecksum 0000000000000000\n";
+  auto s = stream(
+      {"--input", kSeries, "--state-file", state.string(), "--lcm-url", "tcpq://127.0.0.1:1"},
+      "stream.log");
+  lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 2);
+  const std::string log = read_file(dir_ / "stream.log");
+  EXPECT_NE(log.find("corrupt state file " + state.string() + ": checksum mismatch"),
+            std::string::npos)
+      << log;
+}
+
+/// Over LCM's TCP hub (skipped without java / lcm.jar).
+class StreamOverHub : public Stream {
+ protected:
+  void SetUp() override {
+    Stream::SetUp();
+    hub_ = std::make_unique<peritwin::testing::LcmHub>(dir_ / "hub.log", kWaitS);
+    if (!hub_->missing().empty()) GTEST_SKIP() << hub_->missing();
+    ASSERT_TRUE(hub_->up()) << read_file(dir_ / "hub.log");
+  }
+  std::unique_ptr<Process> daemon(const std::string& log) {
+    return std::make_unique<Process>(
+        std::vector<std::string>{kBin + "/peritwin", "--config", kConfig, "--lcm-url", hub_->url(),
+                                 "--state-dir", (dir_ / "state").string(), "--deterministic",
+                                 "--no-results"},
+        (dir_ / log).string());
+  }
+  std::unique_ptr<peritwin::testing::LcmHub> hub_;
+};
+
+TEST_F(StreamOverHub, SigkillAtRandomPointsThenRestartOnTheStateFile) {
+  const std::string reference = replay_summary(kSeries);
+  auto d = daemon("daemon.log");
+  const fs::path state = dir_ / "stream.state";
+  std::mt19937 rng(4242);
+  std::string last;
+  int kills = 0;
+  for (int run = 0; run < 40; ++run) {
+    auto s = stream({"--input", kSeries, "--state-file", state.string(), "--lcm-url", hub_->url(),
+                     "--batch-cycles", "3", "--lockstep", "--give-up-after", "600"},
+                    "stream.log");
+    if (kills < 6) {
+      // Kill after 1 to 3 states of this run.
+      const int states = std::uniform_int_distribution<int>(1, 3)(rng);
+      int seen = 0;
+      while (seen < states) {
+        const auto line = s->read_line(kWaitS);
+        if (!line) break;
+        if (line->find("\"state_seq\"") != std::string::npos) ++seen;
+        last = *line;
+      }
+      if (seen == states) {
+        s->signal(SIGKILL);
+        s->wait_for(kWaitS);
+        ++kills;
+        continue;
+      }
+    }
+    const auto lines = lines_to_end(*s);
+    ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+    ASSERT_FALSE(lines.empty());
+    last = lines.back();
+    break;
+  }
+  EXPECT_GE(kills, 5);
+  ASSERT_NE(last.find("\"engine_hash\""), std::string::npos) << last;
+  expect_same_load(reference, last);
+  EXPECT_EQ(field(last, "lost_samples"), "0") << last;  // a FILE is read again
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+TEST_F(StreamOverHub, SamplesOfAKilledPipeStreamAreReportedLost) {
+  auto d = daemon("daemon.log");
+  const fs::path state = dir_ / "stream.state", fifo = dir_ / "in.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::vector<std::string> args{
+      "--input",        fifo.string(), "--state-file",    state.string(), "--lcm-url", hub_->url(),
+      "--batch-cycles", "3",           "--give-up-after", "600"};
+  std::vector<std::string> rows;
+  {
+    std::ifstream in(kSeries);
+    std::string line;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && line[0] != 't') rows.push_back(line);
+    }
+  }
+  auto s = stream(args, "stream1.log");
+  std::ofstream out(fifo);
+  const std::size_t written = 500;
+  for (std::size_t i = 0; i < written; ++i) out << rows[i] << "\n";
+  out.flush();
+  // Every sample read (the .received count), then SIGKILL: whatever is not in the state file is
+  // lost to a pipe.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(600);
+  std::string received;
+  while (std::chrono::steady_clock::now() < deadline) {
+    received = read_file(state.string() + ".received");
+    if (!received.empty() && std::stoull(received) == written) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(std::stoull(received), written) << read_file(dir_ / "stream1.log");
+  s->signal(SIGKILL);
+  s->wait_for(kWaitS);
+  out.close();
+  const std::string saved = read_file(state);
+  const auto counts = saved.find("\ncounts ");
+  ASSERT_NE(counts, std::string::npos) << saved;
+  std::istringstream fields(saved.substr(counts + 8));
+  std::uint64_t lines = 0, persisted = 0;
+  fields >> lines >> persisted;
+  const std::uint64_t lost = written - persisted;
+
+  // The rest of the data to a restarted stream on the same state file.
+  auto again = stream(args, "stream2.log");
+  {
+    std::ofstream rest(fifo);
+    for (std::size_t i = written; i < rows.size(); ++i) rest << rows[i] << "\n";
+  }
+  const auto output = lines_to_end(*again);
+  ASSERT_EQ(exit_code(*again), 0) << read_file(dir_ / "stream2.log");
+  ASSERT_FALSE(output.empty());
+  EXPECT_EQ(field(output.back(), "lost_samples"), std::to_string(lost)) << output.back();
+  EXPECT_EQ(field(output.back(), "samples"), std::to_string(rows.size() - lost)) << output.back();
+  EXPECT_NE(read_file(dir_ / "stream2.log").find("lost_samples " + std::to_string(lost)),
+            std::string::npos)
+      << read_file(dir_ / "stream2.log");
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+TEST_F(StreamOverHub, LcmSamplesEqualTheReplay) {
+  const std::string reference = replay_summary(kSeries);
+  auto s = stream({"--input", "lcm", "--lcm-url", hub_->url(), "--in-process"}, "stream.log");
+  // The series as load_samples_t messages of 100 samples with their times.
+  std::vector<double> t, p;
+  std::ifstream in(kSeries);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#' || line[0] == 't') continue;
+    const auto comma = line.find(',');
+    t.push_back(std::stod(line.substr(0, comma)));
+    p.push_back(std::stod(line.substr(comma + 1)));
+  }
+  ASSERT_EQ(p.size(), 1200u);
+  // The stream is subscribed once it prints its initial state.
+  ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream.log");
+  lcm::LCM lcm(hub_->url());
+  ASSERT_TRUE(lcm.good());
+  for (std::size_t i = 0, seq = 1; i < p.size(); i += 100, ++seq) {
+    messages::Samples m{"b1-ct", "gauge", static_cast<std::int64_t>(seq), 0.0, 0.0, {}, {}, {}};
+    m.p.assign(p.begin() + static_cast<std::ptrdiff_t>(i),
+               p.begin() + static_cast<std::ptrdiff_t>(i + 100));
+    m.t.assign(t.begin() + static_cast<std::ptrdiff_t>(i),
+               t.begin() + static_cast<std::ptrdiff_t>(i + 100));
+    auto msg = messages::samples_message(m, messages::now_utime());
+    lcm.publish(messages::channel("b1-ct", messages::Kind::kSamples), &msg);
+    if (seq == 3) lcm.publish(messages::channel("b1-ct", messages::Kind::kSamples), &msg);  // dup
+  }
+  // Wait until the stream has taken them (its stderr says nothing per message): a few seconds
+  // of quiet on stdout after the last state, then SIGTERM.
+  while (s->read_line(3.0)) {
+  }
+  s->signal(SIGTERM);
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  expect_same_load(reference, lines.back());
+}
+
+}  // namespace
+}  // namespace peritwin::stream
