@@ -118,6 +118,12 @@ int main(int argc, char** argv) {
   peritwin::dashboard::Store store;
   httplib::Server server;
   peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS);
+  // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use
+  // (requests then go to either): SO_REUSEADDR only, so that is refused.
+  server.set_socket_options([](int sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   int port = address->port;
   if (port == 0) {
     port = server.bind_to_any_port(address->host);
