@@ -69,7 +69,11 @@ class Feed {
  public:
   explicit Feed(peritwin::dashboard::Store& store) : store_(store) {}
   void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    store_.on_message(channel, rbuf->data, rbuf->data_size, peritwin::dashboard::Clock::now());
+    try {
+      store_.on_message(channel, rbuf->data, rbuf->data_size, peritwin::dashboard::Clock::now());
+    } catch (const std::exception& e) {  // e.g. out of memory: drop the message, keep serving
+      spdlog::warn("message on {} dropped: {}", channel, e.what());
+    }
   }
 
  private:
