@@ -208,6 +208,23 @@ std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t
   return {};
 }
 
+bool status_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  // utime, detail_id, health, last_seq, pending, lag_s, uptime_s, errors, duplicates, gaps,
+  // busy_s, auth_rejects, reject_rate.
+  return w.fingerprint(peritwin_msgs::status_t::getHash()) && w.skip(8) && w.string() &&
+         w.string() && w.skip(8 + 4 + 8 + 8 + 3 * 8 + 8 + 8 + 8) && w.at_end();
+}
+
+bool field_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t nodes = 0;
+  // utime, detail_id, state_seq, chunk_index, num_chunks, total_nodes, first_node, the damage.
+  return w.fingerprint(peritwin_msgs::damage_field_t::getHash()) && w.skip(8) && w.string() &&
+         w.skip(8 + 4 * 4) && w.count(4, nodes) && w.skip(4 * static_cast<std::size_t>(nodes)) &&
+         w.at_end();
+}
+
 template <typename Message>
 std::optional<Message> decode_checked(const void* data, std::size_t size,
                                       bool (*layout)(const unsigned char*, std::size_t)) {
@@ -228,6 +245,14 @@ std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std:
 
 std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size) {
   return decode_checked<peritwin_msgs::reject_t>(data, size, reject_layout);
+}
+
+std::optional<peritwin_msgs::status_t> decode_status(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::status_t>(data, size, status_layout);
+}
+
+std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::damage_field_t>(data, size, field_layout);
 }
 
 int handle_lcm(lcm::LCM& lcm, int timeout_ms) {

@@ -103,6 +103,11 @@ Decoded decode_batch(const void* data, std::size_t size);
 std::optional<peritwin_msgs::damage_state_t> decode_state(const void* data, std::size_t size);
 std::optional<peritwin_msgs::reject_t> decode_reject(const void* data, std::size_t size);
 
+/// A STATUS or FIELD chunk decoded from untrusted bytes the same way, or nullopt (a FIELD's
+/// num_nodes is checked against the payload before LCM sizes its damage array).
+std::optional<peritwin_msgs::status_t> decode_status(const void* data, std::size_t size);
+std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std::size_t size);
+
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 
 /// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).

@@ -4,7 +4,7 @@
 #   an LCM TCP hub on 127.0.0.1 (lcm.jar's TCPService; nothing leaves the machine),
 #   the daemon (build/bin/peritwin --deterministic),
 #   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1),
-# and prints every state: cycles, broken bonds, crack length and the remaining life with its band
+# and prints every state (the web dashboard peritwin-dashboard shows them too, its URL printed): cycles, broken bonds, crack length and the remaining life with its band
 # (re-estimated every 10 batches). Authenticated: the script generates a key file
 # (out/demo/keys.toml, mode 0600, keys "replay" and "peritwin"), the daemon's config is the example
 # plus an [auth] table naming it, and the replay signs its batches and verifies every state. The daemon stops at the end-of-life criterion (8 mm of crack
@@ -15,7 +15,7 @@ root=$(pwd)
 bash scripts/install-deps.sh
 build=${BUILD_DIR:-build}
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$(nproc)" --target peritwin peritwin-replay
+cmake --build "$build" -j "$(nproc)" --target peritwin peritwin-replay peritwin-dashboard
 bin="$root/$build/bin"
 
 demo="$root/out/demo"
@@ -31,8 +31,9 @@ if [ -z "$port" ]; then
 fi
 url="tcpq://127.0.0.1:$port"
 
-hub_pid="" daemon_pid=""
+hub_pid="" daemon_pid="" dashboard_pid=""
 cleanup() {
+  if [ -n "$dashboard_pid" ] && kill -0 "$dashboard_pid" 2>/dev/null; then kill -TERM "$dashboard_pid"; fi
   if [ -n "$daemon_pid" ] && kill -0 "$daemon_pid" 2>/dev/null; then kill -TERM "$daemon_pid"; fi
   if [ -n "$hub_pid" ] && kill -0 "$hub_pid" 2>/dev/null; then kill "$hub_pid"; fi
 }
@@ -46,6 +47,17 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 echo "demo: LCM hub on $url (log: out/demo/hub.log)"
+
+# The web dashboard (read-only) on a free loopback port; it prints its URL first.
+"$bin/peritwin-dashboard" --lcm-url "$url" --listen 127.0.0.1:0 >"$demo/dashboard.url" \
+  2>"$demo/dashboard.log" &
+dashboard_pid=$!
+for _ in $(seq 100); do
+  [ -s "$demo/dashboard.url" ] && break
+  sleep 0.1
+done
+dashboard_url=$(grep -o 'http://[^ ]*' "$demo/dashboard.url" || true)
+echo "demo: dashboard on $dashboard_url (log: out/demo/dashboard.log)"
 
 # Keys: one per producer ("replay") and the daemon's own ("peritwin"), HMAC-SHA256.
 "$bin/peritwin-replay" --generate-key-file "$demo/keys.toml" --key-ids replay,peritwin
@@ -63,6 +75,15 @@ echo
   2> >(grep -v '^LCM tcpq' >&2)
 
 echo
+# DASHBOARD_SCREENSHOT=file.png: headless chromium's picture of the dashboard at the end.
+if [ -n "${DASHBOARD_SCREENSHOT:-}" ] && command -v chromium >/dev/null; then
+  chromium --headless --no-sandbox --disable-gpu --window-size=1300,640 \
+    --virtual-time-budget=10000 --screenshot="$DASHBOARD_SCREENSHOT" "${dashboard_url}?events=off" \
+    >/dev/null 2>&1 && echo "demo: dashboard screenshot in $DASHBOARD_SCREENSHOT"
+fi
+kill -TERM "$dashboard_pid"
+wait "$dashboard_pid" || true
+dashboard_pid=""
 kill -TERM "$daemon_pid"
 rc=0
 wait "$daemon_pid" || rc=$?

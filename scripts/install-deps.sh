@@ -14,6 +14,9 @@ packages=(
   libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev nlohmann-json3-dev
   # HMAC-SHA256 of the signed messages and key generation (messages/auth.h, issue 14).
   libsodium-dev
+  # The web dashboard (dashboard/, peritwin-dashboard): HTTP server, Chart.js served from the
+  # package's file (no CDN), and headless chromium for its browser test.
+  libcpp-httplib-dev libjs-chart.js chromium
 )
 # The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
 # PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.

@@ -1,0 +1,190 @@
+// peritwin-dashboard: a read-only web dashboard of every detail on the bus. See README.md,
+// "Dashboard", and dashboard/store.h, dashboard/server.h.
+//
+//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--log-level L]
+//
+// Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
+// port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
+// for the hub), 2 bad usage (nothing started), 3 runtime failure (the address cannot be bound,
+// LCM cannot open the URL). A tcpq hub that is down is waited for, as the daemon does.
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <thread>
+
+#include "dashboard/server.h"
+#include "dashboard/store.h"
+#include "messages/channels.h"
+#include "messages/codec.h"
+#include "twin/service/hub_connection.h"
+
+#ifndef PERITWIN_CHARTJS
+#define PERITWIN_CHARTJS "/usr/share/javascript/chart.js/chart.min.js"
+#endif
+
+namespace {
+
+std::atomic<int> g_signal{0};
+
+extern "C" void on_signal(int signal) { g_signal.store(signal); }
+
+constexpr int kExitOk = 0;
+constexpr int kExitUsage = 2;
+constexpr int kExitRuntime = 3;
+
+struct Listen {
+  std::string host;
+  int port = 0;
+};
+
+/// "HOST:PORT" (PORT 0..65535, 0 = any free port), or nullopt.
+std::optional<Listen> parse_listen(const std::string& text) {
+  const auto colon = text.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == text.size()) return std::nullopt;
+  Listen l;
+  l.host = text.substr(0, colon);
+  if (l.host.size() > 2 && l.host.front() == '[' && l.host.back() == ']') {
+    l.host = l.host.substr(1, l.host.size() - 2);
+  }
+  const std::string port = text.substr(colon + 1);
+  if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos) {
+    return std::nullopt;
+  }
+  l.port = std::atoi(port.c_str());
+  if (l.port > 65535) return std::nullopt;
+  return l;
+}
+
+bool is_loopback(const std::string& host) {
+  return host.rfind("127.", 0) == 0 || host == "localhost" || host == "::1";
+}
+
+/// Raw subscription handler: every message goes to the store, decoded there.
+class Feed {
+ public:
+  explicit Feed(peritwin::dashboard::Store& store) : store_(store) {}
+  void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    try {
+      store_.on_message(channel, rbuf->data, rbuf->data_size, peritwin::dashboard::Clock::now());
+    } catch (const std::exception& e) {  // e.g. out of memory: drop the message, keep serving
+      spdlog::warn("message on {} dropped: {}", channel, e.what());
+    }
+  }
+
+ private:
+  peritwin::dashboard::Store& store_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-dashboard: read-only web dashboard of the details on the bus"};
+  std::string lcm_url, listen = "127.0.0.1:8080", log_level = "info";
+  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
+  app.add_option("--listen", listen,
+                 "HTTP address HOST:PORT (default 127.0.0.1:8080; port 0: any)");
+  app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? kExitOk : kExitUsage;
+  }
+  const auto address = parse_listen(listen);
+  if (!address) {
+    std::fprintf(stderr, "--listen: expected HOST:PORT (e.g. 127.0.0.1:8080), got \"%s\"\n",
+                 listen.c_str());
+    return kExitUsage;
+  }
+
+  auto logger = spdlog::stderr_color_mt("peritwin-dashboard");
+  spdlog::set_default_logger(logger);
+  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
+  spdlog::set_level(spdlog::level::from_str(log_level));
+  if (lcm_url.empty()) {
+    if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
+  }
+
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+  // A browser that goes away mid-write must not kill the process.
+  signal(SIGPIPE, SIG_IGN);
+
+  peritwin::dashboard::Store store;
+  httplib::Server server;
+  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS);
+  // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use
+  // (requests then go to either): SO_REUSEADDR only, so that is refused.
+  server.set_socket_options([](int sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
+  int port = address->port;
+  if (port == 0) {
+    port = server.bind_to_any_port(address->host);
+  } else if (!server.bind_to_port(address->host, port)) {
+    port = -1;
+  }
+  if (port <= 0) {
+    spdlog::critical("cannot listen on {}: address in use or not available here", listen);
+    return kExitRuntime;
+  }
+  if (!is_loopback(address->host)) {
+    spdlog::warn(
+        "listening on {} (not loopback): anyone who can reach it sees every detail's "
+        "state; there is no authentication",
+        address->host);
+  }
+  const std::string host =
+      address->host.find(':') != std::string::npos ? "[" + address->host + "]" : address->host;
+  std::thread http([&server] { server.listen_after_bind(); });
+  std::printf("peritwin-dashboard: http://%s:%d/\n", host.c_str(), port);
+  std::fflush(stdout);
+  spdlog::info("serving http://{}:{}/ (read-only), LCM \"{}\"", host, port,
+               peritwin::messages::shown_url(lcm_url));
+
+  int rc = kExitOk;
+  try {
+    peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
+    const std::unique_ptr<lcm::LCM> connection = hub.open();
+    if (!connection) {
+      if (!hub.error().empty()) {
+        spdlog::critical("{}", hub.error());
+        rc = kExitRuntime;
+      }
+    } else {
+      lcm::LCM& lcm = *connection;
+      Feed feed(store);
+      using peritwin::messages::Kind;
+      for (const Kind kind : {Kind::kState, Kind::kStatus, Kind::kReject, Kind::kField}) {
+        lcm.subscribe(peritwin::messages::channel_regex(kind), &Feed::on_message, &feed);
+      }
+      spdlog::info("subscribed to STATE, STATUS, REJECT and FIELD of every detail");
+      while (g_signal.load() == 0) {
+        if (!hub.connected()) {
+          hub.reconnect(lcm);
+        } else {
+          peritwin::messages::handle_lcm(lcm, 100);  // -1: the hub went away (check says so)
+          hub.check(lcm);
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    spdlog::critical("runtime failure: {}", e.what());
+    rc = kExitRuntime;
+  }
+  if (const int s = g_signal.load(); s != 0) spdlog::info("signal {} received: stopping", s);
+  store.close();
+  server.stop();
+  http.join();
+  return rc;
+}

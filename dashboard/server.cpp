@@ -1,0 +1,74 @@
+#include "dashboard/server.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace peritwin::dashboard {
+namespace {
+
+void not_found(httplib::Response& res, const std::string& what) {
+  res.status = 404;
+  res.set_content(nlohmann::json{{"error", what}}.dump(), "application/json");
+}
+
+void json(httplib::Response& res, const std::string& body) {
+  res.set_header("Cache-Control", "no-store");
+  res.set_content(body, "application/json");
+}
+
+}  // namespace
+
+void install_routes(httplib::Server& server, Store& store, const std::string& chartjs) {
+  server.Get("/", [](const httplib::Request&, httplib::Response& res) {
+    res.set_content(kPageHtml, "text/html; charset=utf-8");
+  });
+  server.Get("/chart.js", [chartjs](const httplib::Request&, httplib::Response& res) {
+    std::ifstream in(chartjs, std::ios::binary);
+    if (!in) return not_found(res, "Chart.js not found at " + chartjs + " (libjs-chart.js)");
+    std::ostringstream text;
+    text << in.rdbuf();
+    res.set_header("Cache-Control", "max-age=3600");
+    res.set_content(text.str(), "application/javascript");
+  });
+  server.Get("/api/details", [&store](const httplib::Request&, httplib::Response& res) {
+    json(res, store.details_json(Clock::now()));
+  });
+  server.Get(R"(/api/details/([A-Za-z0-9_-]+))",
+             [&store](const httplib::Request& req, httplib::Response& res) {
+               const std::string id = req.matches[1];
+               if (const auto body = store.detail_json(id, Clock::now())) return json(res, *body);
+               not_found(res, "unknown detail \"" + id + "\"");
+             });
+  server.Get(R"(/api/details/([A-Za-z0-9_-]+)/history)",
+             [&store](const httplib::Request& req, httplib::Response& res) {
+               const std::string id = req.matches[1];
+               if (const auto body = store.history_json(id)) return json(res, *body);
+               not_found(res, "unknown detail \"" + id + "\"");
+             });
+  server.Get("/api/events", [&store](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    // Events from the one after the newest at connection time: the page loads the current
+    // state through /api/details first.
+    auto cursor = std::make_shared<std::uint64_t>(store.last_event_id());
+    res.set_chunked_content_provider(
+        "text/event-stream", [&store, cursor](std::size_t, httplib::DataSink& sink) {
+          if (store.closed()) return false;
+          const auto events = store.events_after(*cursor, std::chrono::milliseconds(1000));
+          if (store.closed()) return false;
+          std::string out;
+          for (const auto& e : events) {
+            out +=
+                "id: " + std::to_string(e.id) + "\nevent: " + e.kind + "\ndata: " + e.data + "\n\n";
+            *cursor = e.id;
+          }
+          if (out.empty()) out = ": keep-alive\n\n";  // notices a client that went away
+          return sink.write(out.data(), out.size());
+        });
+  });
+  server.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    if (res.status == 404 && res.body.empty()) not_found(res, "no such route");
+  });
+}
+
+}  // namespace peritwin::dashboard

@@ -1,0 +1,24 @@
+// The dashboard's HTTP routes (cpp-httplib), all read-only: nothing here publishes on the bus.
+//   /                         the page (embedded in the binary, dashboard/page.html)
+//   /chart.js                 Chart.js from Debian's libjs-chart.js (read at run time)
+//   /api/details              every detail with its latest summary
+//   /api/details/{id}         the latest state of one detail, 404 {"error"} if unknown
+//   /api/details/{id}/history its bounded history, 404 {"error"} if unknown
+//   /api/events               Server-Sent Events: one per STATE/STATUS/REJECT
+#pragma once
+
+#include <httplib.h>
+
+#include <string>
+
+#include "dashboard/store.h"
+
+namespace peritwin::dashboard {
+
+/// The page (generated from dashboard/page.html at build time).
+extern const char* const kPageHtml;
+
+/// Installs the routes on `server`; `chartjs` is the path of chart.min.js.
+void install_routes(httplib::Server& server, Store& store, const std::string& chartjs);
+
+}  // namespace peritwin::dashboard

@@ -1,0 +1,256 @@
+#include "dashboard/store.h"
+
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "messages/channels.h"
+#include "messages/codec.h"
+
+namespace peritwin::dashboard {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+constexpr std::size_t kMaxEvents = 1000;
+
+std::string dump(const Json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+/// null for NaN and ±Inf (JSON has neither), the number otherwise.
+Json number(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+/// The detail id of a decoded message if it is valid and belongs to the channel's token.
+bool belongs(const std::string& detail_id, const std::string& token) {
+  return messages::is_valid_detail_id(detail_id) && messages::detail_token(detail_id) == token;
+}
+
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+}  // namespace
+
+void Store::on_message(const std::string& channel, const void* data, std::size_t size,
+                       Clock::time_point now) {
+  const auto parts = messages::parse_channel(channel);
+  if (!parts) {
+    const std::lock_guard lock(mutex_);
+    count_undecodable("");
+    return;
+  }
+  const std::lock_guard lock(mutex_);
+  switch (parts->kind) {
+    case messages::Kind::kState: {
+      auto state = messages::decode_state(data, size);
+      if (!state || !belongs(state->detail_id, parts->token))
+        return count_undecodable(parts->token);
+      auto& d = details_[state->detail_id];
+      if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+      // One point per state: a STATE published again (the daemon answers a duplicate batch with
+      // it) adds none. A restarted daemon goes on from its checkpoint's seq, maybe a smaller one.
+      const bool again = d.state && d.state->state_seq == state->state_seq;
+      if (!again) {
+        d.history.push({static_cast<double>(state->total_cycles), state->crack_length_m,
+                        state->remaining_cycles, state->remaining_cycles_low,
+                        state->remaining_cycles_high, static_cast<double>(state->state_seq)});
+      }
+      ++d.states;
+      const std::string id = state->detail_id;
+      d.state = std::move(*state);
+      push_event("state", id, now);
+      return;
+    }
+    case messages::Kind::kStatus: {
+      auto status = messages::decode_status(data, size);
+      if (!status || !belongs(status->detail_id, parts->token)) {
+        return count_undecodable(parts->token);
+      }
+      auto& d = details_[status->detail_id];
+      if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+      d.status_at = now;
+      const std::string id = status->detail_id;
+      d.status = std::move(*status);
+      push_event("status", id, now);
+      return;
+    }
+    case messages::Kind::kReject: {
+      auto reject = messages::decode_reject(data, size);
+      if (!reject || !belongs(reject->detail_id, parts->token)) {
+        return count_undecodable(parts->token);
+      }
+      auto& d = details_[reject->detail_id];
+      if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+      ++d.rejects;
+      const std::string id = reject->detail_id;
+      d.last_reject = std::move(*reject);
+      push_event("reject", id, now);
+      return;
+    }
+    case messages::Kind::kField: {
+      const auto field = messages::decode_field(data, size);
+      if (!field || !belongs(field->detail_id, parts->token)) {
+        return count_undecodable(parts->token);
+      }
+      auto& d = details_[field->detail_id];
+      if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+      ++d.fields;  // counted only: the damage map needs the node coordinates (not on the bus)
+      return;
+    }
+    case messages::Kind::kLoad:
+      return;  // not subscribed
+  }
+}
+
+void Store::count_undecodable(const std::string& token) {
+  ++undecodable_[token];
+  ++undecodable_total_;
+}
+
+void Store::push_event(const std::string& kind, const std::string& detail, Clock::time_point now) {
+  Json j;
+  j["kind"] = kind;
+  j["detail"] = detail;
+  j["summary"] = Json::parse(detail_json_locked(detail, details_.at(detail), now));
+  events_.push_back({next_event_++, kind, dump(j)});
+  while (events_.size() > kMaxEvents) events_.pop_front();
+  changed_.notify_all();
+}
+
+std::string Store::detail_json_locked(const std::string& id, const DetailRecord& d,
+                                      Clock::time_point now) const {
+  Json j;
+  if (d.state) {
+    const auto& s = *d.state;
+    j = Json::parse(messages::state_json(s));
+    j["k_ii"] = number(s.k_ii);
+    j["remaining_life_source"] = s.remaining_life_source;
+    j["signed"] = s.tag_length > 0;
+    // K_I / K_II at the longest crack's (first) tip, when it has one.
+    if (!s.cracks.empty() && !s.cracks.front().tips.empty()) {
+      const auto& tip = s.cracks.front().tips.front();
+      j["tip"] = {{"x", number(tip.x)},
+                  {"y", number(tip.y)},
+                  {"k_i", number(tip.k_i)},
+                  {"k_ii", number(tip.k_ii)},
+                  {"k_status", static_cast<int>(tip.k_status)}};
+    } else {
+      j["tip"] = nullptr;
+    }
+  } else {
+    j["detail"] = id;
+    j["state_seq"] = nullptr;
+  }
+  // Health: the daemon's own word, unless its heartbeat stopped (stale) or never came.
+  const bool has_status = d.status.has_value();
+  const double age = seconds(now - (has_status ? d.status_at : d.first_seen));
+  j["health"] = age > kStaleAfterS ? "stale" : (has_status ? d.status->health : "waiting");
+  j["status_age_s"] = has_status ? Json(age) : Json(nullptr);
+  if (has_status) {
+    const auto& st = *d.status;
+    j["status"] = {{"health", st.health},
+                   {"last_seq", st.last_seq},
+                   {"pending", st.pending},
+                   {"lag_s", number(st.lag_s)},
+                   {"uptime_s", number(st.uptime_s)},
+                   {"errors", st.errors},
+                   {"duplicates", st.duplicates},
+                   {"gaps", st.gaps},
+                   {"busy_s", number(st.busy_s)},
+                   {"auth_rejects", st.auth_rejects},
+                   {"reject_rate", number(st.reject_rate)}};
+  } else {
+    j["status"] = nullptr;
+  }
+  j["states_received"] = d.states;
+  j["rejects"] = d.rejects;
+  if (d.last_reject) {
+    const auto& r = *d.last_reject;
+    j["last_reject"] = {{"source", r.source_id},
+                        {"seq", r.seq},
+                        {"code", static_cast<int>(r.code)},
+                        {"what", r.what},
+                        {"why", r.why}};
+  } else {
+    j["last_reject"] = nullptr;
+  }
+  j["fields"] = d.fields;
+  const auto u = undecodable_.find(messages::detail_token(id));
+  j["undecodable"] = u == undecodable_.end() ? 0 : u->second;
+  return dump(j);
+}
+
+std::string Store::details_json(Clock::time_point now) const {
+  const std::lock_guard lock(mutex_);
+  Json list = Json::array();
+  for (const auto& [id, d] : details_) list.push_back(Json::parse(detail_json_locked(id, d, now)));
+  Json j;
+  j["details"] = std::move(list);
+  j["undecodable"] = undecodable_total_;
+  return dump(j);
+}
+
+std::optional<std::string> Store::detail_json(const std::string& id, Clock::time_point now) const {
+  const std::lock_guard lock(mutex_);
+  const auto it = details_.find(id);
+  if (it == details_.end()) return std::nullopt;
+  return detail_json_locked(id, it->second, now);
+}
+
+std::optional<std::string> Store::history_json(const std::string& id) const {
+  const std::lock_guard lock(mutex_);
+  const auto it = details_.find(id);
+  if (it == details_.end()) return std::nullopt;
+  const auto& h = it->second.history;
+  static constexpr const char* kColumns[] = {"cycles", "crack_length_m", "remaining",
+                                             "low",    "high",           "state_seq"};
+  Json j;
+  j["detail"] = id;
+  j["pushed"] = h.pushed();
+  for (std::size_t c = 0; c < 6; ++c) {
+    Json column = Json::array();
+    for (const auto& row : h.rows()) {
+      // cycles and state_seq are integers (exact below 2^53).
+      if (c == 0 || c == 5) {
+        column.push_back(static_cast<std::int64_t>(row[c]));
+      } else {
+        column.push_back(number(row[c]));
+      }
+    }
+    j[kColumns[c]] = std::move(column);
+  }
+  return dump(j);
+}
+
+std::int64_t Store::undecodable_total() const {
+  const std::lock_guard lock(mutex_);
+  return undecodable_total_;
+}
+
+std::deque<Event> Store::events_after(std::uint64_t after, std::chrono::milliseconds wait) const {
+  std::unique_lock lock(mutex_);
+  changed_.wait_for(lock, wait,
+                    [&] { return closed_ || (!events_.empty() && events_.back().id > after); });
+  std::deque<Event> out;
+  for (const auto& e : events_) {
+    if (e.id > after) out.push_back(e);
+  }
+  return out;
+}
+
+std::uint64_t Store::last_event_id() const {
+  const std::lock_guard lock(mutex_);
+  return next_event_ - 1;
+}
+
+void Store::close() {
+  const std::lock_guard lock(mutex_);
+  closed_ = true;
+  changed_.notify_all();
+}
+
+bool Store::closed() const {
+  const std::lock_guard lock(mutex_);
+  return closed_;
+}
+
+}  // namespace peritwin::dashboard
