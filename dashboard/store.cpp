@@ -97,7 +97,8 @@ void Store::on_message(const std::string& channel, const void* data, std::size_t
       return;
     }
     case messages::Kind::kLoad:
-      return;  // not subscribed
+    case messages::Kind::kSamples:
+      return;  // producers' channels: not subscribed
   }
 }
 
