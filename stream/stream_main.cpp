@@ -248,16 +248,10 @@ int main(int argc, char** argv) {
     std::cerr << loaded.error_text();
     return kExitUsage;
   }
-  const twin::DetailConfig* detail = &loaded.config->details.front();
-  if (!detail_id.empty()) {
-    detail = nullptr;
-    for (const auto& d : loaded.config->details) {
-      if (d.id == detail_id) detail = &d;
-    }
-    if (detail == nullptr) {
-      std::cerr << "peritwin-stream: no detail \"" << detail_id << "\" in " << config_file << "\n";
-      return kExitUsage;
-    }
+  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, detail_id);
+  if (detail == nullptr) {
+    std::cerr << "peritwin-stream: no detail \"" << detail_id << "\" in " << config_file << "\n";
+    return kExitUsage;
   }
   if (source_id.empty() || source_id.size() > twin::kMaxSourceIdLength) {
     std::cerr << "peritwin-stream: --source must have 1 to 64 characters\n";

@@ -339,6 +339,14 @@ ConfigResult parse_config(std::string_view text, std::string_view file_name,
   return result;
 }
 
+const DetailConfig* select_detail(const TwinConfig& config, std::string_view id) {
+  if (id.empty()) return config.details.empty() ? nullptr : &config.details.front();
+  for (const auto& d : config.details) {
+    if (d.id == id) return &d;
+  }
+  return nullptr;
+}
+
 ConfigResult load_config(const std::string& file, const ConfigLimits& limits) {
   const auto failure = [&file](std::string reason) {
     ConfigResult result;

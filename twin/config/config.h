@@ -284,6 +284,10 @@ struct TwinConfig {
   std::optional<AuthConfig> auth;  ///< absent: unauthenticated
 };
 
+/// The detail a producer's --detail names: the one with id `id`, the first when `id` is empty,
+/// nullptr when no detail has that id (the tools' "no detail \"X\" in FILE").
+[[nodiscard]] const DetailConfig* select_detail(const TwinConfig& config, std::string_view id);
+
 /// A source id (or key id): 1 to kMaxSourceIdLength (64) printable ASCII characters without
 /// blanks — the rule check_batch applies to load_batch_t.source_id (messages/batch.cpp, where it is
 /// not exported; keep the two in step).
