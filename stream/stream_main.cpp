@@ -470,12 +470,24 @@ int main(int argc, char** argv) {
 
   LineInput lines_in;
   bool input_open = true;
+  bool lines_idle = false;  // the last pass read no line: wait for the input or the bus
   std::vector<std::string> lines;
   while (input_open && g_signal.load() == 0) {
     // Back-pressure: a FILE is read no faster than the daemon applies.
     const bool backlog =
         sender && sender->last_seq() - std::max<std::int64_t>(sender->acked_seq(), 0) >
                       static_cast<std::int64_t>(4 * std::max<std::size_t>(options.window, 1));
+    // One wait over the input and the bus: a sample that closes a batch is read the moment it
+    // arrives, not after an LCM wait (which cost up to 20 ms of latency per batch, issue 16).
+    const int input_fd = kind == In::fd    ? fd
+                         : kind == In::tcp ? (conn_fd >= 0 ? conn_fd : listen_fd)
+                                           : -1;
+    if (sender && lines_idle) {
+      pollfd p[2] = {{input_fd, POLLIN, 0}, {lcm->getFileno(), POLLIN, 0}};
+      const nfds_t n = input_fd >= 0 && !backlog ? 2 : 1;
+      if (n == 1) p[0] = p[1];
+      ::poll(p, n, 20);
+    }
     const int wait_ms = sender ? 0 : 50;
     lines.clear();
     if (!backlog) {
@@ -516,7 +528,8 @@ int main(int argc, char** argv) {
     }
     if (!deliver()) break;
     if (!state_file.empty()) stream::write_received(state_file, pipe.counts.samples);
-    if (sender && sender->pump(lines.empty() ? 20 : 0) == replay::BatchSender::Progress::failed) {
+    lines_idle = lines.empty();
+    if (sender && sender->pump(0) == replay::BatchSender::Progress::failed) {
       error = sender->error();
       break;
     }
