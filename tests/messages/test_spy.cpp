@@ -216,9 +216,12 @@ TEST_F(LcmSpy, DecodesEveryTypeAndOpensViewerAndPlot) {
   set_env("PERITWIN_SPY_CHECK_TYPES", type_list);
   set_env("PERITWIN_SPY_CHECK_PREFIX", prefix);
   set_env("PERITWIN_SPY_CHECK_SECONDS", "240");
-  const Outcome spy =
-      run({xvfb_run, "-a", kSpy.string(), "--build-dir", kBuildDir.string(), "--lcm-url", url},
-          dir_, "spy");
+  // timeout signals its whole process group: Xvfb and Spy too, should Spy hang without the check.
+  const std::string timeout = find_program("timeout");
+  ASSERT_FALSE(timeout.empty());
+  const Outcome spy = run({timeout, "-k", "10", "270", xvfb_run, "-a", kSpy.string(), "--build-dir",
+                           kBuildDir.string(), "--lcm-url", url},
+                          dir_, "spy");
   EXPECT_EQ(spy.exit_code, 0) << spy.out << spy.err;
   EXPECT_NE(spy.out.find("spy-check: OK\n"), std::string::npos) << spy.out << spy.err;
   EXPECT_EQ(spy.out.find("spy-check: FAIL"), std::string::npos) << spy.out;

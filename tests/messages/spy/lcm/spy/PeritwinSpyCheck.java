@@ -119,7 +119,7 @@ public final class PeritwinSpyCheck implements SpyPlugin {
         final String text = line.toString();
         line.setLength(0);
         if (!text.startsWith("spy-check: ") && (text.contains("Exception") || text.contains("Error"))) {
-          failures.add("Spy printed: " + text);
+          fail("Spy printed: " + text);
         }
       }
 
