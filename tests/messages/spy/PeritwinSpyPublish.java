@@ -19,16 +19,27 @@ import lcm.lcm.LCMEncodable;
 public final class PeritwinSpyPublish {
   private static final int kCount = 2;
 
-  public static void main(String[] args) throws Exception {
+  public static void main(String[] args) {
     if (args.length < 4) {
       System.err.println("usage: PeritwinSpyPublish URL PREFIX SECONDS TYPE...");
       System.exit(2);
     }
+    try {
+      publish(args);
+    } catch (Throwable e) {
+      // Exit: LCM's threads would keep the JVM alive.
+      e.printStackTrace();
+      System.exit(1);
+    }
+    System.exit(0);
+  }
+
+  static void publish(String[] args) throws Exception {
+    final List<Class<?>> types = new ArrayList<>();
+    for (int i = 3; i < args.length; ++i) types.add(Class.forName("peritwin_msgs." + args[i]));
     final LCM lcm = new LCM(args[0]);
     final String prefix = args[1];
     final long end = System.nanoTime() + (long) (Double.parseDouble(args[2]) * 1e9);
-    final List<Class<?>> types = new ArrayList<>();
-    for (int i = 3; i < args.length; ++i) types.add(Class.forName("peritwin_msgs." + args[i]));
 
     for (int round = 0; System.nanoTime() < end; ++round) {
       for (Class<?> type : types) {
