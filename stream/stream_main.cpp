@@ -105,8 +105,13 @@ class LineInput {
 /// the key of their source_id (messages/README.md, "Authentication").
 class SamplesInput {
  public:
-  SamplesInput(lcm::LCM& lcm, std::string detail_id, std::optional<messages::KeyRing> ring)
-      : lcm_(lcm), detail_id_(std::move(detail_id)), ring_(std::move(ring)) {
+  /// `taken`: the last seq per source already taken (from the state file).
+  SamplesInput(lcm::LCM& lcm, std::string detail_id, std::optional<messages::KeyRing> ring,
+               std::map<std::string, std::int64_t> taken)
+      : lcm_(lcm),
+        detail_id_(std::move(detail_id)),
+        ring_(std::move(ring)),
+        last_(std::move(taken)) {
     sub_ = lcm_.subscribe(messages::channel(detail_id_, messages::Kind::kSamples),
                           &SamplesInput::on_msg, this);
     sub_->setQueueCapacity(100'000);
@@ -162,8 +167,8 @@ class SamplesInput {
   lcm::LCM& lcm_;
   std::string detail_id_;
   std::optional<messages::KeyRing> ring_;
-  lcm::Subscription* sub_ = nullptr;
   std::map<std::string, std::int64_t> last_;
+  lcm::Subscription* sub_ = nullptr;
 };
 
 /// The twin in this process (deterministic mode, as peritwin-replay --in-process).
@@ -454,7 +459,8 @@ int main(int argc, char** argv) {
       std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
                    "--sign-only): anyone on the bus can feed this stream\n";
     }
-    samples_in = std::make_unique<SamplesInput>(*lcm, detail->id, std::move(ring));
+    samples_in =
+        std::make_unique<SamplesInput>(*lcm, detail->id, std::move(ring), pipe.samples_taken);
   }
   if (kind == In::tcp) {
     listen_fd = listen_on(port);
@@ -579,6 +585,7 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < s.p.size(); ++i) {
           take(s.time(i), s.p[i], s.alpha.empty() ? 0.0 : s.alpha[i]);
         }
+        pipe.samples_taken[s.source_id] = s.seq;
       }
     }
     if (!deliver()) break;
