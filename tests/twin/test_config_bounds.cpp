@@ -503,6 +503,37 @@ TEST(ConfigResourceBounds, AllDetailsTogetherRefusedAtTheLargest) {
       << r.errors[0].message();
 }
 
+TEST(ConfigServedDetails, OnlyTheServedDetailsAreReturnedAndCountedAgainstTheLimit) {
+  // The daemon's --details (a fleet sharing one config): two plates over the limit together, each
+  // under it alone. Serving one: accepted, that detail only; serving both: refused as before; an
+  // id the file does not have: an error naming it and the file's details.
+  const std::string grid = "dx = 0.00025\n";
+  const std::string text =
+      detail_toml("small", 0.010, 0.005, grid) + detail_toml("large", 0.020, 0.010, grid);
+  const ConfigResult unlimited = parse_config(text, "two.toml", ConfigLimits{1024 * kGiB});
+  ASSERT_TRUE(unlimited.ok()) << unlimited.error_text();
+  const double small = estimate_resources(unlimited.config->details[0]).bytes;
+  const double large = estimate_resources(unlimited.config->details[1]).bytes;
+  const auto limit = static_cast<std::uint64_t>(large + 0.5 * small);
+
+  const ConfigResult one = parse_config(text, "two.toml", ConfigLimits{limit, {"large"}});
+  ASSERT_TRUE(one.ok()) << one.error_text();
+  ASSERT_EQ(one.config->details.size(), 1u);
+  EXPECT_EQ(one.config->details[0].id, "large");
+
+  const ConfigResult both =
+      parse_config(text, "two.toml", ConfigLimits{limit, {"small", "large"}});
+  ASSERT_EQ(both.errors.size(), 1u) << both.error_text();
+  EXPECT_EQ(both.errors[0].path, "detail[1].grid.dx");
+
+  const ConfigResult unknown =
+      parse_config(text, "two.toml", ConfigLimits{1024 * kGiB, {"small", "nope"}});
+  ASSERT_EQ(unknown.errors.size(), 1u) << unknown.error_text();
+  EXPECT_EQ(unknown.errors[0].path, "--details");
+  EXPECT_EQ(unknown.errors[0].reason,
+            "no detail \"nope\" in the file (its details: small, large)");
+}
+
 TEST(ConfigResourceBounds, HostileGeometryEndsInErrorsNotExceptions) {
   // 1500 abutting rectangles 1 m x 1 m at dx = 0.1 mm (1.5e11 nodes): swept exactly (4.5e6 steps);
   // with 20 holes besides, the sweep would take 9.5e7 steps and the bounding box stands in. Then

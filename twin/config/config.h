@@ -299,6 +299,10 @@ struct ConfigLimits {
   /// default, default_memory_limit(); UINT64_MAX = no memory bound (a tool that builds no model,
   /// e.g. peritwin-replay over LCM; the 32-bit index bound still applies).
   std::uint64_t max_memory_bytes = 0;
+  /// The ids of the details this process serves (the daemon's --details, a fleet sharing one
+  /// config): the whole file is still checked, but only these details are returned and counted
+  /// against max_memory_bytes; an id the file does not have is an error. Empty: every detail.
+  std::vector<std::string> served_details{};
 };
 
 /// 75 % of the machine's physical memory (sysconf(_SC_PHYS_PAGES) · sysconf(_SC_PAGE_SIZE)); 8 GiB

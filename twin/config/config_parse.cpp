@@ -792,6 +792,13 @@ void check_resources(Context& ctx, const std::vector<Sized>& sized) {
 
 }  // namespace
 
+/// Whether this process serves detail `id` (ConfigLimits::served_details).
+bool served(const Context& ctx, const std::string& id) {
+  return ctx.served_details.empty() ||
+         std::find(ctx.served_details.begin(), ctx.served_details.end(), id) !=
+             ctx.served_details.end();
+}
+
 TwinConfig parse_document(Context& ctx, const toml::table& root) {
   TwinConfig config;
   TableReader r(ctx, root, "");
@@ -803,7 +810,7 @@ TwinConfig parse_document(Context& ctx, const toml::table& root) {
                const std::size_t i = config.details.size();
                std::optional<ResourceEstimate> estimate;
                DetailConfig d = read_detail(ctx, t, path, &estimate);
-               if (estimate) sized.push_back({&t, path, *estimate});
+               if (estimate && served(ctx, d.id)) sized.push_back({&t, path, *estimate});
                if (!d.token.empty()) {
                  const auto [it, fresh] = tokens.emplace(d.token, i);
                  if (!fresh) {
@@ -828,6 +835,19 @@ TwinConfig parse_document(Context& ctx, const toml::table& root) {
   if (const auto* a = r.table("auth", false)) config.auth = read_auth(ctx, *a, "auth");
   r.finish();
   check_resources(ctx, sized);
+  if (!ctx.served_details.empty()) {
+    // A fleet sharing one config: this process serves the listed details only.
+    std::string ids;
+    for (const auto& d : config.details) ids += (ids.empty() ? "" : ", ") + d.id;
+    for (const std::string& id : ctx.served_details) {
+      if (std::none_of(config.details.begin(), config.details.end(),
+                       [&](const DetailConfig& d) { return d.id == id; })) {
+        ctx.errors.push_back({ctx.file, 0, 0, "--details",
+                              "no detail \"" + id + "\" in the file (its details: " + ids + ")"});
+      }
+    }
+    std::erase_if(config.details, [&](const DetailConfig& d) { return !served(ctx, d.id); });
+  }
   return config;
 }
 

@@ -29,6 +29,8 @@ struct Context {
   /// The most memory all details together may need (bytes, ConfigLimits resolved); 0 = unbounded.
   std::uint64_t max_memory_bytes = 0;
   bool default_memory_limit = false;  ///< max_memory_bytes is default_memory_limit()
+  /// ConfigLimits::served_details (empty: every detail is served).
+  std::vector<std::string> served_details{};
   void error(const toml::source_region& where, std::string path, std::string reason);
   [[nodiscard]] SourceRef ref(const toml::node& node, std::string path) const;
 };

@@ -2,6 +2,7 @@
 //
 //   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
 //            [--deterministic] [--no-results] [--fresh-start] [--max-memory BYTES]
+//            [--details ID,ID,...]
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
 // (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
@@ -50,6 +51,11 @@ int main(int argc, char** argv) {
   app.add_flag("--fresh-start", fresh_start,
                "start from the virgin state when checkpoints exist but none is valid (by "
                "default the daemon then refuses to start, naming each file and why)");
+  std::vector<std::string> served_details;
+  app.add_option("--details", served_details,
+                 "serve only these details of --config (ids, comma-separated): several daemons "
+                 "share one config, each detail served by one of them (default: every detail)")
+      ->delimiter(',');
   std::string max_memory;
   app.add_option("--max-memory", max_memory,
                  "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
@@ -70,7 +76,7 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   const auto loaded = peritwin::twin::load_config(
-      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0)});
+      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0), served_details});
   if (!loaded.ok()) {
     for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
     return kExitUsage;
