@@ -19,12 +19,16 @@
 // its "state" event (detail and state_seq; the event's cycles are checked against the state's)
 // at the SSE client (the time recv() returned the bytes that completed it). The dashboard's CPU is
 // utime + stime from /proc/<pid>/stat over the window divided by the window's wall time; its RSS
-// is VmRSS at the end of the window and VmHWM (peak) from /proc/<pid>/status. One JSON line:
+// is VmRSS at the end of the window and VmHWM (peak) from /proc/<pid>/status. Between the warm-up
+// and the window every detail's history is fetched once (/api/details/{id}/history, as the page
+// does when it loads): its points (history_points_*) and the time of each request
+// (history_get_ms; the store's mutex is held while the JSON is built). One JSON line:
 //   {"bench":"dashboard","details":…,"states_per_s_per_detail":…,"states_per_s":…,"duration_s":…,
 //    "warmup_states_per_detail":…,"warmup_s":…,"warmup_cpu_us_per_state":…,"history_points_min":…,
-//    "history_points_max":…,"published":…,"events":…,"missing_events":…,"cycle_mismatches":…,
-//    "latency_ms":{"p50":…,"p90":…,"p99":…,"max":…},"cpu_fraction_of_core":…,
-//    "cpu_us_per_state":…,"rss_after_warmup_mb":…,"rss_mb":…,"rss_peak_mb":…,
+//    "history_points_max":…,"history_get_ms":{"mean":…,"max":…},"published":…,"events":…,
+//    "missing_events":…,"cycle_mismatches":…,"status_events":…,
+//    "latency_ms":{"p50":…,"p90":…,"p99":…,"max":…},"cpu_fraction_of_core":…,"cpu_us_per_state":…,
+//    "rss_after_warmup_mb":…,"rss_mb":…,"rss_peak_mb":…,
 //    "goals":{"p99_ms":20,"cpu_fraction_of_core":0.1,"rss_mb":200},
 //    "pass":{"p99":…,"cpu":…,"rss":…},"load_average_1min":…,"sse_quickack":…,"dashboard_exit":…,
 //    "transport":"tcpq"}
@@ -54,6 +58,7 @@
 #include <iostream>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <optional>
 #include <regex>
 #include <sstream>
@@ -116,7 +121,8 @@ std::string read_text(const fs::path& file) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// --- /proc ----------------------------------------------------------------------------------------
+// --- /proc
+// ----------------------------------------------------------------------------------------
 
 /// A field of /proc/<pid>/status in kB (VmRSS, VmHWM), or -1.
 std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
@@ -140,12 +146,13 @@ double proc_cpu_s(pid_t pid) {
   std::vector<std::string> fields;
   while (fields.size() < 13 && in >> field) fields.push_back(field);
   if (fields.size() < 13) return -1.0;
-  const double ticks = static_cast<double>(std::atoll(fields[11].c_str()) +
-                                           std::atoll(fields[12].c_str()));
+  const double ticks =
+      static_cast<double>(std::atoll(fields[11].c_str()) + std::atoll(fields[12].c_str()));
   return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
-// --- HTTP -----------------------------------------------------------------------------------------
+// --- HTTP
+// -----------------------------------------------------------------------------------------
 
 int connect_loopback(int port, double recv_timeout_s) {
   const int s = socket(AF_INET, SOCK_STREAM, 0);
@@ -192,7 +199,8 @@ std::optional<std::string> http_get(int port, const std::string& path) {
   return text.substr(end + 4);
 }
 
-// --- what is published ----------------------------------------------------------------------------
+// --- what is published
+// ----------------------------------------------------------------------------
 
 std::string detail_id(int i) {
   char id[24];
@@ -288,7 +296,8 @@ peritwin_msgs::status_t status_message(int i, std::int64_t last_seq, double upti
   return st;
 }
 
-// --- the SSE client -------------------------------------------------------------------------------
+// --- the SSE client
+// -------------------------------------------------------------------------------
 
 /// Publication times of the measured states, by detail and seq (from first_seq), and the arrival
 /// latencies of their events.
@@ -354,9 +363,9 @@ class SseClient {
  public:
   SseClient(int port, Matcher& matcher, bool quickack) : matcher_(matcher), quickack_(quickack) {
     socket_ = connect_loopback(port, 0.5);
-    if (socket_ < 0 ||
-        !send_all(socket_, "GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n"
-                           "Accept: text/event-stream\r\nCache-Control: no-cache\r\n\r\n")) {
+    if (socket_ < 0 || !send_all(socket_,
+                                 "GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                                 "Accept: text/event-stream\r\nCache-Control: no-cache\r\n\r\n")) {
       error_ = "cannot connect to /api/events";
       return;
     }
@@ -475,7 +484,8 @@ int main(int argc, char** argv) {
                  "(default 10000: the history bound, full histories)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{10'000'000}));
   app.add_option("--lcm-url", lcm_url, "use this tcpq URL instead of starting a hub");
-  app.add_option("--dashboard", dashboard_bin, "the peritwin-dashboard binary (default: next to this one)");
+  app.add_option("--dashboard", dashboard_bin,
+                 "the peritwin-dashboard binary (default: next to this one)");
   app.add_flag("--sse-quickack", sse_quickack,
                "TCP_QUICKACK on the SSE client before every receive (a diagnosis: no delayed ACKs "
                "from the client, unlike a browser)");
@@ -494,8 +504,7 @@ int main(int argc, char** argv) {
     if (!keep) fs::remove_all(work);
   };
   auto fail = [&](const std::string& why) {
-    std::cerr << "peritwin-bench-dashboard: " << why << " (logs kept in " << work.string()
-              << ")\n";
+    std::cerr << "peritwin-bench-dashboard: " << why << " (logs kept in " << work.string() << ")\n";
     keep = true;
     cleanup();
     return 3;
@@ -511,9 +520,9 @@ int main(int argc, char** argv) {
     lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
   }
   const fs::path out_file = work / "dashboard.out", log_file = work / "dashboard.log";
-  dashboard = spawn({dashboard_bin, "--lcm-url", lcm_url, "--listen", "127.0.0.1:0", "--log-level",
-                     "info"},
-                    out_file.string(), log_file.string());
+  dashboard =
+      spawn({dashboard_bin, "--lcm-url", lcm_url, "--listen", "127.0.0.1:0", "--log-level", "info"},
+            out_file.string(), log_file.string());
   if (dashboard < 0) return fail("cannot start " + dashboard_bin);
   auto dashboard_alive = [&] { return waitpid(dashboard, nullptr, WNOHANG) == 0; };
   int http_port = -1;
@@ -566,8 +575,8 @@ int main(int argc, char** argv) {
       std::int64_t complete = 0;
       if (j.is_object() && j.contains("details")) {
         for (const auto& d : j["details"]) {
-          if (d.value("states_received", std::int64_t{-1}) == warmup &&
-              !d["status"].is_null() && d["status"].value("last_seq", -1) == warmup) {
+          if (d.value("states_received", std::int64_t{-1}) == warmup && !d["status"].is_null() &&
+              d["status"].value("last_seq", -1) == warmup) {
             ++complete;
           }
         }
@@ -582,8 +591,11 @@ int main(int argc, char** argv) {
   const double warmup_s = since(warmup_t0);
   const double warmup_cpu_s = proc_cpu_s(dashboard) - cpu_before_warmup;
   if (!counted) return fail("the dashboard did not count every warm-up state within 600 s");
+  std::vector<double> history_ms;  // per request, as the client sees it
   for (int i = 0; i < details; ++i) {
+    const auto h0 = Clock::now();
     const auto body = http_get(http_port, "/api/details/" + detail_id(i) + "/history");
+    history_ms.push_back(1e3 * since(h0));
     if (!body) return fail("no history for " + detail_id(i));
     const auto j = nlohmann::json::parse(*body, nullptr, false);
     const auto n = j.is_object() ? static_cast<std::int64_t>(j["cycles"].size()) : -1;
@@ -667,6 +679,11 @@ int main(int argc, char** argv) {
                        : tools::JsonLine(nullptr);
   line["history_points_min"] = history_min;
   line["history_points_max"] = history_max;
+  line["history_get_ms"] = {
+      {"mean", tools::fixed(std::accumulate(history_ms.begin(), history_ms.end(), 0.0) /
+                                static_cast<double>(history_ms.size()),
+                            2)},
+      {"max", tools::fixed(*std::max_element(history_ms.begin(), history_ms.end()), 2)}};
   line["published"] = k_state;
   line["events"] = static_cast<std::int64_t>(latencies.size());
   line["missing_events"] = missing;
@@ -676,10 +693,8 @@ int main(int argc, char** argv) {
   lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
   lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
   lat["p99"] = tools::fixed(p99, 2);
-  lat["max"] = tools::fixed(latencies.empty() ? std::nan("") : *std::max_element(
-                                                                    latencies.begin(),
-                                                                    latencies.end()),
-                            2);
+  lat["max"] = tools::fixed(
+      latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
   line["latency_ms"] = lat;
   line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
   line["cpu_us_per_state"] =
@@ -688,8 +703,8 @@ int main(int argc, char** argv) {
   line["rss_after_warmup_mb"] = tools::fixed(static_cast<double>(rss_after_warmup) / 1024.0, 1);
   line["rss_mb"] = tools::fixed(rss_mb, 1);
   line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
-  line["goals"] = {{"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu},
-                   {"rss_mb", kGoalRssMb}};
+  line["goals"] = {
+      {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
   line["pass"] = {{"p99", missing == 0 && p99 <= kGoalP99Ms},
                   {"cpu", cpu_fraction <= kGoalCpu},
                   {"rss", peak_mb <= kGoalRssMb}};
