@@ -27,15 +27,20 @@
 //    "warmup_states_per_detail":…,"warmup_s":…,"warmup_cpu_us_per_state":…,"history_points_min":…,
 //    "history_points_max":…,"history_get_ms":{"mean":…,"max":…},"published":…,"events":…,
 //    "missing_events":…,"cycle_mismatches":…,"status_events":…,
-//    "latency_ms":{"p50":…,"p90":…,"p99":…,"max":…},"cpu_fraction_of_core":…,"cpu_us_per_state":…,
+//    "sse_clients":…,"latency_ms":{"p50":…,"p90":…,"p99":…,"max":…,"over_goal_fraction":…},
+//    ["lcm_reference_latency_ms":{"events":…,"p50":…,"p99":…,"max":…,"over_goal_fraction":…},]
+//    "cpu_fraction_of_core":…,"cpu_us_per_state":…,
 //    "rss_after_warmup_mb":…,"rss_mb":…,"rss_peak_mb":…,
 //    "goals":{"p99_ms":20,"cpu_fraction_of_core":0.1,"rss_mb":200},
 //    "pass":{"p99":…,"cpu":…,"rss":…},"load_average_1min":…,"sse_quickack":…,"dashboard_exit":…,
 //    "transport":"tcpq"}
-// load_average_1min (/proc/loadavg at the end of the window) says how busy the machine was: on a
-// shared machine the tail latency is mostly other processes' time slices.
-// Exit 0 when measured (whatever the goals say: timings depend on the machine), 3 on a runtime
-// failure (hub, dashboard, a dashboard that does not count the warm-up states).
+// over_goal_fraction: the events later than the goal (20 ms). --sse-clients N: N clients on
+// /api/events (browser tabs), the first one timed. lcm_reference_latency_ms (--lcm-reference): the
+// same states timed to a second LCM subscriber in this process, the hub's share. load_average_1min
+// (/proc/loadavg at the end of the window) says how busy the machine was: on a shared machine the
+// tail latency is mostly other processes' time slices. Exit 0 when measured (whatever the goals
+// say: timings depend on the machine), 3 on a runtime failure (hub, dashboard, a dashboard that
+// does not count the warm-up states).
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -361,7 +366,8 @@ std::optional<std::int64_t> int_after(const std::string& text, const std::string
 /// to the matcher with the time its last bytes arrived.
 class SseClient {
  public:
-  SseClient(int port, Matcher& matcher, bool quickack) : matcher_(matcher), quickack_(quickack) {
+  /// `matcher` null: the events are read and counted, not timed.
+  SseClient(int port, Matcher* matcher, bool quickack) : matcher_(matcher), quickack_(quickack) {
     socket_ = connect_loopback(port, 0.5);
     if (socket_ < 0 || !send_all(socket_,
                                  "GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n"
@@ -442,15 +448,55 @@ class SseClient {
     if (summary == std::string::npos) return;
     const auto seq = int_after(event, "state_seq", summary);
     const auto cycles = int_after(event, "cycles", summary);
-    if (seq && cycles) matcher_.arrived(i, *seq, *cycles, at);
+    if (seq && cycles && matcher_ != nullptr) matcher_->arrived(i, *seq, *cycles, at);
   }
 
-  Matcher& matcher_;
+  Matcher* matcher_;
   bool quickack_;
   int socket_ = -1;
   std::thread thread_;
   std::atomic<bool> stop_{false}, headers_done_{false};
   std::atomic<std::int64_t> state_events_{0}, status_events_{0};
+  std::string error_;
+};
+
+/// A second LCM subscriber to every STATE, in this process: the hub's own share of the latency
+/// (publication to delivery to a subscriber), the part no dashboard can remove.
+class ReferenceSubscriber {
+ public:
+  ReferenceSubscriber(const std::string& url, Matcher& matcher) : matcher_(matcher) {
+    lcm_ = std::make_unique<lcm::LCM>(url);
+    if (!lcm_->good() || !peritwin::messages::transport_up(*lcm_)) {
+      error_ = "the reference subscriber cannot open LCM at " + url;
+      return;
+    }
+    lcm_->subscribeFunction(
+        peritwin::messages::channel_regex(peritwin::messages::Kind::kState),
+        +[](const lcm::ReceiveBuffer* rbuf, const std::string&, ReferenceSubscriber* self) {
+          const auto at = Clock::now();
+          const auto s = peritwin::messages::decode_state(rbuf->data, rbuf->data_size);
+          if (!s || s->detail_id.rfind("bench-", 0) != 0) return;
+          self->matcher_.arrived(std::atoi(s->detail_id.c_str() + 6), s->state_seq, s->total_cycles,
+                                 at);
+        },
+        this);
+    thread_ = std::thread([this] {
+      while (!stop_) peritwin::messages::handle_lcm(*lcm_, 100);
+    });
+  }
+  ~ReferenceSubscriber() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  ReferenceSubscriber(const ReferenceSubscriber&) = delete;
+  ReferenceSubscriber& operator=(const ReferenceSubscriber&) = delete;
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+ private:
+  Matcher& matcher_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
   std::string error_;
 };
 
@@ -472,7 +518,8 @@ int main(int argc, char** argv) {
   std::string lcm_url;
   std::string dashboard_bin =
       (fs::read_symlink("/proc/self/exe").parent_path() / "peritwin-dashboard").string();
-  bool keep = false, sse_quickack = false;
+  bool keep = false, sse_quickack = false, reference = false;
+  int sse_clients = 1;
   app.add_option("--details", details, "details publishing (default 100)")
       ->check(CLI::Range(1, 999));
   app.add_option("--rate", rate, "states per second per detail (default 10)")
@@ -486,9 +533,15 @@ int main(int argc, char** argv) {
   app.add_option("--lcm-url", lcm_url, "use this tcpq URL instead of starting a hub");
   app.add_option("--dashboard", dashboard_bin,
                  "the peritwin-dashboard binary (default: next to this one)");
+  app.add_option("--sse-clients", sse_clients,
+                 "clients on /api/events, the first one timed (default 1; 0: none, no latency)")
+      ->check(CLI::Range(0, 100));
   app.add_flag("--sse-quickack", sse_quickack,
                "TCP_QUICKACK on the SSE client before every receive (a diagnosis: no delayed ACKs "
                "from the client, unlike a browser)");
+  app.add_flag("--lcm-reference", reference,
+               "also time each STATE to a second LCM subscriber in this process (the hub's share "
+               "of the latency; the hub then relays every STATE twice)");
   app.add_flag("--keep", keep, "keep the work directory (hub and dashboard logs)");
   CLI11_PARSE(app, argc, argv);
 
@@ -607,12 +660,22 @@ int main(int argc, char** argv) {
   // Measurement: an SSE client, then `rate` states per second per detail for `seconds`.
   const auto per_detail = static_cast<std::int64_t>(std::llround(rate * seconds));
   Matcher matcher(details, warmup + 1, per_detail);
-  SseClient sse(http_port, matcher, sse_quickack);
-  if (!sse.error().empty()) return fail(sse.error());
-  for (const auto t0 = Clock::now(); !sse.connected() && since(t0) < 10.0;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  Matcher lcm_matcher(details, warmup + 1, per_detail);
+  std::unique_ptr<ReferenceSubscriber> ref;
+  if (reference) {
+    ref = std::make_unique<ReferenceSubscriber>(lcm_url, lcm_matcher);
+    if (!ref->error().empty()) return fail(ref->error());
   }
-  if (!sse.connected()) return fail("no answer on /api/events");
+  std::vector<std::unique_ptr<SseClient>> sse;  // the first one timed
+  for (int c = 0; c < sse_clients; ++c) {
+    sse.push_back(
+        std::make_unique<SseClient>(http_port, c == 0 ? &matcher : nullptr, sse_quickack));
+    if (!sse.back()->error().empty()) return fail(sse.back()->error());
+    for (const auto t0 = Clock::now(); !sse.back()->connected() && since(t0) < 10.0;) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (!sse.back()->connected()) return fail("no answer on /api/events");
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const double state_period_s = 1.0 / (rate * static_cast<double>(details));
   const double status_period_s = 1.0 / static_cast<double>(details);
@@ -638,7 +701,9 @@ int main(int argc, char** argv) {
     const int i = static_cast<int>(k_state % details);
     const std::int64_t seq = warmup + 1 + k_state / details;
     const auto s = state_message(i, seq);
-    matcher.published(i, seq, Clock::now());
+    const auto at = Clock::now();
+    matcher.published(i, seq, at);
+    if (ref) lcm_matcher.published(i, seq, at);
     lcm->publish(state_channel[static_cast<std::size_t>(i)], &s);
     ++k_state;
     if (k_state % 1000 == 0 && (!messages::transport_up(*lcm) || !dashboard_alive())) break;
@@ -650,10 +715,13 @@ int main(int argc, char** argv) {
   const double load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
   // The last events.
   for (const auto t1 = Clock::now();
-       since(t1) < 2.0 && static_cast<std::int64_t>(matcher.latencies_ms().size()) < k_state;) {
+       sse_clients > 0 && since(t1) < 2.0 &&
+       static_cast<std::int64_t>(matcher.latencies_ms().size()) < k_state;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   const std::vector<double> latencies = matcher.latencies_ms();
+  ref.reset();
+  const std::vector<double> lcm_latencies = lcm_matcher.latencies_ms();
   const bool alive = dashboard_alive();
   const int dashboard_exit = alive ? stop_child(dashboard, 30.0) : -1;
   dashboard = -1;
@@ -661,6 +729,12 @@ int main(int argc, char** argv) {
 
   constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
   const double p99 = percentile(latencies, 0.99);
+  auto over_goal = [&](const std::vector<double>& v) {
+    return v.empty() ? std::nan("")
+                     : static_cast<double>(std::count_if(
+                           v.begin(), v.end(), [&](double x) { return x > kGoalP99Ms; })) /
+                           static_cast<double>(v.size());
+  };
   const double cpu_fraction = window_s > 0 ? cpu_s / window_s : 0.0;
   const double rss_mb = static_cast<double>(rss_end) / 1024.0;
   const double peak_mb = static_cast<double>(rss_peak) / 1024.0;
@@ -686,16 +760,26 @@ int main(int argc, char** argv) {
       {"max", tools::fixed(*std::max_element(history_ms.begin(), history_ms.end()), 2)}};
   line["published"] = k_state;
   line["events"] = static_cast<std::int64_t>(latencies.size());
-  line["missing_events"] = missing;
+  line["missing_events"] = sse_clients > 0 ? tools::JsonLine(missing) : tools::JsonLine(nullptr);
   line["cycle_mismatches"] = matcher.cycle_mismatches();
-  line["status_events"] = sse.status_events();
+  line["sse_clients"] = sse_clients;
+  line["status_events"] = sse.empty() ? 0 : sse.front()->status_events();
   tools::JsonLine lat;
   lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
   lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
   lat["p99"] = tools::fixed(p99, 2);
   lat["max"] = tools::fixed(
       latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
+  lat["over_goal_fraction"] = tools::fixed(over_goal(latencies), 4);
   line["latency_ms"] = lat;
+  if (reference) {
+    line["lcm_reference_latency_ms"] = {
+        {"events", static_cast<std::int64_t>(lcm_latencies.size())},
+        {"p50", tools::fixed(percentile(lcm_latencies, 0.50), 2)},
+        {"p99", tools::fixed(percentile(lcm_latencies, 0.99), 2)},
+        {"max", tools::fixed(percentile(lcm_latencies, 1.0), 2)},
+        {"over_goal_fraction", tools::fixed(over_goal(lcm_latencies), 4)}};
+  }
   line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
   line["cpu_us_per_state"] =
       k_state > 0 ? tools::JsonLine(tools::fixed(1e6 * cpu_s / static_cast<double>(k_state), 1))
@@ -705,7 +789,8 @@ int main(int argc, char** argv) {
   line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
   line["goals"] = {
       {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
-  line["pass"] = {{"p99", missing == 0 && p99 <= kGoalP99Ms},
+  line["pass"] = {{"p99", sse_clients > 0 ? tools::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
+                                          : tools::JsonLine(nullptr)},
                   {"cpu", cpu_fraction <= kGoalCpu},
                   {"rss", peak_mb <= kGoalRssMb}};
   line["load_average_1min"] = load_average;
