@@ -7,6 +7,7 @@
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
 //   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE latency)
+//   peritwin-bench dashboard [...]                   peritwin-bench-dashboard (SSE latency)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -330,7 +331,7 @@ int main(int argc, char** argv) {
   // library or daemon, which this solver benchmark does not link) from the same directory with
   // the same arguments.
   if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak" ||
-                    std::string(argv[1]) == "stream")) {
+                    std::string(argv[1]) == "stream" || std::string(argv[1]) == "dashboard")) {
     const auto self = std::filesystem::read_symlink("/proc/self/exe");
     const std::string program =
         (self.parent_path() / ("peritwin-bench-" + std::string(argv[1]))).string();

@@ -1,0 +1,768 @@
+// peritwin-bench-dashboard (also `peritwin-bench dashboard`): STATE-to-SSE-event latency of the
+// web dashboard under load, with its CPU and memory. Issue 17's goal: with 100 details publishing
+// 10 states/s each, the p99 from a STATE's publication to its Server-Sent Event is at most 20 ms,
+// the dashboard uses at most 10 % of one core and its RSS stays below 200 MB with full histories.
+//
+// Starts LCM's Java TCP hub on a free loopback port (unless --lcm-url is given) and the
+// `peritwin-dashboard` binary as a child process (--listen 127.0.0.1:0, the port read from its
+// stdout), then plays --details daemons on one LCM connection (TCP_NODELAY, as the daemon's):
+//   warm-up      --warmup states per detail as fast as the hub and the dashboard take them (LCM
+//                tcpq blocks the publisher when they fall behind), then waits until /api/details
+//                counts them all. The default, 10 000, is the dashboard's history bound
+//                (dashboard/store.h, kHistoryPoints): every detail's history is then full, at
+//                its cap, and the first state of the window makes each one decimate.
+//   measurement  one SSE client on /api/events (a plain socket, as a browser: no TCP options),
+//                then --seconds of STATE at --rate per detail, evenly staggered over the details,
+//                and a STATUS per detail every second (the daemon's heartbeat), then 2 s for the
+//                last events to arrive.
+// Each STATE's publication time (taken just before lcm.publish) is matched with the arrival of
+// its "state" event (detail and state_seq; the event's cycles are checked against the state's)
+// at the SSE client (the time recv() returned the bytes that completed it). The dashboard's CPU is
+// utime + stime from /proc/<pid>/stat over the window divided by the window's wall time; its RSS
+// is VmRSS at the end of the window and VmHWM (peak) from /proc/<pid>/status. Between the warm-up
+// and the window every detail's history is fetched once (/api/details/{id}/history, as the page
+// does when it loads): its points (history_points_*) and the time of each request
+// (history_get_ms; the store's mutex is held while the JSON is built). One JSON line:
+//   {"bench":"dashboard","details":…,"states_per_s_per_detail":…,"states_per_s":…,"duration_s":…,
+//    "warmup_states_per_detail":…,"warmup_s":…,"warmup_cpu_us_per_state":…,"history_points_min":…,
+//    "history_points_max":…,"history_get_ms":{"mean":…,"max":…},"published":…,"events":…,
+//    "missing_events":…,"cycle_mismatches":…,"status_events":…,
+//    "sse_clients":…,"latency_ms":{"p50":…,"p90":…,"p99":…,"max":…,"over_goal_fraction":…},
+//    ["lcm_reference_latency_ms":{"events":…,"p50":…,"p99":…,"max":…,"over_goal_fraction":…},]
+//    "cpu_fraction_of_core":…,"cpu_us_per_state":…,
+//    "rss_after_warmup_mb":…,"rss_mb":…,"rss_peak_mb":…,
+//    "goals":{"p99_ms":20,"cpu_fraction_of_core":0.1,"rss_mb":200},
+//    "pass":{"p99":…,"cpu":…,"rss":…},"load_average_1min":…,"sse_quickack":…,"dashboard_exit":…,
+//    "transport":"tcpq"}
+// over_goal_fraction: the events later than the goal (20 ms). --sse-clients N: N clients on
+// /api/events (browser tabs), the first one timed. lcm_reference_latency_ms (--lcm-reference): the
+// same states timed to a second LCM subscriber in this process, the hub's share. load_average_1min
+// (/proc/loadavg at the end of the window) says how busy the machine was: on a shared machine the
+// tail latency is mostly other processes' time slices. Exit 0 when measured (whatever the goals
+// say: timings depend on the machine), 3 on a runtime failure (hub, dashboard, a dashboard that
+// does not count the warm-up states).
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/time.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <optional>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench/child_process.h"
+#include "messages/channels.h"
+#include "messages/codec.h"
+#include "messages/transport.h"
+#include "tests/support/loopback_port.h"
+#include "tools/json_line.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using peritwin::bench::Clock;
+using peritwin::bench::since;
+using peritwin::bench::spawn;
+using peritwin::bench::stop_child;
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// --- /proc
+// ----------------------------------------------------------------------------------------
+
+/// A field of /proc/<pid>/status in kB (VmRSS, VmHWM), or -1.
+std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(field + ":", 0) == 0) return std::atoll(line.c_str() + field.size() + 1);
+  }
+  return -1;
+}
+
+/// utime + stime of a process (all its threads) in seconds, or -1.
+double proc_cpu_s(pid_t pid) {
+  const std::string text = read_text("/proc/" + std::to_string(pid) + "/stat");
+  const auto paren = text.rfind(')');  // the command name may hold spaces
+  if (paren == std::string::npos) return -1.0;
+  std::istringstream in(text.substr(paren + 2));
+  std::string field;
+  // After ") ": state (3), ppid, pgrp, session, tty_nr, tpgid, flags, minflt, cminflt, majflt,
+  // cmajflt, utime (14), stime (15).
+  std::vector<std::string> fields;
+  while (fields.size() < 13 && in >> field) fields.push_back(field);
+  if (fields.size() < 13) return -1.0;
+  const double ticks =
+      static_cast<double>(std::atoll(fields[11].c_str()) + std::atoll(fields[12].c_str()));
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+// --- HTTP
+// -----------------------------------------------------------------------------------------
+
+int connect_loopback(int port, double recv_timeout_s) {
+  const int s = socket(AF_INET, SOCK_STREAM, 0);
+  if (s < 0) return -1;
+  timeval tv{};
+  tv.tv_sec = static_cast<time_t>(recv_timeout_s);
+  tv.tv_usec = static_cast<suseconds_t>((recv_timeout_s - std::floor(recv_timeout_s)) * 1e6);
+  setsockopt(s, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (connect(s, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    close(s);
+    return -1;
+  }
+  return s;
+}
+
+bool send_all(int s, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const auto n = send(s, text.data() + done, text.size() - done, MSG_NOSIGNAL);
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+/// GET `path` on 127.0.0.1:port (Connection: close): the body of a 200 answer, or nullopt.
+/// The dashboard's JSON routes answer with a Content-Length body.
+std::optional<std::string> http_get(int port, const std::string& path) {
+  const int s = connect_loopback(port, 30.0);
+  if (s < 0) return std::nullopt;
+  std::string text;
+  if (send_all(s, "GET " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")) {
+    char buf[65536];
+    ssize_t n = 0;
+    while ((n = recv(s, buf, sizeof buf, 0)) > 0) text.append(buf, static_cast<std::size_t>(n));
+  }
+  close(s);
+  const auto end = text.find("\r\n\r\n");
+  if (text.rfind("HTTP/1.1 200", 0) != 0 || end == std::string::npos) return std::nullopt;
+  return text.substr(end + 4);
+}
+
+// --- what is published
+// ----------------------------------------------------------------------------
+
+std::string detail_id(int i) {
+  char id[24];
+  std::snprintf(id, sizeof id, "bench-%03d", i);
+  return id;
+}
+
+/// Cycles of state `seq` of detail `i`: 1000 cycles per batch, details offset.
+std::int64_t cycles_of(int i, std::int64_t seq) { return 1000 * seq + 17 * i; }
+
+std::string hex16(std::uint64_t v) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(v));
+  return text;
+}
+
+/// A STATE as the daemon publishes it for a detail with one notch crack growing: one source, the
+/// main crack with its tip and K, a remaining-life estimate with its band, both hashes.
+peritwin_msgs::damage_state_t state_message(int i, std::int64_t seq) {
+  peritwin_msgs::damage_state_t s{};
+  s.utime = peritwin::messages::now_utime();
+  s.detail_id = detail_id(i);
+  s.state_seq = seq;
+  s.num_sources = 1;
+  s.source_ids = {"gauge-1"};
+  s.applied_seq = {seq};
+  s.checkpointed_seq = {seq - seq % 100};
+  s.total_cycles = cycles_of(i, seq);
+  const double growth = 1e-7 * static_cast<double>(seq);  // 0.1 µm per batch: 1 mm per 10^4
+  s.broken_bonds = 40 + seq / 50;
+  s.max_damage = std::min(1.0, 0.4 + 1e-5 * static_cast<double>(seq));
+  s.crack_count = 1;
+  s.crack_length_m = 0.002 + growth;
+  s.num_cracks = 1;
+  peritwin_msgs::crack_t c{};
+  c.id = 1;
+  c.origin_kind = peritwin_msgs::crack_t::ORIGIN_NOTCH;
+  c.origin = "notch 0";
+  c.notch_index = 0;
+  c.origin_x = 0.0275;
+  c.origin_y = 0.0;
+  c.tip_x = 0.0275 + s.crack_length_m;
+  c.tip_y = 1e-5;
+  c.length_m = s.crack_length_m;
+  c.projected_length_m = s.crack_length_m;
+  c.kink_angle_rad = 0.0;
+  c.num_nodes = 2 + static_cast<std::int32_t>(seq / 100);
+  c.phase = peritwin_msgs::crack_t::PHASE_PROPAGATION;
+  c.birth_cycle = 12000;
+  c.num_tips = 1;
+  peritwin_msgs::crack_tip_t tip{};
+  tip.x = c.tip_x;
+  tip.y = c.tip_y;
+  tip.angle_rad = 0.0;
+  tip.k_i = 9.5e6 * std::sqrt(1.0 + growth / 0.015);
+  tip.k_ii = 1.0e4;
+  tip.k_status = peritwin_msgs::crack_tip_t::K_OK;
+  c.tips = {tip};
+  c.num_absorbed = 0;
+  s.cracks = {c};
+  s.k_i = tip.k_i;
+  s.k_ii = tip.k_ii;
+  s.remaining_cycles = std::max(0.0, 4.0e7 - 1000.0 * static_cast<double>(seq));
+  s.remaining_cycles_low = 0.8 * s.remaining_cycles;
+  s.remaining_cycles_high = 1.25 * s.remaining_cycles;
+  s.remaining_life_seq = std::max<std::int64_t>(0, seq - 3);
+  s.remaining_life_source = "gauge-1";
+  s.failure = peritwin_msgs::damage_state_t::FAILURE_NONE;
+  s.end_of_life_cycle = -1;
+  s.state_hash = hex16(0x9e3779b97f4a7c15ULL * static_cast<std::uint64_t>(seq + 1) +
+                       static_cast<std::uint64_t>(i));
+  s.engine_hash = hex16(0xc2b2ae3d27d4eb4fULL * static_cast<std::uint64_t>(seq + 7) +
+                        static_cast<std::uint64_t>(i));
+  s.tag_length = 0;
+  return s;
+}
+
+peritwin_msgs::status_t status_message(int i, std::int64_t last_seq, double uptime_s) {
+  peritwin_msgs::status_t st{};
+  st.utime = peritwin::messages::now_utime();
+  st.detail_id = detail_id(i);
+  st.health = "ok";
+  st.last_seq = last_seq;
+  st.pending = 0;
+  st.lag_s = 0.0;
+  st.uptime_s = uptime_s;
+  st.errors = 0;
+  st.duplicates = 0;
+  st.gaps = 0;
+  st.busy_s = 0.0;
+  st.auth_rejects = 0;
+  st.reject_rate = 0.0;
+  return st;
+}
+
+// --- the SSE client
+// -------------------------------------------------------------------------------
+
+/// Publication times of the measured states, by detail and seq (from first_seq), and the arrival
+/// latencies of their events.
+class Matcher {
+ public:
+  Matcher(int details, std::int64_t first_seq, std::int64_t per_detail)
+      : first_seq_(first_seq),
+        per_detail_(per_detail),
+        published_(static_cast<std::size_t>(details) * static_cast<std::size_t>(per_detail)) {}
+
+  void published(int i, std::int64_t seq, Clock::time_point at) {
+    const std::lock_guard lock(mutex_);
+    if (const auto k = slot(i, seq)) published_[*k] = at;
+  }
+  /// A state event of detail i, state seq, its cycles, arrived at `at`.
+  void arrived(int i, std::int64_t seq, std::int64_t cycles, Clock::time_point at) {
+    const std::lock_guard lock(mutex_);
+    const auto k = slot(i, seq);
+    if (!k || published_[*k] == Clock::time_point{}) {
+      ++unmatched_;
+      return;
+    }
+    if (cycles != cycles_of(i, seq)) ++cycle_mismatches_;
+    latencies_ms_.push_back(std::chrono::duration<double, std::milli>(at - published_[*k]).count());
+    published_[*k] = Clock::time_point{};  // one event per state
+  }
+  std::vector<double> latencies_ms() const {
+    const std::lock_guard lock(mutex_);
+    return latencies_ms_;
+  }
+  std::int64_t cycle_mismatches() const {
+    const std::lock_guard lock(mutex_);
+    return cycle_mismatches_;
+  }
+
+ private:
+  std::optional<std::size_t> slot(int i, std::int64_t seq) const {
+    const std::int64_t j = seq - first_seq_;
+    if (i < 0 || j < 0 || j >= per_detail_) return std::nullopt;
+    const auto k = static_cast<std::size_t>(i) * static_cast<std::size_t>(per_detail_) +
+                   static_cast<std::size_t>(j);
+    return k < published_.size() ? std::optional(k) : std::nullopt;
+  }
+
+  mutable std::mutex mutex_;
+  std::int64_t first_seq_, per_detail_;
+  std::vector<Clock::time_point> published_;
+  std::vector<double> latencies_ms_;
+  std::int64_t unmatched_ = 0, cycle_mismatches_ = 0;
+};
+
+/// The integer after `"key":` in `text` from `from`, or nullopt.
+std::optional<std::int64_t> int_after(const std::string& text, const std::string& key,
+                                      std::size_t from = 0) {
+  const auto p = text.find("\"" + key + "\":", from);
+  if (p == std::string::npos) return std::nullopt;
+  return std::atoll(text.c_str() + p + key.size() + 3);
+}
+
+/// Reads /api/events (HTTP/1.1 chunked) until `stop`: every "state" event of a bench detail goes
+/// to the matcher with the time its last bytes arrived.
+class SseClient {
+ public:
+  /// `matcher` null: the events are read and counted, not timed.
+  SseClient(int port, Matcher* matcher, bool quickack) : matcher_(matcher), quickack_(quickack) {
+    socket_ = connect_loopback(port, 0.5);
+    if (socket_ < 0 || !send_all(socket_,
+                                 "GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                                 "Accept: text/event-stream\r\nCache-Control: no-cache\r\n\r\n")) {
+      error_ = "cannot connect to /api/events";
+      return;
+    }
+    thread_ = std::thread([this] { run(); });
+  }
+  ~SseClient() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    if (socket_ >= 0) close(socket_);
+  }
+  SseClient(const SseClient&) = delete;
+  SseClient& operator=(const SseClient&) = delete;
+
+  [[nodiscard]] const std::string& error() const { return error_; }
+  [[nodiscard]] std::int64_t state_events() const { return state_events_.load(); }
+  [[nodiscard]] std::int64_t status_events() const { return status_events_.load(); }
+  [[nodiscard]] bool connected() const { return headers_done_.load(); }
+
+ private:
+  void run() {
+    std::string raw;     // bytes not yet de-chunked
+    std::string stream;  // the event stream (de-chunked)
+    char buf[65536];
+    while (!stop_) {
+      if (quickack_) {  // not sticky: before every receive
+        const int on = 1;
+        setsockopt(socket_, IPPROTO_TCP, TCP_QUICKACK, &on, sizeof on);
+      }
+      const auto n = recv(socket_, buf, sizeof buf, 0);
+      const auto at = Clock::now();
+      if (n == 0) break;
+      if (n < 0) {
+        if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;
+        break;
+      }
+      raw.append(buf, static_cast<std::size_t>(n));
+      if (!headers_done_) {
+        const auto end = raw.find("\r\n\r\n");
+        if (end == std::string::npos) continue;
+        raw.erase(0, end + 4);
+        headers_done_ = true;
+      }
+      // Chunks: HEX\r\nDATA\r\n.
+      while (true) {
+        const auto eol = raw.find("\r\n");
+        if (eol == std::string::npos) break;
+        const auto size = std::strtoull(raw.substr(0, eol).c_str(), nullptr, 16);
+        if (raw.size() < eol + 2 + size + 2) break;
+        stream.append(raw, eol + 2, size);
+        raw.erase(0, eol + 2 + size + 2);
+      }
+      // Events: blocks ending in a blank line.
+      std::size_t start = 0;
+      for (auto end = stream.find("\n\n"); end != std::string::npos;
+           end = stream.find("\n\n", start)) {
+        on_event(stream.substr(start, end - start), at);
+        start = end + 2;
+      }
+      stream.erase(0, start);
+    }
+  }
+
+  void on_event(const std::string& event, Clock::time_point at) {
+    if (event.find("\nevent: status\n") != std::string::npos) {
+      ++status_events_;
+      return;
+    }
+    if (event.find("\nevent: state\n") == std::string::npos) return;
+    ++state_events_;
+    const auto d = event.find("\"detail\":\"bench-");
+    if (d == std::string::npos) return;
+    const int i = std::atoi(event.c_str() + d + 16);
+    const auto summary = event.find("\"summary\":");
+    if (summary == std::string::npos) return;
+    const auto seq = int_after(event, "state_seq", summary);
+    const auto cycles = int_after(event, "cycles", summary);
+    if (seq && cycles && matcher_ != nullptr) matcher_->arrived(i, *seq, *cycles, at);
+  }
+
+  Matcher* matcher_;
+  bool quickack_;
+  int socket_ = -1;
+  std::thread thread_;
+  std::atomic<bool> stop_{false}, headers_done_{false};
+  std::atomic<std::int64_t> state_events_{0}, status_events_{0};
+  std::string error_;
+};
+
+/// A second LCM subscriber to every STATE, in this process: the hub's own share of the latency
+/// (publication to delivery to a subscriber), the part no dashboard can remove.
+class ReferenceSubscriber {
+ public:
+  ReferenceSubscriber(const std::string& url, Matcher& matcher) : matcher_(matcher) {
+    lcm_ = std::make_unique<lcm::LCM>(url);
+    if (!lcm_->good() || !peritwin::messages::transport_up(*lcm_)) {
+      error_ = "the reference subscriber cannot open LCM at " + url;
+      return;
+    }
+    lcm_->subscribeFunction(
+        peritwin::messages::channel_regex(peritwin::messages::Kind::kState),
+        +[](const lcm::ReceiveBuffer* rbuf, const std::string&, ReferenceSubscriber* self) {
+          const auto at = Clock::now();
+          const auto s = peritwin::messages::decode_state(rbuf->data, rbuf->data_size);
+          if (!s || s->detail_id.rfind("bench-", 0) != 0) return;
+          self->matcher_.arrived(std::atoi(s->detail_id.c_str() + 6), s->state_seq, s->total_cycles,
+                                 at);
+        },
+        this);
+    thread_ = std::thread([this] {
+      while (!stop_) peritwin::messages::handle_lcm(*lcm_, 100);
+    });
+  }
+  ~ReferenceSubscriber() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  ReferenceSubscriber(const ReferenceSubscriber&) = delete;
+  ReferenceSubscriber& operator=(const ReferenceSubscriber&) = delete;
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+ private:
+  Matcher& matcher_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::string error_;
+};
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  const auto k = static_cast<std::size_t>(std::ceil(p * static_cast<double>(v.size()))) - 1;
+  return v[std::min(k, v.size() - 1)];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace peritwin;
+  CLI::App app{"peritwin-bench-dashboard: STATE-to-SSE latency, CPU and RSS of the dashboard"};
+  int details = 100;
+  double rate = 10.0, seconds = 30.0;
+  std::int64_t warmup = static_cast<std::int64_t>(10000);
+  std::string lcm_url;
+  std::string dashboard_bin =
+      (fs::read_symlink("/proc/self/exe").parent_path() / "peritwin-dashboard").string();
+  bool keep = false, sse_quickack = false, reference = false;
+  int sse_clients = 1;
+  app.add_option("--details", details, "details publishing (default 100)")
+      ->check(CLI::Range(1, 999));
+  app.add_option("--rate", rate, "states per second per detail (default 10)")
+      ->check(CLI::Range(0.01, 10000.0));
+  app.add_option("--seconds", seconds, "measurement window (default 30)")
+      ->check(CLI::Range(0.5, 86400.0));
+  app.add_option("--warmup", warmup,
+                 "states per detail published before the window, as fast as they are taken "
+                 "(default 10000: the history bound, full histories)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{10'000'000}));
+  app.add_option("--lcm-url", lcm_url, "use this tcpq URL instead of starting a hub");
+  app.add_option("--dashboard", dashboard_bin,
+                 "the peritwin-dashboard binary (default: next to this one)");
+  app.add_option("--sse-clients", sse_clients,
+                 "clients on /api/events, the first one timed (default 1; 0: none, no latency)")
+      ->check(CLI::Range(0, 100));
+  app.add_flag("--sse-quickack", sse_quickack,
+               "TCP_QUICKACK on the SSE client before every receive (a diagnosis: no delayed ACKs "
+               "from the client, unlike a browser)");
+  app.add_flag("--lcm-reference", reference,
+               "also time each STATE to a second LCM subscriber in this process (the hub's share "
+               "of the latency; the hub then relays every STATE twice)");
+  app.add_flag("--keep", keep, "keep the work directory (hub and dashboard logs)");
+  CLI11_PARSE(app, argc, argv);
+
+  const fs::path work =
+      fs::temp_directory_path() / ("peritwin_bench_dashboard_" + std::to_string(getpid()));
+  fs::create_directories(work);
+  pid_t hub = -1, dashboard = -1;
+  std::unique_ptr<lcm::LCM> lcm;
+  auto cleanup = [&] {
+    lcm.reset();
+    if (dashboard > 0) stop_child(dashboard, 30.0);
+    if (hub > 0) stop_child(hub, 30.0);
+    if (!keep) fs::remove_all(work);
+  };
+  auto fail = [&](const std::string& why) {
+    std::cerr << "peritwin-bench-dashboard: " << why << " (logs kept in " << work.string() << ")\n";
+    keep = true;
+    cleanup();
+    return 3;
+  };
+  if (lcm_url.empty()) {
+    const int port = twin::free_loopback_port();
+    hub = spawn(
+        {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
+        "/dev/null", (work / "hub.log").string());
+    if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+      return fail("the LCM hub did not come up on port " + std::to_string(port));
+    }
+    lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
+  }
+  const fs::path out_file = work / "dashboard.out", log_file = work / "dashboard.log";
+  dashboard =
+      spawn({dashboard_bin, "--lcm-url", lcm_url, "--listen", "127.0.0.1:0", "--log-level", "info"},
+            out_file.string(), log_file.string());
+  if (dashboard < 0) return fail("cannot start " + dashboard_bin);
+  auto dashboard_alive = [&] { return waitpid(dashboard, nullptr, WNOHANG) == 0; };
+  int http_port = -1;
+  for (const auto t0 = Clock::now(); since(t0) < 60.0 && dashboard_alive();) {
+    std::smatch m;
+    const std::string out = read_text(out_file);
+    if (std::regex_search(out, m, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")) &&
+        read_text(log_file).find("subscribed to") != std::string::npos) {
+      http_port = std::stoi(m[1]);
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (http_port < 0) return fail("the dashboard did not come up");
+
+  lcm = std::make_unique<lcm::LCM>(lcm_url);
+  if (!lcm->good() || !messages::transport_up(*lcm)) return fail("cannot open LCM at " + lcm_url);
+  messages::handle_lcm(*lcm, 0);  // TCP_NODELAY on the publisher's socket, as the daemon's
+  std::vector<std::string> state_channel, status_channel;
+  for (int i = 0; i < details; ++i) {
+    state_channel.push_back(messages::channel(detail_id(i), messages::Kind::kState));
+    status_channel.push_back(messages::channel(detail_id(i), messages::Kind::kStatus));
+  }
+  const auto started = Clock::now();
+  auto publish_status = [&](int i, std::int64_t last_seq) {
+    const auto st = status_message(i, last_seq, since(started));
+    lcm->publish(status_channel[static_cast<std::size_t>(i)], &st);
+  };
+
+  // Warm-up: states 1..warmup of every detail as fast as they go, then wait for the dashboard to
+  // have counted them all.
+  for (int i = 0; i < details; ++i) publish_status(i, 0);
+  const double cpu_before_warmup = proc_cpu_s(dashboard);
+  const auto warmup_t0 = Clock::now();
+  for (std::int64_t seq = 1; seq <= warmup; ++seq) {
+    for (int i = 0; i < details; ++i) {
+      const auto s = state_message(i, seq);
+      lcm->publish(state_channel[static_cast<std::size_t>(i)], &s);
+    }
+    if (!messages::transport_up(*lcm)) return fail("connection to the LCM hub lost");
+    if (seq % 1000 == 0 && !dashboard_alive()) return fail("the dashboard died in the warm-up");
+  }
+  for (int i = 0; i < details; ++i) publish_status(i, warmup);
+  const std::int64_t expected_details = details;
+  bool counted = false;
+  std::int64_t history_min = -1, history_max = -1;
+  for (const auto t0 = Clock::now(); since(t0) < 600.0 && dashboard_alive();) {
+    if (const auto body = http_get(http_port, "/api/details")) {
+      const auto j = nlohmann::json::parse(*body, nullptr, false);
+      std::int64_t complete = 0;
+      if (j.is_object() && j.contains("details")) {
+        for (const auto& d : j["details"]) {
+          if (d.value("states_received", std::int64_t{-1}) == warmup && !d["status"].is_null() &&
+              d["status"].value("last_seq", -1) == warmup) {
+            ++complete;
+          }
+        }
+      }
+      if (complete == expected_details) {
+        counted = true;
+        break;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  const double warmup_s = since(warmup_t0);
+  const double warmup_cpu_s = proc_cpu_s(dashboard) - cpu_before_warmup;
+  if (!counted) return fail("the dashboard did not count every warm-up state within 600 s");
+  std::vector<double> history_ms;  // per request, as the client sees it
+  for (int i = 0; i < details; ++i) {
+    const auto h0 = Clock::now();
+    const auto body = http_get(http_port, "/api/details/" + detail_id(i) + "/history");
+    history_ms.push_back(1e3 * since(h0));
+    if (!body) return fail("no history for " + detail_id(i));
+    const auto j = nlohmann::json::parse(*body, nullptr, false);
+    const auto n = j.is_object() ? static_cast<std::int64_t>(j["cycles"].size()) : -1;
+    history_min = history_min < 0 ? n : std::min(history_min, n);
+    history_max = std::max(history_max, n);
+  }
+  const std::int64_t rss_after_warmup = proc_status_kb(dashboard, "VmRSS");
+
+  // Measurement: an SSE client, then `rate` states per second per detail for `seconds`.
+  const auto per_detail = static_cast<std::int64_t>(std::llround(rate * seconds));
+  Matcher matcher(details, warmup + 1, per_detail);
+  Matcher lcm_matcher(details, warmup + 1, per_detail);
+  std::unique_ptr<ReferenceSubscriber> ref;
+  if (reference) {
+    ref = std::make_unique<ReferenceSubscriber>(lcm_url, lcm_matcher);
+    if (!ref->error().empty()) return fail(ref->error());
+  }
+  std::vector<std::unique_ptr<SseClient>> sse;  // the first one timed
+  for (int c = 0; c < sse_clients; ++c) {
+    sse.push_back(
+        std::make_unique<SseClient>(http_port, c == 0 ? &matcher : nullptr, sse_quickack));
+    if (!sse.back()->error().empty()) return fail(sse.back()->error());
+    for (const auto t0 = Clock::now(); !sse.back()->connected() && since(t0) < 10.0;) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (!sse.back()->connected()) return fail("no answer on /api/events");
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const double state_period_s = 1.0 / (rate * static_cast<double>(details));
+  const double status_period_s = 1.0 / static_cast<double>(details);
+  const std::int64_t total_states = per_detail * details;
+  const double cpu0 = proc_cpu_s(dashboard);
+  const auto t0 = Clock::now();
+  std::int64_t k_state = 0, k_status = 0;
+  auto due = [&](std::int64_t k, double period) {
+    return t0 + std::chrono::duration_cast<Clock::duration>(
+                    std::chrono::duration<double>(static_cast<double>(k) * period));
+  };
+  while (k_state < total_states) {
+    const auto next_state = due(k_state, state_period_s);
+    const auto next_status = due(k_status, status_period_s);
+    const bool status_first = next_status < next_state;
+    std::this_thread::sleep_until(status_first ? next_status : next_state);
+    if (status_first) {
+      const int i = static_cast<int>(k_status % details);
+      publish_status(i, warmup + k_state / details);
+      ++k_status;
+      continue;
+    }
+    const int i = static_cast<int>(k_state % details);
+    const std::int64_t seq = warmup + 1 + k_state / details;
+    const auto s = state_message(i, seq);
+    const auto at = Clock::now();
+    matcher.published(i, seq, at);
+    if (ref) lcm_matcher.published(i, seq, at);
+    lcm->publish(state_channel[static_cast<std::size_t>(i)], &s);
+    ++k_state;
+    if (k_state % 1000 == 0 && (!messages::transport_up(*lcm) || !dashboard_alive())) break;
+  }
+  const double window_s = since(t0);
+  const double cpu_s = proc_cpu_s(dashboard) - cpu0;
+  const std::int64_t rss_end = proc_status_kb(dashboard, "VmRSS");
+  const std::int64_t rss_peak = proc_status_kb(dashboard, "VmHWM");
+  const double load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
+  // The last events.
+  for (const auto t1 = Clock::now();
+       sse_clients > 0 && since(t1) < 2.0 &&
+       static_cast<std::int64_t>(matcher.latencies_ms().size()) < k_state;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const std::vector<double> latencies = matcher.latencies_ms();
+  ref.reset();
+  const std::vector<double> lcm_latencies = lcm_matcher.latencies_ms();
+  const bool alive = dashboard_alive();
+  const int dashboard_exit = alive ? stop_child(dashboard, 30.0) : -1;
+  dashboard = -1;
+  if (!alive) return fail("the dashboard died during the window");
+
+  constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
+  const double p99 = percentile(latencies, 0.99);
+  auto over_goal = [&](const std::vector<double>& v) {
+    return v.empty() ? std::nan("")
+                     : static_cast<double>(std::count_if(
+                           v.begin(), v.end(), [&](double x) { return x > kGoalP99Ms; })) /
+                           static_cast<double>(v.size());
+  };
+  const double cpu_fraction = window_s > 0 ? cpu_s / window_s : 0.0;
+  const double rss_mb = static_cast<double>(rss_end) / 1024.0;
+  const double peak_mb = static_cast<double>(rss_peak) / 1024.0;
+  const auto missing = k_state - static_cast<std::int64_t>(latencies.size());
+  const auto total_warmup = static_cast<double>(warmup) * details;
+  tools::JsonLine line;
+  line["bench"] = "dashboard";
+  line["details"] = details;
+  line["states_per_s_per_detail"] = rate;
+  line["states_per_s"] = tools::fixed(static_cast<double>(k_state) / window_s, 1);
+  line["duration_s"] = tools::fixed(window_s, 2);
+  line["warmup_states_per_detail"] = warmup;
+  line["warmup_s"] = tools::fixed(warmup_s, 1);
+  line["warmup_cpu_us_per_state"] =
+      total_warmup > 0 ? tools::JsonLine(tools::fixed(1e6 * warmup_cpu_s / total_warmup, 1))
+                       : tools::JsonLine(nullptr);
+  line["history_points_min"] = history_min;
+  line["history_points_max"] = history_max;
+  line["history_get_ms"] = {
+      {"mean", tools::fixed(std::accumulate(history_ms.begin(), history_ms.end(), 0.0) /
+                                static_cast<double>(history_ms.size()),
+                            2)},
+      {"max", tools::fixed(*std::max_element(history_ms.begin(), history_ms.end()), 2)}};
+  line["published"] = k_state;
+  line["events"] = static_cast<std::int64_t>(latencies.size());
+  line["missing_events"] = sse_clients > 0 ? tools::JsonLine(missing) : tools::JsonLine(nullptr);
+  line["cycle_mismatches"] = matcher.cycle_mismatches();
+  line["sse_clients"] = sse_clients;
+  line["status_events"] = sse.empty() ? 0 : sse.front()->status_events();
+  tools::JsonLine lat;
+  lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
+  lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
+  lat["p99"] = tools::fixed(p99, 2);
+  lat["max"] = tools::fixed(
+      latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
+  lat["over_goal_fraction"] = tools::fixed(over_goal(latencies), 4);
+  line["latency_ms"] = lat;
+  if (reference) {
+    line["lcm_reference_latency_ms"] = {
+        {"events", static_cast<std::int64_t>(lcm_latencies.size())},
+        {"p50", tools::fixed(percentile(lcm_latencies, 0.50), 2)},
+        {"p99", tools::fixed(percentile(lcm_latencies, 0.99), 2)},
+        {"max", tools::fixed(percentile(lcm_latencies, 1.0), 2)},
+        {"over_goal_fraction", tools::fixed(over_goal(lcm_latencies), 4)}};
+  }
+  line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
+  line["cpu_us_per_state"] =
+      k_state > 0 ? tools::JsonLine(tools::fixed(1e6 * cpu_s / static_cast<double>(k_state), 1))
+                  : tools::JsonLine(nullptr);
+  line["rss_after_warmup_mb"] = tools::fixed(static_cast<double>(rss_after_warmup) / 1024.0, 1);
+  line["rss_mb"] = tools::fixed(rss_mb, 1);
+  line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
+  line["goals"] = {
+      {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
+  line["pass"] = {{"p99", sse_clients > 0 ? tools::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
+                                          : tools::JsonLine(nullptr)},
+                  {"cpu", cpu_fraction <= kGoalCpu},
+                  {"rss", peak_mb <= kGoalRssMb}};
+  line["load_average_1min"] = load_average;
+  line["sse_quickack"] = sse_quickack;
+  line["dashboard_exit"] = dashboard_exit;
+  line["transport"] = lcm_url.rfind("tcpq://", 0) == 0 ? "tcpq" : lcm_url;
+  tools::print_line(line);
+  cleanup();
+  return 0;
+}
