@@ -14,6 +14,8 @@ packages=(
   libhdf5-dev libspdlog-dev libtomlplusplus-dev libcli11-dev libpng-dev nlohmann-json3-dev
   # HMAC-SHA256 of the signed messages and key generation (messages/auth.h, issue 14).
   libsodium-dev
+  # systemd-analyze verify of the fleet's unit examples/peritwin@.service (its test).
+  systemd
   # The web dashboard (dashboard/, peritwin-dashboard): HTTP server, Chart.js served from the
   # package's file (no CDN), and headless chromium for its browser test.
   libcpp-httplib-dev libjs-chart.js chromium

@@ -358,6 +358,93 @@ std::string json_value(const std::string& json, const std::string& key) {
   return json.substr(from, json.find_first_of(",}", from) - from);
 }
 
+// A fleet on one bus (issue 18): one config with two details, two daemons on one hub, each
+// serving one of them (--details), a lockstep replay per detail running at the same time. Each
+// detail ends in the state of its own in-process run (the summary line, state_hash included).
+// A --details id the config does not have is a config error (exit 2) naming it.
+TEST_F(CrossProcess, TwoDaemonsOnOneHubServeDisjointDetailsOfOneConfig) {
+  const std::string one = read_file(config_);
+  std::string other = one;
+  for (const auto& [from, to] :
+       {std::pair<std::string, std::string>{"id = \"b1-ct\"", "id = \"b1-hi\""},
+        {"results/b1-ct", "results/b1-hi"}}) {
+    const auto p = other.find(from);
+    ASSERT_NE(p, std::string::npos) << from;
+    other.replace(p, from.size(), to);
+  }
+  config_ = (dir_ / "fleet.toml").string();
+  std::ofstream(config_) << one << "\n" << other;
+  // b1-hi: every block at 4.2 kN (another load than b1-ct's history).
+  const std::string history_hi = (dir_ / "history-hi.csv").string();
+  {
+    std::ofstream h(history_hi);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < 24; ++i) h << "4200,0.1,0,1000\n";
+  }
+  const auto replay_of = [&](const std::string& detail, const std::string& history, bool local) {
+    std::vector<std::string> argv{std::string(PERITWIN_BIN_DIR) + "/peritwin-replay",
+                                  "--config",
+                                  config_,
+                                  "--detail",
+                                  detail,
+                                  "--history",
+                                  history,
+                                  "--json"};
+    if (local) {
+      argv.emplace_back("--in-process");
+    } else {
+      for (const auto* a : {"--lcm-url", url_.c_str(), "--lockstep", "--give-up-after", kWaitArg}) {
+        argv.emplace_back(a);
+      }
+    }
+    return std::make_unique<Process>(
+        argv, (dir_ / ("replay-" + detail + (local ? "-local" : "") + ".log")).string());
+  };
+  const auto daemon_of = [&](const std::string& details, const std::string& name) {
+    return std::make_unique<Process>(
+        std::vector<std::string>{std::string(PERITWIN_BIN_DIR) + "/peritwin", "--config", config_,
+                                 "--details", details, "--lcm-url", url_, "--state-dir",
+                                 (dir_ / ("state-" + name)).string(), "--deterministic",
+                                 "--no-results"},
+        (dir_ / (name + ".log")).string());
+  };
+  auto unknown = daemon_of("b1-ct,b1-lo", "unknown");
+  const auto refused = unknown->wait_for(kWaitS);
+  ASSERT_TRUE(refused && WIFEXITED(*refused)) << read_file(dir_ / "unknown.log");
+  EXPECT_EQ(WEXITSTATUS(*refused), 2);
+  EXPECT_NE(read_file(dir_ / "unknown.log")
+                .find("--details: no detail \"b1-lo\" in the file (its details: b1-ct, b1-hi)"),
+            std::string::npos)
+      << read_file(dir_ / "unknown.log");
+
+  auto ref_ct = replay_of("b1-ct", history_, true);
+  auto ref_hi = replay_of("b1-hi", history_hi, true);
+  const auto reference_ct = lines_to_end(*ref_ct);
+  const auto reference_hi = lines_to_end(*ref_hi);
+  ASSERT_FALSE(reference_ct.empty());
+  ASSERT_FALSE(reference_hi.empty());
+  ASSERT_NE(state_hash_of(reference_ct.back()), state_hash_of(reference_hi.back()));
+
+  auto daemon_ct = daemon_of("b1-ct", "daemon-ct");
+  auto daemon_hi = daemon_of("b1-hi", "daemon-hi");
+  auto run_ct = replay_of("b1-ct", history_, false);
+  auto run_hi = replay_of("b1-hi", history_hi, false);
+  const auto lines_ct = lines_to_end(*run_ct);
+  const auto lines_hi = lines_to_end(*run_hi);
+  for (auto* r : {run_ct.get(), run_hi.get()}) {
+    const auto status = r->wait_for(kWaitS);
+    EXPECT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+        << read_file(dir_ / "replay-b1-ct.log") << read_file(dir_ / "replay-b1-hi.log");
+  }
+  ASSERT_FALSE(lines_ct.empty());
+  ASSERT_FALSE(lines_hi.empty());
+  EXPECT_EQ(lines_ct.back(), reference_ct.back());
+  EXPECT_EQ(lines_hi.back(), reference_hi.back());
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*daemon_ct, "daemon-ct.log"));
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*daemon_hi, "daemon-hi.log"));
+  EXPECT_NE(read_file(dir_ / "daemon-ct.log").find("1 detail(s)"), std::string::npos);
+}
+
 TEST_F(CrossProcess, TheDaemonEndsTheLifeAtTheSameCycleAndEngineStateForEveryBatching) {
   // 300 blocks of 100 cycles at 4 kN, R 0.1 (the criterion, 3 mm, is met at about 20 000
   // cycles), no remaining-life estimates (they are not what is compared, and cost minutes here).
