@@ -46,6 +46,23 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                if (const auto body = store.history_json(id)) return json(res, *body);
                not_found(res, "unknown detail \"" + id + "\"");
              });
+  // The mesh and the newest complete field: 404 for an unknown detail or none yet.
+  server.Get(R"(/api/details/([A-Za-z0-9_-]+)/mesh)",
+             [&store](const httplib::Request& req, httplib::Response& res) {
+               const std::string id = req.matches[1];
+               const auto body = store.mesh_json(id);
+               if (!body) return not_found(res, "unknown detail \"" + id + "\"");
+               if (body->empty()) return not_found(res, "no mesh of \"" + id + "\" yet");
+               json(res, *body);
+             });
+  server.Get(R"(/api/details/([A-Za-z0-9_-]+)/field)",
+             [&store](const httplib::Request& req, httplib::Response& res) {
+               const std::string id = req.matches[1];
+               const auto body = store.field_json(id);
+               if (!body) return not_found(res, "unknown detail \"" + id + "\"");
+               if (body->empty()) return not_found(res, "no complete field of \"" + id + "\" yet");
+               json(res, *body);
+             });
   server.Get("/api/events", [&store](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     // Events from the one after the newest at connection time: the page loads the current
