@@ -6,6 +6,7 @@
 //                                  [--gate N] [--noise]
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
+//   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE latency)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -325,10 +326,11 @@ int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // `peritwin-bench ingest|soak ...` runs peritwin-bench-ingest|soak (they need LCM and the twin
+  // `peritwin-bench ingest|soak|stream ...` runs peritwin-bench-ingest|soak|stream (they need LCM and the twin
   // library or daemon, which this solver benchmark does not link) from the same directory with
   // the same arguments.
-  if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak")) {
+  if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak" ||
+                    std::string(argv[1]) == "stream")) {
     const auto self = std::filesystem::read_symlink("/proc/self/exe");
     const std::string program =
         (self.parent_path() / ("peritwin-bench-" + std::string(argv[1]))).string();

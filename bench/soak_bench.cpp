@@ -44,6 +44,7 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/child_process.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -51,16 +52,13 @@
 #include "tools/json_line.h"
 #include "twin/config/config.h"
 
-extern char** environ;
-
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
+using peritwin::bench::Clock;
+using peritwin::bench::since;
+using peritwin::bench::spawn;
+using peritwin::bench::stop_child;
 
 /// A field of /proc/<pid>/status in kB (VmRSS, VmHWM), or -1.
 std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
@@ -70,37 +68,6 @@ std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
     if (line.rfind(field + ":", 0) == 0) return std::atoll(line.c_str() + field.size() + 1);
   }
   return -1;
-}
-
-pid_t spawn(const std::vector<std::string>& argv, const std::string& out, const std::string& err) {
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-  std::vector<char*> args;
-  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-  args.push_back(nullptr);
-  pid_t pid = -1;
-  if (posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&actions);
-  return pid;
-}
-
-/// SIGTERM, then the exit status (-1 if it had to be killed after timeout_s).
-int stop_child(pid_t pid, double timeout_s) {
-  if (pid <= 0) return -1;
-  kill(pid, SIGTERM);
-  const auto t0 = Clock::now();
-  int status = 0;
-  while (waitpid(pid, &status, WNOHANG) != pid) {
-    if (since(t0) > timeout_s) {
-      kill(pid, SIGKILL);
-      waitpid(pid, &status, 0);
-      return -1;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 /// The B1 example made cheap per batch: each edit's first string must occur once.

@@ -39,6 +39,7 @@
 
 #include "messages/auth.h"
 #include "messages/transport.h"
+#include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
 
@@ -52,9 +53,10 @@ int main(int argc, char** argv) {
   using namespace peritwin;
   CLI::App app{"peritwin-replay: recorded load history -> load blocks -> the twin"};
   std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
-  std::string key_file, daemon_key_id = "peritwin", generate_key_file;
+  replay::ProducerKeyOptions keys;
+  std::string generate_key_file;
   std::vector<std::string> key_ids;
-  bool lockstep = false, in_process = false, json = false, sign_only = false;
+  bool lockstep = false, in_process = false, json = false;
   bool append = false, resume = false;
   std::string residue = "half";
   replay::SeriesRules series_rules;
@@ -81,19 +83,7 @@ int main(int argc, char** argv) {
   app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
   app.add_flag("--in-process", in_process,
                "run the twin library here (no LCM, no daemon; ignores --key-file)");
-  auto* key_file_opt = app.add_option(
-      "--key-file", key_file,
-      "sign the batches with the key of --source and verify every STATE and REJECT with the "
-      "daemon's (TOML [keys], mode 0600; messages/README.md). Without it nothing is signed or "
-      "verified, and anyone on the bus can forge the states this tool reports");
-  auto* daemon_key_opt = app.add_option("--daemon-key", daemon_key_id,
-                                        "id of the daemon's key in --key-file (default peritwin)")
-                             ->needs(key_file_opt);
-  app.add_flag("--sign-only", sign_only,
-               "sign the batches but verify nothing (for a producer whose key file holds only "
-               "its own key; the states it reports can then be forged)")
-      ->needs(key_file_opt)
-      ->excludes(daemon_key_opt);
+  replay::add_key_options(app, keys);
   auto* generate_opt =
       app.add_option("--generate-key-file", generate_key_file,
                      "write a new key file (random keys, mode 0600, never overwrites) and exit");
@@ -127,7 +117,7 @@ int main(int argc, char** argv) {
   }
   options.lockstep = lockstep;
   if (!generate_key_file.empty()) {
-    if (key_ids.empty()) key_ids = {source_id, daemon_key_id};
+    if (key_ids.empty()) key_ids = {source_id, keys.daemon_key_id};
     if (const Status written = messages::write_key_file(generate_key_file, key_ids); !written) {
       std::cerr << "peritwin-replay: " << written.error().message() << "\n";
       return kExitUsage;
@@ -180,30 +170,19 @@ int main(int argc, char** argv) {
   }
   // The keys, before anything is published: a missing one is a usage error.
   replay::ReplayAuth auth;
-  if (!key_file.empty() && in_process) {
+  if (!keys.key_file.empty() && in_process) {
     std::cerr << "peritwin-replay: --in-process publishes and receives nothing: --key-file "
                  "ignored\n";
-  } else if (!key_file.empty()) {
-    const auto ring = messages::KeyRing::load(key_file);
-    if (!ring) {
-      std::cerr << "peritwin-replay: " << ring.error().message() << "\n";
+  } else {
+    auto loaded_keys = replay::load_producer_keys(keys, source_id);
+    if (!loaded_keys) {
+      std::cerr << "peritwin-replay: " << loaded_keys.error().message() << "\n";
       return kExitUsage;
     }
-    for (const auto& [id, role] :
-         {std::pair{source_id, "--source"}, std::pair{daemon_key_id, "--daemon-key"}}) {
-      if (ring->find(id) == nullptr && !(sign_only && id == daemon_key_id)) {
-        std::cerr << "peritwin-replay: " << key_file << ": no key \"" << id << "\" (" << role
-                  << ")\n";
-        return kExitUsage;
-      }
-    }
-    auth.batch_key = *ring->find(source_id);
-    if (sign_only) {
+    auth = std::move(*loaded_keys);
+    if (keys.sign_only) {
       std::cerr << "peritwin-replay: --sign-only: the daemon's STATE and REJECT are not "
                    "verified\n";
-    } else {
-      auth.daemon_key = *ring->find(daemon_key_id);
-      auth.daemon_key_id = daemon_key_id;
     }
   }
   auto batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching);

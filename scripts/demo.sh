@@ -6,7 +6,7 @@
 #   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1),
 # and prints every state (the web dashboard peritwin-dashboard shows them too, its URL printed): cycles, broken bonds, crack length and the remaining life with its band
 # (re-estimated every 10 batches). Authenticated: the script generates a key file
-# (out/demo/keys.toml, mode 0600, keys "replay" and "peritwin"), the daemon's config is the example
+# (out/demo/keys.toml, mode 0600, keys "replay", "stream" and "peritwin"), the daemon's config is the example
 # plus an [auth] table naming it, and the replay signs its batches and verifies every state. The daemon stops at the end-of-life criterion (8 mm of crack
 # growth), then gets SIGTERM, checkpoints and writes its results and pictures under out/demo/.
 set -euo pipefail
@@ -59,8 +59,9 @@ done
 dashboard_url=$(grep -o 'http://[^ ]*' "$demo/dashboard.url" || true)
 echo "demo: dashboard on $dashboard_url (log: out/demo/dashboard.log)"
 
-# Keys: one per producer ("replay") and the daemon's own ("peritwin"), HMAC-SHA256.
-"$bin/peritwin-replay" --generate-key-file "$demo/keys.toml" --key-ids replay,peritwin
+# Keys: one per producer ("replay"; "stream" for peritwin-stream, README "Streaming from
+# sensors") and the daemon's own ("peritwin"), HMAC-SHA256.
+"$bin/peritwin-replay" --generate-key-file "$demo/keys.toml" --key-ids replay,stream,peritwin
 { cat "$root/examples/b1-ct-al6061.toml"; printf '\n[auth]\nkey_file = "keys.toml"\n'; } \
   >"$demo/b1-ct.toml"
 

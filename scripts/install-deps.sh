@@ -17,6 +17,10 @@ packages=(
   # The web dashboard (dashboard/, peritwin-dashboard): HTTP server, Chart.js served from the
   # package's file (no CDN), and headless chromium for its browser test.
   libcpp-httplib-dev libjs-chart.js chromium
+  # lcm-spy with the peritwin types (scripts/spy.sh, issue 17): a JDK builds peritwin_msgs.jar,
+  # Spy is a window (the full JRE's AWT), its message viewer and plots need jchart2d, and its test
+  # runs it under Xvfb (xvfb-run needs xauth).
+  default-jdk-headless default-jre libjchart2d-java xvfb xauth
 )
 # The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
 # PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.

@@ -5,6 +5,7 @@
 //                   [--lcm-url URL] [--source ID] [--state-file F] [--json] [--batch-cycles N]
 //                   [--batch-blocks N] [--batch-seconds T] [--lockstep|--window N]
 //                   [--residue half|whole|keep] [--in-process] [--give-up-after S]
+//                   [--key-file F [--daemon-key ID | --sign-only]]
 //
 // Input: lines "t,P" or "t,P,alpha" (the series format's columns; its header line and '#'
 // comments accepted; t in s strictly increasing, P in the sensor's unit, alpha in rad), read as
@@ -20,6 +21,10 @@
 // applies the same cycles as its replay; whole: each residue range a whole cycle; keep: not
 // applied), the last batch, then it waits for the daemon to apply everything (at most
 // --give-up-after s without progress) and exits 0.
+// --key-file: as peritwin-replay (replay/producer_keys.h): batches signed with the key of --source,
+// every STATE and REJECT verified with the daemon's key, and the load_samples_t of --input lcm
+// taken only when signed with the key of their source_id (refused and counted otherwise; not
+// verified with --sign-only, which says so on stderr).
 // Over LCM it first learns what the daemon has applied of --source (default "stream"); without a
 // state file a stream always appends after that (a new stream is new load). --state-file F: see
 // stream/stream_tool.h; a restart with it neither loses nor doubles a cycle: it resends the
@@ -50,8 +55,10 @@
 #include <map>
 #include <memory>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/transport.h"
+#include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "stream/stream_tool.h"
 #include "tools/cli_checks.h"
@@ -94,10 +101,17 @@ class LineInput {
   std::string partial_;
 };
 
-/// load_samples_t from the bus, each (source, seq) once.
+/// load_samples_t from the bus, each (source, seq) once; with a key ring only those signed with
+/// the key of their source_id (messages/README.md, "Authentication").
 class SamplesInput {
  public:
-  SamplesInput(lcm::LCM& lcm, std::string detail_id) : lcm_(lcm), detail_id_(std::move(detail_id)) {
+  /// `taken`: the last seq per source already taken (from the state file).
+  SamplesInput(lcm::LCM& lcm, std::string detail_id, std::optional<messages::KeyRing> ring,
+               std::map<std::string, std::int64_t> taken)
+      : lcm_(lcm),
+        detail_id_(std::move(detail_id)),
+        ring_(std::move(ring)),
+        last_(std::move(taken)) {
     sub_ = lcm_.subscribe(messages::channel(detail_id_, messages::Kind::kSamples),
                           &SamplesInput::on_msg, this);
     sub_->setQueueCapacity(100'000);
@@ -121,6 +135,21 @@ class SamplesInput {
       return;
     }
     const auto& s = *d.samples;
+    if (ring_) {
+      const messages::AuthKey* key = ring_->find(s.source_id);
+      const Status signed_ok =
+          key != nullptr
+              ? messages::verify_encoded<peritwin_msgs::load_samples_t>(
+                    rbuf->data, static_cast<std::size_t>(rbuf->data_size), *key)
+              : Status{failure("no key for source \"" + s.source_id + "\" in the key file")};
+      if (!signed_ok) {
+        if (refused++ < 5) {
+          std::cerr << "peritwin-stream: " << channel
+                    << ": refused: auth: " << signed_ok.error().message() << "\n";
+        }
+        return;
+      }
+    }
     auto [it, fresh] = last_.try_emplace(s.source_id, 0);
     if (s.seq <= it->second) {
       ++duplicates;
@@ -137,8 +166,9 @@ class SamplesInput {
   }
   lcm::LCM& lcm_;
   std::string detail_id_;
-  lcm::Subscription* sub_ = nullptr;
+  std::optional<messages::KeyRing> ring_;
   std::map<std::string, std::int64_t> last_;
+  lcm::Subscription* sub_ = nullptr;
 };
 
 /// The twin in this process (deterministic mode, as peritwin-replay --in-process).
@@ -228,7 +258,10 @@ int main(int argc, char** argv) {
                  "the rainflow residue at the end of input: half (default, ASTM E1049-85, as the "
                  "replay), whole (conservative) or keep (not applied)")
       ->check(CLI::IsMember({"half", "whole", "keep"}));
-  app.add_flag("--in-process", in_process, "run the twin library here (no daemon)");
+  auto* in_process_opt =
+      app.add_flag("--in-process", in_process, "run the twin library here (no daemon)");
+  replay::ProducerKeyOptions keys;
+  replay::add_key_options(app, keys)->excludes(in_process_opt);
   app.add_option("--give-up-after", options.give_up_after_s,
                  "seconds without progress from the daemon before failing (default 120)")
       ->check(peritwin::cli::finite_positive());
@@ -261,6 +294,16 @@ int main(int argc, char** argv) {
     std::cerr << "peritwin-stream: --state-file needs a daemon (the in-process twin is not "
                  "persisted)\n";
     return kExitUsage;
+  }
+
+  // The keys, before anything is read or published: a missing one is a usage error.
+  auto auth = replay::load_producer_keys(keys, source_id);
+  if (!auth) {
+    std::cerr << "peritwin-stream: " << auth.error().message() << "\n";
+    return kExitUsage;
+  }
+  if (keys.sign_only) {
+    std::cerr << "peritwin-stream: --sign-only: the daemon's STATE and REJECT are not verified\n";
   }
 
   // The input.
@@ -364,7 +407,8 @@ int main(int argc, char** argv) {
     print(local->state);
     if (!pipeline) pipeline.emplace(*detail, source_id, batching, 1);
   } else {
-    sender = std::make_unique<replay::BatchSender>(*lcm, detail->id, source_id, options);
+    sender = std::make_unique<replay::BatchSender>(*lcm, detail->id, source_id, options,
+                                                   std::move(*auth));
     sender->on_state(print);
     const auto learned = sender->probe_applied([] { return g_signal.load() == 0; });
     if (!learned) {
@@ -400,7 +444,24 @@ int main(int argc, char** argv) {
   }
   stream::Pipeline& pipe = *pipeline;
   std::unique_ptr<SamplesInput> samples_in;
-  if (kind == In::lcm) samples_in = std::make_unique<SamplesInput>(*lcm, detail->id);
+  if (kind == In::lcm) {
+    // With --key-file the samples are verified too (with the key of each message's source_id),
+    // unless --sign-only (the key file then holds only this stream's key).
+    std::optional<messages::KeyRing> ring;
+    if (!keys.key_file.empty() && !keys.sign_only) {
+      auto loaded_ring = messages::KeyRing::load(keys.key_file);
+      if (!loaded_ring) {
+        std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
+        return kExitUsage;
+      }
+      ring = std::move(*loaded_ring);
+    } else {
+      std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
+                   "--sign-only): anyone on the bus can feed this stream\n";
+    }
+    samples_in =
+        std::make_unique<SamplesInput>(*lcm, detail->id, std::move(ring), pipe.samples_taken);
+  }
   if (kind == In::tcp) {
     listen_fd = listen_on(port);
     if (listen_fd < 0) {
@@ -470,12 +531,24 @@ int main(int argc, char** argv) {
 
   LineInput lines_in;
   bool input_open = true;
+  bool lines_idle = false;  // the last pass read no line: wait for the input or the bus
   std::vector<std::string> lines;
   while (input_open && g_signal.load() == 0) {
     // Back-pressure: a FILE is read no faster than the daemon applies.
     const bool backlog =
         sender && sender->last_seq() - std::max<std::int64_t>(sender->acked_seq(), 0) >
                       static_cast<std::int64_t>(4 * std::max<std::size_t>(options.window, 1));
+    // One wait over the input and the bus: a sample that closes a batch is read the moment it
+    // arrives, not after an LCM wait (which cost up to 20 ms of latency per batch, issue 16).
+    const int input_fd = kind == In::fd    ? fd
+                         : kind == In::tcp ? (conn_fd >= 0 ? conn_fd : listen_fd)
+                                           : -1;
+    if (sender && lines_idle) {
+      pollfd p[2] = {{input_fd, POLLIN, 0}, {lcm->getFileno(), POLLIN, 0}};
+      const nfds_t n = input_fd >= 0 && !backlog ? 2 : 1;
+      if (n == 1) p[0] = p[1];
+      ::poll(p, n, 20);
+    }
     const int wait_ms = sender ? 0 : 50;
     lines.clear();
     if (!backlog) {
@@ -512,11 +585,13 @@ int main(int argc, char** argv) {
         for (std::size_t i = 0; i < s.p.size(); ++i) {
           take(s.time(i), s.p[i], s.alpha.empty() ? 0.0 : s.alpha[i]);
         }
+        pipe.samples_taken[s.source_id] = s.seq;
       }
     }
     if (!deliver()) break;
     if (!state_file.empty()) stream::write_received(state_file, pipe.counts.samples);
-    if (sender && sender->pump(lines.empty() ? 20 : 0) == replay::BatchSender::Progress::failed) {
+    lines_idle = lines.empty();
+    if (sender && sender->pump(0) == replay::BatchSender::Progress::failed) {
       error = sender->error();
       break;
     }

@@ -9,9 +9,11 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "replay/state_text.h"
+#include "solver/core/fnv1a.h"
 
 namespace peritwin::stream {
 
@@ -19,21 +21,22 @@ namespace {
 
 namespace st = replay::state_text;
 constexpr std::string_view kTag = "peritwin-stream-state";
-constexpr std::uint64_t kVersion = 1;
+// Version 2 adds "samples_taken": the last seq taken per source of load_samples_t. Version 1
+// files (without it) are read as having taken none.
+constexpr std::uint64_t kVersion = 2;
 
-std::uint64_t fnv1a(std::string_view text) {
+/// The checksum line's value: FNV-1a 64 (solver/core/fnv1a.h) of every byte before it.
+std::string checksum(std::string_view body) { return hex64(fnv1a64(body)); }
+
+/// Version 1 files were checksummed by a copy of FNV-1a whose offset basis lost its last digit
+/// (1469598103934665603 for 14695981039346656037); they are still read, with that value.
+std::string version_one_checksum(std::string_view body) {
   std::uint64_t h = 1469598103934665603ULL;
-  for (const char c : text) {
+  for (const char c : body) {
     h ^= static_cast<unsigned char>(c);
-    h *= 1099511628211ULL;
+    h *= Fnv1a64::kPrime;
   }
-  return h;
-}
-
-std::string hex(std::uint64_t v) {
-  char buf[17];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
-  return buf;
+  return hex64(h);
 }
 
 void put_block(std::string& out, const LoadBlock& b) {
@@ -144,6 +147,17 @@ std::string Pipeline::save() const {
   out += "\nopen_blocks";
   st::put(out, static_cast<std::uint64_t>(batcher_.open_blocks().size()));
   for (const auto& b : batcher_.open_blocks()) put_block(out, b);
+  out += "\nsamples_taken";
+  st::put(out, static_cast<std::uint64_t>(samples_taken.size()));
+  for (const auto& [source, seq] : samples_taken) {
+    out += ' ';
+    for (const unsigned char c : source) {  // hex: a source id may hold any byte
+      constexpr char kHex[] = "0123456789abcdef";
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+    st::put(out, static_cast<std::uint64_t>(seq));
+  }
   put_text(out, "counter", counter_.save());
   put_text(out, "cycle_blocks", blocks_.save());
   return out;
@@ -183,7 +197,9 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
   Pipeline p(detail, source_id, batching, 1);
   r.word(kTag);
   r.count(version, "version");
-  if (r.ok() && version != kVersion) r.fail("version " + std::to_string(version) + " unknown");
+  if (r.ok() && version != 1 && version != kVersion) {
+    r.fail("version " + std::to_string(version) + " unknown");
+  }
   r.word("counts");
   for (std::uint64_t* v : {&p.counts.input_lines, &p.counts.samples, &p.counts.bad_lines,
                            &p.counts.batches, &p.counts.lost_samples, &p.counts.block_cycles}) {
@@ -212,6 +228,31 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
     LoadBlock b;
     read_block(r, b);
     blocks.push_back(b);
+  }
+  std::uint64_t sources = 0;
+  if (version >= 2) {
+    r.word("samples_taken");
+    r.count(sources, "samples_taken");
+  }
+  for (std::uint64_t i = 0; r.ok() && i < sources; ++i) {
+    const std::string_view hex_id = r.token("source");
+    std::string source;
+    for (std::size_t k = 0; k + 1 < hex_id.size(); k += 2) {
+      const auto digit = [](char c) {
+        return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1;
+      };
+      const int hi = digit(hex_id[k]), lo = digit(hex_id[k + 1]);
+      if (hi < 0 || lo < 0) break;
+      source += static_cast<char>(hi * 16 + lo);
+    }
+    std::uint64_t seq = 0;
+    r.count(seq, "seq");
+    if (r.ok() && (hex_id.empty() || source.size() * 2 != hex_id.size() ||
+                   source.size() > twin::kMaxSourceIdLength ||
+                   seq > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) ||
+                   !p.samples_taken.emplace(source, static_cast<std::int64_t>(seq)).second)) {
+      r.fail("samples_taken: bad or repeated source \"" + std::string(hex_id) + "\"");
+    }
   }
   r.end();
   if (!r.ok()) return r.error();
@@ -249,7 +290,7 @@ Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
     for (const auto& block : b.blocks) put_block(text, block);
   }
   text += "\n";
-  text += "checksum " + hex(fnv1a(text)) + "\n";
+  text += "checksum " + checksum(text) + "\n";
   const std::filesystem::path tmp = file.string() + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) return failure(tmp.string() + ": cannot write: " + std::strerror(errno));
@@ -293,8 +334,10 @@ Expected<RestoredState, std::string> load_state(const std::filesystem::path& fil
     return fail("truncated (no checksum line)");
   }
   const std::string_view body(text.data(), at);
-  if (trim(std::string_view(text).substr(at + 9)) != hex(fnv1a(body)) &&
-      std::string_view(text).substr(at + 9) != hex(fnv1a(body)) + "\n") {
+  std::string_view stored = trim(std::string_view(text).substr(at + 9));
+  if (stored.ends_with('\n')) stored.remove_suffix(1);
+  const bool version_one = body.starts_with(std::string(kTag) + " 1\n");
+  if (stored != (version_one ? version_one_checksum(body) : checksum(body))) {
     return fail("checksum mismatch (the file was changed or is damaged)");
   }
   const std::size_t un = body.rfind("\nunacknowledged ");

@@ -6,8 +6,8 @@
 // State file (StreamState::save/restore): text, written atomically (temporary file, fsync, rename,
 // fsync of the directory) whenever batches were closed, and at the end. It holds the counter's and
 // the converter's exact states, the open batch, the next seq, the batches not yet acknowledged by
-// the daemon, the input position (lines consumed; a FILE input skips them at a restart) and the
-// counts; its last line is "checksum <FNV-1a 64 of every byte before it>". Next to it,
+// the daemon, the input position (lines consumed; a FILE input skips them at a restart), the last
+// load_samples_t seq taken per source (version 2) and the counts; its last line is "checksum <FNV-1a 64 of every byte before it>". Next to it,
 // "<state file>.received" holds the number of samples read so far (rewritten in place, no fsync:
 // it survives a SIGKILL of the process, the page cache keeps it), so that a restart can report
 // the samples read after the last state was written (lost_samples) for an input it cannot re-read.
@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -54,6 +55,9 @@ class Pipeline {
   [[nodiscard]] std::int64_t next_seq() const { return batcher_.next_seq(); }
   StreamCounts counts;
   std::optional<double> last_time;  ///< of the last sample taken (times must increase)
+  /// --input lcm: the last seq of each source's load_samples_t whose samples were taken (so a
+  /// restart neither takes a resent message twice nor calls the next seq a gap).
+  std::map<std::string, std::int64_t> samples_taken;
 
   /// The state text (without the unacknowledged batches and checksum: StreamState adds them).
   [[nodiscard]] std::string save() const;

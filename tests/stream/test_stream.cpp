@@ -20,6 +20,7 @@
 #include <sstream>
 #include <thread>
 
+#include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "tests/support/lcm_hub.h"
@@ -295,10 +296,11 @@ TEST_F(StreamOverHub, SamplesOfAKilledPipeStreamAreReportedLost) {
   d->wait_for(kWaitS);
 }
 
-TEST_F(StreamOverHub, LcmSamplesEqualTheReplay) {
-  const std::string reference = replay_summary(kSeries);
-  auto s = stream({"--input", "lcm", "--lcm-url", hub_->url(), "--in-process"}, "stream.log");
-  // The series as load_samples_t messages of 100 samples with their times.
+/// The series as load_samples_t of 100 samples with their times (seq 1 to 12), source `source`,
+/// each signed with `key` when given; seq 3 is published twice (a duplicate the stream drops).
+/// Only the messages with seq <= last_seq.
+void publish_series_as_samples(lcm::LCM& lcm, const std::string& source,
+                               const messages::AuthKey* key, std::size_t last_seq = 12) {
   std::vector<double> t, p;
   std::ifstream in(kSeries);
   std::string line;
@@ -309,30 +311,129 @@ TEST_F(StreamOverHub, LcmSamplesEqualTheReplay) {
     p.push_back(std::stod(line.substr(comma + 1)));
   }
   ASSERT_EQ(p.size(), 1200u);
-  // The stream is subscribed once it prints its initial state.
-  ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream.log");
-  lcm::LCM lcm(hub_->url());
-  ASSERT_TRUE(lcm.good());
-  for (std::size_t i = 0, seq = 1; i < p.size(); i += 100, ++seq) {
-    messages::Samples m{"b1-ct", "gauge", static_cast<std::int64_t>(seq), 0.0, 0.0, {}, {}, {}};
+  for (std::size_t i = 0, seq = 1; i < p.size() && seq <= last_seq; i += 100, ++seq) {
+    messages::Samples m{"b1-ct", source, static_cast<std::int64_t>(seq), 0.0, 0.0, {}, {}, {}};
     m.p.assign(p.begin() + static_cast<std::ptrdiff_t>(i),
                p.begin() + static_cast<std::ptrdiff_t>(i + 100));
     m.t.assign(t.begin() + static_cast<std::ptrdiff_t>(i),
                t.begin() + static_cast<std::ptrdiff_t>(i + 100));
     auto msg = messages::samples_message(m, messages::now_utime());
+    if (key != nullptr) messages::sign(msg, *key);
     lcm.publish(messages::channel("b1-ct", messages::Kind::kSamples), &msg);
     if (seq == 3) lcm.publish(messages::channel("b1-ct", messages::Kind::kSamples), &msg);  // dup
   }
-  // Wait until the stream has taken them (its stderr says nothing per message): a few seconds
-  // of quiet on stdout after the last state, then SIGTERM.
-  while (s->read_line(3.0)) {
+}
+
+/// The stream's output once the samples stopped: a few seconds of quiet on stdout after the last
+/// state (its stderr says nothing per message), then SIGTERM; its lines to the end.
+std::vector<std::string> stop_when_quiet(Process& s) {
+  while (s.read_line(3.0)) {
   }
-  s->signal(SIGTERM);
-  const auto lines = lines_to_end(*s);
+  s.signal(SIGTERM);
+  return lines_to_end(s);
+}
+
+TEST_F(StreamOverHub, LcmSamplesEqualTheReplay) {
+  const std::string reference = replay_summary(kSeries);
+  auto s = stream({"--input", "lcm", "--lcm-url", hub_->url(), "--in-process"}, "stream.log");
+  // The stream is subscribed once it prints its initial state.
+  ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream.log");
+  lcm::LCM lcm(hub_->url());
+  ASSERT_TRUE(lcm.good());
+  ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", nullptr));
+  const auto lines = stop_when_quiet(*s);
   ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
   ASSERT_FALSE(lines.empty());
   EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
   expect_same_load(reference, lines.back());
+}
+
+// --input lcm with a state file: the last seq taken per source survives a restart, so a gateway
+// that sends everything again after the restart has its old messages dropped as duplicates and
+// its next one is no gap; the load equals the replay of the whole series. (The first run ends
+// with --residue keep: its open reversals go on in the second.)
+TEST_F(StreamOverHub, LcmSamplesTakenOnceAcrossARestart) {
+  const std::string reference = replay_summary(kSeries);
+  auto d = daemon("daemon.log");
+  const fs::path state = dir_ / "stream.state";
+  const std::vector<std::string> args{"--input",         "lcm",          "--lcm-url",
+                                      hub_->url(),       "--state-file", state.string(),
+                                      "--give-up-after", "600"};
+  lcm::LCM lcm(hub_->url());
+  ASSERT_TRUE(lcm.good());
+  {
+    auto first_args = args;
+    first_args.insert(first_args.end(), {"--residue", "keep"});
+    auto s = stream(first_args, "stream1.log");
+    ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream1.log");
+    ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", nullptr, 6));
+    stop_when_quiet(*s);
+    ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream1.log");
+  }
+  ASSERT_NE(read_file(state).find("samples_taken 1 6761756765 6"), std::string::npos)
+      << read_file(state);  // "gauge" in hex, seq 6
+  auto s = stream(args, "stream2.log");
+  ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream2.log");
+  ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", nullptr));  // 1..12 again
+  const auto lines = stop_when_quiet(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream2.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  expect_same_load(reference, lines.back());
+  EXPECT_EQ(read_file(dir_ / "stream2.log").find("gap"), std::string::npos)
+      << read_file(dir_ / "stream2.log");
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+// --key-file: a daemon with [auth] takes the stream's signed batches, the stream verifies every
+// STATE, and of the samples on the bus only those signed with their source's key are taken
+// (an unsigned copy of the whole series from another source is refused). The same load as the
+// in-process replay. A stream without the key is refused by the daemon (CODE_AUTH, exit 3).
+TEST_F(StreamOverHub, SignedStreamFeedsAnAuthenticatedDaemon) {
+  const std::string reference = replay_summary(kSeries);
+  const std::string keys = (dir_ / "keys.toml").string();
+  Process keygen({kBin + "/peritwin-replay", "--generate-key-file", keys, "--key-ids",
+                  "stream,peritwin,gauge,rogue"},
+                 (dir_ / "keygen.log").string());
+  ASSERT_EQ(exit_code(keygen), 0) << read_file(dir_ / "keygen.log");
+  const fs::path config = dir_ / "b1-auth.toml";
+  std::ofstream(config) << read_file(kConfig) << "\n[auth]\nkey_file = \"keys.toml\"\n";
+  Process d({kBin + "/peritwin", "--config", config.string(), "--lcm-url", hub_->url(),
+             "--state-dir", (dir_ / "state").string(), "--deterministic", "--no-results"},
+            (dir_ / "daemon.log").string());
+
+  // Without the key: the daemon refuses the stream's first batch.
+  auto unsigned_stream = std::make_unique<Process>(
+      std::vector<std::string>{kBin + "/peritwin-stream", "--config", config.string(), "--input",
+                               kSeries, "--lcm-url", hub_->url(), "--give-up-after", "600"},
+      (dir_ / "unsigned.log").string());
+  EXPECT_EQ(exit_code(*unsigned_stream), 3) << read_file(dir_ / "unsigned.log");
+  EXPECT_NE(read_file(dir_ / "unsigned.log").find("auth"), std::string::npos)
+      << read_file(dir_ / "unsigned.log");
+
+  auto s = std::make_unique<Process>(
+      std::vector<std::string>{kBin + "/peritwin-stream", "--config", config.string(), "--input",
+                               "lcm", "--lcm-url", hub_->url(), "--key-file", keys, "--json",
+                               "--give-up-after", "600"},
+      (dir_ / "stream.log").string());
+  ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream.log");
+  const auto ring = messages::KeyRing::load(keys);
+  ASSERT_TRUE(ring) << ring.error().message();
+  lcm::LCM lcm(hub_->url());
+  ASSERT_TRUE(lcm.good());
+  ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "rogue", nullptr));  // unsigned
+  ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", ring->find("gauge")));
+  const auto lines = stop_when_quiet(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  expect_same_load(reference, lines.back());
+  EXPECT_NE(read_file(dir_ / "stream.log").find("refused: auth: auth_tag: unsigned"),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+  d.signal(SIGTERM);
+  d.wait_for(kWaitS);
 }
 
 }  // namespace
