@@ -3,6 +3,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 namespace peritwin::dashboard {
 namespace {
@@ -47,22 +48,22 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                not_found(res, "unknown detail \"" + id + "\"");
              });
   // The mesh and the newest complete field: 404 for an unknown detail or none yet.
-  server.Get(R"(/api/details/([A-Za-z0-9_-]+)/mesh)",
-             [&store](const httplib::Request& req, httplib::Response& res) {
-               const std::string id = req.matches[1];
-               const auto body = store.mesh_json(id);
-               if (!body) return not_found(res, "unknown detail \"" + id + "\"");
-               if (body->empty()) return not_found(res, "no mesh of \"" + id + "\" yet");
-               json(res, *body);
-             });
-  server.Get(R"(/api/details/([A-Za-z0-9_-]+)/field)",
-             [&store](const httplib::Request& req, httplib::Response& res) {
-               const std::string id = req.matches[1];
-               const auto body = store.field_json(id);
-               if (!body) return not_found(res, "unknown detail \"" + id + "\"");
-               if (body->empty()) return not_found(res, "no complete field of \"" + id + "\" yet");
-               json(res, *body);
-             });
+  using Getter = std::optional<std::string> (Store::*)(const std::string&) const;
+  for (const auto& [route, getter, what] :
+       {std::tuple<const char*, Getter, const char*>{"mesh", &Store::mesh_json, "mesh"},
+        std::tuple<const char*, Getter, const char*>{"field", &Store::field_json,
+                                                     "complete field"}}) {
+    server.Get(std::string(R"(/api/details/([A-Za-z0-9_-]+)/)") + route,
+               [&store, getter, what](const httplib::Request& req, httplib::Response& res) {
+                 const std::string id = req.matches[1];
+                 const auto body = (store.*getter)(id);
+                 if (!body) return not_found(res, "unknown detail \"" + id + "\"");
+                 if (body->empty()) {
+                   return not_found(res, std::string("no ") + what + " of \"" + id + "\" yet");
+                 }
+                 json(res, *body);
+               });
+  }
   server.Get("/api/events", [&store](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     // Events from the one after the newest at connection time: the page loads the current
