@@ -1,7 +1,11 @@
 // peritwin-dashboard: a read-only web dashboard of every detail on the bus. See README.md,
 // "Dashboard", and dashboard/store.h, dashboard/server.h.
 //
-//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--log-level L]
+//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR] [--log-level L]
+//
+// It publishes one thing only: a mesh_request_t on PERITWIN_<DETAIL>_MESH_REQUEST for a detail it
+// has no mesh of (every 5 s at most per detail), which its daemon answers on the MESH channel.
+// --results DIR back-fills each detail's history from the daemon's results files under DIR.
 //
 // Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
@@ -15,8 +19,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <thread>
 
+#include "dashboard/backfill.h"
 #include "dashboard/server.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
@@ -84,10 +90,13 @@ class Feed {
 
 int main(int argc, char** argv) {
   CLI::App app{"peritwin-dashboard: read-only web dashboard of the details on the bus"};
-  std::string lcm_url, listen = "127.0.0.1:8080", log_level = "info";
+  std::string lcm_url, listen = "127.0.0.1:8080", log_level = "info", results;
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's default)");
   app.add_option("--listen", listen,
                  "HTTP address HOST:PORT (default 127.0.0.1:8080; port 0: any)");
+  app.add_option("--results", results,
+                 "back-fill each detail's history from the daemon's results files under DIR "
+                 "(<DIR>/<id>.h5 or <DIR>/*/<id>.h5)");
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   try {
@@ -152,6 +161,23 @@ int main(int argc, char** argv) {
   spdlog::info("serving http://{}:{}/ (read-only), LCM \"{}\"", host, port,
                peritwin::messages::shown_url(lcm_url));
 
+  if (!results.empty()) {
+    if (!std::filesystem::is_directory(results)) {
+      spdlog::warn("--results {}: not a directory, nothing back-filled", results);
+    }
+    for (const auto& file : peritwin::dashboard::find_results_files(results)) {
+      try {
+        const auto points = peritwin::dashboard::read_history_points(file.path);
+        const std::size_t taken =
+            store.backfill(file.detail_id, points, peritwin::dashboard::Clock::now());
+        spdlog::info("[{}] back-filled {} of {} state(s) from {}", file.detail_id, taken,
+                     points.size(), file.path.string());
+      } catch (const std::exception& e) {
+        spdlog::warn("[{}] {}: not back-filled: {}", file.detail_id, file.path.string(), e.what());
+      }
+    }
+  }
+
   int rc = kExitOk;
   try {
     peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
@@ -165,16 +191,23 @@ int main(int argc, char** argv) {
       lcm::LCM& lcm = *connection;
       Feed feed(store);
       using peritwin::messages::Kind;
-      for (const Kind kind : {Kind::kState, Kind::kStatus, Kind::kReject, Kind::kField}) {
+      for (const Kind kind :
+           {Kind::kState, Kind::kStatus, Kind::kReject, Kind::kField, Kind::kMesh}) {
         lcm.subscribe(peritwin::messages::channel_regex(kind), &Feed::on_message, &feed);
       }
-      spdlog::info("subscribed to STATE, STATUS, REJECT and FIELD of every detail");
+      spdlog::info("subscribed to STATE, STATUS, REJECT, FIELD and MESH of every detail");
       while (g_signal.load() == 0) {
         if (!hub.connected()) {
           hub.reconnect(lcm);
         } else {
           peritwin::messages::handle_lcm(lcm, 100);  // -1: the hub went away (check says so)
           hub.check(lcm);
+          for (const auto& id : store.take_mesh_requests(peritwin::dashboard::Clock::now())) {
+            const auto request = peritwin::messages::mesh_request_message(
+                id, "peritwin-dashboard", peritwin::messages::now_utime());
+            lcm.publish(peritwin::messages::channel(id, Kind::kMeshRequest), &request);
+            spdlog::debug("[{}] mesh requested", id);
+          }
         }
       }
     }

@@ -3,6 +3,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <tuple>
 
 namespace peritwin::dashboard {
 namespace {
@@ -46,6 +47,23 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                if (const auto body = store.history_json(id)) return json(res, *body);
                not_found(res, "unknown detail \"" + id + "\"");
              });
+  // The mesh and the newest complete field: 404 for an unknown detail or none yet.
+  using Getter = std::optional<std::string> (Store::*)(const std::string&) const;
+  for (const auto& [route, getter, what] :
+       {std::tuple<const char*, Getter, const char*>{"mesh", &Store::mesh_json, "mesh"},
+        std::tuple<const char*, Getter, const char*>{"field", &Store::field_json,
+                                                     "complete field"}}) {
+    server.Get(std::string(R"(/api/details/([A-Za-z0-9_-]+)/)") + route,
+               [&store, getter, what](const httplib::Request& req, httplib::Response& res) {
+                 const std::string id = req.matches[1];
+                 const auto body = (store.*getter)(id);
+                 if (!body) return not_found(res, "unknown detail \"" + id + "\"");
+                 if (body->empty()) {
+                   return not_found(res, std::string("no ") + what + " of \"" + id + "\" yet");
+                 }
+                 json(res, *body);
+               });
+  }
   server.Get("/api/events", [&store](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     // Events from the one after the newest at connection time: the page loads the current

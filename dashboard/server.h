@@ -4,7 +4,9 @@
 //   /api/details              every detail with its latest summary
 //   /api/details/{id}         the latest state of one detail, 404 {"error"} if unknown
 //   /api/details/{id}/history its bounded history, 404 {"error"} if unknown
-//   /api/events               Server-Sent Events: one per STATE/STATUS/REJECT
+//   /api/details/{id}/mesh    its reassembled MESH, 404 {"error"} if unknown or none yet
+//   /api/details/{id}/field   its newest complete FIELD, 404 {"error"} if unknown or none yet
+//   /api/events               Server-Sent Events: one per STATE/STATUS/REJECT, complete MESH/FIELD
 #pragma once
 
 #include <httplib.h>

@@ -48,7 +48,9 @@ void Store::on_message(const std::string& channel, const void* data, std::size_t
       if (d.first_seen == Clock::time_point{}) d.first_seen = now;
       // One point per state: a STATE published again (the daemon answers a duplicate batch with
       // it) adds none. A restarted daemon goes on from its checkpoint's seq, maybe a smaller one.
-      const bool again = d.state && d.state->state_seq == state->state_seq;
+      // (Also the last point of a back-filled history.)
+      const bool again =
+          !d.history.empty() && d.history.rows().back()[5] == static_cast<double>(state->state_seq);
       if (!again) {
         d.history.push({static_cast<double>(state->total_cycles), state->crack_length_m,
                         state->remaining_cycles, state->remaining_cycles_low,
@@ -93,13 +95,115 @@ void Store::on_message(const std::string& channel, const void* data, std::size_t
       }
       auto& d = details_[field->detail_id];
       if (d.first_seen == Clock::time_point{}) d.first_seen = now;
-      ++d.fields;  // counted only: the damage map needs the node coordinates (not on the bus)
+      ++d.fields;
+      const std::string id = field->detail_id;
+      on_field(id, d, std::move(*field), now);
       return;
     }
+    case messages::Kind::kMesh:
+      return on_mesh_chunk(parts->token, data, size, now);
     case messages::Kind::kLoad:
     case messages::Kind::kSamples:
-      return;  // producers' channels: not subscribed
+    case messages::Kind::kMeshRequest:
+      return;  // producers' and requesters' channels: not subscribed
   }
+}
+
+void Store::on_mesh_chunk(const std::string& token, const void* data, std::size_t size,
+                          Clock::time_point now) {
+  auto decoded = messages::decode_mesh_chunk(data, size);
+  if (decoded.chunk && !belongs(decoded.chunk->detail_id, token)) {
+    decoded.error = "detail_id \"" + decoded.chunk->detail_id + "\" is not the channel's";
+  }
+  if (!decoded.error.empty()) {
+    count_undecodable(token);
+    for (auto& [id, d] : details_) {
+      if (messages::detail_token(id) == token) d.mesh_error = decoded.error;
+    }
+    return;
+  }
+  auto& d = details_[decoded.chunk->detail_id];
+  if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+  if (decoded.chunk->mesh_hash == d.mesh_hash) return;  // we have it: a republication for others
+  auto done = meshes_.add(std::move(*decoded.chunk));
+  if (!done.error.empty()) d.mesh_error = done.error;
+  if (done.mesh) {
+    d.mesh_hash = messages::mesh_hash(*done.mesh);
+    d.mesh = std::move(done.mesh);
+    d.mesh_error.clear();
+    push_event("mesh", d.mesh->detail_id, now);
+  }
+}
+
+void Store::on_field(const std::string& id, DetailRecord& d, peritwin_msgs::damage_field_t field,
+                     Clock::time_point now) {
+  PartialField& p = d.partial_field;
+  // A chunk of another state or layout starts a new set (an incomplete older one is dropped).
+  if (p.state_seq != field.state_seq || p.mesh_hash != field.mesh_hash ||
+      p.num_chunks != field.num_chunks || p.total_nodes != field.total_nodes) {
+    p = PartialField{field.state_seq, field.mesh_hash, field.num_chunks, field.total_nodes, {}};
+  }
+  if (field.num_chunks < 1 || field.chunk_index < 0 || field.chunk_index >= field.num_chunks ||
+      field.total_nodes < 1 || field.first_node < 0 ||
+      static_cast<std::int64_t>(field.first_node) + field.num_nodes > field.total_nodes) {
+    return;  // counted in "fields", not drawable
+  }
+  const std::int32_t index = field.chunk_index;
+  p.chunks.insert_or_assign(index, std::move(field));
+  if (static_cast<std::int32_t>(p.chunks.size()) < p.num_chunks) return;
+  Field f{p.state_seq, p.mesh_hash, {}};
+  f.damage.reserve(static_cast<std::size_t>(p.total_nodes));
+  for (const auto& [i, c] : p.chunks) {
+    if (c.first_node != static_cast<std::int32_t>(f.damage.size())) {
+      p = PartialField{};
+      return;  // the chunks do not tile the nodes
+    }
+    f.damage.insert(f.damage.end(), c.damage.begin(), c.damage.end());
+  }
+  const std::int32_t total = p.total_nodes;
+  p = PartialField{};
+  if (static_cast<std::int32_t>(f.damage.size()) != total) return;
+  if (!d.field || d.field->state_seq <= f.state_seq || d.field->mesh_hash != f.mesh_hash) {
+    d.field = std::move(f);
+    return push_event("field", id, now);
+  }
+}
+
+std::vector<std::string> Store::take_mesh_requests(Clock::time_point now) {
+  const std::lock_guard lock(mutex_);
+  std::vector<std::string> out;
+  for (auto& [id, d] : details_) {
+    const bool missing = !d.mesh || (d.field && d.field->mesh_hash != d.mesh_hash);
+    if (!missing) continue;
+    if (d.mesh_requested != Clock::time_point{} &&
+        seconds(now - d.mesh_requested) < kMeshRequestPeriodS) {
+      continue;
+    }
+    d.mesh_requested = now;
+    out.push_back(id);
+  }
+  return out;
+}
+
+std::size_t Store::backfill(const std::string& id, const std::vector<HistoryPoint>& points,
+                            Clock::time_point now) {
+  const std::lock_guard lock(mutex_);
+  auto& d = details_[id];
+  if (d.first_seen == Clock::time_point{}) d.first_seen = now;
+  const bool live = !d.history.empty();
+  const double first_live = live ? d.history.rows().front()[5] : 0.0;
+  History merged{kHistoryPoints};
+  std::size_t taken = 0;
+  for (const auto& p : points) {
+    if (live && static_cast<double>(p.state_seq) >= first_live) continue;
+    merged.push({static_cast<double>(p.cycles), p.crack_length_m, p.remaining, p.low, p.high,
+                 static_cast<double>(p.state_seq)});
+    ++taken;
+  }
+  for (const auto& row : d.history.rows()) merged.push(row);
+  d.history = std::move(merged);
+  d.backfilled += taken;
+  return taken;
 }
 
 void Store::count_undecodable(const std::string& token) {
@@ -137,6 +241,19 @@ std::string Store::detail_json_locked(const std::string& id, const DetailRecord&
     } else {
       j["tip"] = nullptr;
     }
+    // The crack paths to draw: origin, then the tips (listed cracks, the longest first).
+    Json cracks = Json::array();
+    for (const auto& c : s.cracks) {
+      Json tips = Json::array();
+      for (const auto& t : c.tips) tips.push_back({{"x", number(t.x)}, {"y", number(t.y)}});
+      cracks.push_back({{"id", c.id},
+                        {"origin", c.origin},
+                        {"origin_x", number(c.origin_x)},
+                        {"origin_y", number(c.origin_y)},
+                        {"length_m", number(c.length_m)},
+                        {"tips", std::move(tips)}});
+    }
+    j["cracks"] = std::move(cracks);
   } else {
     j["detail"] = id;
     j["state_seq"] = nullptr;
@@ -175,6 +292,12 @@ std::string Store::detail_json_locked(const std::string& id, const DetailRecord&
     j["last_reject"] = nullptr;
   }
   j["fields"] = d.fields;
+  j["mesh_hash"] = d.mesh ? Json(d.mesh_hash) : Json(nullptr);
+  j["mesh_nodes"] = d.mesh ? Json(d.mesh->x.size()) : Json(nullptr);
+  j["mesh_error"] = d.mesh_error.empty() ? Json(nullptr) : Json(d.mesh_error);
+  j["field_seq"] = d.field ? Json(d.field->state_seq) : Json(nullptr);
+  j["field_mesh_hash"] = d.field ? Json(d.field->mesh_hash) : Json(nullptr);
+  j["backfilled"] = d.backfilled;
   const auto u = undecodable_.find(messages::detail_token(id));
   j["undecodable"] = u == undecodable_.end() ? 0 : u->second;
   return dump(j);
@@ -207,6 +330,7 @@ std::optional<std::string> Store::history_json(const std::string& id) const {
   Json j;
   j["detail"] = id;
   j["pushed"] = h.pushed();
+  j["backfilled"] = it->second.backfilled;
   for (std::size_t c = 0; c < 6; ++c) {
     Json column = Json::array();
     for (const auto& row : h.rows()) {
@@ -219,6 +343,51 @@ std::optional<std::string> Store::history_json(const std::string& id) const {
     }
     j[kColumns[c]] = std::move(column);
   }
+  return dump(j);
+}
+
+std::optional<std::string> Store::mesh_json(const std::string& id) const {
+  const std::lock_guard lock(mutex_);
+  const auto it = details_.find(id);
+  if (it == details_.end()) return std::nullopt;
+  if (!it->second.mesh) return std::string();
+  const messages::Mesh& m = *it->second.mesh;
+  Json j;
+  j["detail"] = id;
+  j["mesh_hash"] = it->second.mesh_hash;
+  j["total_nodes"] = m.x.size();
+  j["dx"] = m.dx;
+  j["horizon"] = m.horizon;
+  j["box"] = {m.x_min, m.y_min, m.x_max, m.y_max};
+  j["x"] = m.x;
+  j["y"] = m.y;
+  Json lines = Json::array();
+  for (const auto& line : m.polylines) {
+    const char* kind = line.kind == peritwin_msgs::mesh_polyline_t::KIND_HOLE    ? "hole"
+                       : line.kind == peritwin_msgs::mesh_polyline_t::KIND_NOTCH ? "notch"
+                                                                                 : "outline";
+    lines.push_back({{"kind", kind},
+                     {"index", line.index},
+                     {"closed", line.closed},
+                     {"x", line.x},
+                     {"y", line.y}});
+  }
+  j["polylines"] = std::move(lines);
+  return dump(j);
+}
+
+std::optional<std::string> Store::field_json(const std::string& id) const {
+  const std::lock_guard lock(mutex_);
+  const auto it = details_.find(id);
+  if (it == details_.end()) return std::nullopt;
+  if (!it->second.field) return std::string();
+  const Field& f = *it->second.field;
+  Json j;
+  j["detail"] = id;
+  j["state_seq"] = f.state_seq;
+  j["mesh_hash"] = f.mesh_hash;
+  j["total_nodes"] = f.damage.size();
+  j["damage"] = f.damage;
   return dump(j);
 }
 

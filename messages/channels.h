@@ -12,16 +12,19 @@ namespace peritwin::messages {
 
 // What a channel carries (message type in parentheses).
 enum class Kind {
-  kLoad,     // load batches to the twin (peritwin_msgs::load_batch_t)
-  kState,    // damage state after every applied batch (peritwin_msgs::damage_state_t)
-  kField,    // damage field chunks, throttled (peritwin_msgs::damage_field_t)
-  kReject,   // batches not applied, with the reason (peritwin_msgs::reject_t)
-  kStatus,   // heartbeat (peritwin_msgs::status_t)
-  kSamples,  // raw load samples for peritwin-stream (peritwin_msgs::load_samples_t), v5
+  kLoad,         // load batches to the twin (peritwin_msgs::load_batch_t)
+  kState,        // damage state after every applied batch (peritwin_msgs::damage_state_t)
+  kField,        // damage field chunks, throttled (peritwin_msgs::damage_field_t)
+  kReject,       // batches not applied, with the reason (peritwin_msgs::reject_t)
+  kStatus,       // heartbeat (peritwin_msgs::status_t)
+  kSamples,      // raw load samples for peritwin-stream (peritwin_msgs::load_samples_t), v5
+  kMesh,         // the discretization, chunked (peritwin_msgs::detail_mesh_t), v6
+  kMeshRequest,  // asks the daemon for the mesh again (peritwin_msgs::mesh_request_t), v6
 };
 
-inline constexpr Kind kAllKinds[] = {Kind::kLoad,   Kind::kState,  Kind::kField,
-                                     Kind::kReject, Kind::kStatus, Kind::kSamples};
+inline constexpr Kind kAllKinds[] = {Kind::kLoad,   Kind::kState,      Kind::kField,
+                                     Kind::kReject, Kind::kStatus,     Kind::kSamples,
+                                     Kind::kMesh,   Kind::kMeshRequest};
 
 inline constexpr std::string_view kChannelPrefix = "PERITWIN_";
 
@@ -30,7 +33,8 @@ inline constexpr std::string_view kChannelPrefix = "PERITWIN_";
 inline constexpr std::size_t kMaxDetailIdLength = 32;
 inline constexpr std::size_t kMaxChannelLength = 63;
 
-// Channel suffix of a kind: "LOAD", "STATE", "FIELD", "REJECT", "STATUS", "SAMPLES".
+// Channel suffix of a kind: "LOAD", "STATE", "FIELD", "REJECT", "STATUS", "SAMPLES", "MESH",
+// "MESH_REQUEST".
 constexpr std::string_view suffix(Kind kind) {
   switch (kind) {
     case Kind::kLoad:
@@ -45,15 +49,20 @@ constexpr std::string_view suffix(Kind kind) {
       return "STATUS";
     case Kind::kSamples:
       return "SAMPLES";
+    case Kind::kMesh:
+      return "MESH";
+    case Kind::kMeshRequest:
+      return "MESH_REQUEST";
   }
   return {};
 }
 
-// The longest suffix is SAMPLES.
-static_assert(kChannelPrefix.size() + kMaxDetailIdLength + 1 + suffix(Kind::kSamples).size() <=
+// The longest suffix is MESH_REQUEST.
+static_assert(kChannelPrefix.size() + kMaxDetailIdLength + 1 + suffix(Kind::kMeshRequest).size() <=
               kMaxChannelLength);
 static_assert(suffix(Kind::kStatus).size() == suffix(Kind::kReject).size() &&
-              suffix(Kind::kReject).size() < suffix(Kind::kSamples).size());
+              suffix(Kind::kReject).size() < suffix(Kind::kSamples).size() &&
+              suffix(Kind::kSamples).size() < suffix(Kind::kMeshRequest).size());
 
 // A detail id is 1..kMaxDetailIdLength characters from [A-Za-z0-9_-].
 constexpr bool is_valid_detail_id(std::string_view detail_id) noexcept {

@@ -13,6 +13,8 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "messages/mesh.h"
+
 namespace peritwin::messages {
 
 namespace {
@@ -219,10 +221,40 @@ bool status_layout(const unsigned char* p, std::size_t size) {
 bool field_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   std::int32_t nodes = 0;
-  // utime, detail_id, state_seq, chunk_index, num_chunks, total_nodes, first_node, the damage.
+  // utime, detail_id, state_seq, mesh_hash, chunk_index, num_chunks, total_nodes, first_node,
+  // the damage.
   return w.fingerprint(peritwin_msgs::damage_field_t::getHash()) && w.skip(8) && w.string() &&
-         w.skip(8 + 4 * 4) && w.count(4, nodes) && w.skip(4 * static_cast<std::size_t>(nodes)) &&
-         w.at_end();
+         w.skip(8) && w.string() && w.skip(4 * 4) && w.count(4, nodes) &&
+         w.skip(4 * static_cast<std::size_t>(nodes)) && w.at_end();
+}
+
+/// Fewest encoded bytes of one mesh_polyline_t: kind, index, closed, num_points.
+constexpr std::size_t kMinPolylineBytes = 1 + 4 + 1 + 4;
+
+bool mesh_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  std::int32_t nodes = 0, lines = 0;
+  // utime, detail_id, mesh_hash, chunk_index, num_chunks, total_nodes, dx, horizon, the box,
+  // first_node, x and y, the polylines.
+  if (!w.fingerprint(peritwin_msgs::detail_mesh_t::getHash()) || !w.skip(8) || !w.string() ||
+      !w.string() || !w.skip(3 * 4 + 6 * 8 + 4) || !w.count(2 * 8, nodes) ||
+      !w.skip(2 * 8 * static_cast<std::size_t>(nodes)) || !w.count(kMinPolylineBytes, lines)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < lines; ++i) {
+    std::int32_t points = 0;
+    if (!w.skip(1 + 4 + 1) || !w.count(2 * 8, points) ||
+        !w.skip(2 * 8 * static_cast<std::size_t>(points))) {
+      return false;
+    }
+  }
+  return w.at_end();
+}
+
+bool mesh_request_layout(const unsigned char* p, std::size_t size) {
+  LayoutWalker w(p, size);
+  return w.fingerprint(peritwin_msgs::mesh_request_t::getHash()) && w.skip(8) && w.string() &&
+         w.string() && w.at_end();
 }
 
 template <typename Message>
@@ -253,6 +285,20 @@ std::optional<peritwin_msgs::status_t> decode_status(const void* data, std::size
 
 std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std::size_t size) {
   return decode_checked<peritwin_msgs::damage_field_t>(data, size, field_layout);
+}
+
+std::optional<peritwin_msgs::detail_mesh_t> decode_mesh(const void* data, std::size_t size) {
+  return decode_checked<peritwin_msgs::detail_mesh_t>(data, size, mesh_layout);
+}
+
+std::optional<peritwin_msgs::mesh_request_t> decode_mesh_request(const void* data,
+                                                                 std::size_t size) {
+  auto request = decode_checked<peritwin_msgs::mesh_request_t>(data, size, mesh_request_layout);
+  if (!request || !is_valid_detail_id(request->detail_id) ||
+      request->requester.size() > kMaxRequesterLength) {
+    return std::nullopt;
+  }
+  return request;
 }
 
 int handle_lcm(lcm::LCM& lcm, int timeout_ms) {

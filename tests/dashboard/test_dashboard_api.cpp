@@ -3,19 +3,32 @@
 // 6 batches): the HTTP API reports the last STATE (cycles, crack length, state_hash), 404 for an
 // unknown detail, one history point per state; then headless chromium loads the page and its DOM
 // shows the same numbers and one crack-length chart point per state (screenshot in the build
-// directory). Skipped (GTEST_SKIP) only without java/lcm.jar, or, for the browser part, chromium.
+// directory). The mesh and the newest field the API serves equal what the daemon published (the
+// test subscribes too), and the page draws the damage map (its canvas says how many nodes, which
+// field and how many crack paths) with its legend. A second dashboard started after the run gets
+// the mesh by asking the daemon (mesh_request_t) and the whole history from the daemon's results
+// file (--results). Skipped (GTEST_SKIP) only without java/lcm.jar, or, for the browser part,
+// chromium.
 //
 // Every wait has a deadline of minutes (shared, loaded machines); nothing asserts on wall time.
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <sys/wait.h>
 
+#include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
+#include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <regex>
 #include <thread>
 
+#include "messages/channels.h"
+#include "messages/codec.h"
+#include "messages/mesh.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
 
@@ -48,6 +61,12 @@ class DashboardApi : public ::testing::Test {
     const std::string anchor = "\nevery_batches = 10\n";
     ASSERT_NE(text.find(anchor), std::string::npos);
     text.replace(text.find(anchor), anchor.size(), "\nevery_batches = 0\n");
+    // Results under the test's directory, a FIELD after every batch.
+    const std::string output = "directory = \"results/b1-ct\"\nfield_every_batches = 10\n";
+    ASSERT_NE(text.find(output), std::string::npos);
+    text.replace(
+        text.find(output), output.size(),
+        "directory = \"" + (dir_ / "results" / "b1-ct").string() + "\"\nfield_every_batches = 1\n");
     config_ = (dir_ / "b1.toml").string();
     std::ofstream(config_) << text;
     history_ = (dir_ / "history.csv").string();
@@ -56,6 +75,11 @@ class DashboardApi : public ::testing::Test {
     for (int i = 0; i < kBatches; ++i) h << "4000,0.1,0,2000\n";
   }
   void TearDown() override {
+    stop_listening();
+    if (late_) {
+      late_->signal(SIGTERM);
+      late_->wait_for(kWaitS);
+    }
     if (dashboard_) {
       dashboard_->signal(SIGTERM);
       const auto status = dashboard_->wait_for(kWaitS);
@@ -69,20 +93,57 @@ class DashboardApi : public ::testing::Test {
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_);
   }
 
-  /// Starts the dashboard (any free port) and waits for its URL and its subscriptions.
-  void start_dashboard() {
-    dashboard_ = std::make_unique<Process>(
-        std::vector<std::string>{std::string(PERITWIN_BIN_DIR) + "/peritwin-dashboard", "--lcm-url",
-                                 hub_->url(), "--listen", "127.0.0.1:0"},
-        (dir_ / "dashboard.log").string());
-    const auto line = dashboard_->read_line(kWaitS);
-    ASSERT_TRUE(line) << read_file(dir_ / "dashboard.log");
+  /// Starts a dashboard (any free port) and waits for its URL and its subscriptions.
+  void start_dashboard(std::unique_ptr<Process>& process, int& port, const std::string& log,
+                       std::vector<std::string> extra = {}) {
+    std::vector<std::string> args{std::string(PERITWIN_BIN_DIR) + "/peritwin-dashboard",
+                                  "--lcm-url", hub_->url(), "--listen", "127.0.0.1:0"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    process = std::make_unique<Process>(args, (dir_ / log).string());
+    const auto line = process->read_line(kWaitS);
+    ASSERT_TRUE(line) << read_file(dir_ / log);
     std::smatch m;
     ASSERT_TRUE(std::regex_search(*line, m, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")))
         << *line;
-    port_ = std::stoi(m[1]);
-    ASSERT_TRUE(wait_for_text(dir_ / "dashboard.log", "subscribed to", kWaitS))
-        << read_file(dir_ / "dashboard.log");
+    port = std::stoi(m[1]);
+    ASSERT_TRUE(wait_for_text(dir_ / log, "subscribed to", kWaitS)) << read_file(dir_ / log);
+  }
+  void start_dashboard() { start_dashboard(dashboard_, port_, "dashboard.log"); }
+
+  /// Subscribes this process to the detail's MESH and FIELD channels (a thread handles LCM): what
+  /// the daemon published, to compare the API with.
+  void listen_to_bus() {
+    bus_ = std::make_unique<lcm::LCM>(hub_->url());
+    ASSERT_TRUE(bus_->good());
+    bus_->subscribe(messages::channel("b1-ct", messages::Kind::kMesh), &DashboardApi::on_mesh,
+                    this);
+    bus_->subscribe(messages::channel("b1-ct", messages::Kind::kField), &DashboardApi::on_field,
+                    this);
+    listening_ = true;
+    listener_ = std::thread([this] {
+      while (listening_) messages::handle_lcm(*bus_, 100);
+    });
+  }
+  void stop_listening() {
+    listening_ = false;
+    if (listener_.joinable()) listener_.join();
+  }
+  void on_mesh(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    auto decoded = messages::decode_mesh_chunk(rbuf->data, rbuf->data_size);
+    const std::lock_guard lock(bus_mutex_);
+    ++mesh_chunks_;
+    if (!decoded.chunk) return;
+    if (auto r = assembler_.add(std::move(*decoded.chunk)); r.mesh) mesh_ = std::move(r.mesh);
+  }
+  void on_field(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    auto f = messages::decode_field(rbuf->data, rbuf->data_size);
+    if (!f) return;
+    const std::lock_guard lock(bus_mutex_);
+    auto& damage = fields_[f->state_seq];
+    damage.resize(static_cast<std::size_t>(f->total_nodes));
+    std::copy(f->damage.begin(), f->damage.end(),
+              damage.begin() + static_cast<std::ptrdiff_t>(f->first_node));
+    field_hash_ = f->mesh_hash;
   }
 
   /// Daemon up, the history replayed in lockstep; returns the replay's last STATE line.
@@ -90,7 +151,7 @@ class DashboardApi : public ::testing::Test {
     daemon_ = std::make_unique<Process>(
         std::vector<std::string>{std::string(PERITWIN_BIN_DIR) + "/peritwin", "--config", config_,
                                  "--lcm-url", hub_->url(), "--state-dir", (dir_ / "state").string(),
-                                 "--deterministic", "--no-results"},
+                                 "--deterministic"},
         (dir_ / "daemon.log").string());
     Process replay(
         {std::string(PERITWIN_BIN_DIR) + "/peritwin-replay", "--config", config_, "--history",
@@ -108,8 +169,8 @@ class DashboardApi : public ::testing::Test {
   }
 
   /// GET path: {status, body}; status -1 when the request failed.
-  std::pair<int, std::string> get(const std::string& path) {
-    httplib::Client client("127.0.0.1", port_);
+  std::pair<int, std::string> get(const std::string& path, int port = 0) {
+    httplib::Client client("127.0.0.1", port == 0 ? port_ : port);
     client.set_read_timeout(60, 0);
     const auto res = client.Get(path.c_str());
     if (!res) return {-1, ""};
@@ -130,14 +191,45 @@ class DashboardApi : public ::testing::Test {
     return nullptr;
   }
 
+  /// Waits until GET `path` on `port` answers 200; its JSON (null after the deadline).
+  json wait_for_ok(const std::string& path, int port) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+    while (std::chrono::steady_clock::now() < deadline) {
+      const auto [status, body] = get(path, port);
+      if (status == 200) return json::parse(body);
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return nullptr;
+  }
+
   fs::path dir_;
   std::string config_, history_;
-  int port_ = 0;
+  int port_ = 0, late_port_ = 0;
   std::unique_ptr<testing::LcmHub> hub_;
-  std::unique_ptr<Process> dashboard_, daemon_;
+  std::unique_ptr<Process> dashboard_, daemon_, late_;
+  std::unique_ptr<lcm::LCM> bus_;
+  std::thread listener_;
+  std::atomic<bool> listening_{false};
+  std::mutex bus_mutex_;
+  messages::MeshAssembler assembler_;
+  std::optional<messages::Mesh> mesh_;
+  std::size_t mesh_chunks_ = 0;
+  std::map<std::int64_t, std::vector<float>> fields_;
+  std::string field_hash_;
 };
 
+/// The API's mesh equals `mesh`.
+void expect_mesh(const json& api, const messages::Mesh& mesh) {
+  EXPECT_EQ(api["mesh_hash"], messages::mesh_hash(mesh));
+  EXPECT_EQ(api["total_nodes"], mesh.x.size());
+  EXPECT_EQ(api["x"].get<std::vector<double>>(), mesh.x);
+  EXPECT_EQ(api["y"].get<std::vector<double>>(), mesh.y);
+  EXPECT_EQ(api["dx"], mesh.dx);
+  EXPECT_EQ(api["polylines"].size(), mesh.polylines.size());
+}
+
 TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
+  ASSERT_NO_FATAL_FAILURE(listen_to_bus());
   ASSERT_NO_FATAL_FAILURE(start_dashboard());
   EXPECT_EQ(get("/api/details/b1-ct").first, 404);  // nothing on the bus yet
   const json last = run_history();
@@ -172,6 +264,49 @@ TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
   EXPECT_EQ(list["details"][0]["cycles"], last["cycles"]);
   EXPECT_EQ(get("/").first, 200);
   EXPECT_EQ(get("/chart.js").first, 200);
+
+  // The mesh and the last field, as the daemon published them (FIELD after every batch).
+  const json api_field = [&] {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+    while (std::chrono::steady_clock::now() < deadline) {
+      const auto [status, body] = get("/api/details/b1-ct/field");
+      if (status == 200 && json::parse(body)["state_seq"] == kBatches) return json::parse(body);
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return json();
+  }();
+  ASSERT_FALSE(api_field.is_null()) << read_file(dir_ / "dashboard.log");
+  const json api_mesh = wait_for_ok("/api/details/b1-ct/mesh", port_);
+  ASSERT_FALSE(api_mesh.is_null());
+  EXPECT_EQ(get("/api/details/nope/mesh").first, 404);
+  EXPECT_EQ(get("/api/details/nope/field").first, 404);
+  {
+    const std::lock_guard lock(bus_mutex_);
+    ASSERT_TRUE(mesh_) << "the daemon published no complete mesh";
+    expect_mesh(api_mesh, *mesh_);
+    EXPECT_EQ(api_field["mesh_hash"], messages::mesh_hash(*mesh_));
+    EXPECT_EQ(field_hash_, messages::mesh_hash(*mesh_));
+    ASSERT_TRUE(fields_.count(kBatches));
+    EXPECT_EQ(api_field["damage"].get<std::vector<float>>(), fields_.at(kBatches));
+  }
+  const json with_mesh = json::parse(get("/api/details/b1-ct").second);
+  EXPECT_EQ(with_mesh["mesh_hash"], api_mesh["mesh_hash"]);
+  EXPECT_EQ(with_mesh["field_seq"], kBatches);
+
+  // A dashboard started now has missed the daemon's start: it asks for the mesh, and reads the
+  // history from the results file.
+  ASSERT_NO_FATAL_FAILURE(
+      start_dashboard(late_, late_port_, "late.log", {"--results", (dir_ / "results").string()}));
+  const json late_mesh = wait_for_ok("/api/details/b1-ct/mesh", late_port_);
+  ASSERT_FALSE(late_mesh.is_null())
+      << read_file(dir_ / "late.log") << read_file(dir_ / "daemon.log");
+  EXPECT_EQ(late_mesh, api_mesh);
+  EXPECT_TRUE(wait_for_text(dir_ / "daemon.log", "mesh requested by peritwin-dashboard", kWaitS));
+  const auto late_history = json::parse(get("/api/details/b1-ct/history", late_port_).second);
+  EXPECT_EQ(late_history["backfilled"], kBatches + 1) << read_file(dir_ / "late.log");
+  for (const char* column : {"state_seq", "cycles", "crack_length_m", "remaining"}) {
+    EXPECT_EQ(late_history[column], history[column]) << column;
+  }
 
   // The page in a real browser. ?events=off: headless chromium's virtual time does not run out
   // while an event stream is open; the page loads /api/details and the history either way.
@@ -211,6 +346,19 @@ TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
       std::regex_search(card, m, std::regex("class=\"chart-crack\" data-points=\"([0-9]+)\"")))
       << card;
   EXPECT_EQ(std::stoi(m[1]), kBatches + 1);
+  // The damage map: every node of the mesh, the last field, the legend drawn.
+  ASSERT_TRUE(std::regex_search(card, m, std::regex("class=\"damage-map\"[^>]*>"))) << card;
+  const std::string map_tag = m[0];
+  ASSERT_TRUE(std::regex_search(map_tag, m, std::regex("data-nodes=\"([0-9]+)\""))) << map_tag;
+  EXPECT_EQ(std::stoul(m[1]), api_mesh["total_nodes"].get<std::size_t>());
+  ASSERT_TRUE(std::regex_search(map_tag, m, std::regex("data-field-seq=\"([0-9]+)\""))) << map_tag;
+  EXPECT_EQ(std::stoi(m[1]), kBatches);
+  ASSERT_TRUE(std::regex_search(map_tag, m, std::regex("data-mesh-hash=\"([0-9a-f]+)\"")))
+      << map_tag;
+  EXPECT_EQ(m[1], api_mesh["mesh_hash"].get<std::string>());
+  EXPECT_NE(card.find("class=\"damage-legend\" width=\"64\" height=\"320\" data-drawn=\"true\""),
+            std::string::npos)
+      << card;
 
   const fs::path shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-test.png";
   fs::remove(shot);

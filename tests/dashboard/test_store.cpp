@@ -1,15 +1,21 @@
 // dashboard::Store: decoding with the codec, counting what does not decode, and the JSON it
 // builds from a state (state_json's fields first), its history and its health.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "dashboard/backfill.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
+#include "messages/mesh.h"
+#include "twin/io/results_writer.h"
 
 namespace peritwin::dashboard {
 namespace {
@@ -159,6 +165,7 @@ TEST(DashboardStore, StatusRejectFieldAndStaleness) {
   feed(store, channel("b1-ct", Kind::kReject), encode(r));
   peritwin_msgs::damage_field_t f{};
   f.detail_id = "b1-ct";
+  f.mesh_hash = "0123456789abcdef";
   f.num_chunks = 1;
   f.total_nodes = 2;
   f.num_nodes = 2;
@@ -173,12 +180,180 @@ TEST(DashboardStore, StatusRejectFieldAndStaleness) {
   EXPECT_TRUE(j["state_seq"].is_null());
   j = json::parse(*store.detail_json("b1-ct", kT0 + std::chrono::seconds(6)));
   EXPECT_EQ(j["health"], "stale");
-  // Events: one per STATUS and REJECT (FIELD is only counted).
+  // Events: one per STATUS and REJECT, one per complete FIELD.
   const auto events = store.events_after(0, std::chrono::milliseconds(0));
-  ASSERT_EQ(events.size(), 2u);
+  ASSERT_EQ(events.size(), 3u);
   EXPECT_EQ(events[0].kind, "status");
   EXPECT_EQ(events[1].kind, "reject");
+  EXPECT_EQ(events[2].kind, "field");
+  EXPECT_EQ(json::parse(events[2].data)["summary"]["field_seq"], 0);
   EXPECT_EQ(json::parse(events[1].data)["detail"], "b1-ct");
+}
+
+/// A 100 x 60 grid on 1 mm (6000 nodes: two MESH chunks) with its outline and a notch.
+messages::Mesh grid_mesh() {
+  messages::Mesh m;
+  m.detail_id = "b1-ct";
+  m.dx = 1e-3;
+  m.horizon = 3.015e-3;
+  m.x_max = 0.1;
+  m.y_max = 0.06;
+  for (int j = 0; j < 60; ++j) {
+    for (int i = 0; i < 100; ++i) {
+      m.x.push_back((i + 0.5) * 1e-3);
+      m.y.push_back((j + 0.5) * 1e-3);
+    }
+  }
+  m.polylines.push_back({peritwin_msgs::mesh_polyline_t::KIND_OUTLINE,
+                         0,
+                         true,
+                         {0, 0.1, 0.1, 0},
+                         {0, 0, 0.06, 0.06}});
+  m.polylines.push_back(
+      {peritwin_msgs::mesh_polyline_t::KIND_NOTCH, 0, false, {0, 0.03}, {0.03, 0.03}});
+  return m;
+}
+
+/// The FIELD of state `seq` in chunks of at most `per` nodes.
+std::vector<peritwin_msgs::damage_field_t> field_chunks(std::int64_t seq, const std::string& hash,
+                                                        const std::vector<float>& damage, int per) {
+  std::vector<peritwin_msgs::damage_field_t> out;
+  const int total = static_cast<int>(damage.size());
+  const int chunks = (total + per - 1) / per;
+  for (int c = 0; c < chunks; ++c) {
+    peritwin_msgs::damage_field_t f{};
+    f.detail_id = "b1-ct";
+    f.state_seq = seq;
+    f.mesh_hash = hash;
+    f.chunk_index = c;
+    f.num_chunks = chunks;
+    f.total_nodes = total;
+    f.first_node = c * per;
+    f.num_nodes = std::min(per, total - f.first_node);
+    f.damage.assign(damage.begin() + f.first_node, damage.begin() + f.first_node + f.num_nodes);
+    out.push_back(f);
+  }
+  return out;
+}
+
+TEST(DashboardStore, MeshAndFieldAreReassembledServedAndRequestedWhenMissing) {
+  Store store;
+  feed(store, channel("b1-ct", Kind::kState), encode(state(1, 1000, 0.002)));
+  EXPECT_EQ(store.mesh_json("b1-ct"), std::string());  // known, no mesh yet
+  EXPECT_FALSE(store.mesh_json("nope"));
+  // Without a mesh: asked for once, again only after kMeshRequestPeriodS.
+  EXPECT_EQ(store.take_mesh_requests(kT0), std::vector<std::string>{"b1-ct"});
+  EXPECT_TRUE(store.take_mesh_requests(kT0 + std::chrono::seconds(1)).empty());
+  EXPECT_EQ(store.take_mesh_requests(kT0 + std::chrono::seconds(6)),
+            std::vector<std::string>{"b1-ct"});
+
+  const auto mesh = grid_mesh();
+  const auto hash = messages::mesh_hash(mesh);
+  const auto chunks = messages::mesh_messages(mesh, 7);
+  ASSERT_EQ(chunks.size(), 2u);
+  // A malformed chunk is counted and its reason kept; the mesh still completes after it.
+  auto bad = chunks[1];
+  bad.chunk_index = 5;
+  feed(store, channel("b1-ct", Kind::kMesh), encode(bad));
+  for (const auto& c : chunks) feed(store, channel("b1-ct", Kind::kMesh), encode(c));
+  auto j = json::parse(*store.detail_json("b1-ct", kT0));
+  EXPECT_EQ(j["mesh_hash"], hash);
+  EXPECT_EQ(j["mesh_nodes"], 6000);
+  EXPECT_TRUE(j["mesh_error"].is_null());
+  EXPECT_EQ(j["undecodable"], 1);
+  EXPECT_TRUE(store.take_mesh_requests(kT0 + std::chrono::seconds(60)).empty());
+
+  const auto m = json::parse(*store.mesh_json("b1-ct"));
+  EXPECT_EQ(m["mesh_hash"], hash);
+  EXPECT_EQ(m["x"].get<std::vector<double>>(), mesh.x);
+  EXPECT_EQ(m["y"].get<std::vector<double>>(), mesh.y);
+  EXPECT_EQ(m["dx"], 1e-3);
+  EXPECT_EQ(m["box"], json({0.0, 0.0, 0.1, 0.06}));
+  ASSERT_EQ(m["polylines"].size(), 2u);
+  EXPECT_EQ(m["polylines"][1]["kind"], "notch");
+  EXPECT_EQ(m["polylines"][1]["closed"], false);
+
+  // A field in three chunks; a chunk of an older state in between is dropped with its set.
+  std::vector<float> damage(6000);
+  for (std::size_t i = 0; i < damage.size(); ++i) damage[i] = static_cast<float>(i % 97) / 96.0F;
+  EXPECT_EQ(store.field_json("b1-ct"), std::string());
+  const auto parts = field_chunks(3, hash, damage, 2500);
+  feed(store, channel("b1-ct", Kind::kField), encode(parts[0]));
+  feed(store, channel("b1-ct", Kind::kField), encode(parts[2]));
+  feed(store, channel("b1-ct", Kind::kField), encode(parts[1]));
+  const auto f = json::parse(*store.field_json("b1-ct"));
+  EXPECT_EQ(f["state_seq"], 3);
+  EXPECT_EQ(f["mesh_hash"], hash);
+  EXPECT_EQ(f["damage"].get<std::vector<float>>(), damage);
+  j = json::parse(*store.detail_json("b1-ct", kT0));
+  EXPECT_EQ(j["field_seq"], 3);
+  EXPECT_EQ(j["cracks"].size(), 1u);
+
+  // A field of another mesh (the daemon restarted on a new grid): the mesh is asked for again.
+  for (const auto& p : field_chunks(4, "00000000000000aa", damage, 6000)) {
+    feed(store, channel("b1-ct", Kind::kField), encode(p));
+  }
+  EXPECT_EQ(store.take_mesh_requests(kT0 + std::chrono::seconds(120)),
+            std::vector<std::string>{"b1-ct"});
+}
+
+TEST(DashboardStore, BackfillFromAResultsFileGivesTheSameHistoryAsTheStates) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("peritwin_dashboard_backfill_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "b1-ct");
+  {
+    twin::ResultsWriter writer(dir / "b1-ct" / "b1-ct.h5", {"b1-ct"});
+    const std::vector<double> x{0.0, 1.0}, y{0.0, 0.0};
+    writer.write_mesh(x, y);
+    for (int seq = 0; seq <= 6; ++seq) {
+      const auto s = state(seq, 1000 * seq, 0.001 * seq);
+      twin::TimeSeriesRow row;
+      row.state_seq = s.state_seq;
+      row.total_cycles = s.total_cycles;
+      row.crack_length_m = s.crack_length_m;
+      row.remaining_cycles = s.remaining_cycles;
+      row.remaining_low = s.remaining_cycles_low;
+      row.remaining_high = s.remaining_cycles_high;
+      writer.append(row);
+    }
+  }
+  std::ofstream(dir / "not-a-detail.txt") << "x";
+  const auto files = find_results_files(dir);
+  ASSERT_EQ(files.size(), 1u);
+  EXPECT_EQ(files[0].detail_id, "b1-ct");
+  const auto points = read_history_points(files[0].path);
+  ASSERT_EQ(points.size(), 7u);
+
+  // Live from the start: every state.
+  Store live;
+  for (int seq = 0; seq <= 8; ++seq) {
+    feed(live, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+  }
+  // Started late (states 5.. live): the file fills in 0..4; started later still (nothing live
+  // yet): the whole file, then the live states after it (6 again is no new point).
+  Store late;
+  for (int seq = 5; seq <= 8; ++seq) {
+    feed(late, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+  }
+  EXPECT_EQ(late.backfill("b1-ct", points, kT0), 5u);
+  Store later;
+  EXPECT_EQ(later.backfill("b1-ct", points, kT0), 7u);
+  for (int seq = 6; seq <= 8; ++seq) {
+    feed(later, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+  }
+  auto strip = [](std::string text) {
+    auto j = json::parse(text);
+    j.erase("pushed");
+    j.erase("backfilled");
+    return j;
+  };
+  const auto expected = strip(*live.history_json("b1-ct"));
+  EXPECT_EQ(expected["state_seq"], json({0, 1, 2, 3, 4, 5, 6, 7, 8}));
+  EXPECT_EQ(strip(*late.history_json("b1-ct")), expected);
+  EXPECT_EQ(strip(*later.history_json("b1-ct")), expected);
+  EXPECT_EQ(json::parse(*later.history_json("b1-ct"))["backfilled"], 7);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

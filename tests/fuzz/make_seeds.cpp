@@ -16,6 +16,7 @@
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
+#include "messages/mesh.h"
 #include "twin/io/checkpoint_io.h"
 
 namespace fs = std::filesystem;
@@ -156,6 +157,40 @@ void reject_seeds(const fs::path& dir) {
             "b1-ct", "", -1, {peritwin::messages::Verdict::decode, "message", "truncated"}, 0)));
 }
 
+// A mesh of one chunk (a 12 x 8 grid with its outline, a hole and a notch), a chunk of a
+// two-chunk mesh, and a mesh request.
+void mesh_seeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  peritwin::messages::Mesh mesh;
+  mesh.detail_id = "b1-ct";
+  mesh.dx = 1e-3;
+  mesh.horizon = 3.015e-3;
+  mesh.x_max = 0.012;
+  mesh.y_max = 0.008;
+  for (int j = 0; j < 8; ++j) {
+    for (int i = 0; i < 12; ++i) {
+      mesh.x.push_back((i + 0.5) * 1e-3);
+      mesh.y.push_back((j + 0.5) * 1e-3);
+    }
+  }
+  using peritwin_msgs::mesh_polyline_t;
+  mesh.polylines = {
+      {mesh_polyline_t::KIND_OUTLINE, 0, true, {0, 0.012, 0.012, 0}, {0, 0, 0.008, 0.008}},
+      {mesh_polyline_t::KIND_HOLE, 0, true, {0.008, 0.009, 0.008}, {0.004, 0.005, 0.006}},
+      {mesh_polyline_t::KIND_NOTCH, 0, false, {0, 0.004}, {0.004, 0.004}}};
+  write(dir / "one-chunk.bin", encode_message(peritwin::messages::mesh_messages(mesh, 0)[0]));
+  auto second = peritwin::messages::mesh_messages(mesh, 0)[0];
+  second.chunk_index = 1;
+  second.num_chunks = 2;
+  second.total_nodes = 200;
+  second.first_node = 104;
+  second.num_polylines = 0;
+  second.polylines.clear();
+  write(dir / "second-chunk.bin", encode_message(second));
+  write(dir / "request.bin", encode_message(peritwin::messages::mesh_request_message(
+                                 "b1-ct", "peritwin-dashboard", 1'700'000'000'000'000)));
+}
+
 void key_file_seed(const fs::path& dir) {
   fs::create_directories(dir);
   const std::string text =
@@ -224,6 +259,7 @@ int main(int argc, char** argv) {
     state_seeds(dir / "state");
     reject_seeds(dir / "reject");
     samples_seeds(dir / "samples");
+    mesh_seeds(dir / "mesh");
     key_file_seed(dir / "key_file");
     fs::create_directories(dir / "lcm_log");
     lcm_log_seed(dir / "lcm_log" / "two-batches.lcmlog", false);

@@ -164,6 +164,7 @@ void expect_equal(const msgs::damage_field_t& a, const msgs::damage_field_t& b) 
   EXPECT_EQ(a.utime, b.utime);
   EXPECT_EQ(a.detail_id, b.detail_id);
   EXPECT_EQ(a.state_seq, b.state_seq);
+  EXPECT_EQ(a.mesh_hash, b.mesh_hash);
   EXPECT_EQ(a.chunk_index, b.chunk_index);
   EXPECT_EQ(a.num_chunks, b.num_chunks);
   EXPECT_EQ(a.total_nodes, b.total_nodes);
@@ -294,6 +295,7 @@ msgs::damage_field_t make_field(int num_nodes, std::string detail_id = "b1-ct") 
   m.utime = kI64Min;
   m.detail_id = std::move(detail_id);
   m.state_seq = 17;
+  m.mesh_hash = "0123456789abcdef";
   m.chunk_index = 3;
   m.num_chunks = 9;
   m.total_nodes = 123'456;
@@ -462,6 +464,7 @@ TEST(MessagesSize, FullFieldChunkStaysBelow64KB) {
   const auto field = make_field(msgs::damage_field_t::MAX_NODES_PER_CHUNK, longest_id);
   const auto size = static_cast<std::size_t>(field.getEncodedSize());
   EXPECT_EQ(encode(field).size(), size);
+  EXPECT_EQ(size, 60'102u);  // messages/README.md
   EXPECT_LT(size, std::size_t{64} * 1024);
   // Sent by UDP multicast as one datagram, never as LCM fragments.
   EXPECT_LE(channel(longest_id, Kind::kField).size() + 1 + size, kLcmShortMessageMax);
@@ -476,6 +479,8 @@ TEST(Channels, NamesOfEveryKind) {
   EXPECT_EQ(channel("b1-ct", Kind::kReject), "PERITWIN_B1_CT_REJECT");
   EXPECT_EQ(channel("b1-ct", Kind::kStatus), "PERITWIN_B1_CT_STATUS");
   EXPECT_EQ(channel("b1-ct", Kind::kSamples), "PERITWIN_B1_CT_SAMPLES");
+  EXPECT_EQ(channel("b1-ct", Kind::kMesh), "PERITWIN_B1_CT_MESH");
+  EXPECT_EQ(channel("b1-ct", Kind::kMeshRequest), "PERITWIN_B1_CT_MESH_REQUEST");
 }
 
 TEST(Channels, DetailTokenIsUpperCaseWithUnderscores) {

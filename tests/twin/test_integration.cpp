@@ -19,9 +19,11 @@
 
 #include "messages/auth.h"
 #include "messages/channels.h"
+#include "messages/mesh.h"
 #include "replay/replay_tool.h"
 #include "tests/support/twin_fixtures.h"
 #include "twin/io/checkpoint_io.h"
+#include "twin/lcm/messages_io.h"
 #include "twin/service/daemon.h"
 
 namespace peritwin::twin {
@@ -702,6 +704,75 @@ TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch
   EXPECT_GT(s.reject_rate, 1.0);
   EXPECT_EQ(s.health, "degraded");
   EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  daemon.stop();
+}
+
+// The mesh (message set version 6): every chunk on PERITWIN_<DETAIL>_MESH at start, the FIELD at
+// start names its hash, and a mesh_request_t has the mesh published again; a request that does not
+// decode or names another detail is ignored.
+TEST_F(MemqTest, TheMeshIsPublishedAtStartAndOnRequest) {
+  const TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  struct Sink {
+    messages::MeshAssembler assembler;
+    std::vector<messages::Mesh> meshes;
+    std::vector<std::string> errors;
+    std::vector<std::string> field_hashes;
+    std::size_t chunks = 0;
+    void mesh(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      ++chunks;
+      auto decoded = messages::decode_mesh_chunk(rbuf->data, rbuf->data_size);
+      if (!decoded.chunk) return errors.push_back(decoded.error);
+      EXPECT_LE(rbuf->data_size, messages::kMaxMeshChunkBytes);
+      auto r = assembler.add(std::move(*decoded.chunk));
+      if (!r.error.empty()) errors.push_back(r.error);
+      if (r.mesh) meshes.push_back(std::move(*r.mesh));
+    }
+    void field(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      const auto f = messages::decode_field(rbuf->data, rbuf->data_size);
+      if (f) field_hashes.push_back(f->mesh_hash);
+    }
+  } sink;
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kMesh), &Sink::mesh, &sink);
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kField), &Sink::field, &sink);
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(sink.meshes.size(), 1u);
+  EXPECT_TRUE(sink.errors.empty()) << sink.errors.front();
+  const messages::Mesh expected = detail_mesh(daemon.twin(0).model());
+  EXPECT_EQ(sink.meshes[0], expected);
+  EXPECT_EQ(sink.meshes[0].x.size(),
+            static_cast<std::size_t>(daemon.twin(0).model().disc().num_nodes()));
+  // The B1 outline and its notch are drawn.
+  std::map<int, int> kinds;
+  for (const auto& line : sink.meshes[0].polylines) ++kinds[line.kind];
+  EXPECT_GE(kinds[peritwin_msgs::mesh_polyline_t::KIND_OUTLINE], 1);
+  EXPECT_EQ(kinds[peritwin_msgs::mesh_polyline_t::KIND_NOTCH], 1);
+  ASSERT_FALSE(sink.field_hashes.empty());
+  EXPECT_EQ(sink.field_hashes.front(), messages::mesh_hash(expected));
+  const std::size_t chunks_at_start = sink.chunks;
+
+  // Ignored: bytes that are no request, a request for another detail on this channel.
+  const std::string requests = messages::channel("b1-ct", messages::Kind::kMeshRequest);
+  const std::uint8_t junk[5] = {1, 2, 3, 4, 5};
+  lcm.publish(requests, junk, sizeof junk);
+  const auto other = messages::mesh_request_message("B1_CT", "test", messages::now_utime());
+  lcm.publish(requests, &other);
+  // Answered: a request (after the 1 s republish interval, whatever the clock says).
+  const auto request = messages::mesh_request_message("b1-ct", "test", messages::now_utime());
+  lcm.publish(requests, &request);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  while (sink.meshes.size() < 2 && std::chrono::steady_clock::now() < deadline) {
+    lcm.handleTimeout(50);
+    daemon.tick();
+  }
+  ASSERT_EQ(sink.meshes.size(), 2u);
+  EXPECT_EQ(sink.meshes[1], expected);
+  EXPECT_EQ(sink.chunks, 2 * chunks_at_start);  // one publication for three requests
   daemon.stop();
 }
 

@@ -271,7 +271,7 @@ TEST_F(TwinTest, StateMessage) {
   EXPECT_NE(json.find("\"remaining_cycles\":null"), std::string::npos) << json;
   EXPECT_NE(json.find("\"state_hash\":\"" + m.state_hash + "\""), std::string::npos) << json;
   // Field chunks cover every node.
-  const auto field = field_messages(*twin, 42);
+  const auto field = field_messages(*twin, 42, "0123456789abcdef");
   ASSERT_EQ(field.size(), 1u);
   EXPECT_EQ(field[0].total_nodes, model_->disc().num_nodes());
   EXPECT_EQ(field[0].num_nodes, field[0].total_nodes);

@@ -5,6 +5,104 @@
 
 namespace peritwin::twin {
 
+namespace {
+
+constexpr double kMaxChordRad = 5.0 * 3.14159265358979323846 / 180.0;
+
+/// Points of an arc from `start` sweeping `sweep` (rad) about `centre`, without its first point.
+void add_arc(messages::MeshPolyline& line, Point centre, double radius, double start,
+             double sweep) {
+  const int n = std::max(1, static_cast<int>(std::ceil(std::abs(sweep) / kMaxChordRad)));
+  for (int k = 1; k <= n; ++k) {
+    const double a = start + sweep * k / n;
+    line.x.push_back(centre.x + radius * std::cos(a));
+    line.y.push_back(centre.y + radius * std::sin(a));
+  }
+}
+
+messages::MeshPolyline region_line(const Region& region, std::int8_t kind, int index) {
+  messages::MeshPolyline line;
+  line.kind = kind;
+  line.index = index;
+  line.closed = true;
+  switch (region.shape) {
+    case Region::Shape::rectangle: {
+      const Rectangle& r = region.rectangle;
+      line.x = {r.x_min, r.x_max, r.x_max, r.x_min};
+      line.y = {r.y_min, r.y_min, r.y_max, r.y_max};
+      break;
+    }
+    case Region::Shape::circle:
+      add_arc(line, region.circle.centre, region.circle.radius, 0.0, 2.0 * 3.14159265358979323846);
+      line.x.pop_back();  // the last chord ends where the first began
+      line.y.pop_back();
+      break;
+    case Region::Shape::polygon:
+      for (const BoundaryPiece& piece : region.polygon.boundary()) {
+        if (piece.arc) {
+          line.x.push_back(piece.from.x);
+          line.y.push_back(piece.from.y);
+          add_arc(line, piece.centre, piece.radius, piece.start, piece.sweep);
+          line.x.pop_back();  // the next piece starts there
+          line.y.pop_back();
+        } else {
+          line.x.push_back(piece.from.x);
+          line.y.push_back(piece.from.y);
+        }
+      }
+      break;
+  }
+  return line;
+}
+
+}  // namespace
+
+messages::Mesh detail_mesh(const DetailModel& model) {
+  const Discretization& disc = model.disc();
+  const DetailGeometry& geometry = model.geometry();
+  messages::Mesh mesh;
+  mesh.detail_id = model.config().id;
+  mesh.dx = disc.dx;
+  mesh.horizon = disc.horizon;
+  const Rectangle box = geometry.bounding_box();
+  mesh.x_min = box.x_min;
+  mesh.y_min = box.y_min;
+  mesh.x_max = box.x_max;
+  mesh.y_max = box.y_max;
+  mesh.x.reserve(disc.position.size());
+  mesh.y.reserve(disc.position.size());
+  for (const Point& p : disc.position) {
+    mesh.x.push_back(p.x);
+    mesh.y.push_back(p.y);
+  }
+  std::size_t bytes = 0;
+  auto add = [&](messages::MeshPolyline line) {
+    const std::size_t b = 10 + 16 * line.x.size();
+    if (line.x.size() < 2 || bytes + b > kMaxMeshPolylineBytes) return;
+    bytes += b;
+    mesh.polylines.push_back(std::move(line));
+  };
+  using peritwin_msgs::mesh_polyline_t;
+  for (std::size_t i = 0; i < geometry.outline.size(); ++i) {
+    add(region_line(geometry.outline[i], mesh_polyline_t::KIND_OUTLINE, static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < geometry.holes.size(); ++i) {
+    add(region_line(geometry.holes[i], mesh_polyline_t::KIND_HOLE, static_cast<int>(i)));
+  }
+  for (std::size_t i = 0; i < geometry.notches.size(); ++i) {
+    messages::MeshPolyline line;
+    line.kind = mesh_polyline_t::KIND_NOTCH;
+    line.index = static_cast<std::int32_t>(i);
+    line.closed = false;
+    for (const Point& p : geometry.notches[i].path) {
+      line.x.push_back(p.x);
+      line.y.push_back(p.y);
+    }
+    add(std::move(line));
+  }
+  return mesh;
+}
+
 peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime,
                                             const SeqBySource& checkpointed) {
   peritwin_msgs::damage_state_t m{};
@@ -85,7 +183,8 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
   return m;
 }
 
-std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime) {
+std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime,
+                                                          const std::string& mesh_hash) {
   const auto& damage = twin.engine().node_damage();
   const auto total = static_cast<std::int32_t>(damage.size());
   const std::int32_t per = peritwin_msgs::damage_field_t::MAX_NODES_PER_CHUNK;
@@ -96,6 +195,7 @@ std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std:
     m.utime = utime;
     m.detail_id = twin.detail_id();
     m.state_seq = twin.state_seq();
+    m.mesh_hash = mesh_hash;
     m.chunk_index = c;
     m.num_chunks = chunks;
     m.total_nodes = total;

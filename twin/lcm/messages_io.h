@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "messages/codec.h"
+#include "messages/mesh.h"
 #include "twin/model/twin.h"
 
 namespace peritwin::twin {
@@ -34,7 +35,18 @@ using SeqBySource = std::map<std::string, std::int64_t>;
 peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime,
                                             const SeqBySource& checkpointed = {});
 
-/// The damage field of the current state in chunks of at most MAX_NODES_PER_CHUNK nodes.
-std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime);
+/// The damage field of the current state in chunks of at most MAX_NODES_PER_CHUNK nodes, each
+/// naming the mesh (messages::mesh_hash of detail_mesh(twin.model())) whose node order it follows.
+std::vector<peritwin_msgs::damage_field_t> field_messages(const Twin& twin, std::int64_t utime,
+                                                          const std::string& mesh_hash);
+
+/// Bytes of polylines a detail's mesh carries at most: lines beyond it (a polygon of thousands of
+/// vertices) are left out of the drawing, never out of the nodes.
+inline constexpr std::size_t kMaxMeshPolylineBytes = 40'000;
+
+/// The mesh of a detail for detail_mesh_t: node coordinates in discretization order, dx, δ, the
+/// box of the outline, and its drawing: every outline entry and hole as a closed polyline (arcs
+/// and circles as chords of at most 5°), every notch as an open one.
+messages::Mesh detail_mesh(const DetailModel& model);
 
 }  // namespace peritwin::twin

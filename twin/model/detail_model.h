@@ -39,6 +39,8 @@ class DetailModel {
 
   [[nodiscard]] const DetailConfig& config() const { return config_; }
   [[nodiscard]] const Discretization& disc() const { return specimen_.disc; }
+  /// The outline, holes and notches the discretization was cut from.
+  [[nodiscard]] const DetailGeometry& geometry() const { return specimen_.geometry; }
   [[nodiscard]] const PdModel& pd() const { return specimen_.model; }
   [[nodiscard]] const FatigueSettings& settings() const { return settings_; }
   [[nodiscard]] const CrackTracker& tracker() const { return *tracker_; }

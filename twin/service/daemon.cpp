@@ -29,6 +29,8 @@ constexpr std::size_t kCheckpointsKept = 3;
 /// A worker with nothing to apply still wakes this often for its chores (finished life
 /// estimates, timed checkpoints, the reject log summary).
 constexpr auto kWorkerChoresPeriod = std::chrono::milliseconds(100);
+/// A detail's mesh is published again at most this often, however many requests come.
+constexpr double kMeshRepublishS = 1.0;
 /// Window of STATUS reject_rate and of the reject log summary.
 constexpr double kRejectRateWindowS = 10.0;
 constexpr double kRejectLogPeriodS = 1.0;
@@ -135,7 +137,13 @@ struct Daemon::Detail {
   std::unique_ptr<DetailOutputs> outputs;
   std::unique_ptr<LifeWorker> life;
   lcm::Subscription* subscription = nullptr;
-  std::string id, state_channel, field_channel, reject_channel, status_channel;
+  lcm::Subscription* mesh_subscription = nullptr;
+  std::string id, state_channel, field_channel, reject_channel, status_channel, mesh_channel;
+  // The mesh (immutable): its chunks, published at start and on request by the LCM thread only.
+  std::string mesh_hash;
+  std::vector<peritwin_msgs::detail_mesh_t> mesh_chunks;
+  Clock::time_point mesh_published{};
+  std::string mesh_requester;  ///< of a request not answered yet; "" = none
   std::filesystem::path state_dir;
   std::int64_t checkpoint_seq = -1;  ///< state_seq of the newest checkpoint on disk
   SeqBySource checkpointed;          ///< applied seq per source of that checkpoint
@@ -180,6 +188,7 @@ Daemon::~Daemon() {
   stop_workers();
   for (auto& d : details_) {
     if (d->subscription != nullptr) lcm_.unsubscribe(d->subscription);
+    if (d->mesh_subscription != nullptr) lcm_.unsubscribe(d->mesh_subscription);
   }
 }
 
@@ -216,6 +225,7 @@ Status Daemon::start() {
     if (Status s = start_detail(config); !s) return s;
   }
   for (auto& d : details_) {
+    publish_mesh(*d);
     submit_life(*d);
     publish_state(*d);
     publish_fields(*d);
@@ -322,6 +332,13 @@ Status Daemon::start_detail(const DetailConfig& config) {
   d->twin = std::move(*twin);
   spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
                model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0));
+  {
+    const messages::Mesh mesh = detail_mesh(*model);
+    d->mesh_hash = messages::mesh_hash(mesh);
+    d->mesh_chunks = messages::mesh_messages(mesh, now_utime());
+    spdlog::info("[{}] mesh {}: {} nodes in {} chunk(s), {} line(s) of outline", config.id,
+                 d->mesh_hash, mesh.x.size(), d->mesh_chunks.size(), mesh.polylines.size());
+  }
   d->max_batch_seconds = config.limits.max_batch_seconds;
   d->max_rejects_per_second = config.limits.max_rejects_per_second;
   if (config.limits.max_p) {
@@ -364,6 +381,7 @@ Status Daemon::start_detail(const DetailConfig& config) {
   d->field_channel = messages::channel(config.id, messages::Kind::kField);
   d->reject_channel = messages::channel(config.id, messages::Kind::kReject);
   d->status_channel = messages::channel(config.id, messages::Kind::kStatus);
+  d->mesh_channel = messages::channel(config.id, messages::Kind::kMesh);
   d->state_seq = d->twin->state_seq();
   d->failed = d->twin->failure() != Failure::none;
   log_crack_events(*d);
@@ -380,6 +398,14 @@ Status Daemon::start_detail(const DetailConfig& config) {
     return failure("cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad));
   }
   detail->subscription->setQueueCapacity(options_.queue_capacity);
+  const std::string requests = messages::channel(config.id, messages::Kind::kMeshRequest);
+  detail->mesh_subscription = lcm_.subscribeFunction(
+      requests,
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* target) {
+        target->daemon->on_mesh_request(*target, rbuf);
+      },
+      detail);
+  if (detail->mesh_subscription == nullptr) return failure("cannot subscribe to " + requests);
   return {};
 }
 
@@ -451,6 +477,38 @@ void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
   ++d.errors;
   spdlog::warn("[{}] inbox full ({} batches): a batch of {} bytes is dropped", d.id,
                options_.queue_capacity, rbuf->data_size);
+}
+
+void Daemon::on_mesh_request(Detail& d, const lcm::ReceiveBuffer* rbuf) {
+  const auto request = messages::decode_mesh_request(rbuf->data, rbuf->data_size);
+  if (!request || request->detail_id != d.id) {
+    spdlog::debug(
+        "[{}] a mesh request of {} bytes that does not decode or names another detail "
+        "is ignored",
+        d.id, rbuf->data_size);
+    return;
+  }
+  d.mesh_requester = request->requester.empty() ? "?" : request->requester;
+}
+
+void Daemon::answer_mesh_requests() {
+  const auto now = Clock::now();
+  for (auto& d : details_) {
+    if (d->mesh_requester.empty() || seconds(now - d->mesh_published) < kMeshRepublishS) continue;
+    spdlog::info("[{}] mesh requested by {}: published again", d->id, d->mesh_requester);
+    d->mesh_requester.clear();
+    publish_mesh(*d);
+    flush_outbox();
+  }
+}
+
+void Daemon::publish_mesh(Detail& d) {
+  d.mesh_published = Clock::now();
+  const std::int64_t utime = now_utime();
+  for (auto& m : d.mesh_chunks) {
+    m.utime = utime;
+    outbox_->push({d.mesh_channel, encode(m), 0});
+  }
 }
 
 void Daemon::run_worker(Detail& d) {
@@ -578,7 +636,7 @@ void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {
 }
 
 void Daemon::publish_fields(Detail& d) {
-  for (const auto& m : field_messages(*d.twin, now_utime())) {
+  for (const auto& m : field_messages(*d.twin, now_utime(), d.mesh_hash)) {
     outbox_->push({d.field_channel, encode(m), 0});
   }
 }
@@ -705,6 +763,7 @@ void Daemon::tick() {
   }
   flush_outbox();
   heartbeat(false);
+  answer_mesh_requests();
 }
 
 bool Daemon::poll(int timeout_ms) {
@@ -727,6 +786,7 @@ bool Daemon::poll(int timeout_ms) {
   }
   flush_outbox();
   heartbeat(false);
+  answer_mesh_requests();
   return !failed();
 }
 

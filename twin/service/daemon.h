@@ -1,6 +1,8 @@
 // The twin service on an LCM instance: one Twin per configured detail, fed by
 // PERITWIN_<DETAIL>_LOAD, publishing STATE after every applied batch (and once at start), REJECT
-// for every batch not applied, FIELD (throttled, chunked) and STATUS (heartbeat, 1 s).
+// for every batch not applied, FIELD (throttled, chunked) and STATUS (heartbeat, 1 s), and MESH
+// (the discretization, chunked) at start and whenever asked on PERITWIN_<DETAIL>_MESH_REQUEST (at
+// most once a second per detail; the requests in between are answered by that publication).
 // Checkpoints: <state_dir>/<id>/checkpoint-<state_seq>.h5, atomically, every
 // checkpoint.every_batches applied batches or checkpoint.every_seconds (wall clock; only when the
 // state changed) and at stop(); start() resumes from the newest valid one whose content matches
@@ -113,6 +115,11 @@ class Daemon {
   Status start_detail(const DetailConfig& config);
   Status resume(Detail& d);
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  /// LCM thread: a mesh_request_t for this detail marks its mesh to be published again.
+  void on_mesh_request(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  /// LCM thread: publishes the meshes asked for, once kMeshRepublishS has passed since the last.
+  void answer_mesh_requests();
+  void publish_mesh(Detail& d);
   void run_worker(Detail& d);
   void apply_received(Detail& d, const Received& r);
   void reject(Detail& d, const std::string& source, std::int64_t seq, const Outcome& outcome);
