@@ -178,6 +178,14 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
     return 1000.0 * (u[2 * up + 1] - u[2 * low + 1]);
   };
   double project_s = 0.0, project_opening = 0.0;
+  BaselineRun first;
+  if (baseline) {
+    // The baseline needs the free DOFs and loads only: a solver that is never solved.
+    const StaticSolver plain(specimen.disc, specimen.model, specimen.supports, specimen.loads);
+    first = run_baseline(specimen, plain);
+    first.u = {};
+    peaks.mark(line, "baseline_first");
+  }
   {
     StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
     solver.set_ordering(ordering == "nesdis"  ? Ordering::nesdis
@@ -218,8 +226,22 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
     }
     peaks.mark(line, "assemble_by_products");
     if (baseline) {
-      const BaselineRun plain = run_baseline(specimen, solver);
-      if (!plain.ok) {
+      // After the project's solve here, and once before it (above): the first factorization of
+      // a process pays for page faults and BLAS start-up, so each path is timed once in each
+      // position and the ratio uses the baseline's mean.
+      const BaselineRun after = run_baseline(specimen, solver);
+      BaselineRun plain = after;
+      if (plain.ok && first.ok) {
+        plain.t.assemble_s = 0.5 * (first.t.assemble_s + after.t.assemble_s);
+        plain.t.analyze_s = 0.5 * (first.t.analyze_s + after.t.analyze_s);
+        plain.t.factor_s = 0.5 * (first.t.factor_s + after.t.factor_s);
+        plain.t.solve_s = 0.5 * (first.t.solve_s + after.t.solve_s);
+        line["baseline_first_total_s"] = tools::fixed(
+            first.t.assemble_s + first.t.analyze_s + first.t.factor_s + first.t.solve_s, 3);
+        line["baseline_second_total_s"] = tools::fixed(
+            after.t.assemble_s + after.t.analyze_s + after.t.factor_s + after.t.solve_s, 3);
+      }
+      if (!plain.ok || !first.ok) {
         std::fprintf(stderr, "peritwin-bench: the baseline's CHOLMOD solve failed\n");
         return 1;
       }
@@ -246,7 +268,8 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
   return 0;
 }
 
-int run_fatigue(const std::string& model_name, double target_nodes, double a2_at_1mm) {
+int run_fatigue(const std::string& model_name, double target_nodes, double a2_at_1mm,
+                std::int64_t max_cycles) {
   // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
   // final stiffness refactorized a few times to measure the ratio in this run. Memory: the peak
   // RSS of each phase (PhasePeaks) — the specimen, the first solve (assembly, analysis,
@@ -286,7 +309,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
     for (;;) {
       const int rebuilds_before = engine.rebuilds();
       const bool more = engine.apply({4000.0, 0.1, 0.0, 1000}) == EngineStatus::ok &&
-                        engine.total_cycles() < 10'000'000;
+                        engine.total_cycles() < max_cycles;
       if (first_update && engine.updates() > 0) {  // this block converted the factor
         simplicial_nnz = engine.solver().factor().factor_nonzeros();
         peaks.mark(line, "first_update");
@@ -575,6 +598,10 @@ int main(int argc, char** argv) {
       ->check(peritwin::cli::finite_in(100.0, 1e7));
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
+  std::int64_t fatigue_max_cycles = 10'000'000;
+  fat->add_option("--max-cycles", fatigue_max_cycles,
+                  "stop after this many cycles (default 1e7: final failure comes first)")
+      ->check(CLI::Range(std::int64_t{1000}, std::int64_t{10'000'000}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)")
       ->check(peritwin::cli::finite_positive());
   auto* bil =
@@ -610,7 +637,7 @@ int main(int argc, char** argv) {
                    "white noise instead of sine + random walk (a reversal almost every sample)");
   CLI11_PARSE(app, argc, argv);
   if (stat->parsed()) return run_static(model, nodes, static_baseline, static_ordering);
-  if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);
+  if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2, fatigue_max_cycles);
   if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);
   if (bil->parsed()) {
     return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,
