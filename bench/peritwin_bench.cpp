@@ -1,15 +1,15 @@
 // peritwin-bench: performance figures as one JSON line per run.
 //   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
+//                         [--baseline]               ... next to a plain triplets + CHOLMOD one
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
 //   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
 //   peritwin-bench stream-rainflow [--samples N]     gate + RainflowCounter + CycleBlocks rate
 //                                  [--gate N] [--noise]
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
-//   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE
-//   latency) peritwin-bench dashboard [...]                   peritwin-bench-dashboard (SSE
-//   latency) peritwin-bench fleet [--details N] [...]         peritwin-bench-fleet (many details,
-//   one daemon)
+//   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE)
+//   peritwin-bench dashboard [...]                   peritwin-bench-dashboard (SSE latency)
+//   peritwin-bench fleet [--details N] [...]         peritwin-bench-fleet (one daemon, N details)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,77 +42,303 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-int run_static(const std::string& model_name, double target_nodes) {
+/// A line "Key:   123 kB" of /proc/self/status, in MB (0 when absent).
+double proc_status_mb(const std::string& key) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind(key + ":", 0) == 0)
+      return std::strtod(line.c_str() + key.size() + 1, nullptr) / 1024.0;
+  }
+  return 0.0;
+}
+
+/// Peak resident memory per phase: VmHWM read at the end of a phase, then reset to the current
+/// VmRSS (writing 5 to /proc/self/clear_refs, Linux ≥ 4.0), so each phase reports its own peak.
+/// `reset_ok` is false where the kernel refuses the reset (the peaks are then cumulative).
+class PhasePeaks {
+ public:
+  PhasePeaks() { reset(); }
+  /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
+  void mark(peritwin::tools::JsonLine& line, const std::string& name) {
+    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmHWM"), 1);
+    line["rss_after_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmRSS"), 1);
+    reset();
+  }
+  [[nodiscard]] bool reset_ok() const { return reset_ok_; }
+  /// The process's peak over all phases (getrusage's ru_maxrss follows the resets).
+  [[nodiscard]] double peak_mb() const { return std::max(overall_, proc_status_mb("VmHWM")); }
+  void reset() {
+    overall_ = std::max(overall_, proc_status_mb("VmHWM"));
+    std::ofstream clear("/proc/self/clear_refs");
+    clear << "5";
+    clear.flush();
+    reset_ok_ = reset_ok_ && clear.good();
+  }
+
+ private:
+  bool reset_ok_ = true;
+  double overall_ = 0.0;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The plain path the project's static solve is measured against (issue 18, item 4): the
+/// bond-based K = Σ_b c_b·g_b·g_bᵀ (000 Eq. B1 with the bond stiffness of pd_model) as Eigen
+/// triplets, one upper-triangle triplet per entry of each bond, setFromTriplets, then CHOLMOD
+/// with its default settings (its own ordering choice: AMD, METIS when AMD fills much),
+/// factorize, solve the three basis cases with cholmod_solve. Same supports and loads.
+struct BaselineRun {
+  peritwin::SolveTimings t;
+  double factor_nnz = 0.0;
+  std::vector<double> u;  ///< constant basis, full DOFs
+  bool ok = false;
+};
+
+BaselineRun run_baseline(const peritwin::Specimen& specimen, const peritwin::StaticSolver& solver) {
+  using namespace peritwin;
+  BaselineRun run;
+  const auto& disc = specimen.disc;
+  const auto& free = solver.free_index();
+  const int n = solver.num_free_dofs();
+  auto t0 = std::chrono::steady_clock::now();
+  std::vector<Eigen::Triplet<double, int>> entries;
+  entries.reserve(10 * static_cast<std::size_t>(disc.num_bonds()));
+  for (BondIndex b = 0; b < disc.num_bonds(); ++b) {
+    const auto bi = static_cast<std::size_t>(b);
+    if (disc.bond_precut[bi]) continue;
+    const auto i = 2 * static_cast<std::size_t>(disc.bond_i[bi]);
+    const auto j = 2 * static_cast<std::size_t>(disc.bond_j[bi]);
+    const int f[4] = {free[i], free[i + 1], free[j], free[j + 1]};
+    const double c = disc.bond_cos[bi], s = disc.bond_sin[bi];
+    const double g[4] = {-c, -s, c, s};
+    const double k = specimen.model.bond_stiffness[bi];
+    for (int p = 0; p < 4; ++p) {
+      for (int q = 0; q < 4; ++q) {
+        if (f[p] >= 0 && f[q] >= 0 && f[p] <= f[q])
+          entries.emplace_back(f[p], f[q], k * g[p] * g[q]);
+      }
+    }
+  }
+  SparseMatrix upper(n, n);
+  upper.setFromTriplets(entries.begin(), entries.end());
+  upper.makeCompressed();
+  entries = {};
+  run.t.assemble_s = seconds_since(t0);
+  SparseCholesky cholesky;
+  t0 = std::chrono::steady_clock::now();
+  if (!cholesky.analyze(upper).ok()) return run;
+  run.t.analyze_s = seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  if (!cholesky.factorize(upper).ok()) return run;
+  run.t.factor_s = seconds_since(t0);
+  run.factor_nnz = cholesky.factor_nonzeros();
+  t0 = std::chrono::steady_clock::now();
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
+  for (int basis = 0; basis < 3; ++basis) {
+    const auto force = solver.basis_force(static_cast<Basis>(basis));
+    for (std::size_t dof = 0; dof < force.size(); ++dof) {
+      if (free[dof] >= 0) rhs(free[dof], basis) = force[dof];
+    }
+  }
+  cholesky.solve_with_cholmod(rhs);
+  run.t.solve_s = seconds_since(t0);
+  run.u.assign(free.size(), 0.0);
+  for (std::size_t dof = 0; dof < free.size(); ++dof) {
+    if (free[dof] >= 0) run.u[dof] = rhs(free[dof], 0);
+  }
+  run.ok = true;
+  return run;
+}
+
+int run_static(const std::string& model_name, double target_nodes, bool baseline,
+               const std::string& ordering) {
   using namespace peritwin;
   using namespace peritwin::validation;
   ModelOptions options;
   options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
+  if (baseline && options.kind != ModelKind::bond_based) {
+    std::fprintf(stderr, "peritwin-bench: --baseline is the bond-based plain path (--model bb)\n");
+    return 2;
+  }
   const CompactTensionSpec spec;
+  tools::JsonLine line;
+  PhasePeaks peaks;
   const auto t0 = std::chrono::steady_clock::now();
   const Specimen specimen =
       make_compact_tension(spec, options, compact_tension_spacing(spec, target_nodes));
-  const double build_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
-  const Status report = solver.solve();
-  if (!report.ok()) {
-    std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n", message_of(report).c_str());
-    return 1;
-  }
-  const auto& t = solver.timings();
-  const auto& u = solver.basis_displacement(basis_constant);
+  const double build_s = seconds_since(t0);
+  peaks.mark(line, "build");
   // Load-line opening at 1 kN: the upper pin centre's displacement minus the lower one's.
   const double w = spec.width;
   const auto up = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, 0.275 * w}));
   const auto low = static_cast<std::size_t>(specimen.disc.nearest_node({0.25 * w, -0.275 * w}));
-  const double total_s = build_s + t.assemble_s + t.analyze_s + t.factor_s + t.solve_s;
-  tools::JsonLine line;
-  line["bench"] = "static";
-  line["model"] = model_name;
-  line["nodes"] = specimen.disc.num_nodes();
-  line["bonds"] = specimen.disc.num_bonds();
-  line["dx_m"] = tools::significant(specimen.disc.dx, 6);
-  line["build_s"] = tools::fixed(build_s, 3);
-  line["assemble_s"] = tools::fixed(t.assemble_s, 3);
-  line["analyze_s"] = tools::fixed(t.analyze_s, 3);
-  line["factor_s"] = tools::fixed(t.factor_s, 3);
-  line["solve_s"] = tools::fixed(t.solve_s, 3);
-  line["total_s"] = tools::fixed(total_s, 3);
-  line["factor_nnz"] = tools::whole(solver.factor().factor_nonzeros());
-  line["load_line_opening_m_per_kN"] =
-      tools::significant(1000.0 * (u[2 * up + 1] - u[2 * low + 1]), 7);
-  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
+  auto opening = [&](const std::vector<double>& u) {
+    return 1000.0 * (u[2 * up + 1] - u[2 * low + 1]);
+  };
+  double project_s = 0.0, project_opening = 0.0;
+  BaselineRun first;
+  if (baseline) {
+    // The baseline needs the free DOFs and loads only: a solver that is never solved.
+    const StaticSolver plain(specimen.disc, specimen.model, specimen.supports, specimen.loads);
+    first = run_baseline(specimen, plain);
+    first.u = {};
+    peaks.mark(line, "baseline_first");
+  }
+  {
+    StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
+    solver.set_ordering(ordering == "nesdis"  ? Ordering::nesdis
+                        : ordering == "metis" ? Ordering::metis
+                        : ordering == "amd"   ? Ordering::amd
+                                              : Ordering::metis_or_amd);
+    const Status report = solver.solve();
+    if (!report.ok()) {
+      std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n", message_of(report).c_str());
+      return 1;
+    }
+    const auto& t = solver.timings();
+    project_s = t.assemble_s + t.analyze_s + t.factor_s + t.solve_s;
+    project_opening = opening(solver.basis_displacement(basis_constant));
+    line["bench"] = "static";
+    line["model"] = model_name;
+    line["ordering"] = ordering;
+    line["nodes"] = specimen.disc.num_nodes();
+    line["bonds"] = specimen.disc.num_bonds();
+    line["dx_m"] = tools::significant(specimen.disc.dx, 6);
+    line["build_s"] = tools::fixed(build_s, 3);
+    line["assemble_s"] = tools::fixed(t.assemble_s, 3);
+    line["analyze_s"] = tools::fixed(t.analyze_s, 3);
+    line["factor_s"] = tools::fixed(t.factor_s, 3);
+    line["solve_s"] = tools::fixed(t.solve_s, 3);
+    line["total_s"] = tools::fixed(build_s + project_s, 3);
+    line["factor_nnz"] = tools::whole(solver.factor().factor_nonzeros());
+    line["load_line_opening_m_per_kN"] = tools::significant(project_opening, 7);
+    peaks.mark(line, "solve");
+    {  // the products-and-triplets assembly the scatter replaced (its oracle), in this run
+      const auto ta = std::chrono::steady_clock::now();
+      const SparseMatrix by_products = solver.stiffness_upper_by_products();
+      line["assemble_by_products_s"] = tools::fixed(seconds_since(ta), 3);
+      line["assemblies_equal"] =
+          by_products.nonZeros() == solver.stiffness_upper().nonZeros() &&
+          std::equal(by_products.valuePtr(), by_products.valuePtr() + by_products.nonZeros(),
+                     solver.stiffness_upper().valuePtr());
+    }
+    peaks.mark(line, "assemble_by_products");
+    if (baseline) {
+      // After the project's solve here, and once before it (above): the first factorization of
+      // a process pays for page faults and BLAS start-up, so each path is timed once in each
+      // position and the ratio uses the baseline's mean.
+      const BaselineRun after = run_baseline(specimen, solver);
+      BaselineRun plain = after;
+      if (plain.ok && first.ok) {
+        plain.t.assemble_s = 0.5 * (first.t.assemble_s + after.t.assemble_s);
+        plain.t.analyze_s = 0.5 * (first.t.analyze_s + after.t.analyze_s);
+        plain.t.factor_s = 0.5 * (first.t.factor_s + after.t.factor_s);
+        plain.t.solve_s = 0.5 * (first.t.solve_s + after.t.solve_s);
+        line["baseline_first_total_s"] = tools::fixed(
+            first.t.assemble_s + first.t.analyze_s + first.t.factor_s + first.t.solve_s, 3);
+        line["baseline_second_total_s"] = tools::fixed(
+            after.t.assemble_s + after.t.analyze_s + after.t.factor_s + after.t.solve_s, 3);
+      }
+      if (!plain.ok || !first.ok) {
+        std::fprintf(stderr, "peritwin-bench: the baseline's CHOLMOD solve failed\n");
+        return 1;
+      }
+      const double plain_s =
+          plain.t.assemble_s + plain.t.analyze_s + plain.t.factor_s + plain.t.solve_s;
+      const double plain_opening = opening(plain.u);
+      line["baseline_assemble_s"] = tools::fixed(plain.t.assemble_s, 3);
+      line["baseline_analyze_s"] = tools::fixed(plain.t.analyze_s, 3);
+      line["baseline_factor_s"] = tools::fixed(plain.t.factor_s, 3);
+      line["baseline_solve_s"] = tools::fixed(plain.t.solve_s, 3);
+      line["baseline_total_s"] = tools::fixed(plain_s, 3);
+      line["baseline_factor_nnz"] = tools::whole(plain.factor_nnz);
+      line["baseline_load_line_opening_m_per_kN"] = tools::significant(plain_opening, 7);
+      line["opening_relative_difference"] = tools::significant(
+          std::abs(project_opening - plain_opening) / std::abs(plain_opening), 2);
+      // assemble + analyze + factor + solve of both (the discretization is shared and not counted)
+      line["solve_over_baseline"] = tools::fixed(plain_s > 0.0 ? project_s / plain_s : 0.0, 3);
+      peaks.mark(line, "baseline");
+    }
+  }
+  line["peak_rss_reset_ok"] = peaks.reset_ok();
+  line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
   tools::print_line(line);
   return 0;
 }
 
-int run_fatigue(const std::string& model_name, double target_nodes, double a2_at_1mm) {
+int run_fatigue(const std::string& model_name, double target_nodes, double a2_at_1mm,
+                std::int64_t max_cycles) {
   // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
-  // final stiffness refactorized a few times to measure the ratio in this run.
+  // final stiffness refactorized a few times to measure the ratio in this run. Memory: the peak
+  // RSS of each phase (PhasePeaks) — the specimen, the first solve (assembly, analysis,
+  // supernodal factor), the first rank update (the factor turned simplicial LDLᵀ), the other
+  // blocks with and without a periodic rebuild, the refactorizations.
   using namespace peritwin;
   using namespace peritwin::validation;
   ModelOptions options;
   options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
   const CompactTensionSpec spec;
   const double dx = compact_tension_spacing(spec, target_nodes);
+  tools::JsonLine line;
+  line["bench"] = "fatigue";
+  PhasePeaks peaks;
   const Specimen s = make_compact_tension(spec, options, dx);
+  peaks.mark(line, "build");
   FatigueSettings settings;
   settings.strain = fatigue::al6061_t6_strain_params();
   // A2 calibrated at Δx = 1 mm, scaled to this horizon by 000 Eq. (29).
   settings.strain.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, settings.strain.m2);
   settings.incremental = true;
   const auto t0 = std::chrono::steady_clock::now();
-  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
-  if (!engine.initialize()) {
-    std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
-    return 1;
-  }
-  while (engine.apply({4000.0, 0.1, 0.0, 1000}) == EngineStatus::ok &&
-         engine.total_cycles() < 10'000'000) {
-  }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  // Engine totals: they include the solvers replaced by the periodic rebuilds.
-  const double per_update = engine.updates() > 0 ? engine.update_seconds() / engine.updates() : 0;
+  double per_update = 0.0, update_total = 0.0, basis_total = 0.0, rebuild_total = 0.0, wall = 0.0;
+  double supernodal_nnz = 0.0, simplicial_nnz = 0.0, peak_updates = 0.0, peak_rebuilds = 0.0;
+  std::int64_t cycles = 0, broken = 0;
+  int solves = 0, rebuilds = 0, updates = 0;
+  bool failed = false;
+  {
+    FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+    if (!engine.initialize()) {
+      std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
+      return 1;
+    }
+    supernodal_nnz = engine.solver().factor().factor_nonzeros();
+    peaks.mark(line, "initialize");
+    bool first_update = true;
+    for (;;) {
+      const int rebuilds_before = engine.rebuilds();
+      const bool more = engine.apply({4000.0, 0.1, 0.0, 1000}) == EngineStatus::ok &&
+                        engine.total_cycles() < max_cycles;
+      if (first_update && engine.updates() > 0) {  // this block converted the factor
+        simplicial_nnz = engine.solver().factor().factor_nonzeros();
+        peaks.mark(line, "first_update");
+        first_update = false;
+      } else {
+        const double peak = proc_status_mb("VmHWM");
+        double& slot = engine.rebuilds() != rebuilds_before ? peak_rebuilds : peak_updates;
+        slot = std::max(slot, peak);
+        peaks.reset();
+      }
+      if (!more) break;
+    }
+    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    // Engine totals: they include the solvers replaced by the periodic rebuilds.
+    per_update = engine.updates() > 0 ? engine.update_seconds() / engine.updates() : 0;
+    update_total = engine.update_seconds();
+    basis_total = engine.basis_solve_seconds();
+    rebuild_total = engine.rebuild_seconds();
+    cycles = engine.total_cycles();
+    broken = static_cast<std::int64_t>(engine.broken_bonds());
+    solves = engine.solves();
+    rebuilds = engine.rebuilds();
+    updates = engine.updates();
+    failed = engine.failed();
+  }  // the engine's factor goes before the refactorizing solver is built
+  line["rss_peak_later_updates_mb"] = tools::fixed(peak_updates, 1);
+  line["rss_peak_rebuild_blocks_mb"] = tools::fixed(peak_rebuilds, 1);
+  peaks.mark(line, "engine_freed");
   // Refactorizing path on the same model: assemble + numeric factorization + solve.
   StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
   if (!refactor.solve().ok()) return 1;
@@ -123,24 +350,27 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   }
   const double per_refactor =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
-  tools::JsonLine line;
-  line["bench"] = "fatigue";
+  peaks.mark(line, "refactor");
   line["nodes"] = s.disc.num_nodes();
   line["bonds"] = s.disc.num_bonds();
-  line["cycles"] = static_cast<long long>(engine.total_cycles());
-  line["broken_bonds"] = static_cast<long long>(engine.broken_bonds());
-  line["solves"] = engine.solves();
+  line["cycles"] = static_cast<long long>(cycles);
+  line["broken_bonds"] = static_cast<long long>(broken);
+  line["solves"] = solves;
+  line["updates"] = updates;
   line["wall_s"] = tools::fixed(wall, 2);
-  line["update_total_s"] = tools::fixed(engine.update_seconds(), 2);
-  line["basis_solve_total_s"] = tools::fixed(engine.basis_solve_seconds(), 2);
+  line["update_total_s"] = tools::fixed(update_total, 2);
+  line["basis_solve_total_s"] = tools::fixed(basis_total, 2);
   line["update_s_mean"] = tools::fixed(per_update, 5);
   line["refactor_s_mean"] = tools::fixed(per_refactor, 4);
   line["incremental_over_refactor"] =
       tools::fixed(per_update > 0 ? per_refactor / per_update : 0.0, 1);
-  line["rebuilds"] = engine.rebuilds();
-  line["rebuild_total_s"] = tools::fixed(engine.rebuild_seconds(), 2);
-  line["final_failure"] = engine.failed();
-  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
+  line["rebuilds"] = rebuilds;
+  line["rebuild_total_s"] = tools::fixed(rebuild_total, 2);
+  line["final_failure"] = failed;
+  line["factor_nnz_supernodal"] = tools::whole(supernodal_nnz);
+  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);
+  line["peak_rss_reset_ok"] = peaks.reset_ok();
+  line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
   tools::print_line(line);
   return 0;
 }
@@ -354,6 +584,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"bb", "osb"}));
   stat->add_option("--nodes", nodes, "approximate number of nodes")
       ->check(peritwin::cli::finite_in(100.0, 1e7));
+  bool static_baseline = false;
+  stat->add_flag("--baseline", static_baseline,
+                 "also the plain path (triplets, CHOLMOD defaults) in the same run (--model bb)");
+  std::string static_ordering = "default";
+  stat->add_option(
+          "--ordering", static_ordering,
+          "node-graph ordering: default (METIS or AMD, the lesser fill), nesdis, metis, amd "
+          "(not the default: another factor, other rounding)")
+      ->check(CLI::IsMember({"default", "nesdis", "metis", "amd"}));
   auto* fat = app.add_subcommand("fatigue", "B1 at 4 kN from a0 to final failure");
   double fatigue_nodes = 15000;
   double a2 = 1301;
@@ -361,6 +600,10 @@ int main(int argc, char** argv) {
       ->check(peritwin::cli::finite_in(100.0, 1e7));
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
+  std::int64_t fatigue_max_cycles = 10'000'000;
+  fat->add_option("--max-cycles", fatigue_max_cycles,
+                  "stop after this many cycles (default 1e7: final failure comes first)")
+      ->check(CLI::Range(std::int64_t{1000}, std::int64_t{10'000'000}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)")
       ->check(peritwin::cli::finite_positive());
   auto* bil =
@@ -395,8 +638,8 @@ int main(int argc, char** argv) {
   stream->add_flag("--noise", stream_noise,
                    "white noise instead of sine + random walk (a reversal almost every sample)");
   CLI11_PARSE(app, argc, argv);
-  if (stat->parsed()) return run_static(model, nodes);
-  if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2);
+  if (stat->parsed()) return run_static(model, nodes, static_baseline, static_ordering);
+  if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2, fatigue_max_cycles);
   if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);
   if (bil->parsed()) {
     return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,

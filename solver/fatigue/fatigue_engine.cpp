@@ -634,23 +634,25 @@ double FatigueEngine::basis_solve_seconds() const {
   return retired_basis_solve_s_ + solver_->basis_solve_seconds();
 }
 
-Status FatigueEngine::rebuild_solver(const std::vector<std::uint8_t>& intact) {
+Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   const auto t0 = std::chrono::steady_clock::now();
   retired_update_s_ += solver_->update_seconds();
   retired_updates_ += solver_->updates();
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
-  auto fresh = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_, ties_);
-  Status r = fresh->solve();
+  // The old solver (its updated simplicial factor, the largest block of memory) goes before the
+  // new one factorizes: the two never coexist (the rebuild's memory peak, issue 18 item 5).
+  solver_ = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_, ties_);
+  StaticSolver& fresh = *solver_;
+  Status r = fresh.solve();
   std::vector<BondIndex> broken;
   for (std::size_t b = 0; b < intact.size(); ++b) {
-    if (!intact[b] && fresh->intact()[b]) broken.push_back(static_cast<BondIndex>(b));
+    if (!intact[b] && fresh.intact()[b]) broken.push_back(static_cast<BondIndex>(b));
   }
   if (r.ok() && !broken.empty()) {
-    fresh->set_incremental(false);
-    r = fresh->break_bonds(broken);
+    fresh.set_incremental(false);
+    r = fresh.break_bonds(broken);
   }
-  fresh->set_incremental(settings_.incremental);
-  solver_ = std::move(fresh);
+  fresh.set_incremental(settings_.incremental);
   ++rebuilds_;
   rebuild_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -328,7 +328,7 @@ class FatigueEngine {
   [[nodiscard]] bool rebuild_due(std::size_t resolves) const;
   /// Replaces the solver by a fresh one with exactly the bonds not in `intact` broken (one
   /// refactorization): the same operations whatever the previous solver went through.
-  Status rebuild_solver(const std::vector<std::uint8_t>& intact);
+  Status rebuild_solver(std::vector<std::uint8_t> intact);
   void update_phases();
 
   const Discretization& disc_;

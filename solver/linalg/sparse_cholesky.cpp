@@ -57,11 +57,19 @@ double SparseCholesky::factor_nonzeros() const {
   return static_cast<double>(l->nzmax);
 }
 
-std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& upper) {
+std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& upper,
+                                                        Ordering method) {
   Impl impl;
-  impl.common.nmethods = 2;  // keep whichever of METIS and AMD fills less
-  impl.common.method[0].ordering = CHOLMOD_METIS;
-  impl.common.method[1].ordering = CHOLMOD_AMD;
+  if (method == Ordering::metis_or_amd) {
+    impl.common.nmethods = 2;  // keep whichever of METIS and AMD fills less
+    impl.common.method[0].ordering = CHOLMOD_METIS;
+    impl.common.method[1].ordering = CHOLMOD_AMD;
+  } else {
+    impl.common.nmethods = 1;
+    impl.common.method[0].ordering = method == Ordering::nesdis  ? CHOLMOD_NESDIS
+                                     : method == Ordering::metis ? CHOLMOD_METIS
+                                                                 : CHOLMOD_AMD;
+  }
   impl.common.postorder = 1;
   cholmod_sparse a = Impl::view(upper);
   a.xtype = CHOLMOD_PATTERN;

@@ -17,6 +17,11 @@ using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 // reason (not positive definite, numerically singular — a part of the model has come loose — or
 // a CHOLMOD failure).
 
+/// Fill-reducing orderings of fill_reducing_ordering(): METIS nested dissection or AMD, whichever
+/// fills less (peritwin's choice, docs/solver.md "Ordering"); CHOLMOD's own nested dissection
+/// (NESDIS: METIS bisections, constrained minimum degree on the parts); METIS alone; AMD alone.
+enum class Ordering { metis_or_amd, nesdis, metis, amd };
+
 class SparseCholesky {
  public:
   SparseCholesky();
@@ -31,7 +36,8 @@ class SparseCholesky {
   Status analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
   /// A fill-reducing ordering (METIS nested dissection, AMD when METIS does worse) of the
   /// symmetric pattern whose upper triangle is `upper`; values are ignored.
-  static std::vector<int> fill_reducing_ordering(const SparseMatrix& upper);
+  static std::vector<int> fill_reducing_ordering(const SparseMatrix& upper,
+                                                 Ordering method = Ordering::metis_or_amd);
   /// Numeric factorization; the pattern must be the analyzed one. Reports a matrix that is not
   /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
   /// a piece of the model that came loose) as a typed failure.

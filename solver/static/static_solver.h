@@ -89,6 +89,9 @@ class StaticSolver {
   }
   [[nodiscard]] const std::vector<double>& bond_factors() const { return factor_; }
   void set_incremental(bool incremental) { incremental_ = incremental; }
+  /// The fill-reducing ordering of the node graph (default METIS or AMD, whichever fills less;
+  /// another choice gives another factor, hence other rounding: for measurements).
+  void set_ordering(Ordering ordering) { ordering_ = ordering; }
   [[nodiscard]] bool incremental() const { return incremental_; }
   /// Non-incremental set_bond_factors by preconditioned conjugate gradients instead of a
   /// refactorization per call (003's bilinear increments, see docs/solver.md): K(f)·u = F is
@@ -148,6 +151,9 @@ class StaticSolver {
   [[nodiscard]] std::int32_t num_unknowns() const { return num_unknowns_; }
   /// The matrix of the current factor (upper triangle); on the preconditioned path K(f_ref).
   [[nodiscard]] const SparseMatrix& stiffness_upper() const { return upper_; }
+  /// The same matrix for the current bond factors by the products-and-triplets assembly: the
+  /// oracle the scatter assembly is tested against, bit for bit.
+  [[nodiscard]] SparseMatrix stiffness_upper_by_products() const;
   [[nodiscard]] const std::vector<std::int32_t>& free_index() const { return free_index_; }
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] const PdModel& model() const { return model_; }
@@ -156,8 +162,20 @@ class StaticSolver {
   [[nodiscard]] int factorizations() const { return factorizations_; }
 
  private:
-  /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference).
+  /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference): by
+  /// scatter into the pattern (bond-based and mixed form), else by products.
   void assemble(const std::vector<double>& factors);
+  /// The oracle of the scatter: K = Gᵀ·diag(w)·G (+ Bᵀ·A·B) with Eigen products and triplets.
+  void assemble_by_products(const std::vector<double>& factors, SparseMatrix& out) const;
+  /// Direct scatter of every bond's terms into upper_'s known pattern (built on first use),
+  /// adding each entry's terms in the order the products add them, so the values are the
+  /// same bits as assemble_by_products (tested).
+  void assemble_by_scatter(const std::vector<double>& factors);
+  /// The pattern of upper_: the bonds' node pairs (precut bonds included, as explicit zeros),
+  /// every free diagonal, the ties, and in the mixed form the Bᵀ block and the w diagonal.
+  void build_pattern();
+  /// Position of entry (row, col), row ≤ col, in upper_'s arrays (it must be in the pattern).
+  [[nodiscard]] std::size_t entry(int row, int col) const;
   /// Preconditioned re-solve after factor_ changed (see set_preconditioned).
   Status preconditioned_resolve(bool broke);
   /// PCG on the loaded bases with the current factor as M; false if max_iterations was hit.
@@ -204,6 +222,8 @@ class StaticSolver {
   double w_scale_ = 1.0;
   std::int32_t num_unknowns_ = 0;
   SparseMatrix upper_;
+  bool pattern_ready_ = false;  ///< upper_ holds the scatter pattern
+  Ordering ordering_ = Ordering::metis_or_amd;
   SparseCholesky cholesky_;
   std::array<std::vector<double>, 3> u_;
   std::array<std::vector<double>, 3> s_;
