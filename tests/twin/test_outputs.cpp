@@ -344,7 +344,7 @@ TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
 }
 
 TEST_F(OutputsTest, LayoutVersionTwoFileGetsTheXdmf3MeshAndEstimateColumn) {
-  // Layout 2: no /mesh/xyz, /mesh/vertices (its XDMF crashed ParaView's Xdmf3 reader), no
+  // Layout 2: no /mesh/xyz, /mesh/vertices (its X_Y geometry crashed ParaView's Xdmf3 reader), no
   // /timeseries/remaining_state_seq.
   const fs::path h5 = dir_ / "v2.h5";
   const Mesh mesh = sample_mesh();

@@ -212,8 +212,9 @@ std::vector<hsize_t> parse_dims(const std::string& text) {
 }
 
 /// Checks every DataItem of the XDMF against the HDF5 dataset it names, and the structure the
-/// Xdmf3 reader needs: each Uniform grid's Polyvertex topology carries its connectivity, the
-/// geometry is XYZ of n x 3, every attribute's components match its AttributeType.
+/// Xdmf3 reader needs: the geometry of every Uniform grid is XYZ of n x 3 (ParaView 5.11's Xdmf3
+/// reader crashed on the X_Y geometry of layout 2), its Polyvertex topology carries its
+/// connectivity, every attribute's components match its AttributeType.
 void expect_xdmf_readable(const fs::path& dir, const std::string& xdmf_text, std::size_t nodes,
                           std::size_t& grids, std::vector<std::string>& attributes) {
   const std::regex topology(
@@ -242,6 +243,7 @@ void expect_xdmf_readable(const fs::path& dir, const std::string& xdmf_text, std
     ++uniform;
   }
   EXPECT_EQ(grids, uniform) << "a Uniform grid without the Polyvertex connectivity";
+  EXPECT_EQ(xdmf_text.find("X_Y"), std::string::npos) << "Xdmf3 crashes on an X_Y geometry";
   EXPECT_EQ(geometries, uniform);
   attributes.clear();
   for (auto it = std::sregex_iterator(xdmf_text.begin(), xdmf_text.end(), attribute);

@@ -366,7 +366,7 @@ std::string ResultsWriter::Impl::xdmf_grid(std::string_view name,
   std::ostringstream g;
   g << "      <Grid Name=\"" << name << "\" GridType=\"Uniform\">\n";
   if (snapshot != nullptr) g << "        <Time Value=\"" << snapshot->total_cycles << "\"/>\n";
-  // Xdmf3 reads the Polyvertex connectivity from the DataItem; without one it crashes.
+  // Geometry XYZ, not X_Y: ParaView 5.11's Xdmf3 reader crashes on X_Y (see the header).
   g << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
     << "\" NodesPerElement=\"1\">\n"
     << "          <DataItem Dimensions=\"" << n

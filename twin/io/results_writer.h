@@ -21,11 +21,12 @@
 //                         (crack_tip_t.K_*) (int64); length_m, projected_length_m, tip_x, tip_y,
 //                         tip_angle_rad, k_i, k_ii (float64)
 //   /mesh/x, /mesh/y      float64[node_count] node coordinates (m); /mesh attribute node_count
-//   /mesh/xyz             float64[node_count][3] the same with z = 0 (the XDMF geometry)
+//   /mesh/xyz             float64[node_count][3] the same with z = 0: the XDMF geometry. ParaView
+//                         5.11's default XDMF reader (Xdmf3ReaderS/T) crashes in
+//                         vtkXdmf3DataSet::CopyShape on an X_Y geometry (two DataItems, what
+//                         layouts 1-2 wrote; only the legacy XDMFReader read it) and reads XYZ.
 //   /mesh/vertices        int64[node_count] 0, 1, ..., node_count − 1: the Polyvertex
-//                         connectivity. ParaView's default XDMF reader (Xdmf3) copies the
-//                         topology's connectivity array and crashes on a Topology without one
-//                         (vtkXdmf3DataSet::CopyShape); the legacy reader made it up.
+//                         connectivity, given explicitly rather than left to each reader
 //   /fields/step_<n>/damage  float32[node_count], n = 0, 1, 2, ... zero-padded to 6 digits;
 //                         attributes state_seq, total_cycles (int64) on the dataset and its group
 //   /fields/step_<n>/<field>  float64[node_count] or [node_count][components]: the snapshot's
