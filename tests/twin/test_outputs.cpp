@@ -795,6 +795,76 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
   EXPECT_THROW(write_damage_png(p, x, y, d, 1e-9), PngError);
 }
 
+TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
+  // 20 x 10 nodes (dx = 1 mm); node (5, 4) holds notch damage only (φ = 0.42 = its notch φ), node
+  // (6, 4) the same notch damage plus a broken fatigue bond (φ = 0.48): grey and colour.
+  const double dx = 1e-3;
+  std::vector<double> x, y, d;
+  DamageMap map;
+  map.title = "ct-1   N = 12000 cycles";
+  for (int j = 0; j < 10; ++j) {
+    for (int i = 0; i < 20; ++i) {
+      x.push_back((i + 0.5) * dx);
+      y.push_back((j + 0.5) * dx);
+      const bool notch = j == 4 && (i == 5 || i == 6);
+      d.push_back(notch ? (i == 5 ? 0.42 : 0.48) : 0.0);
+      map.notch_damage.push_back(notch ? 0.42 : 0.0);
+    }
+  }
+  map.notches = {{{0.0, 4.5e-3}, {5.5e-3, 4.5e-3}}};
+  map.crack_paths = {{{6.5e-3, 4.5e-3}, {12.5e-3, 2.5e-3}}};
+  const fs::path p = dir_ / "map.png";
+  const DamageMapLayout layout = write_damage_map_png(p, x, y, d, dx, map);
+  EXPECT_EQ(layout.grid.node_pixels, 40);
+  EXPECT_GT(layout.left, 0);  // room for the y axis, its ticks and labels
+  EXPECT_GT(layout.top, 0);   // and the title
+  EXPECT_GT(layout.width, layout.left + layout.grid.width);  // and the colour bar
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  ASSERT_EQ(w, static_cast<std::uint32_t>(layout.width));
+  ASSERT_EQ(h, static_cast<std::uint32_t>(layout.height));
+  auto at = [&](int col, int row_from_top, int dy = 20) {
+    const auto i = 3 * (std::size_t(layout.top + row_from_top * 40 + dy) * w +
+                        std::size_t(layout.left + col * 40 + 20));
+    return Rgb{px[i], px[i + 1], px[i + 2]};
+  };
+  EXPECT_EQ(at(5, 9 - 4, 5), notch_color(0.42));        // off the notch line drawn through the row
+  EXPECT_EQ(notch_color(0.42).r, notch_color(0.42).b);  // a grey
+  EXPECT_EQ(at(6, 9 - 4, 5), damage_color(0.48));
+  EXPECT_EQ(at(15, 0), damage_color(0.0));
+  std::size_t magenta = 0, dark = 0;
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    magenta += px[i] == 200 && px[i + 1] == 0 && px[i + 2] == 200;
+    dark += px[i] == 0 && px[i + 1] == 0 && px[i + 2] == 0;
+  }
+  EXPECT_GT(magenta, 300u);  // the crack path (6 mm at 3 px) and its legend
+  EXPECT_GT(dark, 1000u);    // text, ticks, frame, the notch line
+  map.notch_damage = {0.1};  // not one per node
+  EXPECT_THROW(write_damage_map_png(p, x, y, d, dx, map), PngError);
+}
+
+TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
+  CrackGrowthPlot plot;
+  plot.title = "ct-1";
+  for (int k = 0; k <= 20; ++k) {
+    plot.cycles.push_back(1e3 * k);
+    plot.lengths_m.push_back(1e-4 * k);
+  }
+  plot.predictions = {{5e3, 5e-4, 2e4, 1.5e4, 2.5e4}, {1e4, 1e-3, 1.6e4, kNaN, kNaN}};
+  plot.critical_length_m = 3e-3;
+  const fs::path p = dir_ / "an.png";
+  write_crack_growth_png(p, plot);
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  std::size_t orange = 0;
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    orange += px[i] == 230 && px[i + 1] == 110 && px[i + 2] == 0;
+  }
+  EXPECT_GT(orange, 200u);  // diamonds, the band bar, the dashed latest prediction, the legend
+  plot.lengths_m.pop_back();
+  EXPECT_THROW(write_crack_growth_png(p, plot), PngError);
+}
+
 TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
   std::vector<double> n, a;
   for (int k = 0; k <= 50; ++k) {
