@@ -159,9 +159,10 @@ DetailOutputs::DetailOutputs(const Twin& twin) : id_(twin.detail_id()) {
     }
     writer_->rewind_to(twin.state_seq() - 1);
     for (const auto& s : writer_->snapshots()) last_snapshot_seq_ = s.state_seq;
-    history_ = writer_->read_rows();
-    history_.push_back(results_row(twin));
-    writer_->append(history_.back());
+    for (const auto& row : writer_->read_rows()) history_.add(row);
+    const TimeSeriesRow row = results_row(twin);
+    writer_->append(row);
+    history_.add(row);
     const auto every = config.output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
     spdlog::info("[{}] results: {} ({} rows)", id_, h5_path_.string(), writer_->rows());
@@ -187,8 +188,9 @@ void DetailOutputs::snapshot(const Twin& twin) {
 void DetailOutputs::record(const Twin& twin) {
   if (!writer_) return;
   try {
-    history_.push_back(results_row(twin));
-    writer_->append(history_.back());
+    const TimeSeriesRow row = results_row(twin);
+    writer_->append(row);
+    history_.add(row);
     const auto every = twin.model().config().output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
   } catch (const std::exception& e) {
@@ -216,28 +218,31 @@ void DetailOutputs::finish(const Twin& twin) {
   }
 }
 
-namespace {
-
-/// Each crack tip's track over the states: the crack paths of the damage map.
-std::vector<std::vector<MapPoint>> crack_paths(const std::vector<TimeSeriesRow>& history) {
-  std::map<std::pair<std::int64_t, int>, std::vector<MapPoint>> tracks;
-  for (const auto& row : history) {
-    std::map<std::int64_t, int> tip_of;  // the next tip index per crack in this row
-    for (const auto& c : row.cracks) {
-      const int tip = tip_of[c.crack_id]++;
-      if (!(c.length_m > 0.0) || !std::isfinite(c.tip_x) || !std::isfinite(c.tip_y)) continue;
-      auto& track = tracks[{c.crack_id, tip}];
-      if (track.empty() || track.back().x != c.tip_x || track.back().y != c.tip_y) {
-        track.push_back({c.tip_x, c.tip_y});
-      }
+void DetailOutputs::PictureHistory::add(const TimeSeriesRow& row) {
+  state_seq.push_back(row.state_seq);
+  cycles.push_back(static_cast<double>(row.total_cycles));
+  lengths_m.push_back(row.crack_length_m);
+  // A new estimate: its end of life counts from the state it was made on.
+  if (row.remaining_state_seq >= 0 && row.remaining_state_seq != last_estimate_seq) {
+    const auto it = std::lower_bound(state_seq.begin(), state_seq.end(), row.remaining_state_seq);
+    if (it != state_seq.end() && *it == row.remaining_state_seq) {
+      const auto i = static_cast<std::size_t>(it - state_seq.begin());
+      predictions.push_back(
+          {cycles[i], lengths_m[i], row.remaining_cycles, row.remaining_low, row.remaining_high});
+      last_estimate_seq = row.remaining_state_seq;
     }
   }
-  std::vector<std::vector<MapPoint>> out;
-  for (auto& [key, track] : tracks) out.push_back(std::move(track));
-  return out;
+  // Each crack tip's track over the states: the crack paths of the damage map.
+  std::map<std::int64_t, int> tip_of;  // the next tip index per crack in this row
+  for (const auto& c : row.cracks) {
+    const int tip = tip_of[c.crack_id]++;
+    if (!(c.length_m > 0.0) || !std::isfinite(c.tip_x) || !std::isfinite(c.tip_y)) continue;
+    auto& track = tip_tracks[{c.crack_id, tip}];
+    if (track.empty() || track.back().x != c.tip_x || track.back().y != c.tip_y) {
+      track.push_back({c.tip_x, c.tip_y});
+    }
+  }
 }
-
-}  // namespace
 
 void DetailOutputs::pictures(const Twin& twin) {
   const auto& config = twin.model().config();
@@ -250,7 +255,7 @@ void DetailOutputs::pictures(const Twin& twin) {
       y.push_back(p.y);
     }
     const std::int64_t cycles = twin.engine().total_cycles();
-    const double length_mm = history_.empty() ? 0.0 : 1e3 * history_.back().crack_length_m;
+    const double length_mm = history_.lengths_m.empty() ? 0.0 : 1e3 * history_.lengths_m.back();
     char title[160];
     std::snprintf(title, sizeof title, "%s   N = %lld cycles   crack %.2f mm", id_.c_str(),
                   static_cast<long long>(cycles), length_mm);
@@ -265,26 +270,14 @@ void DetailOutputs::pictures(const Twin& twin) {
       for (const auto& p : notch.path) line.push_back({p.x, p.y});
       map.notches.push_back(std::move(line));
     }
-    map.crack_paths = crack_paths(history_);
+    for (const auto& [key, track] : history_.tip_tracks) map.crack_paths.push_back(track);
     write_damage_map_png(damage_png(), x, y, twin.engine().node_damage(), disc.dx, map);
 
     CrackGrowthPlot plot;
     plot.title = id_ + "   crack length and predicted end of life";
-    std::map<std::int64_t, const TimeSeriesRow*> by_seq;  // the state each estimate was made on
-    for (const auto& row : history_) {
-      plot.cycles.push_back(static_cast<double>(row.total_cycles));
-      plot.lengths_m.push_back(row.crack_length_m);
-      by_seq[row.state_seq] = &row;
-    }
-    std::int64_t last_estimate = -1;
-    for (const auto& row : history_) {
-      const auto made_on = by_seq.find(row.remaining_state_seq);
-      if (row.remaining_state_seq == last_estimate || made_on == by_seq.end()) continue;
-      last_estimate = row.remaining_state_seq;
-      plot.predictions.push_back({static_cast<double>(made_on->second->total_cycles),
-                                  made_on->second->crack_length_m, row.remaining_cycles,
-                                  row.remaining_low, row.remaining_high});
-    }
+    plot.cycles = history_.cycles;
+    plot.lengths_m = history_.lengths_m;
+    plot.predictions = history_.predictions;
     if (config.life.criterion == LifeCriterion::crack_length) {
       plot.critical_length_m = config.life.critical_crack_length;
     }

@@ -15,9 +15,13 @@
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
+#include <utility>
+#include <vector>
 
+#include "twin/io/damage_png.h"
 #include "twin/io/results_writer.h"
 #include "twin/model/twin.h"
 
@@ -56,7 +60,17 @@ class DetailOutputs {
   std::string id_;
   std::unique_ptr<ResultsWriter> writer_;
   std::int64_t last_snapshot_seq_ = -1;
-  std::vector<TimeSeriesRow> history_;  ///< the rows written, for the pictures
+  /// What the pictures need of the rows written, kept compact (24 bytes a row, the estimates
+  /// once each, a tip track point only when the tip moved): a daemon runs for years of batches.
+  struct PictureHistory {
+    std::vector<std::int64_t> state_seq;  ///< ascending, one per row
+    std::vector<double> cycles, lengths_m;
+    std::vector<LifePrediction> predictions;
+    std::int64_t last_estimate_seq = -1;
+    std::map<std::pair<std::int64_t, int>, std::vector<MapPoint>> tip_tracks;  ///< (crack, tip)
+    void add(const TimeSeriesRow& row);
+  };
+  PictureHistory history_;
 };
 
 }  // namespace peritwin::twin
