@@ -9,6 +9,7 @@
 #include <png.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -20,6 +21,7 @@
 
 #include "solver/static/pd_strain.h"
 #include "tests/support/twin_fixtures.h"
+#include "twin/config/config.h"
 #include "twin/io/detail_outputs.h"
 
 namespace peritwin::twin {
@@ -165,6 +167,38 @@ TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
   const Point p = model_->disc().position[at];
   EXPECT_LT(std::hypot(p.x - tip.x, p.y - tip.y), 2.0 * model_->disc().horizon)
       << "largest principal strain " << largest_principal << " at (" << p.x << ", " << p.y << ")";
+}
+
+TEST(ResultsFieldsStrip, FarFieldStrainIsTheUniaxialOneAndPeaksAtTheHoleRim) {
+  // examples/strip-with-hole.toml at P = 20 kN along x: W = 60 mm, h = 5 mm, E = 68 GPa, so away
+  // from the hole and the grips E_xx = P/(W·h·E) = 9.804e-4 (plane stress, small strain).
+  auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/strip-with-hole.toml");
+  ASSERT_TRUE(parsed.ok()) << parsed.error_text();
+  const auto model = b1_model(parsed.config->details.at(0));
+  auto twin = make_twin(model);
+  const double p = 20000.0;
+  ASSERT_EQ(twin->apply({"strip-hole", "test", 1, {{p, 0.1, 0.0, 1}}}).verdict, Verdict::applied);
+  const SnapshotFields fields = snapshot_fields(*twin);
+  const auto& strain = fields.fields.at(1);
+  const auto& principal = fields.fields.at(3);
+  ASSERT_EQ(strain.name, "strain");
+  ASSERT_EQ(principal.name, "max_principal_strain");
+  const Discretization& disc = model->disc();
+  std::vector<double> far;
+  std::size_t peak = 0;
+  for (std::size_t k = 0; k < disc.position.size(); ++k) {
+    const double x = disc.position[k].x;
+    if ((x > 0.03 && x < 0.07) || (x > 0.13 && x < 0.17)) far.push_back(strain.values[6 * k]);
+    if (principal.values[k] > principal.values[peak]) peak = k;
+  }
+  std::sort(far.begin(), far.end());
+  const double want = p / (0.060 * 0.005 * 68e9);
+  EXPECT_NEAR(far[far.size() / 2], want, 0.01 * want);  // measured 9.799e-4: 0.05 % off
+  // The concentration: at the rim of the hole (r = 5 mm), at its top or bottom (x ≈ 0.1).
+  const Point at = disc.position[peak];
+  EXPECT_NEAR(std::hypot(at.x - 0.100, at.y - 0.030), 0.005, disc.dx);
+  EXPECT_NEAR(at.x, 0.100, disc.dx);
+  EXPECT_GT(principal.values[peak], 1.4 * want);  // measured 1.64 on the 1 mm grid (δ = 3 mm)
 }
 
 // --- the results directory -----------------------------------------------------------------
