@@ -1,14 +1,17 @@
 // peritwin-replay: feeds a recorded load history to the twin of one detail.
 //
 //   peritwin-replay --config detail.toml --history FILE [--format series|cycles|spectrum|lcm-log]
-//                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process]
-//                   [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
+//                   [--detail ID] [--source ID] [--lcm-url URL] [--lockstep] [--in-process
+//                   [--results DIR]] [--json] [--batch-blocks N] [--batch-cycles N] [--window N]
 //                   [--residue half|whole|keep] [--gate N] [--alpha-bin RAD]
 //                   [--key-file F [--daemon-key ID | --sign-only]] [--continue | --resume]
 //   peritwin-replay --generate-key-file F [--key-ids ID,ID,...]
 //
 // Over LCM (default) it publishes the batches to a running daemon (see replay/replay_tool.h);
-// --in-process runs the twin library directly with the same config (deterministic mode, no LCM).
+// --in-process runs the twin library directly with the same config (deterministic mode, no LCM);
+// with --results DIR it writes the daemon's results files of the detail there (DIR instead of
+// [detail.output] directory: <id>.h5, <id>.xdmf and, with output.png, the two PNGs), by the
+// daemon's own writer (twin/io/detail_outputs.h).
 // --key-file: batches signed with the key of --source, every STATE and REJECT verified with the
 // daemon's key (messages/README.md, "Authentication"); without it anyone on the bus can forge the
 // states it reports. --generate-key-file writes a new key file (mode 0600) and exits.
@@ -42,6 +45,7 @@
 #include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
+#include "twin/io/detail_outputs.h"
 
 namespace {
 std::atomic<int> g_signal{0};
@@ -81,8 +85,14 @@ int main(int argc, char** argv) {
   app.add_option("--source", source_id, "source id of the batches (default replay)");
   app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
   app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
-  app.add_flag("--in-process", in_process,
-               "run the twin library here (no LCM, no daemon; ignores --key-file)");
+  auto* in_process_opt =
+      app.add_flag("--in-process", in_process,
+                   "run the twin library here (no LCM, no daemon; ignores --key-file)");
+  std::string results_dir;
+  app.add_option("--results", results_dir,
+                 "with --in-process: write the daemon's results files (HDF5 + XDMF, PNGs with "
+                 "[detail.output] png) to this directory")
+      ->needs(in_process_opt);
   replay::add_key_options(app, keys);
   auto* generate_opt =
       app.add_option("--generate-key-file", generate_key_file,
@@ -210,7 +220,21 @@ int main(int argc, char** argv) {
 
   std::optional<peritwin_msgs::damage_state_t> final_state;
   if (in_process) {
-    const auto r = replay::run_in_process(*detail, batches, print);
+    twin::DetailConfig run_detail = *detail;
+    std::unique_ptr<twin::DetailOutputs> outputs;
+    replay::TwinObserver on_twin;
+    if (!results_dir.empty()) {
+      run_detail.output.directory = results_dir;
+      on_twin = [&outputs](const twin::Twin& t, bool last) {
+        if (!outputs) {
+          outputs = std::make_unique<twin::DetailOutputs>(t);
+        } else if (!last) {
+          outputs->record(t);
+        }
+        if (last) outputs->finish(t);
+      };
+    }
+    const auto r = replay::run_in_process(run_detail, batches, print, on_twin);
     if (!r.error.empty()) {
       std::cerr << "peritwin-replay: " << r.error << "\n";
       return kExitUsage;

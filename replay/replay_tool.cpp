@@ -130,7 +130,8 @@ ReplayResult LcmReplayer::run(
 
 InProcessResult run_in_process(
     const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
-    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state) {
+    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
+    const TwinObserver& on_twin) {
   InProcessResult result;
   auto model = twin::DetailModel::build(detail);
   if (!model) {
@@ -146,16 +147,20 @@ InProcessResult run_in_process(
   t->catch_up_life();
   auto state = twin::state_message(*t, twin::now_utime());
   if (on_state) on_state(state);
+  if (on_twin) on_twin(*t, false);
   for (const auto& b : batches) {
     const auto outcome = t->apply(b);
     if (outcome.verdict == twin::Verdict::failed) break;
     if (!outcome.applied()) {
       result.error = "batch " + std::to_string(b.seq) + ": " + outcome.what + ": " + outcome.why;
+      if (on_twin) on_twin(*t, true);
       return result;
     }
     state = twin::state_message(*t, twin::now_utime());
     if (on_state) on_state(state);
+    if (on_twin) on_twin(*t, false);
   }
+  if (on_twin) on_twin(*t, true);
   result.final_state = state;
   return result;
 }

@@ -87,13 +87,18 @@ class LcmReplayer {
 /// Applies the batches to a fresh Twin of `detail` (deterministic mode: remaining life
 /// synchronously at the fixed points), calling on_state after every batch and once for the
 /// initial state. Returns the final state message; error set when the model cannot be built.
+/// on_twin (optional) sees the twin where on_state sees its message (`last` false), and once more
+/// after the last batch (`last` true): where peritwin-replay --results hangs the daemon's
+/// results writer (twin/io/detail_outputs.h), which this library does not link.
 struct InProcessResult {
   std::optional<peritwin_msgs::damage_state_t> final_state;
   std::string error;
 };
+using TwinObserver = std::function<void(const twin::Twin&, bool last)>;
 InProcessResult run_in_process(
     const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
-    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state);
+    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
+    const TwinObserver& on_twin = {});
 
 /// "state 12: 12000 cycles, 36 broken bonds, crack 1.00 mm, remaining 48000 cycles [40000,
 /// 56000] (estimated at seq 10)".

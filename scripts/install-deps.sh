@@ -30,6 +30,12 @@ if [ "${PERITWIN_SANITIZER_DEPS:-0}" = 1 ]; then
   packages+=(clang libclang-rt-14-dev libfuzzer-14-dev)
 fi
 
+# The ParaView check of the results files (scripts/check-results-paraview.sh, which sets
+# PERITWIN_PARAVIEW_DEPS=1): ParaView 5.11 with its Python (pvbatch), about 545 MB installed.
+if [ "${PERITWIN_PARAVIEW_DEPS:-0}" = 1 ]; then
+  packages+=(paraview python3-paraview)
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then

@@ -96,7 +96,7 @@ std::vector<TimeSeriesRow> sample_rows() {
   a.state_seq = 1;
   a.total_cycles = 1000;
   TimeSeriesRow b{2,   250000, 17,     2,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
-                  0.1, 12.5e6, -0.3e6, 4.5e6, 3.9e6,   5.1e6,    {}};
+                  0.1, 12.5e6, -0.3e6, 4.5e6, 3.9e6,   5.1e6,    1,      {}};
   // Two cracks: a notch crack and an interior one with two tips (three crack rows).
   b.cracks = {{0, 1, 1, 0, 1.25e-3, 1.125e-3, 0.0315, -0.0021, 0.1, 12.5e6, -0.3e6},
               {0, 2, 3, 2, 2e-3, 1.9e-3, 0.01, 0.02, 3.0, kNaN, kNaN},
@@ -115,6 +115,7 @@ std::vector<TimeSeriesRow> sample_rows() {
                   0.0,
                   -1.0,
                   2.5,
+                  3,
                   {}};
   return {a, b, c};
 }
@@ -127,6 +128,7 @@ void expect_rows_equal(const std::vector<TimeSeriesRow>& got,
     EXPECT_EQ(got[r].total_cycles, want[r].total_cycles);
     EXPECT_EQ(got[r].broken_bonds, want[r].broken_bonds);
     EXPECT_EQ(got[r].crack_count, want[r].crack_count);
+    EXPECT_EQ(got[r].remaining_state_seq, want[r].remaining_state_seq);
     const double TimeSeriesRow::*members[] = {
         &TimeSeriesRow::crack_length_m, &TimeSeriesRow::crack_projected_length_m,
         &TimeSeriesRow::tip_x,          &TimeSeriesRow::tip_y,
@@ -176,6 +178,7 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   const auto cyc = raw_read<std::int64_t>(f, "/timeseries/total_cycles", H5T_NATIVE_INT64);
   const auto bb = raw_read<std::int64_t>(f, "/timeseries/broken_bonds", H5T_NATIVE_INT64);
   const auto cc = raw_read<std::int64_t>(f, "/timeseries/crack_count", H5T_NATIVE_INT64);
+  const auto rs = raw_read<std::int64_t>(f, "/timeseries/remaining_state_seq", H5T_NATIVE_INT64);
   ASSERT_EQ(seq.size(), 3u);
   std::vector<TimeSeriesRow> got(3);
   for (std::size_t r = 0; r < 3; ++r) {
@@ -183,6 +186,7 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
     got[r].total_cycles = cyc[r];
     got[r].broken_bonds = bb[r];
     got[r].crack_count = cc[r];
+    got[r].remaining_state_seq = rs[r];
   }
   const std::pair<const char*, double TimeSeriesRow::*> cols[] = {
       {"crack_length_m", &TimeSeriesRow::crack_length_m},
@@ -241,8 +245,8 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   for (const char* s :
        {"<Xdmf Version=\"3.0\">", "CollectionType=\"Temporal\"", "Name=\"step_000000\"",
         "Name=\"step_000001\"", "<Time Value=\"1000\"/>", "<Time Value=\"9007199254740993\"/>",
-        "TopologyType=\"Polyvertex\" NumberOfElements=\"12\"", "GeometryType=\"X_Y\"",
-        "ct-1.h5:/mesh/x", "ct-1.h5:/mesh/y", "ct-1.h5:/fields/step_000000/damage",
+        "TopologyType=\"Polyvertex\" NumberOfElements=\"12\"", "GeometryType=\"XYZ\"",
+        "ct-1.h5:/mesh/vertices", "ct-1.h5:/mesh/xyz", "ct-1.h5:/fields/step_000000/damage",
         "ct-1.h5:/fields/step_000001/damage", "</Xdmf>"}) {
     EXPECT_NE(xdmf.find(s), std::string::npos) << s;
   }
@@ -324,7 +328,7 @@ TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
   ASSERT_EQ(before.size(), 1u);
   EXPECT_EQ(before[0].crack_count, -1);
   EXPECT_TRUE(read_crack_rows(h5).empty());
-  // Continued by a writer: upgraded to layout 2, the old row kept (crack_count -1), new rows whole.
+  // Continued by a writer: upgraded to layout 3, the old row kept (crack_count -1), new rows whole.
   {
     ResultsWriter w(h5, {.detail = "old"});
     EXPECT_EQ(w.rows(), 1u);
@@ -336,7 +340,115 @@ TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
   EXPECT_EQ(after[0].total_cycles, rows[0].total_cycles);
   EXPECT_EQ(after[1].crack_count, rows[1].crack_count);
   EXPECT_EQ(read_crack_rows(h5).size(), rows[1].cracks.size());
-  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 2);
+  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 3);
+}
+
+TEST_F(OutputsTest, LayoutVersionTwoFileGetsTheXdmf3MeshAndEstimateColumn) {
+  // Layout 2: no /mesh/xyz, /mesh/vertices (its X_Y geometry crashed ParaView's Xdmf3 reader), no
+  // /timeseries/remaining_state_seq.
+  const fs::path h5 = dir_ / "v2.h5";
+  const Mesh mesh = sample_mesh();
+  const auto rows = sample_rows();
+  {
+    ResultsWriter w(h5, {.detail = "v2"});
+    w.write_mesh(mesh.x, mesh.y);
+    w.append(rows[1]);
+  }
+  {
+    h5::File f(h5, h5::File::Mode::read_write);
+    f.remove("mesh/xyz");
+    f.remove("mesh/vertices");
+    f.remove("timeseries/remaining_state_seq");
+    f.set_attribute("layout_version", std::int64_t{2});
+  }
+  EXPECT_EQ(read_time_series(h5).at(0).remaining_state_seq, -1);
+  {
+    ResultsWriter w(h5, {.detail = "v2"});
+    w.append(rows[2]);
+  }
+  const auto after = read_time_series(h5);
+  ASSERT_EQ(after.size(), 2u);
+  EXPECT_EQ(after[0].remaining_state_seq, -1);
+  EXPECT_EQ(after[1].remaining_state_seq, rows[2].remaining_state_seq);
+  const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const auto xyz = raw_read<double>(f, "/mesh/xyz", H5T_NATIVE_DOUBLE);
+  const auto vertices = raw_read<std::int64_t>(f, "/mesh/vertices", H5T_NATIVE_INT64);
+  H5Fclose(f);
+  ASSERT_EQ(xyz.size(), 36u);
+  ASSERT_EQ(vertices.size(), 12u);
+  for (std::size_t k = 0; k < 12; ++k) {
+    EXPECT_EQ(xyz[3 * k], mesh.x[k]);
+    EXPECT_EQ(xyz[3 * k + 1], mesh.y[k]);
+    EXPECT_EQ(xyz[3 * k + 2], 0.0);
+    EXPECT_EQ(vertices[k], static_cast<std::int64_t>(k));
+  }
+  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 3);
+}
+
+TEST_F(OutputsTest, SnapshotNodeFieldsAreStoredWithTheirShapes) {
+  const fs::path h5 = dir_ / "fields.h5";
+  const Mesh mesh = sample_mesh();
+  SnapshotFields extra;
+  NodeField disp{"displacement", NodeField::Kind::vector, "m", {}};
+  NodeField strain{"strain", NodeField::Kind::tensor6, "1", {}};
+  NodeField dil{"dilatation", NodeField::Kind::scalar, "1", {}};
+  for (std::size_t k = 0; k < 12; ++k) {
+    for (int c = 0; c < 3; ++c) disp.values.push_back(1e-6 * static_cast<double>(10 * k + c));
+    for (int c = 0; c < 6; ++c) strain.values.push_back(1e-4 * static_cast<double>(10 * k + c));
+    dil.values.push_back(-1e-3 * static_cast<double>(k));
+  }
+  extra.fields = {disp, strain, dil};
+  extra.attributes = {{"load_p_max_n", 4000.0}};
+  {
+    ResultsWriter w(h5, {.detail = "f"});
+    w.write_mesh(mesh.x, mesh.y);
+    w.write_snapshot(1, 10, std::vector<double>(12, 0.5), extra);
+    // Sizes that do not match the nodes, a name twice or a bad name are refused.
+    SnapshotFields bad;
+    bad.fields = {{"displacement", NodeField::Kind::vector, "m", std::vector<double>(12)}};
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
+    bad.fields = {dil, dil};
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
+    bad.fields = {{"a b", NodeField::Kind::scalar, "1", std::vector<double>(12)}};
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
+    EXPECT_EQ(w.snapshots().size(), 1u);
+  }
+  const auto snaps = read_snapshot_list(h5);
+  ASSERT_EQ(snaps.size(), 1u);
+  EXPECT_EQ(snaps[0].fields.size(), 3u);  // found again on reading, with their kinds
+  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "displacement"), disp.values);
+  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "strain"), strain.values);
+  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "dilatation"), dil.values);
+  EXPECT_TRUE(read_snapshot_field(h5, snaps[0], "nothing").empty());
+  const std::string xdmf = slurp(dir_ / "fields.xdmf");
+  for (const char* s :
+       {"<Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">",
+        "<DataItem Dimensions=\"12 3\" NumberType=\"Float\" Precision=\"8\" "
+        "Format=\"HDF\">fields.h5:/fields/step_000000/displacement</DataItem>",
+        "<Attribute Name=\"strain\" AttributeType=\"Tensor6\" Center=\"Node\">",
+        "<DataItem Dimensions=\"12 6\"",
+        "<Attribute Name=\"dilatation\" AttributeType=\"Scalar\" Center=\"Node\">"}) {
+    EXPECT_NE(xdmf.find(s), std::string::npos) << s;
+  }
+  const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  const hid_t ds = H5Dopen2(f, "/fields/step_000000/strain", H5P_DEFAULT);
+  const hid_t space = H5Dget_space(ds);
+  hsize_t dims[2] = {0, 0};
+  EXPECT_EQ(H5Sget_simple_extent_ndims(space), 2);
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  EXPECT_EQ(dims[0], 12u);
+  EXPECT_EQ(dims[1], 6u);
+  H5Sclose(space);
+  H5Dclose(ds);
+  double p = 0.0;
+  const hid_t a =
+      H5Aopen_by_name(f, "/fields/step_000000", "load_p_max_n", H5P_DEFAULT, H5P_DEFAULT);
+  EXPECT_GE(H5Aread(a, H5T_NATIVE_DOUBLE, &p), 0);
+  H5Aclose(a);
+  EXPECT_EQ(p, 4000.0);
+  H5Fclose(f);
 }
 
 TEST_F(OutputsTest, UnreadableResultsFileIsMovedAside) {
@@ -681,6 +793,76 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
 
   EXPECT_THROW(write_damage_png(p, x, y, std::vector<double>(3, 0.0), dx), PngError);
   EXPECT_THROW(write_damage_png(p, x, y, d, 1e-9), PngError);
+}
+
+TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
+  // 20 x 10 nodes (dx = 1 mm); node (5, 4) holds notch damage only (φ = 0.42 = its notch φ), node
+  // (6, 4) the same notch damage plus a broken fatigue bond (φ = 0.48): grey and colour.
+  const double dx = 1e-3;
+  std::vector<double> x, y, d;
+  DamageMap map;
+  map.title = "ct-1   N = 12000 cycles";
+  for (int j = 0; j < 10; ++j) {
+    for (int i = 0; i < 20; ++i) {
+      x.push_back((i + 0.5) * dx);
+      y.push_back((j + 0.5) * dx);
+      const bool notch = j == 4 && (i == 5 || i == 6);
+      d.push_back(notch ? (i == 5 ? 0.42 : 0.48) : 0.0);
+      map.notch_damage.push_back(notch ? 0.42 : 0.0);
+    }
+  }
+  map.notches = {{{0.0, 4.5e-3}, {5.5e-3, 4.5e-3}}};
+  map.crack_paths = {{{6.5e-3, 4.5e-3}, {12.5e-3, 2.5e-3}}};
+  const fs::path p = dir_ / "map.png";
+  const DamageMapLayout layout = write_damage_map_png(p, x, y, d, dx, map);
+  EXPECT_EQ(layout.grid.node_pixels, 40);
+  EXPECT_GT(layout.left, 0);  // room for the y axis, its ticks and labels
+  EXPECT_GT(layout.top, 0);   // and the title
+  EXPECT_GT(layout.width, layout.left + layout.grid.width);  // and the colour bar
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  ASSERT_EQ(w, static_cast<std::uint32_t>(layout.width));
+  ASSERT_EQ(h, static_cast<std::uint32_t>(layout.height));
+  auto at = [&](int col, int row_from_top, int dy = 20) {
+    const auto i = 3 * (std::size_t(layout.top + row_from_top * 40 + dy) * w +
+                        std::size_t(layout.left + col * 40 + 20));
+    return Rgb{px[i], px[i + 1], px[i + 2]};
+  };
+  EXPECT_EQ(at(5, 9 - 4, 5), notch_color(0.42));        // off the notch line drawn through the row
+  EXPECT_EQ(notch_color(0.42).r, notch_color(0.42).b);  // a grey
+  EXPECT_EQ(at(6, 9 - 4, 5), damage_color(0.48));
+  EXPECT_EQ(at(15, 0), damage_color(0.0));
+  std::size_t magenta = 0, dark = 0;
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    magenta += px[i] == 200 && px[i + 1] == 0 && px[i + 2] == 200;
+    dark += px[i] == 0 && px[i + 1] == 0 && px[i + 2] == 0;
+  }
+  EXPECT_GT(magenta, 300u);  // the crack path (6 mm at 3 px) and its legend
+  EXPECT_GT(dark, 1000u);    // text, ticks, frame, the notch line
+  map.notch_damage = {0.1};  // not one per node
+  EXPECT_THROW(write_damage_map_png(p, x, y, d, dx, map), PngError);
+}
+
+TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
+  CrackGrowthPlot plot;
+  plot.title = "ct-1";
+  for (int k = 0; k <= 20; ++k) {
+    plot.cycles.push_back(1e3 * k);
+    plot.lengths_m.push_back(1e-4 * k);
+  }
+  plot.predictions = {{5e3, 5e-4, 2e4, 1.5e4, 2.5e4}, {1e4, 1e-3, 1.6e4, kNaN, kNaN}};
+  plot.critical_length_m = 3e-3;
+  const fs::path p = dir_ / "an.png";
+  write_crack_growth_png(p, plot);
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  std::size_t orange = 0;
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    orange += px[i] == 230 && px[i + 1] == 110 && px[i + 2] == 0;
+  }
+  EXPECT_GT(orange, 200u);  // diamonds, the band bar, the dashed latest prediction, the legend
+  plot.lengths_m.pop_back();
+  EXPECT_THROW(write_crack_growth_png(p, plot), PngError);
 }
 
 TEST_F(OutputsTest, CrackLengthPlotIsAPng) {

@@ -1,14 +1,18 @@
 // PNG pictures of a detail for people: the damage map (nodes rasterized on their grid, colormapped,
-// white where there is no material) and a crack-length-versus-cycles line plot with axes, ticks and
-// numeric tick labels (a built-in 5x7 bitmap font). Encoded with libpng's simplified API and
-// written atomically (temp file + rename). Units: positions and dx in m, crack lengths in m
-// (plotted in mm).
+// white where there is no material; the annotated one with a title, axes in mm, a colour bar, the
+// notches and the crack paths) and the a-N plot (crack length against cycles with the
+// remaining-life estimates), with axes, ticks and tick labels in a built-in 5x7 bitmap font.
+// Encoded with libpng's simplified API and written atomically (temp file + rename). Units:
+// positions and dx in m, crack lengths in m (plotted in mm).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <span>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace peritwin::twin {
 
@@ -46,6 +50,39 @@ DamageImageLayout write_damage_png(const std::filesystem::path& path, std::span<
                                    std::span<const double> y, std::span<const double> damage,
                                    double dx, const DamagePngOptions& options = {});
 
+/// A point of a polyline on the damage map (m).
+struct MapPoint {
+  double x = 0.0, y = 0.0;
+};
+
+/// What the annotated damage map shows besides the damage.
+struct DamageMap {
+  std::string title;  ///< e.g. "b1-ct  N = 38373 cycles"
+  /// φ per node from the notch cuts alone (the damage of the virgin detail), or empty. A node
+  /// whose damage is all notch (φ ≤ notch φ + 1e-6) is drawn in grey (kNotchGrey scaled by φ),
+  /// so the notch (φ ≈ 0.42 along its faces) and a grown crack (≈ 0.48) do not share a colour.
+  std::vector<double> notch_damage;
+  std::vector<std::vector<MapPoint>> notches;      ///< notch polylines, drawn black
+  std::vector<std::vector<MapPoint>> crack_paths;  ///< crack tip tracks, drawn magenta
+};
+
+/// Grey of a notch-only node with damage φ: from light (φ = 0) to dark (φ = 1).
+Rgb notch_color(double damage);
+
+/// Where the annotated map put things: the node raster (as write_damage_png) at (left, top).
+struct DamageMapLayout {
+  DamageImageLayout grid;  ///< its width and height are the raster's
+  int left = 0, top = 0;   ///< the raster's top-left pixel in the picture
+  int width = 0, height = 0;
+};
+
+/// The damage map with a title, axes in mm with ticks, a colour bar for φ (and a grey swatch for
+/// the notch) and the notches and crack paths drawn over it.
+DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::span<const double> x,
+                                     std::span<const double> y, std::span<const double> damage,
+                                     double dx, const DamageMap& map,
+                                     const DamagePngOptions& options = {});
+
 struct PlotOptions {
   int width = 800;
   int height = 500;
@@ -54,5 +91,29 @@ struct PlotOptions {
 /// Crack length (m, drawn in mm) against cycles; non-finite points break the line.
 void write_crack_length_png(const std::filesystem::path& path, std::span<const double> cycles,
                             std::span<const double> lengths_m, const PlotOptions& options = {});
+
+/// A remaining-life estimate made at a state with `cycles` applied and a crack of `length_m`.
+struct LifePrediction {
+  double cycles = 0.0;
+  double length_m = 0.0;
+  double remaining = 0.0;                                 ///< cycles to the end of life (central)
+  double low = std::numeric_limits<double>::quiet_NaN();  ///< band, NaN: none
+  double high = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The a-N plot: crack length against cycles and, for every estimate, the predicted end of life
+/// N + remaining as a diamond at the crack length of the state it was made on, with its band
+/// [N + low, N + high] as a horizontal bar; the latest prediction as a dashed vertical line; the
+/// critical crack length (if finite) as a dashed horizontal line; the end of life, if reached.
+struct CrackGrowthPlot {
+  std::string title;
+  std::vector<double> cycles;               ///< per state
+  std::vector<double> lengths_m;            ///< per state
+  std::vector<LifePrediction> predictions;  ///< in the order made; non-finite ones are skipped
+  double critical_length_m = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t end_of_life_cycle = -1;  ///< >= 0: the twin reached its end of life there
+};
+void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
+                            const PlotOptions& options = {});
 
 }  // namespace peritwin::twin

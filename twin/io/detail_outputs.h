@@ -1,14 +1,27 @@
 // The results of one detail for people (twin/io/results_writer.h, twin/io/damage_png.h):
-// <output.directory>/<id>.h5 (time series: one row per applied state; damage snapshots every
-// output.field_every_batches states and at shutdown) with <id>.xdmf next to it, and at shutdown
-// (output.png) <id>-damage.png and <id>-crack-length.png. Output failures are logged and switch
-// the outputs of that detail off; they never stop the twin.
+// <output.directory>/<id>.h5 (time series: one row per applied state; node-field snapshots every
+// output.field_every_batches states and at shutdown) with <id>.xdmf next to it, and, with
+// output.png, <id>-damage.png (the annotated damage map) and <id>-crack-length.png (the a-N plot
+// with the remaining-life estimates), rewritten at every snapshot and at shutdown. Output failures
+// are logged and switch the outputs of that detail off; they never stop the twin. The daemon and
+// peritwin-replay --in-process --results both write through this class.
+//
+// A snapshot holds, per node: the damage φ; the displacement at the load of the state's last
+// block (P_max, α; before any block, the largest P_max of the life reference spectrum, else 1 N:
+// the step group's attributes load_p_max_n and load_alpha_rad say which), and, when the detail
+// has more than the constant load basis, each loaded basis's part at P_max (displacement_cos,
+// displacement_sin, displacement_constant); the Lagrange strain of that displacement (004 Eq. 6-7,
+// solver/static/pd_strain.h) as a tensor, its dilatation tr E and its larger principal value.
 #pragma once
 
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
+#include <utility>
+#include <vector>
 
+#include "twin/io/damage_png.h"
 #include "twin/io/results_writer.h"
 #include "twin/model/twin.h"
 
@@ -17,6 +30,12 @@ namespace peritwin::twin {
 /// The time-series row of the twin's current state.
 TimeSeriesRow results_row(const Twin& twin);
 
+/// The load a snapshot's displacement and strain belong to (see the file comment).
+LoadBlock snapshot_load(const Twin& twin);
+
+/// The node fields of a snapshot beside the damage (see the file comment).
+SnapshotFields snapshot_fields(const Twin& twin);
+
 class DetailOutputs {
  public:
   /// Opens or creates the results file. Resuming at state_seq k drops rows and snapshots after
@@ -24,7 +43,7 @@ class DetailOutputs {
   explicit DetailOutputs(const Twin& twin);
   /// After every applied batch.
   void record(const Twin& twin);
-  /// Last snapshot, close, PNGs.
+  /// Last snapshot, close, pictures.
   void finish(const Twin& twin);
 
   [[nodiscard]] std::filesystem::path h5_path() const { return h5_path_; }
@@ -33,6 +52,7 @@ class DetailOutputs {
 
  private:
   void snapshot(const Twin& twin);
+  void pictures(const Twin& twin);
   void disable(const char* what, const std::exception& e);
 
   std::filesystem::path dir_;
@@ -40,6 +60,17 @@ class DetailOutputs {
   std::string id_;
   std::unique_ptr<ResultsWriter> writer_;
   std::int64_t last_snapshot_seq_ = -1;
+  /// What the pictures need of the rows written, kept compact (24 bytes a row, the estimates
+  /// once each, a tip track point only when the tip moved): a daemon runs for years of batches.
+  struct PictureHistory {
+    std::vector<std::int64_t> state_seq;  ///< ascending, one per row
+    std::vector<double> cycles, lengths_m;
+    std::vector<LifePrediction> predictions;
+    std::int64_t last_estimate_seq = -1;
+    std::map<std::pair<std::int64_t, int>, std::vector<MapPoint>> tip_tracks;  ///< (crack, tip)
+    void add(const TimeSeriesRow& row);
+  };
+  PictureHistory history_;
 };
 
 }  // namespace peritwin::twin

@@ -474,12 +474,19 @@ std::vector<std::string> Group::children() const {
 Dataset Group::write_raw(std::string_view path, ElementType type, const void* data, std::size_t n,
                          const WriteOptions& options) {
   quiet();
-  const hsize_t dims[1] = {static_cast<hsize_t>(n)};
-  Handle space(H5Screate_simple(1, dims, nullptr), Handle::Kind::dataspace);
+  const hsize_t columns = std::max<hsize_t>(options.columns, 1);
+  if (n % columns != 0) {
+    throw Error("HDF5: " + std::to_string(n) + " values for dataset '" + std::string(path) +
+                    "' in file '" + file_ + "' do not fill rows of " + std::to_string(columns),
+                file_, child_path(path));
+  }
+  const int rank = columns > 1 ? 2 : 1;
+  const hsize_t dims[2] = {static_cast<hsize_t>(n) / columns, columns};
+  Handle space(H5Screate_simple(rank, dims, nullptr), Handle::Kind::dataspace);
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), Handle::Kind::plist);
   if (options.deflate_level > 0 && n > 0) {
-    const hsize_t chunk[1] = {std::min<hsize_t>(dims[0], 65536)};
-    H5Pset_chunk(dcpl.get(), 1, chunk);
+    const hsize_t chunk[2] = {std::min<hsize_t>(dims[0], 65536 / columns + 1), columns};
+    H5Pset_chunk(dcpl.get(), rank, chunk);
     H5Pset_shuffle(dcpl.get());
     H5Pset_deflate(dcpl.get(), static_cast<unsigned>(std::min(options.deflate_level, 9)));
   }

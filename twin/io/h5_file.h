@@ -77,6 +77,9 @@ class Handle {
 /// Options of a fixed-size dataset: 0 = contiguous; 1..9 = chunked, shuffle + deflate level.
 struct WriteOptions {
   int deflate_level = 0;
+  /// > 1: a 2-D dataset of n / columns rows by `columns` (n must be a multiple), e.g. one row of
+  /// components per node; 1: a 1-D dataset of n elements.
+  std::size_t columns = 1;
 };
 
 /// What groups, datasets and files share: the handle, the file name, the path, attributes.
@@ -129,7 +132,8 @@ class Object {
   void read_attribute_raw(std::string_view name, ElementType type, void* out) const;
 };
 
-/// A 1-D dataset (or a scalar string dataset).
+/// A 1-D dataset, a 2-D one of rows of components (WriteOptions::columns), or a scalar string
+/// dataset. size() and read() count and read every element, row by row.
 class Dataset : public Object {
  public:
   Dataset() = default;

@@ -15,7 +15,7 @@ namespace peritwin::twin {
 namespace {
 
 constexpr const char* kFormat = "peritwin-results";
-constexpr std::int64_t kLayoutVersion = 2;
+constexpr std::int64_t kLayoutVersion = 3;
 
 template <class Row>
 struct IntColumn {
@@ -31,11 +31,12 @@ struct DoubleColumn {
   const char* units;
 };
 
-constexpr std::array<IntColumn<TimeSeriesRow>, 4> kIntColumns{{
+constexpr std::array<IntColumn<TimeSeriesRow>, 5> kIntColumns{{
     {"state_seq", &TimeSeriesRow::state_seq, "1"},
     {"total_cycles", &TimeSeriesRow::total_cycles, "cycles"},
     {"broken_bonds", &TimeSeriesRow::broken_bonds, "1"},
     {"crack_count", &TimeSeriesRow::crack_count, "1", -1},
+    {"remaining_state_seq", &TimeSeriesRow::remaining_state_seq, "1", -1},
 }};
 constexpr std::array<IntColumn<CrackRow>, 4> kCrackIntColumns{{
     {"state_seq", &CrackRow::state_seq, "1"},
@@ -140,12 +141,51 @@ std::string xml_escape(std::string_view s) {
   return out;
 }
 
+/// XDMF AttributeType of a NodeField kind, also stored as the dataset's "kind" attribute.
+const char* kind_name(NodeField::Kind kind) {
+  switch (kind) {
+    case NodeField::Kind::vector:
+      return "Vector";
+    case NodeField::Kind::tensor6:
+      return "Tensor6";
+    case NodeField::Kind::scalar:
+      break;
+  }
+  return "Scalar";
+}
+
+std::optional<NodeField::Kind> kind_from_name(const std::string& name) {
+  for (const auto kind :
+       {NodeField::Kind::scalar, NodeField::Kind::vector, NodeField::Kind::tensor6}) {
+    if (name == kind_name(kind)) return kind;
+  }
+  return std::nullopt;
+}
+
+std::size_t components_of(NodeField::Kind kind) {
+  switch (kind) {
+    case NodeField::Kind::vector:
+      return 3;
+    case NodeField::Kind::tensor6:
+      return 6;
+    case NodeField::Kind::scalar:
+      break;
+  }
+  return 1;
+}
+
+bool valid_field_name(const std::string& name) {
+  return !name.empty() && name != "damage" && std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+  });
+}
+
 void check_format(const h5::File& file) {
   if (!file.has_attribute("format") || file.attribute_string("format") != kFormat) {
     throw ResultsError("'" + file.file_name() + "' is not a peritwin results file");
   }
   const std::int64_t layout = file.attribute_int64("layout_version");
-  if (layout != kLayoutVersion && layout != 1) {
+  if (layout < 1 || layout > kLayoutVersion) {
     throw ResultsError("'" + file.file_name() + "' has results layout_version " +
                        std::to_string(layout) + "; this build reads " +
                        std::to_string(kLayoutVersion));
@@ -166,7 +206,17 @@ std::vector<SnapshotInfo> scan_snapshots(h5::Group& root, bool drop_partial) {
       const h5::Dataset ds = fields.open_dataset(name + "/damage");
       complete = ds.has_attribute("state_seq") && ds.has_attribute("total_cycles");
       if (complete) {
-        out.push_back({index, ds.attribute_int64("state_seq"), ds.attribute_int64("total_cycles")});
+        SnapshotInfo info{
+            index, ds.attribute_int64("state_seq"), ds.attribute_int64("total_cycles"), {}};
+        const h5::Group step = fields.open_group(name);
+        for (const auto& field : step.children()) {
+          if (field == "damage") continue;
+          const h5::Dataset f = step.open_dataset(field);
+          if (!f.has_attribute("kind")) continue;
+          const auto kind = kind_from_name(f.attribute_string("kind"));
+          if (kind) info.fields.emplace_back(field, *kind);
+        }
+        out.push_back(std::move(info));
       }
     }
     if (!complete && drop_partial) fields.remove(name);
@@ -178,7 +228,25 @@ std::vector<SnapshotInfo> scan_snapshots(h5::Group& root, bool drop_partial) {
 
 }  // namespace
 
+namespace {
+/// /mesh/xyz and /mesh/vertices from the node coordinates (see the layout in the header).
+void write_mesh_geometry(h5::File& file, std::span<const double> x, std::span<const double> y) {
+  std::vector<double> xyz(3 * x.size(), 0.0);
+  std::vector<std::int64_t> vertices(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    xyz[3 * i] = x[i];
+    xyz[3 * i + 1] = y[i];
+    vertices[i] = static_cast<std::int64_t>(i);
+  }
+  h5::Group mesh = file.require_group("mesh");
+  mesh.write<double>("xyz", std::span<const double>(xyz), {.columns = 3});
+  mesh.write<std::int64_t>("vertices", std::span<const std::int64_t>(vertices));
+}
+}  // namespace
+
 std::string SnapshotInfo::group() const { return "/fields/" + step_name(index); }
+
+std::size_t NodeField::components() const { return components_of(kind); }
 
 struct ResultsWriter::Impl {
   std::filesystem::path h5_path;
@@ -236,6 +304,9 @@ void ResultsWriter::Impl::open_or_create() {
   }
   if (file.exists("mesh/x")) {
     nodes = static_cast<std::size_t>(file.open_dataset("mesh/x").size());
+    if (!file.exists("mesh/xyz")) {  // a layout 1 or 2 file
+      write_mesh_geometry(file, file.read<double>("mesh/x"), file.read<double>("mesh/y"));
+    }
   }
   snapshots = scan_snapshots(file, true);
   file.flush();
@@ -295,21 +366,33 @@ std::string ResultsWriter::Impl::xdmf_grid(std::string_view name,
   std::ostringstream g;
   g << "      <Grid Name=\"" << name << "\" GridType=\"Uniform\">\n";
   if (snapshot != nullptr) g << "        <Time Value=\"" << snapshot->total_cycles << "\"/>\n";
+  // Geometry XYZ, not X_Y: ParaView 5.11's Xdmf3 reader crashes on X_Y (see the header).
   g << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
-    << "\" NodesPerElement=\"1\"/>\n"
-    << "        <Geometry GeometryType=\"X_Y\">\n";
-  for (const char* axis : {"x", "y"}) {
-    g << "          <DataItem Name=\"" << axis << "\" Dimensions=\"" << n
-      << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5 << ":/mesh/" << axis
-      << "</DataItem>\n";
-  }
-  g << "        </Geometry>\n";
+    << "\" NodesPerElement=\"1\">\n"
+    << "          <DataItem Dimensions=\"" << n
+    << "\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">" << h5
+    << ":/mesh/vertices</DataItem>\n"
+    << "        </Topology>\n"
+    << "        <Geometry GeometryType=\"XYZ\">\n"
+    << "          <DataItem Dimensions=\"" << n
+    << " 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << h5
+    << ":/mesh/xyz</DataItem>\n"
+    << "        </Geometry>\n";
   if (snapshot != nullptr) {
-    g << "        <Attribute Name=\"damage\" AttributeType=\"Scalar\" Center=\"Node\">\n"
-      << "          <DataItem Dimensions=\"" << n
-      << "\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">" << h5 << ":" << snapshot->group()
-      << "/damage</DataItem>\n"
-      << "        </Attribute>\n";
+    auto attribute = [&](const std::string& field, const char* type, std::size_t components,
+                         int precision) {
+      g << "        <Attribute Name=\"" << field << "\" AttributeType=\"" << type
+        << "\" Center=\"Node\">\n"
+        << "          <DataItem Dimensions=\"" << n;
+      if (components > 1) g << " " << components;
+      g << "\" NumberType=\"Float\" Precision=\"" << precision << "\" Format=\"HDF\">" << h5 << ":"
+        << snapshot->group() << "/" << field << "</DataItem>\n"
+        << "        </Attribute>\n";
+    };
+    attribute("damage", "Scalar", 1, 4);
+    for (const auto& [field, kind] : snapshot->fields) {
+      attribute(field, kind_name(kind), components_of(kind), 8);
+    }
   }
   g << "      </Grid>\n";
   return g.str();
@@ -377,6 +460,7 @@ void ResultsWriter::write_mesh(std::span<const double> x, std::span<const double
     mesh.write<double>("y", y);
     mesh.set_attribute("node_count", static_cast<std::int64_t>(x.size()));
   }
+  write_mesh_geometry(f, x, y);
   f.flush();
   impl_->nodes = x.size();
   impl_->write_xdmf();
@@ -396,15 +480,15 @@ void ResultsWriter::append(const TimeSeriesRow& row) {
 }
 
 void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
-                                   std::span<const double> damage) {
+                                   std::span<const double> damage, const SnapshotFields& extra) {
   std::vector<float> f(damage.size());
   std::transform(damage.begin(), damage.end(), f.begin(),
                  [](double d) { return static_cast<float>(d); });
-  write_snapshot(state_seq, total_cycles, std::span<const float>(f));
+  write_snapshot(state_seq, total_cycles, std::span<const float>(f), extra);
 }
 
 void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
-                                   std::span<const float> damage) {
+                                   std::span<const float> damage, const SnapshotFields& extra) {
   Impl& im = *impl_;
   im.require_open("write_snapshot");
   if (im.nodes == 0) throw ResultsError("write_snapshot before write_mesh");
@@ -412,10 +496,36 @@ void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cy
     throw ResultsError("write_snapshot: " + std::to_string(damage.size()) + " damage values for " +
                        std::to_string(im.nodes) + " nodes");
   }
-  const std::int64_t index = im.snapshots.empty() ? 0 : im.snapshots.back().index + 1;
-  const SnapshotInfo info{index, state_seq, total_cycles};
+  SnapshotInfo info{
+      im.snapshots.empty() ? 0 : im.snapshots.back().index + 1, state_seq, total_cycles, {}};
+  for (const auto& field : extra.fields) {
+    if (!valid_field_name(field.name)) {
+      throw ResultsError("write_snapshot: bad field name '" + field.name + "'");
+    }
+    if (field.values.size() != im.nodes * field.components()) {
+      throw ResultsError("write_snapshot: field '" + field.name + "' has " +
+                         std::to_string(field.values.size()) + " values for " +
+                         std::to_string(im.nodes) + " nodes of " +
+                         std::to_string(field.components()) + " components");
+    }
+    if (std::any_of(info.fields.begin(), info.fields.end(),
+                    [&](const auto& f) { return f.first == field.name; })) {
+      throw ResultsError("write_snapshot: field '" + field.name + "' given twice");
+    }
+    info.fields.emplace_back(field.name, field.kind);
+  }
+  std::sort(info.fields.begin(), info.fields.end());
   {
-    h5::Group step = im.file.create_group("fields/" + step_name(index));
+    h5::Group step = im.file.create_group("fields/" + step_name(info.index));
+    for (const auto& field : extra.fields) {
+      h5::Dataset ds = step.write<double>(
+          field.name, std::span<const double>(field.values),
+          {.deflate_level = im.options.field_deflate_level, .columns = field.components()});
+      ds.set_attribute("units", std::string_view(field.units));
+      ds.set_attribute("kind", std::string_view(kind_name(field.kind)));
+    }
+    for (const auto& [name, value] : extra.attributes) step.set_attribute(name, value);
+    // The damage last: a step is complete (scan_snapshots) once its damage has its attributes.
     h5::Dataset ds = step.write<float>("damage", damage, {im.options.field_deflate_level});
     for (h5::Object* o : {static_cast<h5::Object*>(&step), static_cast<h5::Object*>(&ds)}) {
       o->set_attribute("state_seq", state_seq);
@@ -423,7 +533,7 @@ void ResultsWriter::write_snapshot(std::int64_t state_seq, std::int64_t total_cy
     }
   }
   im.file.flush();
-  im.snapshots.push_back(info);
+  im.snapshots.push_back(std::move(info));
   im.write_xdmf();
 }
 
@@ -505,6 +615,20 @@ std::vector<Row> read_table(const h5::File& file, const std::string& group,
 
 }  // namespace
 
+std::vector<TimeSeriesRow> ResultsWriter::read_rows() const {
+  impl_->require_open("read_rows");
+  auto rows = read_table(impl_->file, "timeseries", kIntColumns, kDoubleColumns);
+  const auto cracks = read_table(impl_->file, "cracks", kCrackIntColumns, kCrackDoubleColumns);
+  std::size_t c = 0;
+  for (auto& row : rows) {
+    while (c < cracks.size() && cracks[c].state_seq < row.state_seq) ++c;
+    for (; c < cracks.size() && cracks[c].state_seq == row.state_seq; ++c) {
+      row.cracks.push_back(cracks[c]);
+    }
+  }
+  return rows;
+}
+
 std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path) {
   const h5::File file(h5_path, h5::File::Mode::read_only, {false});
   check_format(file);
@@ -529,6 +653,15 @@ std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
   const h5::File file(h5_path, h5::File::Mode::read_only, {false});
   check_format(file);
   return file.read<float>(snapshot.group() + "/damage");
+}
+
+std::vector<double> read_snapshot_field(const std::filesystem::path& h5_path,
+                                        const SnapshotInfo& snapshot, const std::string& name) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  const std::string path = snapshot.group() + "/" + name;
+  if (!valid_field_name(name) || !file.exists(path)) return {};
+  return file.read<double>(path);
 }
 
 }  // namespace peritwin::twin

@@ -4,11 +4,14 @@
 // (temp file + rename) after every snapshot, so both are usable at any moment.
 // Units: SI (m, rad, Pa·√m for K); cycles are counts.
 //
-// File layout (layout_version 2; a version-1 file is upgraded in place when opened for writing:
-// its rows get crack_count = -1, unknown, and no crack rows):
+// File layout (layout_version 3; a version-1 or -2 file is upgraded in place when opened for
+// writing: version-1 rows get crack_count = -1, unknown, and no crack rows; the mesh gets
+// /mesh/xyz and /mesh/vertices):
 //   /                     attributes: format = "peritwin-results", layout_version = 2, detail
 //   /timeseries/<column>  extendible 1-D, one element per row; attribute "units". Columns:
-//                         state_seq, total_cycles, broken_bonds, crack_count (int64);
+//                         state_seq, total_cycles, broken_bonds, crack_count,
+//                         remaining_state_seq (the state the remaining-life estimate was
+//                         computed on, -1 none; rows of a version-1 or -2 file: -1) (int64);
 //                         crack_length_m, crack_projected_length_m, tip_x, tip_y, kink_angle_rad,
 //                         k_i, k_ii (the main crack: the longest, first tip), remaining_cycles,
 //                         remaining_low, remaining_high (float64)
@@ -18,10 +21,20 @@
 //                         (crack_tip_t.K_*) (int64); length_m, projected_length_m, tip_x, tip_y,
 //                         tip_angle_rad, k_i, k_ii (float64)
 //   /mesh/x, /mesh/y      float64[node_count] node coordinates (m); /mesh attribute node_count
+//   /mesh/xyz             float64[node_count][3] the same with z = 0: the XDMF geometry. ParaView
+//                         5.11's default XDMF reader (Xdmf3ReaderS/T) crashes in
+//                         vtkXdmf3DataSet::CopyShape on an X_Y geometry (two DataItems, what
+//                         layouts 1-2 wrote; only the legacy XDMFReader read it) and reads XYZ.
+//   /mesh/vertices        int64[node_count] 0, 1, ..., node_count − 1: the Polyvertex
+//                         connectivity, given explicitly rather than left to each reader
 //   /fields/step_<n>/damage  float32[node_count], n = 0, 1, 2, ... zero-padded to 6 digits;
 //                         attributes state_seq, total_cycles (int64) on the dataset and its group
-//   <name>.xdmf           XDMF 3: a temporal collection (Time = total_cycles) of Polyvertex grids,
-//                         Geometry X_Y from /mesh/x and /mesh/y, node attribute "damage"
+//   /fields/step_<n>/<field>  float64[node_count] or [node_count][components]: the snapshot's
+//                         NodeFields (displacement, strain, ...); attribute "units"; the group
+//                         carries the NodeFields' scalar attributes (the load they belong to)
+//   <name>.xdmf           XDMF 3: a temporal collection (Time = total_cycles) of Polyvertex grids
+//                         (connectivity /mesh/vertices), Geometry XYZ from /mesh/xyz, node
+//                         attributes "damage" and every NodeField (Scalar, Vector, Tensor6)
 #pragma once
 
 #include <cstdint>
@@ -32,6 +45,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace peritwin::twin {
@@ -67,9 +81,31 @@ struct TimeSeriesRow {
   double remaining_cycles = std::numeric_limits<double>::quiet_NaN();
   double remaining_low = std::numeric_limits<double>::quiet_NaN();
   double remaining_high = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t remaining_state_seq = -1;  ///< the state the estimate belongs to (-1: none)
   /// Every crack tip of the state (written to /cracks with this row's state_seq; not read back
   /// by read_time_series: see read_crack_rows).
   std::vector<CrackRow> cracks;
+};
+
+/// One more per-node array of a snapshot, beside the damage.
+struct NodeField {
+  enum class Kind {
+    scalar,   ///< 1 value per node
+    vector,   ///< 3 per node: x, y, z
+    tensor6,  ///< 6 per node, a symmetric tensor: xx, xy, xz, yy, yz, zz (XDMF's Tensor6 order)
+  };
+  std::string name;  ///< dataset and attribute name: letters, digits, '_'
+  Kind kind = Kind::scalar;
+  std::string units;
+  std::vector<double> values;  ///< node-major: components() per node
+  [[nodiscard]] std::size_t components() const;
+};
+
+/// A snapshot's fields beside the damage, and numbers that say what they are (stored as float64
+/// attributes of the step group, e.g. the load P_max the displacement belongs to).
+struct SnapshotFields {
+  std::vector<NodeField> fields;
+  std::vector<std::pair<std::string, double>> attributes;
 };
 
 struct ResultsOptions {
@@ -91,6 +127,8 @@ struct SnapshotInfo {
   std::int64_t index = 0;  ///< n of /fields/step_<n>
   std::int64_t state_seq = 0;
   std::int64_t total_cycles = 0;
+  /// The snapshot's NodeFields beside the damage (name and kind), in name order.
+  std::vector<std::pair<std::string, NodeField::Kind>> fields;
   [[nodiscard]] std::string group() const;  ///< "/fields/step_<n>"
 };
 
@@ -113,13 +151,16 @@ class ResultsWriter {
   void append(const TimeSeriesRow& row);
   /// Damage φ per node (stored as float32); needs the mesh. Rewrites the XDMF file.
   void write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
-                      std::span<const float> damage);
+                      std::span<const float> damage, const SnapshotFields& extra = {});
   void write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
-                      std::span<const double> damage);
+                      std::span<const double> damage, const SnapshotFields& extra = {});
   /// Drops every row and snapshot with state_seq > `state_seq` (resume from a checkpoint).
   void rewind_to(std::int64_t state_seq);
 
   [[nodiscard]] std::uint64_t rows() const;
+  /// The time series as written so far, with every row's crack rows (what read_time_series and
+  /// read_crack_rows give, without opening the file a second time).
+  [[nodiscard]] std::vector<TimeSeriesRow> read_rows() const;
   [[nodiscard]] const std::vector<SnapshotInfo>& snapshots() const;
   [[nodiscard]] std::size_t node_count() const;  ///< 0 until the mesh is written
   [[nodiscard]] const std::filesystem::path& h5_path() const;
@@ -145,5 +186,8 @@ std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path);
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path);
 std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot);
+/// A NodeField of a snapshot (`name` as written), node-major; empty when the snapshot has none.
+std::vector<double> read_snapshot_field(const std::filesystem::path& h5_path,
+                                        const SnapshotInfo& snapshot, const std::string& name);
 
 }  // namespace peritwin::twin
