@@ -11,6 +11,7 @@
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
 // for the hub), 2 bad usage (nothing started), 3 runtime failure (the address cannot be bound,
 // LCM cannot open the URL). A tcpq hub that is down is waited for, as the daemon does.
+#include <netinet/tcp.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -136,6 +137,7 @@ int main(int argc, char** argv) {
   server.set_socket_options([](int sock) {
     int yes = 1;
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    setsockopt(sock, IPPROTO_TCP, TCP_NODELAY, &yes, sizeof yes);
   });
   int port = address->port;
   if (port == 0) {

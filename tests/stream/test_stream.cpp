@@ -324,11 +324,28 @@ void publish_series_as_samples(lcm::LCM& lcm, const std::string& source,
   }
 }
 
-/// The stream's output once the samples stopped: a few seconds of quiet on stdout after the last
-/// state (its stderr says nothing per message), then SIGTERM; its lines to the end.
+/// The stream's output once the samples stopped: 10 s of quiet on stdout after the last state
+/// (its stderr says nothing per message), then SIGTERM; its lines to the end. For an in-process
+/// stream, which has no state file; with one, stop_when_received is exact.
 std::vector<std::string> stop_when_quiet(Process& s) {
-  while (s.read_line(3.0)) {
+  while (s.read_line(10.0)) {
   }
+  s.signal(SIGTERM);
+  return lines_to_end(s);
+}
+
+/// SIGTERM once the stream has taken `samples` samples (its "<state file>.received", at most
+/// kWaitS), then its lines to the end: a loaded machine cannot stop it early.
+std::vector<std::string> stop_when_received(Process& s, const fs::path& state_file,
+                                            std::uint64_t samples) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(600);
+  std::string received;
+  while (std::chrono::steady_clock::now() < deadline) {
+    received = read_file(state_file.string() + ".received");
+    if (!received.empty() && std::stoull(received) >= samples) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(received.empty() ? 0 : std::stoull(received), samples);
   s.signal(SIGTERM);
   return lines_to_end(s);
 }
@@ -367,7 +384,7 @@ TEST_F(StreamOverHub, LcmSamplesTakenOnceAcrossARestart) {
     auto s = stream(first_args, "stream1.log");
     ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream1.log");
     ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", nullptr, 6));
-    stop_when_quiet(*s);
+    stop_when_received(*s, state, 600);
     ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream1.log");
   }
   ASSERT_NE(read_file(state).find("samples_taken 1 6761756765 6"), std::string::npos)
@@ -375,7 +392,7 @@ TEST_F(StreamOverHub, LcmSamplesTakenOnceAcrossARestart) {
   auto s = stream(args, "stream2.log");
   ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream2.log");
   ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", nullptr));  // 1..12 again
-  const auto lines = stop_when_quiet(*s);
+  const auto lines = stop_when_received(*s, state, 1200);
   ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream2.log");
   ASSERT_FALSE(lines.empty());
   EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
@@ -415,7 +432,8 @@ TEST_F(StreamOverHub, SignedStreamFeedsAnAuthenticatedDaemon) {
   auto s = std::make_unique<Process>(
       std::vector<std::string>{kBin + "/peritwin-stream", "--config", config.string(), "--input",
                                "lcm", "--lcm-url", hub_->url(), "--key-file", keys, "--json",
-                               "--give-up-after", "600"},
+                               "--give-up-after", "600", "--state-file",
+                               (dir_ / "stream.state").string()},
       (dir_ / "stream.log").string());
   ASSERT_TRUE(s->read_line(kWaitS).has_value()) << read_file(dir_ / "stream.log");
   const auto ring = messages::KeyRing::load(keys);
@@ -424,7 +442,7 @@ TEST_F(StreamOverHub, SignedStreamFeedsAnAuthenticatedDaemon) {
   ASSERT_TRUE(lcm.good());
   ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "rogue", nullptr));  // unsigned
   ASSERT_NO_FATAL_FAILURE(publish_series_as_samples(lcm, "gauge", ring->find("gauge")));
-  const auto lines = stop_when_quiet(*s);
+  const auto lines = stop_when_received(*s, dir_ / "stream.state", 1200);
   ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
   ASSERT_FALSE(lines.empty());
   EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
