@@ -213,9 +213,10 @@ std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t
 bool status_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   // utime, detail_id, health, last_seq, pending, lag_s, uptime_s, errors, duplicates, gaps,
-  // busy_s, auth_rejects, reject_rate.
+  // busy_s, auth_rejects, reject_rate, host, pid, started_utime.
   return w.fingerprint(peritwin_msgs::status_t::getHash()) && w.skip(8) && w.string() &&
-         w.string() && w.skip(8 + 4 + 8 + 8 + 3 * 8 + 8 + 8 + 8) && w.at_end();
+         w.string() && w.skip(8 + 4 + 8 + 8 + 3 * 8 + 8 + 8 + 8) && w.string() && w.skip(4 + 8) &&
+         w.at_end();
 }
 
 bool field_layout(const unsigned char* p, std::size_t size) {

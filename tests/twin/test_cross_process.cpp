@@ -361,7 +361,8 @@ std::string json_value(const std::string& json, const std::string& key) {
 // A fleet on one bus (issue 18): one config with two details, two daemons on one hub, each
 // serving one of them (--details), a lockstep replay per detail running at the same time. Each
 // detail ends in the state of its own in-process run (the summary line, state_hash included).
-// A --details id the config does not have is a config error (exit 2) naming it.
+// A --details id the config does not have is a config error (exit 2) naming it; a daemon started
+// for a detail that already has a twin on the bus refuses to start (exit 2) naming that daemon.
 TEST_F(CrossProcess, TwoDaemonsOnOneHubServeDisjointDetailsOfOneConfig) {
   const std::string one = read_file(config_);
   std::string other = one;
@@ -440,6 +441,16 @@ TEST_F(CrossProcess, TwoDaemonsOnOneHubServeDisjointDetailsOfOneConfig) {
   ASSERT_FALSE(lines_hi.empty());
   EXPECT_EQ(lines_ct.back(), reference_ct.back());
   EXPECT_EQ(lines_hi.back(), reference_hi.back());
+  // A third daemon for b1-ct hears the running twin's STATUS and refuses to start, naming it.
+  auto second_twin = daemon_of("b1-ct", "second-twin");
+  const auto second = second_twin->wait_for(kWaitS);
+  ASSERT_TRUE(second && WIFEXITED(*second)) << read_file(dir_ / "second-twin.log");
+  EXPECT_EQ(WEXITSTATUS(*second), 2) << read_file(dir_ / "second-twin.log");
+  EXPECT_NE(read_file(dir_ / "second-twin.log")
+                .find("detail \"b1-ct\" already has a twin: peritwin pid " +
+                      std::to_string(daemon_ct->pid()) + " on host"),
+            std::string::npos)
+      << read_file(dir_ / "second-twin.log");
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*daemon_ct, "daemon-ct.log"));
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*daemon_hi, "daemon-hi.log"));
   EXPECT_NE(read_file(dir_ / "daemon-ct.log").find("1 detail(s)"), std::string::npos);

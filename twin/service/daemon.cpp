@@ -17,6 +17,7 @@
 #include "solver/core/blas_kernel.h"
 #include "twin/io/checkpoint_io.h"
 #include "twin/lcm/messages_io.h"
+#include "twin/service/duplicate_twin.h"
 
 namespace peritwin::twin {
 
@@ -669,6 +670,10 @@ bool Daemon::publish_status(Detail& d, const char* health) {
   m.duplicates = d.duplicates;
   m.gaps = d.gaps;
   m.auth_rejects = d.auth_rejects;
+  const DaemonIdentity& me = DaemonIdentity::self();
+  m.host = me.host;
+  m.pid = me.pid;
+  m.started_utime = me.started_utime;
   if (m.health == "ok") {
     if (d.failed) {
       m.health = "failed";

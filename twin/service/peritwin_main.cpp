@@ -2,13 +2,14 @@
 //
 //   peritwin --config detail.toml [--lcm-url URL] [--state-dir DIR] [--log-level L]
 //            [--deterministic] [--no-results] [--fresh-start] [--max-memory BYTES]
-//            [--details ID,ID,...]
+//            [--details ID,ID,...] [--twin-check-seconds S]
 //
 // Exit codes: 0 clean stop (SIGTERM/SIGINT: checkpoint, results, exit), 2 bad usage or config
-// (nothing started), 3 runtime failure (LCM, checkpoint or model I/O, an internal error while
-// applying a batch; the last checkpoint is left as it was; checkpoints exist and none is valid,
-// without --fresh-start; the state dir is not writable). A tcpq hub that is down is not a
-// failure: the daemon waits for it and reconnects with backoff (twin/service/hub_connection.h).
+// (nothing started; also: another daemon's STATUS names one of its details, duplicate_twin.h), 3
+// runtime failure (LCM, checkpoint or model I/O, an internal error while applying a batch; the last
+// checkpoint is left as it was; checkpoints exist and none is valid, without --fresh-start; the
+// state dir is not writable). A tcpq hub that is down is not a failure: the daemon waits for it and
+// reconnects with backoff (twin/service/hub_connection.h).
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -21,6 +22,7 @@
 #include "messages/auth.h"
 #include "twin/config/config.h"
 #include "twin/service/daemon.h"
+#include "twin/service/duplicate_twin.h"
 #include "twin/service/hub_connection.h"
 
 namespace {
@@ -56,6 +58,12 @@ int main(int argc, char** argv) {
                  "serve only these details of --config (ids, comma-separated): several daemons "
                  "share one config, each detail served by one of them (default: every detail)")
       ->delimiter(',');
+  double twin_check_s = 1.5;
+  app.add_option("--twin-check-seconds", twin_check_s,
+                 "listen this long to the STATUS of this daemon's details before starting; "
+                 "another daemon's STATUS for one of them: refuse to start (exit 2). 0 = no check "
+                 "(default 1.5: STATUS comes every second)")
+      ->check(CLI::Range(0.0, 60.0));
   std::string max_memory;
   app.add_option("--max-memory", max_memory,
                  "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
@@ -117,6 +125,17 @@ int main(int argc, char** argv) {
       return kExitOk;
     }
     lcm::LCM& lcm = *connection;
+    if (twin_check_s > 0) {
+      std::vector<std::string> ids;
+      for (const auto& d : loaded.config->details) ids.push_back(d.id);
+      if (const auto other = peritwin::twin::find_other_twin(lcm, ids, twin_check_s)) {
+        spdlog::error(
+            "{}: refusing to start a second twin of it (give each detail to one daemon: "
+            "--details, README \"A fleet\")",
+            other->describe());
+        return kExitUsage;
+      }
+    }
     peritwin::twin::DaemonOptions options;
     options.state_dir = state_dir;
     options.deterministic = deterministic;
