@@ -9,12 +9,14 @@
 #include <cerrno>
 #include <cmath>
 #include <condition_variable>
+#include <cstdio>
 #include <deque>
 #include <map>
 #include <thread>
 
 #include "messages/channels.h"
 #include "solver/core/blas_kernel.h"
+#include "twin/config/resources.h"
 #include "twin/io/checkpoint_io.h"
 #include "twin/lcm/messages_io.h"
 #include "twin/service/duplicate_twin.h"
@@ -319,10 +321,26 @@ Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
   return {};
 }
 
+namespace {
+/// The process's resident memory (/proc/self/statm, bytes); 0 when unreadable.
+double resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0.0;
+  unsigned long long size = 0, resident = 0;
+  const int n = std::fscanf(f, "%llu %llu", &size, &resident);
+  std::fclose(f);
+  return n == 2 ? static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE))
+                : 0.0;
+}
+}  // namespace
+
 Status Daemon::start_detail(const DetailConfig& config) {
   auto d = std::make_unique<Detail>();
   d->id = config.id;
   const auto t0 = Clock::now();
+  // The details are built one after another before any worker runs: the growth of the resident
+  // memory over one build is that detail's (issue 18: memory per detail reported at start).
+  const double resident_before = resident_bytes();
   auto built = DetailModel::build(config);
   if (!built) return failure(built.error().message());
   const std::shared_ptr<const DetailModel> model = *built;
@@ -331,8 +349,12 @@ Status Daemon::start_detail(const DetailConfig& config) {
   auto twin = Twin::create(model, twin_options);
   if (!twin) return failure(twin.error().message());
   d->twin = std::move(*twin);
-  spdlog::info("[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s", config.id,
-               model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0));
+  spdlog::info(
+      "[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s, memory {} resident (estimated "
+      "{} with its life engines, docs/limits.md)",
+      config.id, model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0),
+      format_bytes(std::max(0.0, resident_bytes() - resident_before)),
+      format_bytes(estimate_resources(config).bytes));
   {
     const messages::Mesh mesh = detail_mesh(*model);
     d->mesh_hash = messages::mesh_hash(mesh);
