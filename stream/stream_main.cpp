@@ -381,6 +381,28 @@ int main(int argc, char** argv) {
       return kExitRuntime;
     }
   }
+  // Subscribed before anything else happens on the bus (the probe, the first state printed):
+  // a sample message published once the stream has said it is up is never missed.
+  std::unique_ptr<SamplesInput> samples_in;
+  if (kind == In::lcm) {
+    // With --key-file the samples are verified too (with the key of each message's source_id),
+    // unless --sign-only (the key file then holds only this stream's key).
+    std::optional<messages::KeyRing> ring;
+    if (!keys.key_file.empty() && !keys.sign_only) {
+      auto loaded_ring = messages::KeyRing::load(keys.key_file);
+      if (!loaded_ring) {
+        std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
+        return kExitUsage;
+      }
+      ring = std::move(*loaded_ring);
+    } else {
+      std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
+                   "--sign-only): anyone on the bus can feed this stream\n";
+    }
+    samples_in = std::make_unique<SamplesInput>(
+        *lcm, detail->id, std::move(ring),
+        pipeline ? pipeline->samples_taken : std::map<std::string, std::int64_t>{});
+  }
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
@@ -443,25 +465,6 @@ int main(int argc, char** argv) {
     }
   }
   stream::Pipeline& pipe = *pipeline;
-  std::unique_ptr<SamplesInput> samples_in;
-  if (kind == In::lcm) {
-    // With --key-file the samples are verified too (with the key of each message's source_id),
-    // unless --sign-only (the key file then holds only this stream's key).
-    std::optional<messages::KeyRing> ring;
-    if (!keys.key_file.empty() && !keys.sign_only) {
-      auto loaded_ring = messages::KeyRing::load(keys.key_file);
-      if (!loaded_ring) {
-        std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
-        return kExitUsage;
-      }
-      ring = std::move(*loaded_ring);
-    } else {
-      std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
-                   "--sign-only): anyone on the bus can feed this stream\n";
-    }
-    samples_in =
-        std::make_unique<SamplesInput>(*lcm, detail->id, std::move(ring), pipe.samples_taken);
-  }
   if (kind == In::tcp) {
     listen_fd = listen_on(port);
     if (listen_fd < 0) {
