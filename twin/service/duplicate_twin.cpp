@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cerrno>
 #include <chrono>
 
 #include "messages/channels.h"
@@ -53,6 +54,9 @@ class StatusWatch {
     if (!s) return;
     const DaemonIdentity& me = DaemonIdentity::self();
     if (s->host == me.host && s->pid == me.pid && s->started_utime == me.started_utime) return;
+    // A daemon that says it is stopping (its last STATUS after SIGTERM) is going away: a restart
+    // that follows it at once is no second twin.
+    if (s->health == "stopping") return;
     found = OtherTwin{s->detail_id, {s->host, s->pid, s->started_utime}, s->health, s->uptime_s};
   }
   lcm::LCM& lcm_;

@@ -34,7 +34,8 @@ struct OtherTwin {
 
 /// Listens to the STATUS channels of `detail_ids` for `window_s` (STATUS is sent every second:
 /// 1.5 s sees at least one heartbeat of a running daemon) and returns the first STATUS from
-/// another daemon than this process, or nothing. Undecodable messages are ignored.
+/// another daemon than this process that is not stopping (health "stopping": its last STATUS
+/// after SIGTERM), or nothing. Undecodable messages are ignored.
 std::optional<OtherTwin> find_other_twin(lcm::LCM& lcm, const std::vector<std::string>& detail_ids,
                                          double window_s);
 
