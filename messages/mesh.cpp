@@ -230,8 +230,12 @@ MeshAssembler::Result MeshAssembler::add(detail_mesh_t chunk) {
   mesh.y_min = any.y_min;
   mesh.x_max = any.x_max;
   mesh.y_max = any.y_max;
-  mesh.x.reserve(static_cast<std::size_t>(any.total_nodes));
-  mesh.y.reserve(static_cast<std::size_t>(any.total_nodes));
+  // Reserved from the nodes the chunks hold, never from total_nodes: a forged chunk may claim
+  // 2^31 nodes (the mesh fuzz target found an 8.5 GB reserve); the count is checked below.
+  std::size_t held = 0;
+  for (const auto& [i, c] : set.chunks) held += c.x.size();
+  mesh.x.reserve(held);
+  mesh.y.reserve(held);
   const std::string hash = any.mesh_hash;
   for (const auto& [i, c] : set.chunks) {
     if (c.first_node != static_cast<std::int32_t>(mesh.x.size())) {
