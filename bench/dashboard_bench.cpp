@@ -72,6 +72,7 @@
 #include <vector>
 
 #include "bench/child_process.h"
+#include "bench/percentile.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -82,6 +83,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using peritwin::bench::Clock;
+using peritwin::bench::percentile;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
@@ -464,13 +466,6 @@ class ReferenceSubscriber {
   std::atomic<bool> stop_{false};
   std::string error_;
 };
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const auto k = static_cast<std::size_t>(std::ceil(p * static_cast<double>(v.size()))) - 1;
-  return v[std::min(k, v.size() - 1)];
-}
 
 }  // namespace
 

@@ -33,6 +33,7 @@
 #include <thread>
 
 #include "bench/child_process.h"
+#include "bench/percentile.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -44,6 +45,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace peritwin;
 using bench::Clock;
+using bench::percentile;
 using bench::since;
 
 constexpr const char* kSource = "fleet";
@@ -79,13 +81,6 @@ std::string fleet_config(int details, double dx) {
     out += d + "\n";
   }
   return out;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
-  return v[std::min(i, v.size() - 1)];
 }
 
 /// VmRSS or VmHWM of `pid` in MB (from /proc/<pid>/status), NaN if unreadable.

@@ -32,6 +32,7 @@
 #include <thread>
 
 #include "bench/child_process.h"
+#include "bench/percentile.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -45,6 +46,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace peritwin;
 using bench::Clock;
+using bench::percentile;
 using bench::since;
 
 constexpr const char* kSource = "stream";
@@ -78,13 +80,6 @@ class StateWatch {
   lcm::Subscription* sub_ = nullptr;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1;
-  return v[std::min(i, v.size() - 1)];
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -95,8 +90,7 @@ int main(int argc, char** argv) {
   app.add_option("--seconds", seconds, "seconds of samples measured after the warm-up (20)")
       ->check(CLI::PositiveNumber);
   app.add_option("--rate", rate, "samples per second (10000)")->check(CLI::PositiveNumber);
-  app.add_option("--cycle-hz", cycle_hz, "load cycles per second (30)")
-      ->check(CLI::PositiveNumber);
+  app.add_option("--cycle-hz", cycle_hz, "load cycles per second (30)")->check(CLI::PositiveNumber);
   app.add_option("--warm-up", warm_up_s, "seconds of samples not measured first (2)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
@@ -141,10 +135,10 @@ int main(int argc, char** argv) {
     return cleanup(3);
   }
   watch = std::make_unique<StateWatch>(*lcm, detail.id);
-  daemon = bench::spawn({(bin / "peritwin").string(), "--config", config_file, "--lcm-url", url,
-                         "--state-dir", (work / "state").string(), "--no-results", "--log-level",
-                         "warn"},
-                        "/dev/null", (work / "daemon.log").string());
+  daemon = bench::spawn(
+      {(bin / "peritwin").string(), "--config", config_file, "--lcm-url", url, "--state-dir",
+       (work / "state").string(), "--no-results", "--log-level", "warn"},
+      "/dev/null", (work / "daemon.log").string());
   const auto t_start = Clock::now();
   while (!watch->seen_state && since(t_start) < 600.0 && waitpid(daemon, nullptr, WNOHANG) == 0) {
     messages::handle_lcm(*lcm, 50);
@@ -158,8 +152,7 @@ int main(int argc, char** argv) {
   if (pipe2(pipe_fd, O_CLOEXEC) != 0) return cleanup(3);
   stream = bench::spawn({(bin / "peritwin-stream").string(), "--config", config_file, "--input",
                          "-", "--lcm-url", url, "--batch-seconds", "0.1", "--json"},
-                        (work / "stream.out").string(), (work / "stream.err").string(),
-                        pipe_fd[0]);
+                        (work / "stream.out").string(), (work / "stream.err").string(), pipe_fd[0]);
   close(pipe_fd[0]);
   pipe_fd[0] = -1;
   if (stream < 0) return cleanup(3);
@@ -253,8 +246,8 @@ int main(int argc, char** argv) {
   line["stream_exit"] = stream_exit;
   line["transport"] = "tcpq";
   tools::print_line(line);
-  const bool complete = static_cast<std::int64_t>(watch->applied_at.size()) > last_batch &&
-                        stream_exit == 0;
+  const bool complete =
+      static_cast<std::int64_t>(watch->applied_at.size()) > last_batch && stream_exit == 0;
   if (!complete) {
     std::cerr << "peritwin-bench-stream: not every batch was applied (see " << work << ")\n";
     return cleanup(3);
