@@ -14,12 +14,17 @@
 // from its publication to the first STATE showing it applied. The measured window is --seconds,
 // or shorter when the loud detail reaches its end-of-life criterion (8 mm of crack) before.
 //
-// The daemon runs one worker thread per detail (README "A fleet"); the comparison with one
-// thread (quiet_p99_ms_one_thread) waits for a worker pool whose size can be set. One JSON line:
+// The daemon applies the details' batches on a pool of worker threads (README "A fleet"): the run
+// is made twice in one invocation, with the daemon's default pool (--worker-threads, default the
+// cores) and with one worker thread (every detail then waits for the loud one's re-solves), and
+// the quiet p99 of both and their ratio are reported (--no-one-thread skips the second). One
+// JSON line:
 //   {"bench":"fleet","details":…,"nodes_per_detail":…,"dx_m":…,"startup_s":…,
 //    "startup_s_per_detail":…,"rss_mb":…,"rss_peak_mb":…,"rss_mb_per_detail":…,"cycles_per_s":…,
 //    "quiet_batches":…,"quiet_p50_ms":…,"quiet_p99_ms":…,"loud_batches":…,"loud_broken_bonds":…,
-//    "window_s":…,"loud_end_of_life":…,"goals":{…},"transport":"tcpq"}
+//    "window_s":…,"loud_end_of_life":…,"worker_threads":…,"startup_s_one_thread":…,
+//    "quiet_p50_ms_one_thread":…,"quiet_p99_ms_one_thread":…,"quiet_p99_one_thread_over_pool":…,
+//    "goals":{…},"transport":"tcpq"}
 // rss_mb is the daemon's VmRSS at the end of the run, rss_peak_mb its VmHWM. Exit 0 when the run
 // completed, 3 on a runtime failure.
 #include <CLI/CLI.hpp>
@@ -184,6 +189,8 @@ struct Options {
   int nodes_per_detail = 4000;
   double seconds = 30.0, quiet_rate = 5.0;
   std::int64_t loud_cycles = 50;
+  int worker_threads = 0;  ///< the daemon's --worker-threads in the first run (0: its default)
+  bool one_thread = true;  ///< the second run with --worker-threads 1
 };
 
 /// One daemon run on `url` with `extra` daemon arguments.
@@ -302,7 +309,13 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--loud-cycles", o.loud_cycles, "cycles per batch of the loud detail (50)")
       ->check(CLI::PositiveNumber);
+  app.add_option("--worker-threads", o.worker_threads,
+                 "the daemon's --worker-threads in the first run (default 0: its default)")
+      ->check(CLI::Range(0, 1024));
+  bool no_one_thread = false;
+  app.add_flag("--no-one-thread", no_one_thread, "skip the comparison run with one worker thread");
   CLI11_PARSE(app, argc, argv);
+  o.one_thread = !no_one_thread;
 
   // B1 is 62.5 mm x 60 mm: nodes ~ 3750 mm^2 / dx^2.
   const double dx = std::sqrt(0.0625 * 0.060 / o.nodes_per_detail);
@@ -325,11 +338,18 @@ int main(int argc, char** argv) {
     return 3;
   }
   const std::string url = "tcpq://127.0.0.1:" + std::to_string(port);
-  const RunResult pool = run(o, url, config, work, {}, "daemon");
+  const RunResult pool =
+      run(o, url, config, work, {"--worker-threads", std::to_string(o.worker_threads)}, "pool");
+  RunResult single;
+  if (pool.ok && o.one_thread) {
+    single = run(o, url, config, work, {"--worker-threads", "1"}, "one-thread");
+  }
   bench::stop_child(hub, 60.0);
-  if (!pool.ok) {
-    std::cerr << "peritwin-bench-fleet: " << pool.error << " (in " << work << ")\n";
-    return 3;
+  for (const RunResult* r : std::initializer_list<const RunResult*>{&pool, &single}) {
+    if (!r->ok && (r == &pool || o.one_thread)) {
+      std::cerr << "peritwin-bench-fleet: " << r->error << " (in " << work << ")\n";
+      return 3;
+    }
   }
   fs::remove_all(work);
 
@@ -352,6 +372,17 @@ int main(int argc, char** argv) {
   line["loud_broken_bonds"] = pool.loud_broken;
   line["window_s"] = tools::fixed(pool.window_s, 1);
   line["loud_end_of_life"] = pool.loud_ended;
+  line["worker_threads"] = o.worker_threads;  // 0: the daemon's default (the cores, at least 2)
+  if (o.one_thread) {
+    const double p99_one = percentile(single.quiet_ms, 0.99);
+    line["startup_s_one_thread"] = tools::fixed(single.startup_s, 2);
+    line["quiet_batches_one_thread"] = single.quiet_ms.size();
+    line["quiet_p50_ms_one_thread"] = tools::fixed(percentile(single.quiet_ms, 0.5), 2);
+    line["quiet_p99_ms_one_thread"] = tools::fixed(p99_one, 2);
+    line["quiet_p99_one_thread_over_pool"] = tools::fixed(p99_one / p99, 2);
+    line["loud_batches_one_thread"] = single.loud_batches;
+    line["rss_mb_one_thread"] = tools::fixed(single.rss_mb, 1);
+  }
   line["goals"] = {{"rss_mb_at_32x4000", 1536},
                    {"quiet_p99_ms", 20},
                    {"startup_s_per_detail", 0.5},

@@ -244,6 +244,58 @@ TEST_F(MemqTest, OneTwinPerDetailEachOnItsOwnChannels) {
   EXPECT_TRUE(fs::exists(options_.state_dir / "b2-cts"));
 }
 
+TEST_F(MemqTest, AnyNumberOfWorkerThreadsGivesEachDetailItsSingleDetailRun) {
+  // Three copies of B1, one loud (4 kN: breaks bonds batch after batch) and two quiet, their
+  // batches interleaved on the bus. Whatever the pool's size (one thread: every detail waits
+  // for the loud one's re-solves; two; more than details: capped), each detail's final state is
+  // bit for bit its own single-detail run: the pool changes when a batch is applied, never what.
+  const std::vector<std::pair<std::string, double>> details = {
+      {"loud", 4000.0}, {"quiet-a", 1500.0}, {"quiet-b", 2000.0}};
+  std::string text;
+  for (const auto& [id, load] : details) {
+    text += b1_text("every_batches = 0", {{"id = \"b1-ct\"", "id = \"" + id + "\""},
+                                          {"\"results/b1-ct\"", "\"results/" + id + "\""}}) +
+            "\n";
+  }
+  const TwinConfig config = config_of(text);
+  ASSERT_EQ(config.details.size(), details.size());
+  std::vector<std::vector<Batch>> batches;
+  std::vector<std::string> expected_hash;
+  for (std::size_t i = 0; i < details.size(); ++i) {
+    std::vector<LoadBlock> blocks;
+    for (int k = 0; k < 8; ++k) blocks.push_back({details[i].second, 0.1, 0.0, 1500});
+    batches.push_back(replay::make_twin_batches(blocks, details[i].first, "replay", {4, 1000}));
+    std::string last;
+    const auto r = replay::run_in_process(config.details[i], batches.back(),
+                                          [&](const auto& s) { last = s.state_hash; });
+    ASSERT_TRUE(r.error.empty()) << r.error;
+    expected_hash.push_back(last);
+  }
+  for (const int threads : {1, 2, 5}) {
+    SCOPED_TRACE("worker_threads " + std::to_string(threads));
+    fs::remove_all(options_.state_dir);
+    options_.worker_threads = threads;
+    lcm::LCM lcm("memq://");
+    Daemon daemon(lcm, config, options_);
+    const Status started = daemon.start();
+    ASSERT_TRUE(started.ok()) << message_of(started);
+    for (std::size_t k = 0; k < batches[0].size(); ++k) {
+      for (const auto& detail_batches : batches) {
+        const auto m = batch_message(detail_batches[k], 0);
+        lcm.publish(messages::channel(detail_batches[k].detail_id, messages::Kind::kLoad), &m);
+      }
+    }
+    for (int i = 0; i < 20; ++i) daemon.poll(10);
+    daemon.tick();
+    for (std::size_t i = 0; i < details.size(); ++i) {
+      EXPECT_EQ(daemon.twin(i).state_seq(), static_cast<std::int64_t>(batches[i].size()));
+      EXPECT_EQ(daemon.twin(i).state_hash_hex(), expected_hash[i]) << details[i].first;
+    }
+    EXPECT_GT(daemon.twin(0).broken_bonds(), 0);  // the loud one did break bonds
+    daemon.stop();
+  }
+}
+
 TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   // Not deterministic: a worker thread estimates; ingest goes on meanwhile. Every estimate is a
   // pure function of the state it names, so it equals the synchronous one for that state.

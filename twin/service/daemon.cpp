@@ -16,6 +16,7 @@
 
 #include "messages/channels.h"
 #include "solver/core/blas_kernel.h"
+#include "twin/config/config_toml.h"
 #include "twin/config/resources.h"
 #include "twin/io/checkpoint_io.h"
 #include "twin/lcm/messages_io.h"
@@ -29,8 +30,8 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::string_view kCheckpointPrefix = "checkpoint";
 constexpr std::size_t kCheckpointsKept = 3;
-/// A worker with nothing to apply still wakes this often for its chores (finished life
-/// estimates, timed checkpoints, the reject log summary).
+/// Every detail gets a turn at least this often, for its chores (finished life estimates, timed
+/// checkpoints, the reject log summary), whether batches come or not.
 constexpr auto kWorkerChoresPeriod = std::chrono::milliseconds(100);
 /// A detail's mesh is published again at most this often, however many requests come.
 constexpr double kMeshRepublishS = 1.0;
@@ -76,6 +77,25 @@ const char* verdict_name(Verdict v) {
       return "limit";
   }
   return "?";
+}
+
+/// The process's resident memory (/proc/self/statm, bytes); 0 when unreadable.
+double resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0.0;
+  unsigned long long size = 0, resident = 0;
+  const int n = std::fscanf(f, "%llu %llu", &size, &resident);
+  std::fclose(f);
+  return n == 2 ? static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE))
+                : 0.0;
+}
+
+/// DaemonOptions::worker_threads resolved: 0 = the cores (at least 2), never more than details.
+int worker_thread_count(int requested, std::size_t details) {
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  const int wanted = requested > 0 ? requested : std::max(2, cores);
+  return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
+                                                  std::max<std::size_t>(1, details)));
 }
 
 }  // namespace
@@ -133,8 +153,8 @@ class Daemon::Outbox {
 };
 
 struct Daemon::Detail {
-  // Set up by start(); afterwards only the worker thread touches these (and stop(), after the
-  // worker has been joined).
+  // Set up by start(); afterwards only the worker running the detail's turn touches these (one at
+  // a time: Detail::scheduled) and stop(), after the workers have been joined.
   Daemon* daemon = nullptr;
   std::unique_ptr<Twin> twin;
   std::unique_ptr<DetailOutputs> outputs;
@@ -157,14 +177,14 @@ struct Daemon::Detail {
   double max_batch_seconds = 60.0;
   double max_rejects_per_second = 10.0;
 
-  // Shared between the LCM thread and the worker, under `mutex`.
+  // Shared between the LCM thread and the workers, under `mutex`.
   std::mutex mutex;
-  std::condition_variable wake;                ///< the worker: a batch arrived, or stop
-  std::condition_variable idle;                ///< tick(): the inbox ran empty
+  std::condition_variable idle;                ///< tick(): no longer scheduled
   std::deque<Received> inbox;                  ///< received, not yet applied, in arrival order
   std::deque<Clock::time_point> reject_times;  ///< rejects of the last kRejectRateWindowS
-  bool applying = false;
-  bool stop_requested = false;
+  /// On the pool's ready queue or in a turn on a worker: never on two workers at once, so its
+  /// batches are applied one after another in arrival order.
+  bool scheduled = false;
 
   // Written by the worker, read by the heartbeat.
   std::atomic<std::int64_t> busy_since_ns{0};  ///< steady clock; 0 = idle
@@ -177,8 +197,6 @@ struct Daemon::Detail {
   std::atomic<std::int64_t> duplicates{0};
   std::atomic<std::int64_t> gaps{0};
   std::atomic<bool> failed{false};  ///< final failure reached
-
-  std::thread worker;
 };
 
 Daemon::Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options)
@@ -212,9 +230,10 @@ void Daemon::fail(std::string why) {
   failed_.store(true);
   for (auto& d : details_) {
     std::lock_guard lock(d->mutex);
-    d->wake.notify_all();
     d->idle.notify_all();
   }
+  std::lock_guard lock(pool_mutex_);
+  pool_wake_.notify_all();
 }
 
 Status Daemon::start() {
@@ -224,8 +243,38 @@ Status Daemon::start() {
       "OPENBLAS_CORETYPE pins it)",
       blas_kernel_name());
   if (Status keys = load_keys(); !keys) return keys;
-  for (const DetailConfig& config : config_.details) {
-    if (Status s = start_detail(config); !s) return s;
+  const std::size_t n = config_.details.size();
+  const int threads = worker_thread_count(options_.worker_threads, n);
+  // Build and factor the details `threads` at a time; the first failure in config order is the
+  // one reported. With one thread the resident memory's growth over a build is that detail's.
+  std::vector<std::optional<Expected<std::unique_ptr<Detail>>>> built(n);
+  {
+    const double resident_before = resident_bytes();
+    const auto t0 = Clock::now();
+    std::atomic<std::size_t> next{0};
+    const auto build_some = [&] {
+      for (std::size_t i = next++; i < n; i = next++) {
+        try {
+          built[i] = build_detail(config_.details[i]);
+        } catch (const std::exception& e) {
+          built[i] = failure("[" + config_.details[i].id + "] " + e.what());
+        }
+      }
+    };
+    std::vector<std::thread> builders;
+    for (int k = 1; k < threads; ++k) builders.emplace_back(build_some);
+    build_some();
+    for (auto& b : builders) b.join();
+    const double grown = std::max(0.0, resident_bytes() - resident_before);
+    spdlog::info(
+        "{} detail(s) built in {:.2f} s on {} thread(s): resident memory +{} ({} per detail)", n,
+        seconds(Clock::now() - t0), std::min<std::size_t>(threads, n), format_bytes(grown),
+        format_bytes(n > 0 ? grown / static_cast<double>(n) : 0.0));
+  }
+  for (auto& b : built) {
+    if (!*b) return b->error();
+    details_.push_back(std::move(**b));
+    if (Status s = subscribe_detail(*details_.back()); !s) return s;
   }
   for (auto& d : details_) {
     publish_mesh(*d);
@@ -235,10 +284,9 @@ Status Daemon::start() {
   }
   flush_outbox();
   heartbeat(true);
-  for (auto& d : details_) {
-    Detail* detail = d.get();
-    d->worker = std::thread([this, detail] { run_worker(*detail); });
-  }
+  next_chores_ = Clock::now() + kWorkerChoresPeriod;
+  for (int k = 0; k < threads; ++k) workers_.emplace_back([this] { run_worker(); });
+  spdlog::info("{} worker thread(s) apply the batches of {} detail(s)", threads, n);
   return {};
 }
 
@@ -321,26 +369,11 @@ Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
   return {};
 }
 
-namespace {
-/// The process's resident memory (/proc/self/statm, bytes); 0 when unreadable.
-double resident_bytes() {
-  std::FILE* f = std::fopen("/proc/self/statm", "r");
-  if (f == nullptr) return 0.0;
-  unsigned long long size = 0, resident = 0;
-  const int n = std::fscanf(f, "%llu %llu", &size, &resident);
-  std::fclose(f);
-  return n == 2 ? static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE))
-                : 0.0;
-}
-}  // namespace
-
-Status Daemon::start_detail(const DetailConfig& config) {
+Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(const DetailConfig& config) {
   auto d = std::make_unique<Detail>();
   d->id = config.id;
+  d->daemon = this;
   const auto t0 = Clock::now();
-  // The details are built one after another before any worker runs: the growth of the resident
-  // memory over one build is that detail's (issue 18: memory per detail reported at start).
-  const double resident_before = resident_bytes();
   auto built = DetailModel::build(config);
   if (!built) return failure(built.error().message());
   const std::shared_ptr<const DetailModel> model = *built;
@@ -349,12 +382,13 @@ Status Daemon::start_detail(const DetailConfig& config) {
   auto twin = Twin::create(model, twin_options);
   if (!twin) return failure(twin.error().message());
   d->twin = std::move(*twin);
+  const double factor_entries = d->twin->engine().solver().factor().factor_nonzeros();
   spdlog::info(
-      "[{}] model: {} nodes, {} bonds, initial solve in {:.2f} s, memory {} resident (estimated "
-      "{} with its life engines, docs/limits.md)",
-      config.id, model->disc().num_nodes(), model->disc().num_bonds(), seconds(Clock::now() - t0),
-      format_bytes(std::max(0.0, resident_bytes() - resident_before)),
-      format_bytes(estimate_resources(config).bytes));
+      "[{}] model: {} nodes, {} bonds, factor {} entries ({} of values), initial solve in {:.2f} s "
+      "(estimated memory {} with its life engines, docs/limits.md)",
+      config.id, model->disc().num_nodes(), model->disc().num_bonds(),
+      config_internal::format_count(factor_entries), format_bytes(8.0 * factor_entries),
+      seconds(Clock::now() - t0), format_bytes(estimate_resources(config).bytes));
   {
     const messages::Mesh mesh = detail_mesh(*model);
     d->mesh_hash = messages::mesh_hash(mesh);
@@ -381,7 +415,7 @@ Status Daemon::start_detail(const DetailConfig& config) {
   }
   d->state_dir = detail_state_dir(options_.state_dir, config.id);
   if (options_.checkpoints) {
-    if (Status resumed = resume(*d); !resumed) return resumed;
+    if (Status resumed = resume(*d); !resumed) return resumed.error();
     // Before the first STATE: a state dir we cannot write to would lose every batch applied
     // from here on at the next crash.
     try {
@@ -408,27 +442,28 @@ Status Daemon::start_detail(const DetailConfig& config) {
   d->state_seq = d->twin->state_seq();
   d->failed = d->twin->failure() != Failure::none;
   log_crack_events(*d);
-  d->daemon = this;
-  Detail* detail = d.get();
-  details_.push_back(std::move(d));
-  detail->subscription = lcm_.subscribeFunction(
-      messages::channel(config.id, messages::Kind::kLoad),
+  return d;
+}
+
+Status Daemon::subscribe_detail(Detail& d) {
+  Detail* detail = &d;
+  const std::string loads = messages::channel(d.id, messages::Kind::kLoad);
+  d.subscription = lcm_.subscribeFunction(
+      loads,
       +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* target) {
         target->daemon->on_load(*target, rbuf);
       },
       detail);
-  if (detail->subscription == nullptr) {
-    return failure("cannot subscribe to " + messages::channel(config.id, messages::Kind::kLoad));
-  }
-  detail->subscription->setQueueCapacity(options_.queue_capacity);
-  const std::string requests = messages::channel(config.id, messages::Kind::kMeshRequest);
-  detail->mesh_subscription = lcm_.subscribeFunction(
+  if (d.subscription == nullptr) return failure("cannot subscribe to " + loads);
+  d.subscription->setQueueCapacity(options_.queue_capacity);
+  const std::string requests = messages::channel(d.id, messages::Kind::kMeshRequest);
+  d.mesh_subscription = lcm_.subscribeFunction(
       requests,
       +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* target) {
         target->daemon->on_mesh_request(*target, rbuf);
       },
       detail);
-  if (detail->mesh_subscription == nullptr) return failure("cannot subscribe to " + requests);
+  if (d.mesh_subscription == nullptr) return failure("cannot subscribe to " + requests);
   return {};
 }
 
@@ -492,7 +527,10 @@ void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
     if (d.inbox.size() < static_cast<std::size_t>(std::max(1, options_.queue_capacity))) {
       const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
       d.inbox.push_back({{data, data + rbuf->data_size}, rbuf->recv_utime});
-      d.wake.notify_one();
+      if (!d.scheduled) {
+        d.scheduled = true;
+        schedule(d);
+      }
       return;
     }
     d.reject_times.push_back(Clock::now());
@@ -534,37 +572,69 @@ void Daemon::publish_mesh(Detail& d) {
   }
 }
 
-void Daemon::run_worker(Detail& d) {
+void Daemon::schedule(Detail& d) {
+  std::lock_guard lock(pool_mutex_);
+  ready_.push_back(&d);
+  pool_wake_.notify_one();
+}
+
+void Daemon::run_worker() {
   for (;;) {
-    std::optional<Received> received;
+    Detail* d = nullptr;
+    bool chores_due = false;
     {
-      std::unique_lock lock(d.mutex);
-      d.wake.wait_for(lock, kWorkerChoresPeriod,
-                      [&] { return d.stop_requested || !d.inbox.empty() || failed(); });
-      if (failed()) break;
-      if (!d.inbox.empty()) {
-        received = std::move(d.inbox.front());
-        d.inbox.pop_front();
-        d.applying = true;
-      } else if (d.stop_requested) {
-        break;
+      std::unique_lock lock(pool_mutex_);
+      pool_wake_.wait_until(lock, next_chores_,
+                            [&] { return pool_stop_ || !ready_.empty() || failed(); });
+      if (failed()) return;
+      if (!ready_.empty()) {
+        d = ready_.front();
+        ready_.pop_front();
+      } else if (pool_stop_) {
+        return;  // every detail's inbox is empty: a detail with batches is always on ready_
+      } else if (Clock::now() >= next_chores_) {
+        next_chores_ = Clock::now() + kWorkerChoresPeriod;
+        chores_due = true;
       }
     }
-    if (received) {
-      d.busy_since_ns = now_ns();
-      if (options_.before_apply) options_.before_apply(d.id);
-      apply_received(d, *received);
-      d.busy_since_ns = 0;
-      std::lock_guard lock(d.mutex);
-      d.applying = false;
-      if (d.inbox.empty()) d.idle.notify_all();
-    }
-    if (failed()) break;
-    worker_chores(d);
+    if (chores_due) schedule_chores();
+    if (d != nullptr) run_turn(*d);
   }
+}
+
+void Daemon::schedule_chores() {
+  for (auto& d : details_) {
+    std::lock_guard lock(d->mutex);
+    if (!d->scheduled) {
+      d->scheduled = true;
+      schedule(*d);
+    }
+  }
+}
+
+void Daemon::run_turn(Detail& d) {
+  std::optional<Received> received;
+  {
+    std::lock_guard lock(d.mutex);
+    if (!d.inbox.empty()) {
+      received = std::move(d.inbox.front());
+      d.inbox.pop_front();
+    }
+  }
+  if (received && !failed()) {
+    d.busy_since_ns = now_ns();
+    if (options_.before_apply) options_.before_apply(d.id);
+    apply_received(d, *received);
+    d.busy_since_ns = 0;
+  }
+  if (!failed()) worker_chores(d);
   std::lock_guard lock(d.mutex);
-  d.applying = false;
-  d.idle.notify_all();
+  if (!d.inbox.empty() && !failed()) {
+    schedule(d);  // to the back of the queue: details with batches waiting take turns
+  } else {
+    d.scheduled = false;
+    d.idle.notify_all();
+  }
 }
 
 void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
@@ -786,7 +856,7 @@ void Daemon::submit_life(Detail& d) {
 void Daemon::tick() {
   for (auto& d : details_) {
     std::unique_lock lock(d->mutex);
-    d->idle.wait(lock, [&] { return (d->inbox.empty() && !d->applying) || failed(); });
+    d->idle.wait(lock, [&] { return !d->scheduled || failed(); });
   }
   flush_outbox();
   heartbeat(false);
@@ -818,22 +888,21 @@ bool Daemon::poll(int timeout_ms) {
 }
 
 void Daemon::stop_workers() {
-  for (auto& d : details_) {
-    {
-      std::lock_guard lock(d->mutex);
-      d->stop_requested = true;
-    }
-    d->wake.notify_all();
+  {
+    std::lock_guard lock(pool_mutex_);
+    pool_stop_ = true;
   }
-  for (auto& d : details_) {
-    if (d->worker.joinable()) d->worker.join();
+  pool_wake_.notify_all();
+  for (auto& w : workers_) {
+    if (w.joinable()) w.join();
   }
+  workers_.clear();
 }
 
 void Daemon::stop() {
   if (stopped_) return;
   stopped_ = true;
-  stop_workers();  // each applies what it has received first
+  stop_workers();  // every batch received is applied first
   for (auto& d : details_) {
     d->life.reset();  // cancels a running estimate
     if (!failed()) {

@@ -20,11 +20,14 @@
 //    receives batches into the per-detail inboxes (raw bytes + LCM receive time), publishes what
 //    the detail workers queued in the outbox, and publishes STATUS from its own timer, whatever
 //    the workers are doing;
-//  * one worker thread per detail applies that detail's batches in arrival order (decode,
-//    authenticate, apply, STATE/REJECT, results, checkpoints, remaining-life hand-over). A long
-//    batch on one detail delays no other detail and no heartbeat; STATUS says how long the
-//    current batch has been running (busy_s) and turns "degraded" past
-//    [detail.limits] max_batch_seconds.
+//  * a pool of worker threads (DaemonOptions::worker_threads, default: the cores, at least two,
+//    at most one per detail) applies the details' batches. A detail is on at most one worker at a
+//    time and its batches are applied in arrival order (decode, authenticate, apply, STATE/REJECT,
+//    results, checkpoints, remaining-life hand-over); details with batches waiting take turns,
+//    one batch each, so a detail with a long backlog or a long re-solve holds one worker and the
+//    other details flow on the others. STATUS says how long the current batch has been running
+//    (busy_s) and turns "degraded" past [detail.limits] max_batch_seconds;
+//  * start() builds and factors the details on that many threads at once.
 // Each detail's state is a pure function of its config and the batches in its arrival order:
 // threads change when a state is published, never what it is.
 //
@@ -36,6 +39,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
@@ -43,6 +48,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "messages/auth.h"
@@ -69,6 +75,10 @@ struct DaemonOptions {
   double degraded_lag_s = 10.0;  ///< STATUS says "degraded" when the oldest waiting batch is older
   double status_period_s = 1.0;
   bool record_latency = false;  ///< keep receipt -> STATE publish latencies (benchmark)
+  /// Threads that apply the details' batches (and build them at start): 0 = the machine's cores,
+  /// at least 2; never more than there are details. With 1, a detail's long batch delays every
+  /// other detail's (the fleet benchmark's comparison).
+  int worker_threads = 0;
   /// Test hook: called on a detail's worker thread before each received batch is applied.
   std::function<void(const std::string& detail_id)> before_apply;
 };
@@ -112,7 +122,10 @@ class Daemon {
   Status load_keys();
   /// With [auth]: the batch's source is allowed and its tag is the source key's; else AUTH.
   [[nodiscard]] Outcome authenticate(const Received& r, const messages::Decoded& decoded) const;
-  Status start_detail(const DetailConfig& config);
+  /// The detail's model, twin, checkpoint and results (no LCM): runs on a start-up thread.
+  Expected<std::unique_ptr<Detail>> build_detail(const DetailConfig& config);
+  /// LCM thread: the detail's channels and subscriptions.
+  Status subscribe_detail(Detail& d);
   Status resume(Detail& d);
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
   /// LCM thread: a mesh_request_t for this detail marks its mesh to be published again.
@@ -120,7 +133,13 @@ class Daemon {
   /// LCM thread: publishes the meshes asked for, once kMeshRepublishS has passed since the last.
   void answer_mesh_requests();
   void publish_mesh(Detail& d);
-  void run_worker(Detail& d);
+  /// Puts a detail on the pool's ready queue (caller holds d.mutex and has set d.scheduled).
+  void schedule(Detail& d);
+  void run_worker();
+  /// One turn of a detail on a worker: at most one batch, then its chores.
+  void run_turn(Detail& d);
+  /// Every kWorkerChoresPeriod: a chores-only turn for each detail that is not scheduled.
+  void schedule_chores();
   void apply_received(Detail& d, const Received& r);
   void reject(Detail& d, const std::string& source, std::int64_t seq, const Outcome& outcome);
   void worker_chores(Detail& d);
@@ -143,6 +162,13 @@ class Daemon {
   DaemonOptions options_;
   std::vector<std::unique_ptr<Detail>> details_;
   std::unique_ptr<Outbox> outbox_;
+  // The worker pool: details with something to do, each at most once (Detail::scheduled).
+  std::mutex pool_mutex_;  ///< taken after a Detail::mutex, never before
+  std::condition_variable pool_wake_;
+  std::deque<Detail*> ready_;
+  std::chrono::steady_clock::time_point next_chores_;
+  bool pool_stop_ = false;
+  std::vector<std::thread> workers_;
   std::optional<messages::KeyRing> keys_;          ///< [auth] key_file; none = unauthenticated
   const messages::AuthKey* daemon_key_ = nullptr;  ///< signs STATE and REJECT
   std::vector<std::string> allowed_sources_;       ///< sorted; with keys_ only

@@ -64,6 +64,11 @@ int main(int argc, char** argv) {
                  "another daemon's STATUS for one of them: refuse to start (exit 2). 0 = no check "
                  "(default 1.5: STATUS comes every second)")
       ->check(CLI::Range(0.0, 60.0));
+  int worker_threads = 0;
+  app.add_option("--worker-threads", worker_threads,
+                 "threads that apply the details' batches and build them at start (default 0: "
+                 "the machine's cores, at least 2; never more than the details served)")
+      ->check(CLI::Range(0, 1024));
   std::string max_memory;
   app.add_option("--max-memory", max_memory,
                  "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
@@ -141,6 +146,7 @@ int main(int argc, char** argv) {
     options.deterministic = deterministic;
     options.results = !no_results;
     options.fresh_start = fresh_start;
+    options.worker_threads = worker_threads;
     peritwin::twin::Daemon daemon(lcm, *loaded.config, options);
     spdlog::info("peritwin: {} detail(s) from {}, LCM \"{}\", state in {}, {} mode",
                  loaded.config->details.size(), config_file,
