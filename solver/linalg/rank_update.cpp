@@ -213,7 +213,7 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
     for (int j : path) entries += lnz[j];
     const bool threaded =
         impl.solve_threads == 2 ||
-        (impl.solve_threads == 0 && entries > 200'000 && std::thread::hardware_concurrency() > 1);
+        (impl.solve_threads == 0 && entries > 200'000 && SparseCholesky::automatic_two_threads());
     if (!threaded) {
       RankScalars active[kGroup];
       double y_old[3], y_new[3];

@@ -48,6 +48,19 @@ SparseCholesky& SparseCholesky::operator=(SparseCholesky&&) noexcept = default;
 
 void SparseCholesky::set_solve_threads(int threads) { impl_->solve_threads = threads; }
 
+namespace {
+std::atomic<bool> g_automatic_two_threads{true};
+}  // namespace
+
+void SparseCholesky::allow_automatic_two_threads(bool allow) {
+  g_automatic_two_threads.store(allow, std::memory_order_relaxed);
+}
+
+bool SparseCholesky::automatic_two_threads() {
+  return g_automatic_two_threads.load(std::memory_order_relaxed) &&
+         std::thread::hardware_concurrency() > 1;
+}
+
 bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
 
 double SparseCholesky::factor_nonzeros() const {
@@ -233,8 +246,8 @@ void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
   const int* perm = static_cast<const int*>(l->Perm);
   const auto r = static_cast<std::size_t>(cols);
   const bool threaded = impl.schedule.balanced &&
-                        (impl.solve_threads == 2 || (impl.solve_threads == 0 && nnz > 2'000'000 &&
-                                                     std::thread::hardware_concurrency() > 1));
+                        (impl.solve_threads == 2 ||
+                         (impl.solve_threads == 0 && nnz > 2'000'000 && automatic_two_threads()));
   auto run = [&](bool do_forward, bool do_backward) {
     double* y = impl.work.data();
     ldlt::solve(static_cast<int>(r), *l, impl.schedule, threaded, y, do_forward, do_backward);

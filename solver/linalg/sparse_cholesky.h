@@ -66,6 +66,12 @@ class SparseCholesky {
   /// Threads of the own solve: 0 automatic (two for factors above 2M nonzeros on a machine with
   /// two cores or more), 1 or 2. The arithmetic, hence the result, is the same for all.
   void set_solve_threads(int threads);
+  /// Process-wide: whether automatic mode (set_solve_threads(0)) may use two threads at all
+  /// (default true). A daemon serving several details turns it off: its worker pool already
+  /// keeps the cores busy, and a loud detail's two-thread re-solve would take the core the quiet
+  /// details' batches run on. Same arithmetic either way, so no result changes.
+  static void allow_automatic_two_threads(bool allow);
+  [[nodiscard]] static bool automatic_two_threads();
 
   [[nodiscard]] bool analyzed() const;
   [[nodiscard]] double factor_nonzeros() const;

@@ -16,6 +16,7 @@
 
 #include "messages/channels.h"
 #include "solver/core/blas_kernel.h"
+#include "solver/linalg/sparse_cholesky.h"
 #include "twin/config/config_toml.h"
 #include "twin/config/resources.h"
 #include "twin/io/checkpoint_io.h"
@@ -285,8 +286,12 @@ Status Daemon::start() {
   flush_outbox();
   heartbeat(true);
   next_chores_ = Clock::now() + kWorkerChoresPeriod;
+  // Several details: the pool spreads them over the cores, so a detail's re-solve keeps to one
+  // thread instead of taking the core the other details' batches run on (same arithmetic).
+  SparseCholesky::allow_automatic_two_threads(n <= 1);
   for (int k = 0; k < threads; ++k) workers_.emplace_back([this] { run_worker(); });
-  spdlog::info("{} worker thread(s) apply the batches of {} detail(s)", threads, n);
+  spdlog::info("{} worker thread(s) apply the batches of {} detail(s){}", threads, n,
+               n > 1 ? ", each detail's re-solves on one thread" : "");
   return {};
 }
 
