@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -11,6 +12,13 @@ namespace {
 void not_found(httplib::Response& res, const std::string& what) {
   res.status = 404;
   res.set_content(nlohmann::json{{"error", what}}.dump(), "application/json");
+}
+
+/// A decimal event id of at most 19 digits, or nullopt.
+std::optional<std::uint64_t> parse_event_id(const std::string& text) {
+  if (text.empty() || text.size() > 19 || text.find_first_not_of("0123456789") != std::string::npos)
+    return std::nullopt;
+  return std::stoull(text);
 }
 
 void json(httplib::Response& res, const std::string& body) {
@@ -33,7 +41,11 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
     res.set_content(text.str(), "application/javascript");
   });
   server.Get("/api/details", [&store](const httplib::Request&, httplib::Response& res) {
-    json(res, store.details_json(Clock::now()));
+    std::uint64_t last_event = 0;
+    const std::string body = store.details_json(Clock::now(), &last_event);
+    // The newest event in this snapshot: /api/events?after=ID follows on without a gap.
+    res.set_header("X-Last-Event-Id", std::to_string(last_event));
+    json(res, body);
   });
   server.Get(R"(/api/details/([A-Za-z0-9_-]+))",
              [&store](const httplib::Request& req, httplib::Response& res) {
@@ -64,11 +76,20 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                  json(res, *body);
                });
   }
-  server.Get("/api/events", [&store](const httplib::Request&, httplib::Response& res) {
+  server.Get("/api/events", [&store](const httplib::Request& req, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
-    // Events from the one after the newest at connection time: the page loads the current
-    // state through /api/details first.
-    auto cursor = std::make_shared<std::uint64_t>(store.last_event_id());
+    // Events after the one a reconnecting EventSource names (Last-Event-ID), else after ?after=ID
+    // (the X-Last-Event-Id of the /api/details snapshot the page drew), else after the newest at
+    // connection time. An id this process has not reached yet (another dashboard's) counts as
+    // the newest; events older than the 1000 kept are gone.
+    const std::uint64_t newest = store.last_event_id();
+    std::uint64_t start = newest;
+    const std::string named = req.has_header("Last-Event-ID")
+                                  ? req.get_header_value("Last-Event-ID")
+                              : req.has_param("after") ? req.get_param_value("after")
+                                                       : std::string();
+    if (const auto id = parse_event_id(named); id && *id < newest) start = *id;
+    auto cursor = std::make_shared<std::uint64_t>(start);
     res.set_chunked_content_provider(
         "text/event-stream", [&store, cursor](std::size_t, httplib::DataSink& sink) {
           if (store.closed()) return false;

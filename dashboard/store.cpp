@@ -306,8 +306,9 @@ std::string Store::detail_json_locked(const std::string& id, const DetailRecord&
   return dump(j);
 }
 
-std::string Store::details_json(Clock::time_point now) const {
+std::string Store::details_json(Clock::time_point now, std::uint64_t* last_event) const {
   const std::lock_guard lock(mutex_);
+  if (last_event) *last_event = next_event_ - 1;
   Json list = Json::array();
   for (const auto& [id, d] : details_) list.push_back(Json::parse(detail_json_locked(id, d, now)));
   Json j;
