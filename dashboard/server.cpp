@@ -4,10 +4,14 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
+#include <thread>
 #include <tuple>
 
 namespace peritwin::dashboard {
 namespace {
+
+/// How long an event stream gathers events after a write before the next one.
+constexpr std::chrono::milliseconds kEventCoalesce{5};
 
 void not_found(httplib::Response& res, const std::string& what) {
   res.status = 404;
@@ -89,18 +93,28 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                               : req.has_param("after") ? req.get_param_value("after")
                                                        : std::string();
     if (const auto id = parse_event_id(named); id && *id < newest) start = *id;
-    auto cursor = std::make_shared<std::uint64_t>(start);
+    struct Stream {
+      std::uint64_t cursor;
+      bool wrote_events = false;
+    };
+    auto stream = std::make_shared<Stream>(Stream{start});
     res.set_chunked_content_provider(
-        "text/event-stream", [&store, cursor](std::size_t, httplib::DataSink& sink) {
+        "text/event-stream", [&store, stream](std::size_t, httplib::DataSink& sink) {
           if (store.closed()) return false;
-          const auto events = store.events_after(*cursor, std::chrono::milliseconds(1000));
+          // After a write of events, the next ones are gathered for kEventCoalesce first: one
+          // wake-up and one send per 5 ms at most instead of one per event (at 1100 events/s
+          // the wake-ups, futexes and sends were a third of the dashboard's CPU,
+          // docs/benchmarks.md "Dashboard"). An event after a quiet spell goes out at once.
+          if (stream->wrote_events) std::this_thread::sleep_for(kEventCoalesce);
+          const auto events = store.events_after(stream->cursor, std::chrono::milliseconds(1000));
           if (store.closed()) return false;
           std::string out;
           for (const auto& e : events) {
             out +=
                 "id: " + std::to_string(e.id) + "\nevent: " + e.kind + "\ndata: " + e.data + "\n\n";
-            *cursor = e.id;
+            stream->cursor = e.id;
           }
+          stream->wrote_events = !out.empty();
           if (out.empty()) out = ": keep-alive\n\n";  // notices a client that went away
           return sink.write(out.data(), out.size());
         });
