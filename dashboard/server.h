@@ -7,6 +7,8 @@
 //   /api/details/{id}/mesh    its reassembled MESH, 404 {"error"} if unknown or none yet
 //   /api/details/{id}/field   its newest complete FIELD, 404 {"error"} if unknown or none yet
 //   /api/events               Server-Sent Events: one per STATE/STATUS/REJECT, complete MESH/FIELD
+//                             after the event Last-Event-ID or ?after=ID names (X-Last-Event-Id of
+//                             /api/details: the newest its snapshot includes), else from now
 #pragma once
 
 #include <httplib.h>

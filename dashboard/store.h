@@ -115,7 +115,9 @@ class Store {
                   Clock::time_point now);
 
   /// JSON texts as described above; nullopt for an unknown detail.
-  [[nodiscard]] std::string details_json(Clock::time_point now) const;
+  /// `last_event` (when given): the id of the newest event the snapshot includes.
+  [[nodiscard]] std::string details_json(Clock::time_point now,
+                                         std::uint64_t* last_event = nullptr) const;
   [[nodiscard]] std::optional<std::string> detail_json(const std::string& id,
                                                        Clock::time_point now) const;
   [[nodiscard]] std::optional<std::string> history_json(const std::string& id) const;

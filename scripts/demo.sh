@@ -78,7 +78,7 @@ echo
 echo
 # DASHBOARD_SCREENSHOT=file.png: headless chromium's picture of the dashboard at the end.
 if [ -n "${DASHBOARD_SCREENSHOT:-}" ] && command -v chromium >/dev/null; then
-  chromium --headless --no-sandbox --disable-gpu --window-size=1300,640 \
+  chromium --headless --no-sandbox --disable-gpu --window-size=1300,1000 \
     --virtual-time-budget=10000 --screenshot="$DASHBOARD_SCREENSHOT" "${dashboard_url}?events=off" \
     >/dev/null 2>&1 && echo "demo: dashboard screenshot in $DASHBOARD_SCREENSHOT"
 fi

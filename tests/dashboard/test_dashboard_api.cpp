@@ -3,7 +3,9 @@
 // 6 batches): the HTTP API reports the last STATE (cycles, crack length, state_hash), 404 for an
 // unknown detail, one history point per state; then headless chromium loads the page and its DOM
 // shows the same numbers and one crack-length chart point per state (screenshot in the build
-// directory). The mesh and the newest field the API serves equal what the daemon published (the
+// directory). A second test opens the page first, events on, and reads its live DOM through the
+// DevTools protocol while the daemon applies the history (tests/dashboard/cdp_pipe.h). The mesh
+// and the newest field the API serves equal what the daemon published (the
 // test subscribes too), and the page draws the damage map (its canvas says how many nodes, which
 // field and how many crack paths) with its legend. A second dashboard started after the run gets
 // the mesh by asking the daemon (mesh_request_t) and the whole history from the daemon's results
@@ -16,6 +18,8 @@
 #include <sys/wait.h>
 
 #include <atomic>
+#include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
@@ -29,6 +33,7 @@
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/mesh.h"
+#include "tests/dashboard/cdp_pipe.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
 
@@ -259,9 +264,39 @@ TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
   EXPECT_EQ(history["cycles"].back(), last["cycles"]);
   EXPECT_EQ(history["crack_length_m"].size(), std::size_t(kBatches + 1));
 
+  // The event stream from the start (?after=0): every STATE's event, in order, with its cycles.
+  {
+    httplib::Client client("127.0.0.1", port_);
+    client.set_read_timeout(60, 0);
+    std::string stream;
+    std::vector<json> states;
+    client.Get("/api/events?after=0", [&](const char* data, std::size_t size) {
+      stream.append(data, size);
+      for (std::size_t end; (end = stream.find("\n\n")) != std::string::npos;
+           stream.erase(0, end + 2)) {
+        const std::string event = stream.substr(0, end);
+        const auto at = event.find("\ndata: ");
+        if (event.find("event: state\n") == std::string::npos || at == std::string::npos) continue;
+        states.push_back(json::parse(event.substr(at + 7))["summary"]);
+      }
+      return states.size() < std::size_t(kBatches + 1);
+    });
+    ASSERT_EQ(states.size(), std::size_t(kBatches + 1));
+    for (int s = 0; s <= kBatches; ++s) {
+      EXPECT_EQ(states[std::size_t(s)]["state_seq"], s);
+      EXPECT_EQ(states[std::size_t(s)]["cycles"], history["cycles"][std::size_t(s)]);
+    }
+  }
+
   const auto list = json::parse(get("/api/details").second);
   ASSERT_EQ(list["details"].size(), 1u);
   EXPECT_EQ(list["details"][0]["cycles"], last["cycles"]);
+  {  // The snapshot names the newest event it includes (at least the states').
+    httplib::Client client("127.0.0.1", port_);
+    const auto res = client.Get("/api/details");
+    ASSERT_TRUE(res && res->has_header("X-Last-Event-Id"));
+    EXPECT_GE(std::stoull(res->get_header_value("X-Last-Event-Id")), std::uint64_t(kBatches + 1));
+  }
   EXPECT_EQ(get("/").first, 200);
   EXPECT_EQ(get("/chart.js").first, 200);
 
@@ -369,6 +404,118 @@ TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
   EXPECT_TRUE(shot_status && WIFEXITED(*shot_status) && WEXITSTATUS(*shot_status) == 0)
       << read_file(dir_ / "chromium.log");
   EXPECT_TRUE(fs::exists(shot) && fs::file_size(shot) > 0) << shot;
+}
+
+// The page opened first, before any detail is on the bus and with its event stream on; then the
+// daemon applies the history. Read from the live DOM through the DevTools protocol (chromium
+// --remote-debugging-pipe): the card shows the last STATE's cycles and crack length, the
+// crack-length chart holds one point per state at the API history's cycles and lengths, and the
+// damage map shows the last field — in the same document (a mark set before the run is still
+// there: no reload), updated by the state events it counted. Screenshot in the build directory.
+TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) {
+  if (!fs::exists(kChromium))
+    GTEST_SKIP() << kChromium << " not installed (scripts/install-deps.sh)";
+  ASSERT_NO_FATAL_FAILURE(start_dashboard());
+  testing::CdpPipe browser(
+      {kChromium, "--headless", "--no-sandbox", "--disable-gpu", "--window-size=1300,1000",
+       "--no-first-run", "--user-data-dir=" + (dir_ / "chromium-profile").string(), "about:blank"},
+      (dir_ / "chromium.log").string());
+  ASSERT_TRUE(browser.started());
+  const auto targets = browser.call("Target.getTargets", json::object(), "", kWaitS);
+  ASSERT_TRUE(targets) << read_file(dir_ / "chromium.log");
+  std::string target;
+  for (const auto& t : (*targets)["result"]["targetInfos"]) {
+    if (t["type"] == "page") target = t["targetId"];
+  }
+  ASSERT_FALSE(target.empty()) << targets->dump();
+  const auto attached =
+      browser.call("Target.attachToTarget", {{"targetId", target}, {"flatten", true}}, "", kWaitS);
+  ASSERT_TRUE(attached && (*attached)["result"].contains("sessionId"))
+      << attached.value_or(json()).dump();
+  const std::string page = (*attached)["result"]["sessionId"];
+  const std::string url = "http://127.0.0.1:" + std::to_string(port_) + "/";
+  const auto navigated = browser.call("Page.navigate", {{"url", url}}, page, kWaitS);
+  ASSERT_TRUE(navigated && !(*navigated)["result"].contains("errorText"))
+      << navigated.value_or(json()).dump();
+
+  // Polls `expression` until it is true (the deadline is kWaitS).
+  const auto wait_until = [&](const std::string& expression) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (const auto v = browser.evaluate(page, expression, 60.0); v && *v == true) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+    return false;
+  };
+  // The event stream is open, no detail yet; the mark tells this document from a reloaded one.
+  ASSERT_TRUE(wait_until("document.getElementById('connection').textContent === 'live'"))
+      << read_file(dir_ / "chromium.log");
+  EXPECT_EQ(browser.evaluate(page, "document.querySelectorAll('.card[data-detail]').length", 60)
+                .value_or(json()),
+            json(0));
+  ASSERT_TRUE(
+      browser.evaluate(page, "window.peritwinMark = 'before the run'; true", 60).has_value());
+
+  const json last = run_history();
+  ASSERT_EQ(last["state_seq"], kBatches) << last.dump();
+  const auto [hs, hbody] = get("/api/details/b1-ct/history");
+  ASSERT_EQ(hs, 200);
+  const auto history = json::parse(hbody);
+
+  // What the page shows once its card has the last state and the last field drawn.
+  const std::string card = "document.querySelector('.card[data-detail=\"b1-ct\"]')";
+  ASSERT_TRUE(wait_until(
+      "(() => { const c = " + card +
+      "; return c !== null && c.querySelector('.state-seq').dataset.value === '" +
+      std::to_string(kBatches) + "' && c.querySelector('.damage-map').dataset.fieldSeq === '" +
+      std::to_string(kBatches) + "'; })()"))
+      << browser.evaluate(page, "document.body.outerHTML", 60).value_or(json()).dump();
+  const auto shown = browser.evaluate(page, "(() => { const c = " + card + R"(;
+      const chart = Chart.getChart(c.querySelector('.chart-crack'));
+      const points = chart.data.datasets[0].data;
+      return {mark: window.peritwinMark ?? null,
+              stateEvents: Number(document.body.dataset.stateEvents ?? 0),
+              cycles: c.querySelector('.cycles').dataset.value,
+              cyclesText: c.querySelector('.cycles').textContent,
+              crack: c.querySelector('.crack-length').dataset.value,
+              crackText: c.querySelector('.crack-length').textContent,
+              dataPoints: Number(c.querySelector('.chart-crack').dataset.points),
+              x: points.map(p => p.x), y: points.map(p => p.y),
+              mapNodes: Number(c.querySelector('.damage-map').dataset.nodes)}; })())",
+                                      60);
+  ASSERT_TRUE(shown && shown->is_object()) << read_file(dir_ / "chromium.log");
+  const json& s = *shown;
+  EXPECT_EQ(s["mark"], "before the run") << "the page was reloaded";
+  // Every state arrived as an event (the card was created by the first one).
+  EXPECT_GE(s["stateEvents"].get<int>(), kBatches + 1);
+  EXPECT_EQ(std::stoll(s["cycles"].get<std::string>()), last["cycles"].get<std::int64_t>());
+  EXPECT_DOUBLE_EQ(std::stod(s["crack"].get<std::string>()), last["crack_length_m"].get<double>());
+  char mm[32];
+  std::snprintf(mm, sizeof mm, "%.3f", last["crack_length_m"].get<double>() * 1e3);
+  EXPECT_EQ(s["crackText"], mm);
+  // One chart point per state, at the history's cycles and crack lengths (mm; the page's
+  // product by 1e3 in double, so within an ulp or two of ours).
+  EXPECT_EQ(s["dataPoints"], kBatches + 1);
+  ASSERT_EQ(s["x"].size(), history["cycles"].size());
+  ASSERT_EQ(s["y"].size(), history["crack_length_m"].size());
+  for (std::size_t i = 0; i < s["x"].size(); ++i) {
+    EXPECT_EQ(s["x"][i].get<double>(), history["cycles"][i].get<double>()) << i;
+    EXPECT_NEAR(s["y"][i].get<double>(), history["crack_length_m"][i].get<double>() * 1e3,
+                1e-12 * (1.0 + std::abs(s["y"][i].get<double>())))
+        << i;
+  }
+  EXPECT_GT(s["mapNodes"].get<int>(), 0);
+
+  const fs::path shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-live-test.png";
+  fs::remove(shot);
+  const auto captured = browser.call("Page.captureScreenshot", {{"format", "png"}}, page, kWaitS);
+  ASSERT_TRUE(captured && (*captured)["result"].contains("data"))
+      << captured.value_or(json()).dump();
+  const auto png = testing::base64_decode((*captured)["result"]["data"].get<std::string>());
+  ASSERT_TRUE(png && png->size() > 8);
+  EXPECT_EQ(png->substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  std::ofstream(shot, std::ios::binary) << *png;
+  EXPECT_TRUE(fs::exists(shot) && fs::file_size(shot) == png->size()) << shot;
 }
 
 }  // namespace

@@ -115,6 +115,66 @@ TEST(DashboardStore, DetailJsonStartsWithTheStateJsonFields) {
   EXPECT_FALSE(store.history_json("nope"));
 }
 
+/// Top-level keys of a JSON object text as written (a duplicate counted twice), by SAX.
+std::vector<std::string> top_level_keys(const std::string& text) {
+  struct Keys : nlohmann::json_sax<json> {
+    std::vector<std::string> keys;
+    int depth = 0;
+    bool null() override { return true; }
+    bool boolean(bool) override { return true; }
+    bool number_integer(number_integer_t) override { return true; }
+    bool number_unsigned(number_unsigned_t) override { return true; }
+    bool number_float(number_float_t, const string_t&) override { return true; }
+    bool string(string_t&) override { return true; }
+    bool binary(binary_t&) override { return true; }
+    bool start_object(std::size_t) override { return ++depth, true; }
+    bool end_object() override { return --depth, true; }
+    bool start_array(std::size_t) override { return ++depth, true; }
+    bool end_array() override { return --depth, true; }
+    bool key(string_t& k) override {
+      if (depth == 1) keys.push_back(k);
+      return true;
+    }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+      return false;
+    }
+  } sax;
+  if (!json::sax_parse(text, &sax)) return {};
+  return sax.keys;
+}
+
+// The summary is state_json's text spliced with the dashboard's fields (no parse): it must be the
+// bytes a parse of the whole and a dump give (what the dashboard served before the splice), and
+// hold no key twice (a field state_json gains one day that the dashboard also adds). With the
+// awkward values: NaN and infinities (null), -0.0, tiny and huge numbers, a non-ASCII and a
+// control character in strings, and before any state (no splice).
+TEST(DashboardStore, DetailJsonIsTheDumpOfItsOwnParseWithNoKeyTwice) {
+  Store store;
+  auto s = state(5, 5000, 1.0e-300);
+  s.max_damage = -0.0;
+  s.k_i = std::numeric_limits<double>::infinity();
+  s.remaining_cycles = 1.0e300;
+  s.remaining_cycles_low = 0.1 + 0.2;
+  s.remaining_life_source = "r\xc3\xa9play\x01\"";
+  s.state_hash = "\t";
+  feed(store, channel("b1-ct", Kind::kState), encode(s));
+  feed(store, channel("b1-dg", Kind::kStatus), encode([] {
+         peritwin_msgs::status_t st{};
+         st.detail_id = "b1-dg";
+         st.health = "ok";
+         return st;
+       }()));
+  ASSERT_EQ(top_level_keys(R"({"a": {"b": 1}, "a": 2})"), (std::vector<std::string>{"a", "a"}));
+  for (const std::string id : {"b1-ct", "b1-dg"}) {
+    const auto text = store.detail_json(id, kT0);
+    ASSERT_TRUE(text) << id;
+    const auto ordered = nlohmann::ordered_json::parse(*text);
+    EXPECT_EQ(ordered.dump(-1, ' ', false, json::error_handler_t::replace), *text) << id;
+    const auto keys = top_level_keys(*text);
+    EXPECT_EQ(keys.size(), ordered.size()) << id << ": a key appears twice in " << *text;
+  }
+}
+
 TEST(DashboardStore, HistoryHasOnePointPerStateAndNullForNoEstimate) {
   Store store;
   for (int seq = 0; seq <= 4; ++seq) {
