@@ -15,6 +15,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "messages/auth.h"
@@ -756,6 +757,40 @@ TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch
   EXPECT_GT(s.reject_rate, 1.0);
   EXPECT_EQ(s.health, "degraded");
   EXPECT_EQ(daemon.twin(0).state_seq(), 0);
+  daemon.stop();
+}
+
+// The last state a dashboard's damage map should show is the end of life: its FIELD goes out
+// even when the state is not on the field_every_batches period.
+TEST_F(MemqTest, TheEndOfLifeStatePublishesItsField) {
+  const TwinConfig config = config_of(
+      b1_text("every_batches = 0", {{"field_every_batches = 10", "field_every_batches = 1000"}}));
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  struct Sink {
+    std::set<std::int64_t> field_states;
+    void field(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+      const auto f = messages::decode_field(rbuf->data, rbuf->data_size);
+      if (f) field_states.insert(f->state_seq);
+    }
+  } sink;
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kField), &Sink::field, &sink);
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
+  // Seq 1: 1000 cycles, no end of life; seq 2: enough cycles at 4 kN to reach the 8 mm criterion.
+  for (const Batch& b : {Batch{"b1-ct", "p", 1, {{4000, 0.1, 0, 1000}}},
+                         Batch{"b1-ct", "p", 2, {{4000, 0.1, 0, 1'000'000}}}}) {
+    const auto m = batch_message(b, 0);
+    lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
+  }
+  for (int i = 0; i < 20; ++i) daemon.poll(10);
+  daemon.tick();
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(daemon.twin(0).state_seq(), 2);
+  ASSERT_NE(daemon.twin(0).failure(), Failure::none);
+  EXPECT_EQ(sink.field_states, (std::set<std::int64_t>{0, 2}));  // start and end of life only
   daemon.stop();
 }
 

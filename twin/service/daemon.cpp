@@ -721,8 +721,13 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   const auto every = twin.model().config().checkpoint.every_batches;
   if (every > 0 && twin.state_seq() % every == 0) checkpoint(d, "every_batches");
   publish_state(d, r.recv_utime);
+  // FIELD every field_every_batches, and at the end of life (the last state a dashboard's damage
+  // map should show: no batch comes after it).
   const auto every_field = twin.model().config().output.field_every_batches;
-  if (every_field > 0 && twin.state_seq() % every_field == 0) publish_fields(d);
+  if (every_field > 0 &&
+      (twin.state_seq() % every_field == 0 || twin.failure() != Failure::none)) {
+    publish_fields(d);
+  }
   if (d.outputs) d.outputs->record(twin);
   submit_life(d);
 }
