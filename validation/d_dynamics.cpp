@@ -207,8 +207,11 @@ int run_d3(const std::filesystem::path& out, int threads) {
     plot.y_title = "normalized k";
     bool exact_drawn = false;
     for (const auto& kernel : {kConstant, kGaussian}) {
-      for (const std::string extrapolation : {"delta_2delta", "nearest_nodes"}) {
+      for (const std::string extrapolation : {"delta_2delta", "nearest_nodes", "both_edges"}) {
+        if (extrapolation == "both_edges" && kernel.shape == KernelChoice::Shape::constant)
+          continue;
         CrackSpec spec;
+        spec.both_edges = extrapolation == "both_edges";
         spec.kernel = kernel;
         spec.threads = threads;
         spec.loading = {kind, 3.36e-4};
@@ -224,7 +227,8 @@ int run_d3(const std::filesystem::path& out, int threads) {
         line["kernel"] = kernel_key(kernel);
         if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
         line["loading"] = loading;
-        line["extrapolation"] = extrapolation;
+        line["extrapolation"] = spec.both_edges ? "delta_2delta" : extrapolation;
+        line["loaded_edges"] = spec.both_edges ? "both (compared with 2 x Freund)" : "top";
         line["r1_m"] = r.r1;
         line["r2_m"] = r.r2;
         line["nodes"] = r.nodes;
@@ -233,7 +237,8 @@ int run_d3(const std::filesystem::path& out, int threads) {
                             tools::significant(r.first_reflection, 5)};
         line["mean_rel_error"] = tools::significant(r.mean_rel_error, 4);
         line["max_rel_error"] = tools::significant(r.max_rel_error, 4);
-        if (kernel.shape == KernelChoice::Shape::gaussian && loading == "ramp") {
+        if (kernel.shape == KernelChoice::Shape::gaussian && loading == "ramp" &&
+            !spec.both_edges) {
           line["goal"] = "mean <= 0.05, max <= 0.10";
           line["met"] = r.mean_rel_error <= 0.05 && r.max_rel_error <= 0.10;
         }

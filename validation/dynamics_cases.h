@@ -96,6 +96,10 @@ struct CrackSpec {
   dynamics::KernelChoice kernel;
   int threads = 1;
   bool lattice_calibrated = false;
+  /// false: σ(t) on the top edge only, one plane wave of amplitude σ0 meeting the crack: Freund's
+  /// problem (the crack faces see the pressure σ0). true: on both edges, the two waves add at the
+  /// crack line (pressure 2σ0) and K_I is twice Eq. (65)/(67) — compared with that doubled value.
+  bool both_edges = false;
   /// Face-node distances behind the tip for Eq. (62) (m); NaN: δ + Δ/2 and 2δ + Δ/2 (the node
   /// columns at δ and 2δ behind the tip, the static solver's convention).
   double r1 = std::numeric_limits<double>::quiet_NaN();
