@@ -208,6 +208,18 @@ Expected<std::unique_ptr<ExplicitDynamics>> ExplicitDynamics::create(const Discr
     if (sum > 0) min_step = std::min(min_step, std::sqrt(2.0 / sum));
   }
   d->stable_time_step_ = min_step;
+  if (setup.critical_stretch > 0) {
+    // Breaking compares the elongation l − ξ with s_c·ξ; a bond touching a no-fail node (the
+    // geometry's no-fail zones, 002 Sec. 7: load rows) gets an infinite limit.
+    d->elongation_limit_.resize(ne);
+    for (std::size_t e = 0; e < ne; ++e) {
+      const auto b = static_cast<std::size_t>(d->bond_of_[e]);
+      const bool no_fail = disc.no_fail[static_cast<std::size_t>(disc.bond_i[b])] ||
+                           disc.no_fail[static_cast<std::size_t>(disc.bond_j[b])];
+      d->elongation_limit_[e] =
+          no_fail ? std::numeric_limits<double>::infinity() : setup.critical_stretch * d->xi_[e];
+    }
+  }
   if (setup.time_step > min_step) {
     char text[200];
     std::snprintf(text, sizeof text,
@@ -244,7 +256,7 @@ void ExplicitDynamics::accelerate(int lo, int hi, const double* u, double load, 
   const double* xy = xi_y_.data();
   const double* xl = xi_.data();
   double* coef = coef_.data();
-  const double sc = setup_.critical_stretch;
+  const double* limit = elongation_limit_.data();
   for (int i = lo; i < hi; ++i) {
     const auto iu = static_cast<std::size_t>(i);
     const double uxi = u[2 * iu];
@@ -261,7 +273,7 @@ void ExplicitDynamics::accelerate(int lo, int hi, const double* u, double load, 
       if constexpr (Breaking) {
         // Both ends compute the same bits of l (ξ_ji + η_ji = −(ξ_ij + η_ij) exactly), so they
         // break the bond at the same step.
-        coef[e] = (l - xl[e]) > sc * xl[e] ? 0.0 : coef[e];
+        coef[e] = (l - xl[e]) > limit[e] ? 0.0 : coef[e];
       }
       // c s (ξ+η)/|ξ+η| · β V_j / ρ with s = (l − ξ)/ξ: coef·ξ·s/l = coef·(1 − ξ/l).
       const double t = coef[e] * (1.0 - xl[e] / l);

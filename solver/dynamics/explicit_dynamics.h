@@ -66,11 +66,13 @@ struct DynamicsSetup {
   Dimension dimension = Dimension::two;
   PlaneCondition plane = PlaneCondition::plane_stress;
   KernelChoice kernel;
-  double youngs_modulus = 0.0;    ///< E (Pa)
-  double density = 0.0;           ///< ρ (kg/m³)
-  double time_step = 0.0;         ///< Δt (s); refused above the stable step of Eq. (42)
-  int threads = 1;                ///< bond-force evaluation threads (>= 1)
-  double critical_stretch = 0.0;  ///< s_c: a bond whose stretch exceeds it breaks; 0 = never
+  double youngs_modulus = 0.0;  ///< E (Pa)
+  double density = 0.0;         ///< ρ (kg/m³)
+  double time_step = 0.0;       ///< Δt (s); refused above the stable step of Eq. (42)
+  int threads = 1;              ///< bond-force evaluation threads (>= 1)
+  /// s_c: a bond whose stretch exceeds it breaks; 0 = never. Bonds touching a node of the
+  /// Discretization's no-fail zones never break.
+  double critical_stretch = 0.0;
   /// false: c0 of the paper (Eq. 24-33, from the continuum integral over the horizon). true: c0
   /// scaled so that an interior node's discrete family (the lattice sum with the partial volumes
   /// of Eq. 36) has the continuum's strain energy under isotropic strain, the same idea as the
@@ -174,9 +176,10 @@ class ExplicitDynamics {
   std::vector<std::int32_t> neighbour_;
   std::vector<double> xi_x_, xi_y_, xi_;  ///< ξ = x_j − x_i and |ξ|
   std::vector<double> coef_;  ///< c(ξ)·β·V_j/(ρ ξ) (1/s² per unit stretch·m), 0 = broken
-  std::vector<BondIndex> bond_of_;  ///< the Discretization bond of the entry
-  std::vector<double> mass_;        ///< ρ V_i
-  std::vector<double> body_;        ///< b/ρ per node (interleaved), m/s²
+  std::vector<BondIndex> bond_of_;        ///< the Discretization bond of the entry
+  std::vector<double> elongation_limit_;  ///< s_c·ξ, +inf near no-fail nodes (breaking only)
+  std::vector<double> mass_;              ///< ρ V_i
+  std::vector<double> body_;              ///< b/ρ per node (interleaved), m/s²
   std::vector<std::uint8_t> fixed_;
   std::vector<double> fixed_u_;
   struct Image {
