@@ -79,6 +79,12 @@ int run_d1(const std::filesystem::path& out, int threads) {
       line["kernel"] = kernel_key(kernel);
       if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
       line["micromodulus"] = calibrated ? "lattice_calibrated" : "paper_eq26_33";
+      if (calibrated) {
+        line["c0_factor"] =
+            tools::significant(dynamics::lattice_calibration_factor(
+                                   dynamics::Dimension::one, kernel, spec.dx, spec.m * spec.dx),
+                               5);
+      }
       line["dx_m"] = spec.dx;
       line["horizon_m"] = spec.m * spec.dx;
       line["dt_s"] = spec.time_step;
@@ -172,6 +178,49 @@ int run_d2(const std::filesystem::path& out) {
     plot.series.push_back({"local omega = vk", ks, local, kBlack, true});
   }
   twin::write_line_plot_png(out / "d2_dispersion.png", plot);
+  // 001 Figs. 5 and 9: the effect of Δx at m = 3 (Gaussian p = 2), and of m at δ = 4 mm
+  // (constant kernel), the formula with the partial volumes (equal to the lattice, above).
+  {
+    twin::LinePlot by_dx;
+    by_dx.title = "d2 gaussian p=2, m = 3: dx = 0.5, 1, 2 mm";
+    by_dx.x_title = "k [1/m]";
+    by_dx.y_title = "omega/v [1/m]";
+    const twin::Rgb colours[] = {kBlue, kGreen, kRed};
+    int c = 0;
+    for (const double dx : {0.5e-3, 1e-3, 2e-3}) {
+      std::vector<double> ks, w;
+      for (int s = 1; s <= 400; ++s) {
+        ks.push_back(3000.0 * s / 400.0);
+        w.push_back(dynamics::dispersion_omega(kGaussian, v, 3, dx, ks.back(), true) / v);
+      }
+      char label[32];
+      std::snprintf(label, sizeof label, "dx = %g mm", dx * 1e3);
+      by_dx.series.push_back({label, ks, w, colours[c++], false});
+    }
+    std::vector<double> ks, local;
+    for (int s = 0; s <= 400; ++s) {
+      ks.push_back(3000.0 * s / 400.0);
+      local.push_back(ks.back());
+    }
+    by_dx.series.push_back({"local", ks, local, kBlack, true});
+    twin::write_line_plot_png(out / "d2_dispersion_dx.png", by_dx);
+    twin::LinePlot by_m;
+    by_m.title = "d2 constant kernel, delta = 4 mm: m = 2, 3, 5, 10";
+    by_m.x_title = "k [1/m]";
+    by_m.y_title = "omega/v [1/m]";
+    const twin::Rgb more[] = {kRed, kGreen, kBlue, twin::Rgb{150, 90, 0}};
+    c = 0;
+    for (const int m : {2, 3, 5, 10}) {
+      std::vector<double> kk, w;
+      for (int s = 1; s <= 400; ++s) {
+        kk.push_back(3000.0 * s / 400.0);
+        w.push_back(dynamics::dispersion_omega(kConstant, v, m, 4e-3 / m, kk.back(), true) / v);
+      }
+      by_m.series.push_back({"m = " + std::to_string(m), kk, w, more[c++], false});
+    }
+    by_m.series.push_back({"local", ks, local, kBlack, true});
+    twin::write_line_plot_png(out / "d2_dispersion_m.png", by_m);
+  }
   // The packet: measured speed against the group speed dω/dk of the same lattice.
   for (const auto& kernel : {kConstant, kGaussian}) {
     PacketSpec spec;
@@ -207,11 +256,15 @@ int run_d3(const std::filesystem::path& out, int threads) {
     plot.y_title = "normalized k";
     bool exact_drawn = false;
     for (const auto& kernel : {kConstant, kGaussian}) {
-      for (const std::string extrapolation : {"delta_2delta", "nearest_nodes", "both_edges"}) {
-        if (extrapolation == "both_edges" && kernel.shape == KernelChoice::Shape::constant)
+      for (const std::string extrapolation :
+           {"delta_2delta", "nearest_nodes", "both_edges", "lattice_c0"}) {
+        if ((extrapolation == "both_edges" || extrapolation == "lattice_c0") &&
+            kernel.shape == KernelChoice::Shape::constant) {
           continue;
+        }
         CrackSpec spec;
         spec.both_edges = extrapolation == "both_edges";
+        spec.lattice_calibrated = extrapolation == "lattice_c0";
         spec.kernel = kernel;
         spec.threads = threads;
         spec.loading = {kind, 3.36e-4};
@@ -227,7 +280,8 @@ int run_d3(const std::filesystem::path& out, int threads) {
         line["kernel"] = kernel_key(kernel);
         if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
         line["loading"] = loading;
-        line["extrapolation"] = spec.both_edges ? "delta_2delta" : extrapolation;
+        line["extrapolation"] = extrapolation == "nearest_nodes" ? "nearest_nodes" : "delta_2delta";
+        line["micromodulus"] = spec.lattice_calibrated ? "lattice_calibrated" : "paper_eq29";
         line["loaded_edges"] = spec.both_edges ? "both (compared with 2 x Freund)" : "top";
         line["r1_m"] = r.r1;
         line["r2_m"] = r.r2;
@@ -237,6 +291,12 @@ int run_d3(const std::filesystem::path& out, int threads) {
                             tools::significant(r.first_reflection, 5)};
         line["mean_rel_error"] = tools::significant(r.mean_rel_error, 4);
         line["max_rel_error"] = tools::significant(r.max_rel_error, 4);
+        if (spec.lattice_calibrated) {
+          line["c0_factor"] = tools::significant(
+              dynamics::lattice_calibration_factor(dynamics::Dimension::two, kernel, spec.dx,
+                                                   spec.horizon_ratio * spec.dx),
+              5);
+        }
         if (kernel.shape == KernelChoice::Shape::gaussian && loading == "ramp" &&
             !spec.both_edges) {
           line["goal"] = "mean <= 0.05, max <= 0.10";
@@ -250,10 +310,17 @@ int run_d3(const std::filesystem::path& out, int threads) {
           plot.series.push_back({"freund", t, scaled(r.k_exact, norm), kBlack, true});
           exact_drawn = true;
         }
-        if (extrapolation == "delta_2delta") {
-          plot.series.push_back({kernel_label(kernel), t, scaled(r.k_pd, norm),
-                                 kernel.shape == KernelChoice::Shape::constant ? kRed : kBlue,
-                                 false});
+        if (extrapolation == "delta_2delta" || extrapolation == "nearest_nodes") {
+          const bool nearest = extrapolation == "nearest_nodes";
+          if (!nearest || kernel.shape == KernelChoice::Shape::gaussian) {
+            plot.series.push_back(
+                {nearest ? std::string("gaussian, nearest nodes") : kernel_label(kernel), t,
+                 scaled(r.k_pd, norm),
+                 nearest                                         ? kGreen
+                 : kernel.shape == KernelChoice::Shape::constant ? kRed
+                                                                 : kBlue,
+                 false});
+          }
         }
       }
     }
