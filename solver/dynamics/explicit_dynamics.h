@@ -111,10 +111,12 @@ class ExplicitDynamics {
   ExplicitDynamics(const ExplicitDynamics&) = delete;
   ExplicitDynamics& operator=(const ExplicitDynamics&) = delete;
 
-  /// 001 Eq. (42)-(43): min over nodes of √(2ρ / Σ_j V_j β_j c(ξ)/ξ) — see the .cpp for the 2.
+  /// 001 Eq. (42)-(43) as printed: min over nodes of √(ρ / Σ_j V_j β_j c(ξ)/ξ); Δt above it is
+  /// refused.
   [[nodiscard]] double stable_time_step() const { return stable_time_step_; }
-  /// The same with Eq. (42) taken literally (no factor 2): smaller by √2.
-  [[nodiscard]] double stable_time_step_as_printed() const;
+  /// √2 × stable_time_step(): the von Neumann bound √(2ρ / Σ V_j C_ij) of the paper's source
+  /// (Silling & Askari 2005), sufficient for stability (see the .cpp); informational.
+  [[nodiscard]] double von_neumann_time_step() const;
   [[nodiscard]] double bond_stiffness_c0() const { return c0_; }
 
   /// u0, v0 interleaved [x0, y0, x1, y1, ...] (size 2·nodes). Sets step 0; u_{−1} from the Taylor

@@ -117,9 +117,9 @@ TEST(Dynamics, FreePlateConservesTheSchemesDiscreteEnergy) {
               worst_naive);
 }
 
-// Eq. (42)-(43): the limit is computed, a larger Δt refused naming it, the limit itself accepted;
-// and it is a sufficient one: 2/ω_max of the actual lattice (max over k of the lattice sum at the
-// bar's middle node) is not below it.
+// Eq. (42)-(43): the limit is computed as printed, a larger Δt refused naming it, the limit itself
+// accepted; and it is a sufficient one: 2/ω_max of the actual lattice (max over k of the lattice
+// sum at the bar's middle node) is not below it, nor below the √2-larger von Neumann bound.
 TEST(Dynamics, RefusesATimeStepAboveTheStableOne) {
   const Discretization disc = dynamics::bar_discretization(0.0, 200, 1.25e-3, 6.25e-3, 1e-6);
   dynamics::DynamicsSetup setup;
@@ -137,13 +137,15 @@ TEST(Dynamics, RefusesATimeStepAboveTheStableOne) {
   for (int j = 1; j <= 5; ++j)
     sum += 2 * c0 * (j == 5 ? 0.5 : 1.0) * 1e-6 * 1.25e-3 / (j * 1.25e-3);
   // The end nodes have half a family: the interior one is the smallest limit.
-  EXPECT_NEAR(limit, std::sqrt(2 * 7850 / sum), 1e-12 * limit);
+  EXPECT_NEAR(limit, std::sqrt(7850 / sum), 1e-12 * limit);
   double omega_max = 0.0;
   for (int s = 0; s <= 2000; ++s) {
     const double k = pi / 1.25e-3 * s / 2000.0;
     omega_max = std::max(omega_max, std::sqrt(ok.value()->lattice_omega_squared(100, k)));
   }
-  EXPECT_GE(2.0 / omega_max, limit);
+  // The printed limit and even the √2-larger von Neumann bound are within 2/ω_max.
+  EXPECT_GE(2.0 / omega_max, ok.value()->von_neumann_time_step());
+  EXPECT_NEAR(ok.value()->von_neumann_time_step(), std::sqrt(2.0) * limit, 1e-12 * limit);
   setup.time_step = limit;
   EXPECT_TRUE(dynamics::ExplicitDynamics::create(disc, setup));
   setup.time_step = 1.001 * limit;
