@@ -92,6 +92,8 @@ int run_d1(const std::filesystem::path& out, int threads) {
       line["transits"] = spec.transits;
       line["rel_l2_error"] = tools::significant(r.rel_l2_error, 4);
       line["max_abs_error_over_eps0"] = tools::significant(r.max_abs_error_over_strain, 4);
+      line["undershoot_first_jump_over_eps0"] = tools::significant(r.undershoot_first_jump, 3);
+      line["overshoot_second_jump_over_eps0"] = tools::significant(r.overshoot_second_jump, 3);
       line["goal"] =
           kernel.shape == KernelChoice::Shape::gaussian ? "rel_l2_error <= 0.05" : "measured";
       line["met"] = kernel.shape == KernelChoice::Shape::gaussian ? r.rel_l2_error <= 0.05 : true;

@@ -101,6 +101,16 @@ BarResult run_bar(const BarSpec& spec) {
     ref2 += exact * exact;
     r.max_abs_error_over_strain =
         std::max(r.max_abs_error_over_strain, std::abs(eps - exact) / strain0);
+    // The release wave from the free end reaches xp at (L − xp)/c, its reflection from the fixed
+    // end at (L + xp)/c.
+    const double t = dyn->time();
+    const double first = (spec.length - xp) / c, second = (spec.length + xp) / c;
+    if (t > first && t < first + 50e-6) {
+      r.undershoot_first_jump = std::max(r.undershoot_first_jump, -eps / strain0);
+    }
+    if (t > second && t < second + 50e-6) {
+      r.overshoot_second_jump = std::max(r.overshoot_second_jump, -eps / strain0 - 1.0);
+    }
   };
   sample();
   while (dyn->step_count() < steps) {

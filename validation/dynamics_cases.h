@@ -38,6 +38,10 @@ struct BarResult {
   std::vector<double> time, strain, exact;
   double rel_l2_error = 0.0;  ///< ‖ε − ε_exact‖₂ / ‖ε_exact‖₂ over the samples
   double max_abs_error_over_strain = 0.0;  ///< max |ε − ε_exact| / (F0/EA)
+  /// The oscillation behind each jump, over the 50 µs after the exact arrival, per F0/EA: how far
+  /// ε dips below 0 after the first (1 -> 0) and below −1 after the second (0 -> −1).
+  double undershoot_first_jump = 0.0;
+  double overshoot_second_jump = 0.0;
   double stable_time_step = 0.0;
   int nodes = 0;
   double wall_s = 0.0;

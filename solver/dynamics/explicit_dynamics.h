@@ -104,7 +104,7 @@ struct Energy {
 class ExplicitDynamics {
  public:
   /// Builds the per-entry coefficients (each bond stored from both ends) and checks Δt against
-  /// stable_time_step(); an error names the limit.
+  /// stable_time_step(); an error names the limit. `disc` must outlive the integrator.
   static Expected<std::unique_ptr<ExplicitDynamics>> create(const Discretization& disc,
                                                             const DynamicsSetup& setup);
   ~ExplicitDynamics();
