@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/dynamics_bench.h"
 #include "replay/cycle_blocks.h"
 #include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
@@ -637,7 +638,19 @@ int main(int argc, char** argv) {
   bool stream_noise = false;
   stream->add_flag("--noise", stream_noise,
                    "white noise instead of sine + random walk (a reversal almost every sample)");
+  auto* dyn =
+      app.add_subcommand("dynamics", "explicit bond-based dynamics (001): bond evaluations/s");
+  double dynamics_nodes = 15000;
+  int dynamics_threads = 2;
+  int dynamics_steps = 1000;
+  dyn->add_option("--nodes", dynamics_nodes, "approximate number of nodes")
+      ->check(peritwin::cli::finite_in(100.0, 1e8));
+  dyn->add_option("--threads", dynamics_threads, "bond-force threads")->check(CLI::Range(1, 256));
+  dyn->add_option("--steps", dynamics_steps, "timed steps")->check(CLI::Range(1, 100000000));
   CLI11_PARSE(app, argc, argv);
+  if (dyn->parsed()) {
+    return peritwin::bench::run_dynamics(dynamics_nodes, dynamics_threads, dynamics_steps);
+  }
   if (stat->parsed()) return run_static(model, nodes, static_baseline, static_ordering);
   if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2, fatigue_max_cycles);
   if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);

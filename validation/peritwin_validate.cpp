@@ -15,6 +15,7 @@
 #include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
 #include "validation/ct_calibration.h"
+#include "validation/d_dynamics.h"
 
 namespace {
 
@@ -232,8 +233,10 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B2 | B3 | B4")
-      ->check(CLI::IsMember({"B1", "B2", "B3", "B4"}));
+  app.add_option("--case", which, "B1 | B2 | B3 | B4 | D1 | D2 | D3 | D4")
+      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "D1", "D2", "D3", "D4"}));
+  int threads = 2;
+  app.add_option("--threads", threads, "D1, D3, D4: bond-force threads")->check(CLI::Range(1, 64));
   bool no_limit = false;
   double max_cycles = 5e6;
   app.add_flag("--no-propagation-limit", no_limit, "B3: without 002 Eq. (12)");
@@ -327,5 +330,9 @@ int main(int argc, char** argv) {
   if (which == "B3")
     return run_b3(dx_option->count() > 0 ? dx : 0.00025, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
+  if (which == "D1") return validation::run_d1(out, threads);
+  if (which == "D2") return validation::run_d2(out);
+  if (which == "D3") return validation::run_d3(out, threads);
+  if (which == "D4") return validation::run_d4(out, threads, dx_option->count() > 0 ? dx : 0.0);
   return 2;
 }

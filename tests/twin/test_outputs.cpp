@@ -6,6 +6,7 @@
 #include <png.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstring>
@@ -863,6 +864,50 @@ TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
   EXPECT_GT(orange, 200u);  // diamonds, the band bar, the dashed latest prediction, the legend
   plot.lengths_m.pop_back();
   EXPECT_THROW(write_crack_growth_png(p, plot), PngError);
+}
+
+TEST_F(OutputsTest, LinePlotDrawsEverySeries) {
+  // Two curves in their own colours (a solid sine, a dashed line), the image the size asked for;
+  // a horizontal line at y = 0 over a fixed range [-1, 1] lands on the frame's middle row.
+  LinePlot plot;
+  plot.title = "k(t)";
+  plot.x_title = "t";
+  plot.y_title = "k";
+  plot.y_lo = -1.0;
+  plot.y_hi = 1.0;
+  PlotSeries sine{"sine", {}, {}, Rgb{200, 40, 40}, false};
+  PlotSeries zero{"zero", {}, {}, Rgb{30, 150, 60}, true};
+  for (int k = 0; k <= 200; ++k) {
+    sine.x.push_back(0.05 * k);
+    sine.y.push_back(std::sin(0.05 * k));
+    zero.x.push_back(0.05 * k);
+    zero.y.push_back(0.0);
+  }
+  plot.series = {sine, zero};
+  const fs::path p = dir_ / "lines.png";
+  write_line_plot_png(p, plot, PlotOptions{640, 400});
+  std::uint32_t w = 0, h = 0;
+  const auto px = png_pixels(p, w, h);
+  ASSERT_EQ(w, 640u);
+  ASSERT_EQ(h, 400u);
+  std::size_t red = 0, green = 0;
+  std::vector<std::size_t> green_rows(h, 0);
+  for (std::size_t i = 0; i < px.size(); i += 3) {
+    red += px[i] == 200 && px[i + 1] == 40 && px[i + 2] == 40;
+    if (px[i] == 30 && px[i + 1] == 150 && px[i + 2] == 60) {
+      ++green;
+      ++green_rows[(i / 3) / w];
+    }
+  }
+  EXPECT_GT(red, 500u);    // the sine over 10 units at 2 px
+  EXPECT_GT(green, 300u);  // dashed: about half of a 2 px line across the frame
+  // The zero line: the green pixels (legend aside) sit in two adjacent rows near the middle.
+  const auto row = static_cast<std::size_t>(std::max_element(green_rows.begin(), green_rows.end()) -
+                                            green_rows.begin());
+  EXPECT_GT(row, h / 4);
+  EXPECT_LT(row, 3 * h / 4);
+  plot.series[0].y.pop_back();
+  EXPECT_THROW(write_line_plot_png(p, plot), PngError);
 }
 
 TEST_F(OutputsTest, CrackLengthPlotIsAPng) {

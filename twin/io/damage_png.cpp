@@ -605,4 +605,68 @@ void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowth
   save(path, img);
 }
 
+void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
+                         const PlotOptions& options) {
+  if (options.width < 200 || options.height < 150 || options.width > kMaxSide ||
+      options.height > kMaxSide) {
+    throw PngError("write_line_plot_png: image size out of range");
+  }
+  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
+  double y_lo = x_lo, y_hi = -x_lo;
+  for (const auto& s : plot.series) {
+    if (s.x.size() != s.y.size()) throw PngError("write_line_plot_png: x and y differ in size");
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      x_lo = std::min(x_lo, s.x[i]);
+      x_hi = std::max(x_hi, s.x[i]);
+      y_lo = std::min(y_lo, s.y[i]);
+      y_hi = std::max(y_hi, s.y[i]);
+    }
+  }
+  if (!(x_lo <= x_hi)) x_lo = x_hi = 0.0;
+  if (!(y_lo <= y_hi)) y_lo = y_hi = 0.0;
+  if (plot.y_lo < plot.y_hi) {
+    y_lo = plot.y_lo;
+    y_hi = plot.y_hi;
+  }
+  const Axis ax = exact_axis(x_lo, x_hi, 6);
+  const Axis ay = nice_axis(y_lo, y_hi);
+  const int left = 20 + text_width("-0.00000", kScale), right = 30;
+  const int top = 20 + 3 * kGlyphHeight + 20, bottom = 20 + 2 * kGlyphHeight + 20;
+  const Frame f{left, top, options.width - left - right, options.height - top - bottom, ax, ay};
+  Image img(options.width, options.height, kWhite);
+  draw_frame(img, f, plot.x_title, plot.y_title, true);
+  draw_text(img, left - text_width("-0.0", kScale), 10, plot.title, kScale, kBlack);
+  auto clamp_y = [&](double v) { return std::clamp(v, ay.lo, ay.hi); };
+  for (const auto& s : plot.series) {
+    bool have_prev = false;
+    int prev_x = 0, prev_y = 0;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
+        have_prev = false;
+        continue;
+      }
+      const int cx = f.px(s.x[i]), cy = f.py(clamp_y(s.y[i]));
+      if (have_prev) {
+        if (s.dashed) {
+          draw_dashed_line(img, prev_x, prev_y, cx, cy, 2, 4, s.color);
+        } else {
+          draw_line(img, prev_x, prev_y, cx, cy, 2, s.color);
+        }
+      }
+      prev_x = cx;
+      prev_y = cy;
+      have_prev = true;
+    }
+  }
+  int lx = f.left + f.width;
+  const int ly = 10 + kGlyphHeight + 8;
+  for (auto it = plot.series.rbegin(); it != plot.series.rend(); ++it) {
+    lx -= text_width(it->label, kScale) + 40;
+    draw_line(img, lx, ly + kGlyphHeight / 2, lx + 22, ly + kGlyphHeight / 2, 3, it->color);
+    draw_text(img, lx + 28, ly, it->label, kScale, kBlack);
+  }
+  save(path, img);
+}
+
 }  // namespace peritwin::twin

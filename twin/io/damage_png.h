@@ -116,4 +116,23 @@ struct CrackGrowthPlot {
 void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
                             const PlotOptions& options = {});
 
+/// One curve of a line plot: its points, legend text, colour and whether it is dashed.
+struct PlotSeries {
+  std::string label;
+  std::vector<double> x, y;  ///< same size; a non-finite point breaks the line
+  Rgb color{31, 90, 180};
+  bool dashed = false;
+};
+
+/// A generic x-y line plot (validation figures: K(t) against Freund, ε(t) against the exact
+/// solution, ω(k) curves): a title, axis titles, 1-2-5 axes over the data (or the given range when
+/// y_lo < y_hi), one row of legend.
+struct LinePlot {
+  std::string title, x_title, y_title;
+  std::vector<PlotSeries> series;
+  double y_lo = 0.0, y_hi = 0.0;  ///< y_lo < y_hi: fixed y range
+};
+void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
+                         const PlotOptions& options = {});
+
 }  // namespace peritwin::twin
