@@ -211,7 +211,10 @@ LifeJob Twin::life_job_state_only() const {
 
 LifeJob Twin::life_job() const {
   LifeJob job = life_job_state_only();
-  if (can_fork(*model_)) job.engine = engine_->fork(model_->engine_settings());
+  // The coarse estimate ([detail.life] dx) maps the state onto its own grid: no fork needed.
+  if (can_fork(*model_) && !(model_->config().life.dx > 0)) {
+    job.engine = engine_->fork(model_->engine_settings());
+  }
   return job;
 }
 

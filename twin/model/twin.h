@@ -86,8 +86,9 @@ struct LifeJob {
   std::string source;
   /// A fork of the live engine at `state` (FatigueEngine::fork), which the estimate's
   /// simulations fork again instead of rebuilding and replaying the factor; null for the bilinear
-  /// law (simulate_life then imports `state`). It holds a copy of the factor: one more factor in
-  /// memory while the job waits or runs (docs/design.md, "Remaining life").
+  /// law (simulate_life then imports `state`) and for the coarse estimate ([detail.life] dx). It
+  /// holds a copy of the factor: one more factor in memory while the job waits or runs
+  /// (docs/design.md, "Remaining life").
   std::shared_ptr<const FatigueEngine> engine;
 };
 
