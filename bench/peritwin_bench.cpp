@@ -10,6 +10,7 @@
 //   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE)
 //   peritwin-bench dashboard [...]                   peritwin-bench-dashboard (SSE latency)
 //   peritwin-bench fleet [--details N] [...]         peritwin-bench-fleet (one daemon, N details)
+//   peritwin-bench life --nodes N [...]              peritwin-bench-life (one life estimate)
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -565,7 +566,7 @@ int main(int argc, char** argv) {
   // directory with the same arguments.
   if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak" ||
                     std::string(argv[1]) == "stream" || std::string(argv[1]) == "dashboard" ||
-                    std::string(argv[1]) == "fleet")) {
+                    std::string(argv[1]) == "fleet" || std::string(argv[1]) == "life")) {
     const auto self = std::filesystem::read_symlink("/proc/self/exe");
     const std::string program =
         (self.parent_path() / ("peritwin-bench-" + std::string(argv[1]))).string();

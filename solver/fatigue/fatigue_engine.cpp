@@ -417,7 +417,7 @@ EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block, const StopChe
     const std::size_t e0 = state_.events.size();
     if (!bilinear_increment(state_.pending_key, dn)) return EngineStatus::final_failure;
     return stop && state_.events.size() > e0 && stop(*this) ? EngineStatus::stopped
-                                                             : EngineStatus::ok;
+                                                            : EngineStatus::ok;
   };
   if (state_.pending_cycles > 0 && !same_bilinear_key(state_.pending_key, block)) {
     const std::int64_t dn = state_.pending_cycles;
@@ -700,6 +700,62 @@ void FatigueEngine::update_phases() {
                     ? 2
                     : 1;
   }
+}
+
+FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& settings)
+    : disc_(other.disc_),
+      model_(other.model_),
+      supports_(other.supports_),
+      loads_(other.loads_),
+      ties_(other.ties_),
+      solver_(std::make_unique<StaticSolver>(*other.solver_)),
+      retired_update_s_(other.retired_update_s_),
+      retired_updates_(other.retired_updates_),
+      retired_basis_solve_s_(other.retired_basis_solve_s_),
+      rebuilds_(other.rebuilds_),
+      rebuild_s_(other.rebuild_s_),
+      settings_(settings),
+      critical_stretch_(other.critical_stretch_),
+      critical_bond_energy_(other.critical_bond_energy_),
+      state_(other.state_),
+      rate_(other.rate_),
+      phase_(other.phase_),
+      breakable_(other.breakable_),
+      node_damage_(other.node_damage_),
+      stretch_(other.stretch_),
+      solves_(other.solves_),
+      increments_(other.increments_),
+      unconverged_increments_(other.unconverged_increments_) {
+  dose_threshold_[0] = other.dose_threshold_[0];
+  dose_threshold_[1] = other.dose_threshold_[1];
+}
+
+std::unique_ptr<FatigueEngine> FatigueEngine::fork(const FatigueSettings& settings) const {
+  if (bilinear() || settings.law == FatigueLaw::bilinear) {
+    throw std::logic_error("FatigueEngine::fork: not for the bilinear law (see fork())");
+  }
+  if (settings.law != settings_.law || settings.incremental != settings_.incremental ||
+      settings.refactor_every_resolves != settings_.refactor_every_resolves ||
+      settings.phase_switch_damage != settings_.phase_switch_damage ||
+      settings.critical_stretch != settings_.critical_stretch ||
+      settings.critical_bond_energy != settings_.critical_bond_energy ||
+      settings.static_failure != settings_.static_failure ||
+      settings.crack_interactions != settings_.crack_interactions) {
+    throw std::invalid_argument(
+        "FatigueEngine::fork: only the fatigue laws' coefficients may differ");
+  }
+  auto copy = std::unique_ptr<FatigueEngine>(new FatigueEngine(*this, settings));
+  // What import_state leaves on a fresh engine, done here on the copy: the phase III scan is
+  // redone at the next block, rates without a key are zero (a fresh engine's), and rates with a
+  // key are recomputed from the copied stretches' solver for the new coefficients, unfolded.
+  copy->cascade_checked_ = false;
+  if (copy->state_.rates_valid && !copy->state_.failed) {
+    copy->compute_rates(copy->state_.rate_key);
+  } else {
+    std::fill(copy->rate_.begin(), copy->rate_.end(), 0.0);
+    copy->state_.rates_valid = false;
+  }
+  return copy;
 }
 
 EngineState FatigueEngine::export_state() const {

@@ -292,6 +292,16 @@ class FatigueEngine {
   [[nodiscard]] std::int64_t increments() const { return increments_; }
   [[nodiscard]] std::int64_t unconverged_increments() const { return unconverged_increments_; }
 
+  /// A copy of this engine that continues with `settings` (which may differ from this engine's
+  /// only in the fatigue laws' coefficients, e.g. A2 for a life band): the factor is copied, not
+  /// rebuilt. Its state, and every later step, is bit for bit that of a fresh engine built with
+  /// `settings` that initialize()d and import_state(export_state()) (tested): the lives, doses,
+  /// broken bonds and the factor are the same, the rates are recomputed for the new
+  /// coefficients as import_state does. Not for the bilinear law (std::logic_error), whose
+  /// import refactorizes with the softened factors and so differs in the last bits from a
+  /// solver that got there by preconditioned increments.
+  [[nodiscard]] std::unique_ptr<FatigueEngine> fork(const FatigueSettings& settings) const;
+
   [[nodiscard]] EngineState export_state() const;
   /// Restores a state exported from an engine built from the same model; false if it does not fit.
   bool import_state(const EngineState& state);
@@ -330,6 +340,8 @@ class FatigueEngine {
   /// refactorization): the same operations whatever the previous solver went through.
   Status rebuild_solver(std::vector<std::uint8_t> intact);
   void update_phases();
+  /// fork(): every member copied (the solver deeply), settings_ replaced.
+  FatigueEngine(const FatigueEngine& other, const FatigueSettings& settings);
 
   const Discretization& disc_;
   const PdModel& model_;

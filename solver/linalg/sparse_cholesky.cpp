@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <new>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -43,6 +44,28 @@ Status check_after_downdate(const std::vector<double>& diagonal) {
 
 SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::~SparseCholesky() = default;
+
+SparseCholesky::SparseCholesky(const SparseCholesky& other) : impl_(std::make_unique<Impl>()) {
+  const Impl& o = *other.impl_;
+  if (o.factor != nullptr) {
+    impl_->factor = cholmod_copy_factor(o.factor, &impl_->common);
+    if (impl_->factor == nullptr) throw std::bad_alloc();
+  }
+  // Everything the updates and solves read, so that the copy continues bit for bit as the
+  // original would (the common's settings are the constructor's, never changed afterwards).
+  impl_->inverse_perm = o.inverse_perm;
+  impl_->schedule = o.schedule;
+  impl_->diagonal = o.diagonal;
+  impl_->mark = o.mark;
+  impl_->stamp = o.stamp;
+  impl_->solve_threads = o.solve_threads;
+  impl_->w = o.w;
+  impl_->tracked_rhs = o.tracked_rhs;
+  impl_->forward_y = o.forward_y;
+  impl_->delta = o.delta;
+  impl_->forward_valid = o.forward_valid;
+  impl_->work = o.work;
+}
 SparseCholesky::SparseCholesky(SparseCholesky&&) noexcept = default;
 SparseCholesky& SparseCholesky::operator=(SparseCholesky&&) noexcept = default;
 

@@ -26,7 +26,10 @@ class SparseCholesky {
  public:
   SparseCholesky();
   ~SparseCholesky();
-  SparseCholesky(const SparseCholesky&) = delete;
+  /// A deep copy (the factor by cholmod_copy_factor, with the update and solve state), for a
+  /// forward simulation that continues from a live solver's factor (FatigueEngine::fork); explicit
+  /// so that a factor of hundreds of MB is never copied by accident.
+  explicit SparseCholesky(const SparseCholesky& other);
   SparseCholesky& operator=(const SparseCholesky&) = delete;
   SparseCholesky(SparseCholesky&&) noexcept;
   SparseCholesky& operator=(SparseCholesky&&) noexcept;

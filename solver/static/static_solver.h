@@ -70,6 +70,10 @@ class StaticSolver {
  public:
   StaticSolver(const Discretization& disc, const PdModel& model, std::vector<Support> supports,
                std::vector<LoadTerm> loads, std::vector<Tie> ties = {});
+  /// A deep copy (the factor too) that continues bit for bit as this solver would
+  /// (FatigueEngine::fork); the copy refers to the same discretization and model.
+  StaticSolver(const StaticSolver&) = default;
+  StaticSolver& operator=(const StaticSolver&) = delete;
 
   /// Assembles, factorizes and solves the three basis cases for the current bond state.
   Status solve();

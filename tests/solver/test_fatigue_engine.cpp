@@ -449,6 +449,62 @@ TEST_P(IncrementalEqualsRefactor, PeriodicRebuildsKeepResumeBitIdenticalAndShort
   for (std::size_t i = 0; i < la.size(); ++i) EXPECT_NEAR(la[i], lb[i], 1e-9);
 }
 
+TEST_P(IncrementalEqualsRefactor, ForkContinuesBitForBitAsAFreshEngineThatImports) {
+  // FatigueEngine::fork (the remaining-life simulations, twin/model/life.h) copies the live
+  // factor instead of rebuilding it. With other coefficients (A2 and A1 × 1.2, the life band), a
+  // rebuild every 4 re-solves and re-solves after it, in dose mode and in direct mode (a fatigue
+  // limit), the fork's state and every later step equal those of a fresh engine with the same
+  // coefficients that initialize()d and import_state()d the exported state: bit for bit.
+  const auto plate = make_notched_plate(GetParam());
+  for (const double eps_inf_fraction : {0.0, 0.2}) {
+    SCOPED_TRACE(eps_inf_fraction);
+    auto settings =
+        settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0, eps_inf_fraction);
+    settings.incremental = true;
+    settings.refactor_every_resolves = 4;
+    FatigueEngine live(plate.disc, plate.model, plate.supports, plate.loads, settings);
+    ASSERT_TRUE(live.initialize());
+    live.apply({1000.0, 0.1, 0.0, 500});
+    live.apply({1100.0, 0.1, 0.3, 700});
+    ASSERT_GE(live.export_state().resolve_groups.size(), 6u);  // a rebuild and re-solves after
+    ASSERT_GT(live.rebuilds(), 0);
+    FatigueSettings band = settings;
+    band.strain.A2 *= 1.2;
+    band.strain.A1 *= 1.2;
+    FatigueEngine fresh(plate.disc, plate.model, plate.supports, plate.loads, band);
+    ASSERT_TRUE(fresh.initialize());
+    ASSERT_TRUE(fresh.import_state(live.export_state()));
+    const auto fork = live.fork(band);
+    EXPECT_EQ(fork->state_hash(), fresh.state_hash());
+    EXPECT_EQ(fork->state_hash(), live.state_hash());  // the state is the same, not the rates
+    const LoadBlock c{1100.0, 0.1, 0.3, 400}, d{900.0, 0.2, 0.0, 2000};
+    for (const auto& block : {c, d}) {
+      EXPECT_EQ(fork->apply(block), fresh.apply(block));
+    }
+    EXPECT_GT(fresh.break_events().size(), live.break_events().size());  // they broke bonds
+    expect_same_state(*fork, fresh);
+    EXPECT_EQ(fork->state_hash(), fresh.state_hash());
+    // The live engine was not touched by its fork's steps.
+    EXPECT_EQ(live.total_cycles(), 1200);
+  }
+}
+
+TEST(FatigueEngineFork, RefusesOtherStructuralSettingsAndTheBilinearLaw) {
+  const auto plate = make_notched_plate(ModelKind::bond_based);
+  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(engine.initialize());
+  FatigueSettings other = settings;
+  other.critical_stretch *= 2;
+  EXPECT_THROW((void)engine.fork(other), std::invalid_argument);
+  other = settings;
+  other.law = FatigueLaw::energy;
+  EXPECT_THROW((void)engine.fork(other), std::invalid_argument);
+  other = settings;
+  other.law = FatigueLaw::bilinear;
+  EXPECT_THROW((void)engine.fork(other), std::logic_error);
+}
+
 TEST_P(IncrementalEqualsRefactor, TiesStayThroughUpdatesAndRebuilds) {
   // A tie (Tie: a fixture outside the bonds) holds the top corners' x displacements equal. The
   // engine keeps it in every solve: rank updates with a rebuild every 4 re-solves give the

@@ -756,6 +756,41 @@ TEST(ConfigErrors, LifeSettings) {
   EXPECT_EQ(r.errors[3].line, 27u);
 }
 
+TEST(ConfigErrors, LifeCoarseGridSpacing) {
+  // [detail.life] dx: the coarser estimate model's spacing, larger than the grid's (0.5 mm here),
+  // for the laws with an A2 to calibrate; each error at its line and field.
+  Doc doc = plate();
+  doc.lines.push_back("[detail.life]");  // 24
+  doc.lines.push_back("dx = 0.001");     // 25
+  ConfigResult ok = parse(doc);
+  ASSERT_TRUE(ok.ok()) << ok.error_text();
+  EXPECT_EQ(ok.config->details[0].life.dx, 0.001);
+  EXPECT_EQ(parse(plate()).config->details[0].life.dx, 0.0);  // default: none
+
+  doc = plate();
+  doc.lines.push_back("[detail.life]");
+  doc.lines.push_back("dx = 0.0005");
+  expect_one_error(parse(doc), 25, "detail[0].life.dx",
+                   "must be larger than [detail.grid] dx = 5e-04 m");
+  doc = plate();
+  doc.lines.push_back("[detail.life]");
+  doc.lines.push_back("dx = -0.001");
+  expect_one_error(parse(doc), 25, "detail[0].life.dx", "must be > 0");
+  doc = plate();
+  doc.replace("law = ", R"(law = "kinetic")");
+  doc.replace("A1 = ", "U = 2e-19");
+  doc.replace("m1 = ", "gamma = 1e-28");
+  doc.erase("A2 = ");
+  doc.erase("m2 = ");
+  doc.lines.push_back("[detail.life]");
+  doc.lines.push_back("dx = 0.001");
+  const ConfigResult kinetic = parse(doc);
+  ASSERT_FALSE(kinetic.ok());
+  ASSERT_EQ(kinetic.errors.size(), 1u) << kinetic.error_text();
+  EXPECT_EQ(kinetic.errors[0].path, "detail[0].life.dx");
+  EXPECT_NE(kinetic.errors[0].reason.find("only with fatigue law"), std::string::npos);
+}
+
 TEST(ConfigErrors, StressIntensitySettings) {
   Doc doc = plate();
   doc.lines.push_back("[detail.stress_intensity]");      // 24

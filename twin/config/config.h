@@ -68,7 +68,11 @@
 //                        estimate is computed synchronously whenever state_seq is a multiple of it,
 //                        state 0 included), every_cycles 0 (>= 0, 0 = never: in deterministic
 //                        mode also at every state whose batch passed a multiple of it in cycles;
-//                        either schedule > 0 turns the daemon's life worker on)
+//                        either schedule > 0 turns the daemon's life worker on), dx (m, > the
+//                        grid's dx, default: none; laws strain_range and energy only): estimate
+//                        on a coarser grid of the same detail, the fine crack mapped onto it and
+//                        its A2 calibrated to the fine model's recent da/dN (docs/design.md,
+//                        "Remaining life on a coarser grid")
 //   [detail.stress_intensity]
 //                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
 //                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
@@ -207,6 +211,8 @@ struct LifeConfig {
   /// multiple of this (0 = never): a schedule in load, not in messages, so that a producer's
   /// batch size (a stream's 100 ms batches, 1-cycle batches) does not set how often it runs.
   std::int64_t every_cycles = 0;
+  /// Grid spacing (m) of the coarser estimate model; 0 = estimate on the detail's own model.
+  double dx = 0.0;
   /// Whether remaining life is estimated at all (either schedule on).
   [[nodiscard]] bool estimates() const { return every_batches > 0 || every_cycles > 0; }
   [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }

@@ -500,7 +500,8 @@ void read_spectrum_block(Context& ctx, const toml::table& t, const std::string& 
   blocks.push_back(b);
 }
 
-void read_life(Context& ctx, const toml::table& t, const std::string& path, LifeConfig& l) {
+void read_life(Context& ctx, const toml::table& t, const std::string& path, const DetailConfig& d,
+               LifeConfig& l) {
   TableReader r(ctx, t, path);
   const auto criterion = r.choice<LifeCriterion>("criterion",
                                                  {{"crack_length", LifeCriterion::crack_length},
@@ -546,6 +547,22 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, Life
     r.node("a2_relative_scatter", false);
     r.check("a2_relative_scatter", !band || !r.has("a2_relative_scatter"),
             "only used with band = \"a2_scatter\"");
+  }
+  if (r.has("dx")) {
+    // The coarser estimate model (twin/model/coarse_life.h): its A2 is calibrated, so a law
+    // with an A2 is needed, and it must be coarser than the detail's own grid.
+    if (const auto dx = req(r, "dx", Bound::positive)) {
+      l.dx = *dx;
+      if (r.check("dx",
+                  d.fatigue.law == FatigueLaw::strain_range || d.fatigue.law == FatigueLaw::energy,
+                  "a coarser estimate model calibrates A2: only with fatigue law "
+                  "\"strain_range\" or \"energy\"") &&
+          d.dx > 0) {
+        r.check("dx", *dx > d.dx,
+                "must be larger than [detail.grid] dx = " + format_number(d.dx) +
+                    " m: the estimate model is a coarser grid (got " + format_number(*dx) + ")");
+      }
+    }
   }
   r.finish();
 }
@@ -712,7 +729,7 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
              });
   d.output.directory = "results/" + d.id;
   if (const auto* o = r.table("output", false)) read_output(ctx, *o, r.path_of("output"), d.output);
-  if (const auto* l = r.table("life", false)) read_life(ctx, *l, r.path_of("life"), d.life);
+  if (const auto* l = r.table("life", false)) read_life(ctx, *l, r.path_of("life"), d, d.life);
   if (const auto* k = r.table("stress_intensity", false)) {
     read_stress_intensity(ctx, *k, r.path_of("stress_intensity"), d.stress_intensity);
   }

@@ -131,10 +131,15 @@ Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConf
   return std::shared_ptr<const DetailModel>(std::move(m));
 }
 
-std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {
+FatigueSettings DetailModel::engine_settings(double a2_factor) const {
   FatigueSettings s = settings_;
   s.strain.A2 *= a2_factor;
   s.bilinear.A *= a2_factor;  // the bilinear law's growth coefficient (003 Eq. 27) plays A2's role
+  return s;
+}
+
+std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {
+  const FatigueSettings s = engine_settings(a2_factor);
   return std::make_unique<FatigueEngine>(specimen_.disc, specimen_.model, specimen_.supports,
                                          specimen_.loads, s);
 }
@@ -319,9 +324,8 @@ Failure end_of_life(const DetailModel& model, const FatigueEngine& engine) {
 }
 
 FatigueEngine::StopCheck end_of_life_check(const DetailModel& model) {
-  return [&model](const FatigueEngine& engine) {
-    return end_of_life(model, engine) != Failure::none;
-  };
+  return
+      [&model](const FatigueEngine& engine) { return end_of_life(model, engine) != Failure::none; };
 }
 
 }  // namespace peritwin::twin

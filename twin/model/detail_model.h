@@ -59,6 +59,8 @@ class DetailModel {
   /// A new engine on this model (not initialized); the phase II coefficient A2 scaled by
   /// `a2_factor` (the life band).
   [[nodiscard]] std::unique_ptr<FatigueEngine> make_engine(double a2_factor = 1.0) const;
+  /// The settings make_engine(a2_factor) builds its engine with (for FatigueEngine::fork).
+  [[nodiscard]] FatigueSettings engine_settings(double a2_factor = 1.0) const;
 
  private:
   DetailModel() = default;

@@ -1,8 +1,11 @@
 #include "twin/model/life.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <future>
+
+#include "twin/model/coarse_life.h"
 
 namespace peritwin::twin {
 
@@ -80,19 +83,40 @@ std::vector<LoadBlock> reference_spectrum(const DetailModel& model,
   return life.reference_spectrum;
 }
 
-double simulate_life(const DetailModel& model, const EngineState& state,
-                     const std::vector<LoadBlock>& spectrum, double a2_factor,
-                     const std::atomic<bool>* cancel) {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+bool can_fork(const DetailModel& model) {
+  return model.settings().law != peritwin::FatigueLaw::bilinear;
+}
+
+double run_to_end(FatigueEngine& engine, const std::vector<LoadBlock>& spectrum,
+                  const FatigueEngine::StopCheck& stop, const std::atomic<bool>* cancel,
+                  SimulationStats* stats) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (spectrum.empty()) return nan;
-  const auto engine = model.make_engine(a2_factor);
-  if (!engine->initialize() || !engine->import_state(state)) return nan;
-  const std::int64_t start = engine->total_cycles();
+  SimulationStats local;
+  SimulationStats& st = stats != nullptr ? *stats : local;
+  struct Stepping {  // the stepping phase, whichever way it returns
+    SimulationStats& st;
+    const FatigueEngine& engine;
+    std::size_t events0;
+    int updates0;
+    std::chrono::steady_clock::time_point t0;
+    ~Stepping() {
+      st.stepping_s += seconds_since(t0);
+      st.breaks += static_cast<std::int64_t>(engine.break_events().size() - events0);
+      st.updates += engine.updates() - updates0;
+    }
+  } stepping{st, engine, engine.break_events().size(), engine.updates(),
+             std::chrono::steady_clock::now()};
+  const std::int64_t start = engine.total_cycles();
   const auto elapsed = [&](std::int64_t cycle) { return static_cast<double>(cycle - start); };
-  if (end_of_life(model, *engine) != Failure::none) return 0.0;
-  // The engine stops at the exact cycle of the criterion (end_of_life_check); connectivity (and
-  // every criterion's singular stiffness) ends in the engine's final failure.
-  const FatigueEngine::StopCheck stop = end_of_life_check(model);
   constexpr std::int64_t kMaxMultiplier = std::int64_t{1} << 40;
   std::int64_t multiplier = 1;
   while (true) {
@@ -103,10 +127,10 @@ double simulate_life(const DetailModel& model, const EngineState& state,
       block.count = level.count > std::numeric_limits<std::int64_t>::max() / multiplier
                         ? std::numeric_limits<std::int64_t>::max() / 2
                         : level.count * multiplier;
-      const std::size_t e0 = engine->break_events().size();
-      if (engine->apply(block, stop) != EngineStatus::ok) return elapsed(engine->total_cycles());
-      broke = broke || engine->break_events().size() != e0;
-      if (elapsed(engine->total_cycles()) > kMaxSimulatedCycles) {
+      const std::size_t e0 = engine.break_events().size();
+      if (engine.apply(block, stop) != EngineStatus::ok) return elapsed(engine.total_cycles());
+      broke = broke || engine.break_events().size() != e0;
+      if (elapsed(engine.total_cycles()) > kMaxSimulatedCycles) {
         return std::numeric_limits<double>::infinity();
       }
     }
@@ -114,30 +138,83 @@ double simulate_life(const DetailModel& model, const EngineState& state,
   }
 }
 
+double simulate_life(const DetailModel& model, const EngineState& state,
+                     const std::vector<LoadBlock>& spectrum, double a2_factor,
+                     const std::atomic<bool>* cancel, const FatigueEngine* live,
+                     SimulationStats* stats) {
+  const auto t_start = std::chrono::steady_clock::now();
+  SimulationStats local;
+  SimulationStats& st = stats != nullptr ? *stats : local;
+  st = SimulationStats{};
+  struct WallTime {  // the whole call, whichever way it returns
+    SimulationStats& st;
+    std::chrono::steady_clock::time_point t0;
+    ~WallTime() { st.wall_s = seconds_since(t0); }
+  } wall{st, t_start};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (spectrum.empty()) return nan;
+  std::unique_ptr<FatigueEngine> engine;
+  if (live != nullptr && can_fork(model)) {
+    // Decision (issue 18 item 3): the copy of the live factor replaces a fresh engine's first
+    // factorization, periodic rebuild and replay of up to refactor_every_resolves rank updates;
+    // fork() reproduces import_state's result bit for bit (tests/twin/test_life.cpp).
+    const auto t0 = std::chrono::steady_clock::now();
+    engine = live->fork(model.engine_settings(a2_factor));
+    st.fork_s = seconds_since(t0);
+  } else {
+    engine = model.make_engine(a2_factor);
+    auto t0 = std::chrono::steady_clock::now();
+    const bool ok = engine->initialize();
+    st.build_s = seconds_since(t0);
+    if (!ok) return nan;
+    t0 = std::chrono::steady_clock::now();
+    const bool imported = engine->import_state(state);
+    st.import_s = seconds_since(t0);
+    if (!imported) return nan;
+  }
+  if (end_of_life(model, *engine) != Failure::none) return 0.0;
+  // The engine stops at the exact cycle of the criterion (end_of_life_check); connectivity (and
+  // every criterion's singular stiffness) ends in the engine's final failure.
+  return run_to_end(*engine, spectrum, end_of_life_check(model), cancel, &st);
+}
+
 LifeEstimate estimate_life(const DetailModel& model, const EngineState& state,
                            const std::vector<LoadBlock>& spectrum, bool parallel,
-                           const std::atomic<bool>* cancel) {
+                           const std::atomic<bool>* cancel, const FatigueEngine* live,
+                           std::vector<SimulationStats>* stats) {
+  if (model.config().life.dx > 0) {
+    if (stats != nullptr) stats->clear();
+    return estimate_life_coarse(model, model.config().life.dx, state, spectrum, parallel, cancel);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
   LifeEstimate out;
+  out.start_cycles = state.total_cycles;
+  out.forked = live != nullptr && can_fork(model);
   const LifeConfig& life = model.config().life;
   const bool band =
       life.band == BandSource::a2_scatter && model.settings().law != peritwin::FatigueLaw::kinetic;
+  std::vector<SimulationStats> local(3);
+  std::vector<SimulationStats>& st = stats != nullptr ? *stats : local;
+  st.assign(band ? 3 : 1, SimulationStats{});
   if (!band) {
-    out.central = simulate_life(model, state, spectrum, 1.0, cancel);
+    out.central = simulate_life(model, state, spectrum, 1.0, cancel, live, &st[0]);
     out.low = out.high = out.central;
+    out.wall_s = seconds_since(t0);
     return out;
   }
   const double s = life.a2_relative_scatter;
   const auto policy = parallel ? std::launch::async : std::launch::deferred;
-  auto low =
-      std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 + s, cancel); });
-  auto high =
-      std::async(policy, [&] { return simulate_life(model, state, spectrum, 1 - s, cancel); });
-  out.central = simulate_life(model, state, spectrum, 1.0, cancel);
+  auto low = std::async(
+      policy, [&] { return simulate_life(model, state, spectrum, 1 + s, cancel, live, &st[1]); });
+  auto high = std::async(
+      policy, [&] { return simulate_life(model, state, spectrum, 1 - s, cancel, live, &st[2]); });
+  out.central = simulate_life(model, state, spectrum, 1.0, cancel, live, &st[0]);
   const double a = low.get(), b = high.get();
   // Larger A2 damages faster: the low end. Ordered so that low <= central <= high holds even if
   // the crack path makes the relation non-monotone.
   out.low = std::min({a, b, out.central});
   out.high = std::max({a, b, out.central});
+  out.wall_s = seconds_since(t0);
   return out;
 }
 

@@ -37,6 +37,24 @@ struct LifeEstimate {
   std::int64_t state_seq = -1;  ///< Twin state_seq it belongs to (-1: none)
   std::int64_t seq = -1;        ///< (source, seq) of the batch that produced that state
   std::string source;           ///< "" with seq -1: none, or the initial state
+  // Diagnostics, not part of the twin's state (not hashed, not checkpointed):
+  double wall_s = std::numeric_limits<double>::quiet_NaN();  ///< wall time of the estimate
+  std::int64_t start_cycles = -1;  ///< engine cycles of the state it started from
+  bool forked = false;             ///< continued from a live engine's factor (FatigueEngine::fork)
+  bool coarse = false;             ///< on the coarser grid of [detail.life] dx (coarse_life.h)
+  /// Coarse only: calibrated A2 over its 000 Eq. (29) value; NaN when not calibrated.
+  double coarse_a2_factor = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Where one forward simulation's wall time went (seconds; a phase not taken is 0).
+struct SimulationStats {
+  double build_s = 0.0;     ///< a fresh engine: its first solve (assembly, analysis, factor)
+  double import_s = 0.0;    ///< a fresh engine: import_state (replay of the re-solves)
+  double fork_s = 0.0;      ///< FatigueEngine::fork (copy of the live factor)
+  double stepping_s = 0.0;  ///< blocks until the criterion (bond breaks, rank updates, solves)
+  double wall_s = 0.0;      ///< the whole simulate_life call
+  std::int64_t breaks = 0;  ///< bonds broken in the simulation
+  int updates = 0;          ///< rank updates in the simulation
 };
 
 /// The rolling empirical spectrum: the last kCapacity received blocks (a block equal in
@@ -71,14 +89,37 @@ std::vector<LoadBlock> reference_spectrum(const DetailModel& model,
 /// `a2_factor`. 0 when already met, +Inf when not met within kMaxSimulatedCycles, NaN when the
 /// state cannot be imported or the spectrum is empty, or when `cancel` becomes true (checked
 /// between blocks).
+/// With `live` (an engine on `model` whose export_state() is `state`, e.g. the twin's), the
+/// simulation continues from a fork of it (FatigueEngine::fork: its factor copied, not rebuilt
+/// and replayed) instead of a fresh engine that imports `state`; the result is the same bit for
+/// bit (the bilinear law always imports, see fork()). `stats` (optional) receives the phases.
 double simulate_life(const DetailModel& model, const EngineState& state,
                      const std::vector<LoadBlock>& spectrum, double a2_factor,
-                     const std::atomic<bool>* cancel = nullptr);
+                     const std::atomic<bool>* cancel = nullptr, const FatigueEngine* live = nullptr,
+                     SimulationStats* stats = nullptr);
 
-/// Central value and band (3 forward simulations, run concurrently when `parallel`).
-/// state_seq/seq/source are left for the caller to fill in.
+/// The stepping of a forward simulation: the spectrum's blocks, pass after pass (a pass without
+/// breaks doubles the next pass's counts), each applied with `stop`, until a block ends early
+/// (the stop check said so, or final failure). Returns the cycles applied; +Inf past
+/// kMaxSimulatedCycles, NaN when cancelled or the spectrum is empty. Adds its time, breaks and
+/// updates to `stats` (optional).
+double run_to_end(FatigueEngine& engine, const std::vector<LoadBlock>& spectrum,
+                  const FatigueEngine::StopCheck& stop, const std::atomic<bool>* cancel = nullptr,
+                  SimulationStats* stats = nullptr);
+
+/// Whether simulate_life can continue from a live engine of `model` (every law but bilinear).
+bool can_fork(const DetailModel& model);
+
+/// Central value and band (3 forward simulations, run concurrently when `parallel`), from a fork
+/// of `live` when given (see simulate_life). With `[detail.life] dx` the simulations run on the
+/// coarser grid instead (estimate_life_coarse, twin/model/coarse_life.h; `live` and `stats` are
+/// not used). state_seq/seq/source are left for the caller to fill
+/// in; wall_s, start_cycles and forked are filled. `stats` (optional, 3 entries: central, low
+/// A2·(1 + s), high A2·(1 − s); only the first without a band) receives each simulation's phases.
 LifeEstimate estimate_life(const DetailModel& model, const EngineState& state,
                            const std::vector<LoadBlock>& spectrum, bool parallel = true,
-                           const std::atomic<bool>* cancel = nullptr);
+                           const std::atomic<bool>* cancel = nullptr,
+                           const FatigueEngine* live = nullptr,
+                           std::vector<SimulationStats>* stats = nullptr);
 
 }  // namespace peritwin::twin

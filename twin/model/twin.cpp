@@ -199,13 +199,23 @@ std::uint64_t Twin::state_hash() const {
 
 std::string Twin::state_hash_hex() const { return hex64(state_hash()); }
 
-LifeJob Twin::life_job() const {
+LifeJob Twin::life_job_state_only() const {
   return {model_,
           engine_->export_state(),
           reference_spectrum(*model_, spectrum_),
           state_seq_,
           last_seq_,
-          last_source_};
+          last_source_,
+          nullptr};
+}
+
+LifeJob Twin::life_job() const {
+  LifeJob job = life_job_state_only();
+  // The coarse estimate ([detail.life] dx) maps the state onto its own grid: no fork needed.
+  if (can_fork(*model_) && !(model_->config().life.dx > 0)) {
+    job.engine = engine_->fork(model_->engine_settings());
+  }
+  return job;
 }
 
 void Twin::set_life(const LifeEstimate& estimate) {
@@ -226,8 +236,10 @@ bool Twin::life_due() const {
 }
 
 void Twin::estimate_life_now() {
-  const LifeJob job = life_job();
-  LifeEstimate e = estimate_life(*model_, job.state, job.spectrum, options_.parallel_band);
+  // Synchronous: the simulations fork the live engine itself (no snapshot needed).
+  const LifeJob job = life_job_state_only();
+  LifeEstimate e = estimate_life(*model_, job.state, job.spectrum, options_.parallel_band, nullptr,
+                                 engine_.get());
   e.state_seq = job.state_seq;
   e.seq = job.seq;
   e.source = job.source;

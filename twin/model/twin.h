@@ -84,6 +84,12 @@ struct LifeJob {
   std::int64_t state_seq = 0;
   std::int64_t seq = -1;
   std::string source;
+  /// A fork of the live engine at `state` (FatigueEngine::fork), which the estimate's
+  /// simulations fork again instead of rebuilding and replaying the factor; null for the bilinear
+  /// law (simulate_life then imports `state`) and for the coarse estimate ([detail.life] dx). It
+  /// holds a copy of the factor: one more factor in memory while the job waits or runs
+  /// (docs/design.md, "Remaining life").
+  std::shared_ptr<const FatigueEngine> engine;
 };
 
 class Twin {
@@ -146,6 +152,8 @@ class Twin {
 
   /// Remaining life ----------------------------------------------------------------------------
   [[nodiscard]] LifeJob life_job() const;
+  /// The same without the engine fork (simulate_life then rebuilds from the state).
+  [[nodiscard]] LifeJob life_job_state_only() const;
   /// Installs an estimate unless it belongs to an older state than the current estimate.
   void set_life(const LifeEstimate& estimate);
   /// True when a synchronous estimate is due for the current state and not computed yet: state 0,

@@ -1,5 +1,7 @@
 #include "twin/service/life_worker.h"
 
+#include <spdlog/spdlog.h>
+
 namespace peritwin::twin {
 
 LifeWorker::LifeWorker() : thread_([this] { run(); }) {}
@@ -45,10 +47,22 @@ void LifeWorker::run() {
       pending_.reset();
       running_ = true;
     }
-    LifeEstimate e = estimate_life(*job.model, job.state, job.spectrum, true, &cancel_);
+    LifeEstimate e =
+        estimate_life(*job.model, job.state, job.spectrum, true, &cancel_, job.engine.get());
+    job.engine.reset();  // its factor copy goes before the next job's
     e.state_seq = job.state_seq;
     e.seq = job.seq;
     e.source = job.source;
+    if (!cancel_.load()) {
+      // Every estimate's cost and the state it started from (issue 18 item 3).
+      spdlog::info(
+          "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in "
+          "{:.2f} s ({})",
+          job.model->config().id, e.state_seq, e.start_cycles, e.central, e.low, e.high, e.wall_s,
+          e.coarse   ? "on the coarser grid of [detail.life] dx"
+          : e.forked ? "forked from the live factor"
+                     : "rebuilt from the state");
+    }
     std::lock_guard lock(mutex_);
     running_ = false;
     if (!stop_) done_ = std::move(e);
