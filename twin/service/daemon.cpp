@@ -710,6 +710,17 @@ void Daemon::apply_received(Detail& d, const Received& r) {
                 batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
                 twin.broken_bonds());
   log_crack_events(d);
+  if (options_.deterministic && twin.life().state_seq == twin.state_seq()) {
+    // The synchronous estimate of this state (the LifeWorker logs the asynchronous ones).
+    const LifeEstimate& e = twin.life();
+    spdlog::info(
+        "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in {:.2f} s "
+        "({})",
+        d.id, e.state_seq, e.start_cycles, e.central, e.low, e.high, e.wall_s,
+        e.coarse   ? "on the coarser grid of [detail.life] dx"
+        : e.forked ? "forked from the live factor"
+                   : "rebuilt from the state");
+  }
   if (twin.failure() != Failure::none) {
     d.failed = true;
     spdlog::warn("[{}] end of life at state_seq {} ({} cycles): {}", d.id, twin.state_seq(),
@@ -724,8 +735,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   // FIELD every field_every_batches, and at the end of life (the last state a dashboard's damage
   // map should show: no batch comes after it).
   const auto every_field = twin.model().config().output.field_every_batches;
-  if (every_field > 0 &&
-      (twin.state_seq() % every_field == 0 || twin.failure() != Failure::none)) {
+  if (every_field > 0 && (twin.state_seq() % every_field == 0 || twin.failure() != Failure::none)) {
     publish_fields(d);
   }
   if (d.outputs) d.outputs->record(twin);
