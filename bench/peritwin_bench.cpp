@@ -61,10 +61,21 @@ class PhasePeaks {
   PhasePeaks() { reset(); }
   /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
   void mark(peritwin::tools::JsonLine& line, const std::string& name) {
-    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmHWM"), 1);
+    const double peak = proc_status_mb("VmHWM");
+    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(peak, 1);
     line["rss_after_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmRSS"), 1);
+    note(name, peak);
     reset();
   }
+  /// A phase's peak measured outside mark() (the later blocks' maximum).
+  void note(const std::string& name, double peak_mb) {
+    if (peak_mb > peak_phase_mb_) {
+      peak_phase_mb_ = peak_mb;
+      peak_phase_ = name;
+    }
+  }
+  /// The phase whose peak was the highest: where the process's peak comes from.
+  [[nodiscard]] const std::string& peak_phase() const { return peak_phase_; }
   [[nodiscard]] bool reset_ok() const { return reset_ok_; }
   /// The process's peak over all phases (getrusage's ru_maxrss follows the resets).
   [[nodiscard]] double peak_mb() const { return std::max(overall_, proc_status_mb("VmHWM")); }
@@ -79,6 +90,8 @@ class PhasePeaks {
  private:
   bool reset_ok_ = true;
   double overall_ = 0.0;
+  double peak_phase_mb_ = 0.0;
+  std::string peak_phase_;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -295,6 +308,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   const auto t0 = std::chrono::steady_clock::now();
   double per_update = 0.0, update_total = 0.0, basis_total = 0.0, rebuild_total = 0.0, wall = 0.0;
   double supernodal_nnz = 0.0, simplicial_nnz = 0.0, peak_updates = 0.0, peak_rebuilds = 0.0;
+  double supernodal_bytes = 0.0, ldlt_bytes = 0.0;
   std::int64_t cycles = 0, broken = 0;
   int solves = 0, rebuilds = 0, updates = 0;
   bool failed = false;
@@ -305,6 +319,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
       return 1;
     }
     supernodal_nnz = engine.solver().factor().factor_nonzeros();
+    supernodal_bytes = engine.solver().factor().factor_bytes();
     peaks.mark(line, "initialize");
     bool first_update = true;
     for (;;) {
@@ -313,6 +328,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
                         engine.total_cycles() < max_cycles;
       if (first_update && engine.updates() > 0) {  // this block converted the factor
         simplicial_nnz = engine.solver().factor().factor_nonzeros();
+        ldlt_bytes = engine.solver().factor().factor_bytes();
         peaks.mark(line, "first_update");
         first_update = false;
       } else {
@@ -338,6 +354,8 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   }  // the engine's factor goes before the refactorizing solver is built
   line["rss_peak_later_updates_mb"] = tools::fixed(peak_updates, 1);
   line["rss_peak_rebuild_blocks_mb"] = tools::fixed(peak_rebuilds, 1);
+  peaks.note("later_updates", peak_updates);
+  peaks.note("rebuild_blocks", peak_rebuilds);
   peaks.mark(line, "engine_freed");
   // Refactorizing path on the same model: assemble + numeric factorization + solve.
   StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
@@ -368,9 +386,14 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   line["rebuild_total_s"] = tools::fixed(rebuild_total, 2);
   line["final_failure"] = failed;
   line["factor_nnz_supernodal"] = tools::whole(supernodal_nnz);
-  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);
+  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);  // the LDLᵀ factor's entries
+  // The factor's own bytes: supernodal LLᵀ after the first solve, LDLᵀ (packed in the
+  // supernodal storage) once updated.
+  line["factor_mb_supernodal"] = tools::fixed(supernodal_bytes / (1024.0 * 1024.0), 1);
+  line["factor_mb_ldlt"] = tools::fixed(ldlt_bytes / (1024.0 * 1024.0), 1);
   line["peak_rss_reset_ok"] = peaks.reset_ok();
   line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
+  line["peak_rss_phase"] = peaks.peak_phase();
   tools::print_line(line);
   return 0;
 }

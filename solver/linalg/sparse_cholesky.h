@@ -69,6 +69,10 @@ class SparseCholesky {
 
   [[nodiscard]] bool analyzed() const;
   [[nodiscard]] double factor_nonzeros() const;
+  /// Bytes the factor holds (values, row indices, column pointers; not CHOLMOD's workspace):
+  /// supernodal LLᵀ after factorize(), packed LDLᵀ after modify_fused() (8 B per entry plus the
+  /// supernodes' rows), CHOLMOD's simplicial LDLᵀ after modify() (12 B per entry).
+  [[nodiscard]] double factor_bytes() const;
 
  private:
   struct Impl;
