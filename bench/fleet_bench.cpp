@@ -66,7 +66,7 @@ std::string edit(std::string text, const std::string& from, const std::string& t
 }
 
 /// The fleet's config: `details` copies of the B1 example at grid spacing `dx`.
-std::string fleet_config(int details, double dx) {
+std::string fleet_config(int details, double dx, bool release_idle_factors) {
   const std::string b1 = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
   std::string out;
   for (int i = 0; i < details; ++i) {
@@ -78,6 +78,9 @@ std::string fleet_config(int details, double dx) {
     d = edit(d, "field_every_batches = 10", "field_every_batches = 0");
     d = edit(d, "png = true", "png = false");
     d = edit(d, "\nevery_batches = 10\n", "\nevery_batches = 0\n");  // [detail.life]: no estimates
+    if (release_idle_factors) {
+      d = edit(d, "release_idle_factor = false", "release_idle_factor = true");
+    }
     out += d + "\n";
   }
   return out;
@@ -184,6 +187,7 @@ struct Options {
   int nodes_per_detail = 4000;
   double seconds = 30.0, quiet_rate = 5.0;
   std::int64_t loud_cycles = 50;
+  bool release_idle_factors = false;  ///< [detail.limits] release_idle_factor in every detail
 };
 
 /// One daemon run on `url` with `extra` daemon arguments.
@@ -302,6 +306,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--loud-cycles", o.loud_cycles, "cycles per batch of the loud detail (50)")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--release-idle-factors", o.release_idle_factors,
+               "every detail frees its Cholesky factor while it breaks no bond ([detail.limits] "
+               "release_idle_factor)");
   CLI11_PARSE(app, argc, argv);
 
   // B1 is 62.5 mm x 60 mm: nodes ~ 3750 mm^2 / dx^2.
@@ -311,7 +318,7 @@ int main(int argc, char** argv) {
   fs::create_directories(work);
   const fs::path config = work / "fleet.toml";
   try {
-    std::ofstream(config) << fleet_config(o.details, dx);
+    std::ofstream(config) << fleet_config(o.details, dx, o.release_idle_factors);
   } catch (const std::exception& e) {
     std::cerr << "peritwin-bench-fleet: " << e.what() << "\n";
     return 3;
@@ -337,6 +344,7 @@ int main(int argc, char** argv) {
   tools::JsonLine line;
   line["bench"] = "fleet";
   line["details"] = o.details;
+  line["release_idle_factors"] = o.release_idle_factors;
   line["nodes_per_detail"] = o.nodes_per_detail;
   line["dx_m"] = tools::fixed(dx, 6);
   line["startup_s"] = tools::fixed(pool.startup_s, 2);

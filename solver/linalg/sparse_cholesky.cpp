@@ -178,6 +178,32 @@ SparseCholesky& SparseCholesky::operator=(SparseCholesky&&) noexcept = default;
 
 void SparseCholesky::set_solve_threads(int threads) { impl_->solve_threads = threads; }
 
+Status SparseCholesky::convert_to_ldlt() { return impl_->to_ldlt(true); }
+
+bool SparseCholesky::release_values() {
+  auto& impl = *impl_;
+  cholmod_factor* l = impl.factor;
+  if (l == nullptr || !l->is_super) return false;
+  impl.free_packed();
+  if (l->xtype != CHOLMOD_PATTERN) {
+    // Supernodal numeric -> supernodal symbolic (CHOLMOD's ll_super_to_super_symbolic).
+    if (!cholmod_change_factor(CHOLMOD_PATTERN, 1, 1, 1, 1, l, &impl.common)) return false;
+  }
+  impl.schedule = {};
+  impl.diagonal.clear();
+  impl.forward_valid = false;
+  impl.w = {};
+  impl.delta = {};
+  impl.forward_y = {};
+  impl.tracked_rhs.resize(0, 0);
+  return true;
+}
+
+bool SparseCholesky::has_values() const {
+  const cholmod_factor* l = impl_->factor;
+  return l != nullptr && (impl_->packed_active() || l->xtype != CHOLMOD_PATTERN);
+}
+
 bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
 
 double SparseCholesky::factor_nonzeros() const {
@@ -186,6 +212,11 @@ double SparseCholesky::factor_nonzeros() const {
   const cholmod_factor* l = impl_->factor;
   if (l->is_super) return static_cast<double>(l->xsize);
   return static_cast<double>(l->nzmax);
+}
+
+double SparseCholesky::supernodal_nonzeros() const {
+  const cholmod_factor* l = impl_->factor;
+  return l != nullptr && l->is_super ? static_cast<double>(l->xsize) : 0.0;
 }
 
 double SparseCholesky::factor_bytes() const {

@@ -52,6 +52,7 @@ Expected<FatigueSettings> solver_settings(const DetailConfig& detail) {
     }
   }
   s.incremental = true;
+  s.release_idle_factor = detail.limits.release_idle_factor;
   return s;
 }
 
@@ -319,9 +320,8 @@ Failure end_of_life(const DetailModel& model, const FatigueEngine& engine) {
 }
 
 FatigueEngine::StopCheck end_of_life_check(const DetailModel& model) {
-  return [&model](const FatigueEngine& engine) {
-    return end_of_life(model, engine) != Failure::none;
-  };
+  return
+      [&model](const FatigueEngine& engine) { return end_of_life(model, engine) != Failure::none; };
 }
 
 }  // namespace peritwin::twin
