@@ -52,7 +52,6 @@ Expected<FatigueSettings> solver_settings(const DetailConfig& detail) {
     }
   }
   s.incremental = true;
-  s.release_idle_factor = detail.limits.release_idle_factor;
   return s;
 }
 
@@ -132,8 +131,11 @@ Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConf
   return std::shared_ptr<const DetailModel>(std::move(m));
 }
 
-std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {
+std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor, bool live) const {
   FatigueSettings s = settings_;
+  // Only the live twin idles between breaks; a remaining-life simulation breaks bonds from its
+  // first blocks, so it keeps its factor.
+  s.release_idle_factor = live && config_.limits.release_idle_factor;
   s.strain.A2 *= a2_factor;
   s.bilinear.A *= a2_factor;  // the bilinear law's growth coefficient (003 Eq. 27) plays A2's role
   return std::make_unique<FatigueEngine>(specimen_.disc, specimen_.model, specimen_.supports,
