@@ -71,7 +71,7 @@ std::string edit(std::string text, const std::string& from, const std::string& t
 }
 
 /// The fleet's config: `details` copies of the B1 example at grid spacing `dx`.
-std::string fleet_config(int details, double dx) {
+std::string fleet_config(int details, double dx, bool release_idle_factors) {
   const std::string b1 = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
   std::string out;
   for (int i = 0; i < details; ++i) {
@@ -83,6 +83,9 @@ std::string fleet_config(int details, double dx) {
     d = edit(d, "field_every_batches = 10", "field_every_batches = 0");
     d = edit(d, "png = true", "png = false");
     d = edit(d, "\nevery_batches = 10\n", "\nevery_batches = 0\n");  // [detail.life]: no estimates
+    if (release_idle_factors) {
+      d = edit(d, "release_idle_factor = false", "release_idle_factor = true");
+    }
     out += d + "\n";
   }
   return out;
@@ -191,6 +194,7 @@ struct Options {
   std::int64_t loud_cycles = 50;
   int worker_threads = 0;  ///< the daemon's --worker-threads in the first run (0: its default)
   bool one_thread = true;  ///< the second run with --worker-threads 1
+  bool release_idle_factors = false;  ///< [detail.limits] release_idle_factor in every detail
 };
 
 /// One daemon run on `url` with `extra` daemon arguments.
@@ -314,6 +318,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1024));
   bool no_one_thread = false;
   app.add_flag("--no-one-thread", no_one_thread, "skip the comparison run with one worker thread");
+  app.add_flag("--release-idle-factors", o.release_idle_factors,
+               "every detail frees its Cholesky factor while it breaks no bond ([detail.limits] "
+               "release_idle_factor)");
   CLI11_PARSE(app, argc, argv);
   o.one_thread = !no_one_thread;
 
@@ -324,7 +331,7 @@ int main(int argc, char** argv) {
   fs::create_directories(work);
   const fs::path config = work / "fleet.toml";
   try {
-    std::ofstream(config) << fleet_config(o.details, dx);
+    std::ofstream(config) << fleet_config(o.details, dx, o.release_idle_factors);
   } catch (const std::exception& e) {
     std::cerr << "peritwin-bench-fleet: " << e.what() << "\n";
     return 3;
@@ -357,6 +364,7 @@ int main(int argc, char** argv) {
   tools::JsonLine line;
   line["bench"] = "fleet";
   line["details"] = o.details;
+  line["release_idle_factors"] = o.release_idle_factors;
   line["nodes_per_detail"] = o.nodes_per_detail;
   line["dx_m"] = tools::fixed(dx, 6);
   line["startup_s"] = tools::fixed(pool.startup_s, 2);

@@ -63,10 +63,21 @@ class PhasePeaks {
   PhasePeaks() { reset(); }
   /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
   void mark(peritwin::tools::JsonLine& line, const std::string& name) {
-    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmHWM"), 1);
+    const double peak = proc_status_mb("VmHWM");
+    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(peak, 1);
     line["rss_after_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmRSS"), 1);
+    note(name, peak);
     reset();
   }
+  /// A phase's peak measured outside mark() (the later blocks' maximum).
+  void note(const std::string& name, double peak_mb) {
+    if (peak_mb > peak_phase_mb_) {
+      peak_phase_mb_ = peak_mb;
+      peak_phase_ = name;
+    }
+  }
+  /// The phase whose peak was the highest: where the process's peak comes from.
+  [[nodiscard]] const std::string& peak_phase() const { return peak_phase_; }
   [[nodiscard]] bool reset_ok() const { return reset_ok_; }
   /// The process's peak over all phases (getrusage's ru_maxrss follows the resets).
   [[nodiscard]] double peak_mb() const { return std::max(overall_, proc_status_mb("VmHWM")); }
@@ -81,6 +92,8 @@ class PhasePeaks {
  private:
   bool reset_ok_ = true;
   double overall_ = 0.0;
+  double peak_phase_mb_ = 0.0;
+  std::string peak_phase_;
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -276,8 +289,8 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
   // final stiffness refactorized a few times to measure the ratio in this run. Memory: the peak
   // RSS of each phase (PhasePeaks) — the specimen, the first solve (assembly, analysis,
-  // supernodal factor), the first rank update (the factor turned simplicial LDLᵀ), the other
-  // blocks with and without a periodic rebuild, the refactorizations.
+  // supernodal factor, then packed LDLᵀ in place), the first rank update, the other blocks with
+  // and without a periodic rebuild, the refactorizations.
   using namespace peritwin;
   using namespace peritwin::validation;
   ModelOptions options;
@@ -297,6 +310,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   const auto t0 = std::chrono::steady_clock::now();
   double per_update = 0.0, update_total = 0.0, basis_total = 0.0, rebuild_total = 0.0, wall = 0.0;
   double supernodal_nnz = 0.0, simplicial_nnz = 0.0, peak_updates = 0.0, peak_rebuilds = 0.0;
+  double ldlt_bytes = 0.0;
   std::int64_t cycles = 0, broken = 0;
   int solves = 0, rebuilds = 0, updates = 0;
   bool failed = false;
@@ -306,7 +320,8 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
       std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
       return 1;
     }
-    supernodal_nnz = engine.solver().factor().factor_nonzeros();
+    supernodal_nnz = engine.solver().factor().supernodal_nonzeros();
+    simplicial_nnz = engine.solver().factor().factor_nonzeros();
     peaks.mark(line, "initialize");
     bool first_update = true;
     for (;;) {
@@ -315,6 +330,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
                         engine.total_cycles() < max_cycles;
       if (first_update && engine.updates() > 0) {  // this block converted the factor
         simplicial_nnz = engine.solver().factor().factor_nonzeros();
+        ldlt_bytes = engine.solver().factor().factor_bytes();
         peaks.mark(line, "first_update");
         first_update = false;
       } else {
@@ -340,6 +356,8 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   }  // the engine's factor goes before the refactorizing solver is built
   line["rss_peak_later_updates_mb"] = tools::fixed(peak_updates, 1);
   line["rss_peak_rebuild_blocks_mb"] = tools::fixed(peak_rebuilds, 1);
+  peaks.note("later_updates", peak_updates);
+  peaks.note("rebuild_blocks", peak_rebuilds);
   peaks.mark(line, "engine_freed");
   // Refactorizing path on the same model: assemble + numeric factorization + solve.
   StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
@@ -370,9 +388,15 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   line["rebuild_total_s"] = tools::fixed(rebuild_total, 2);
   line["final_failure"] = failed;
   line["factor_nnz_supernodal"] = tools::whole(supernodal_nnz);
-  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);
+  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);  // the LDLᵀ factor's entries
+  // The factor's bytes: the supernodal LLᵀ's values (8 B per entry, briefly, at each
+  // factorization) and the LDLᵀ factor kept between updates (values, rows, pointers).
+  line["factor_mb_supernodal_values"] =
+      tools::fixed(supernodal_nnz * sizeof(double) / (1024.0 * 1024.0), 1);
+  line["factor_mb_ldlt"] = tools::fixed(ldlt_bytes / (1024.0 * 1024.0), 1);
   line["peak_rss_reset_ok"] = peaks.reset_ok();
   line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
+  line["peak_rss_phase"] = peaks.peak_phase();
   tools::print_line(line);
   return 0;
 }

@@ -136,6 +136,7 @@ bool FatigueEngine::initialize() {
     breakable_[b] = intact[b] && !disc_.no_fail[i] && !disc_.no_fail[j] ? 1 : 0;
   }
   update_phases();
+  if (settings_.release_idle_factor) solver_->release_factor();
   return true;
 }
 
@@ -653,6 +654,7 @@ Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
     r = fresh.break_bonds(broken);
   }
   fresh.set_incremental(settings_.incremental);
+  if (r.ok() && settings_.release_idle_factor) fresh.release_factor();
   ++rebuilds_;
   rebuild_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

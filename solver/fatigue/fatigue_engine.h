@@ -131,6 +131,12 @@ struct FatigueSettings {
   /// bounds the round-off carried by long chains of updates and what import_state must replay on
   /// resume (the re-solves since the last rebuild, not the whole history). 0 = never.
   std::int64_t refactor_every_resolves = 1024;
+  /// Incremental only: free the Cholesky factor after each factorization (initialize, rebuild)
+  /// until the next bond breaks, which factorizes again first (StaticSolver::release_factor: the
+  /// same factor bit for bit, so the same states and hashes). Memory for time: a detail that
+  /// idles holds no factor (most of its memory), the first break after it pays one
+  /// factorization. For fleets of details that mostly idle (issue 18).
+  bool release_idle_factor = false;
 };
 
 /// 000 Eq. (8): s_c = sqrt(G_c / ((6μ/π + 16(κ − 2μ)/(9π²))·δ)), plane-stress κ, μ of the material.

@@ -17,40 +17,94 @@ namespace peritwin {
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
 Status check_after_downdate(const std::vector<double>& diagonal);
 
+/// The LDLᵀ factor after the first fused update, kept in the supernodal factor's storage instead
+/// of CHOLMOD's simplicial one (issue 18, item 5). CHOLMOD's conversion (cholmod_change_factor
+/// to simplicial LDLᵀ, packed) allocates a row index per entry (4 B: 0.49 GB for the 60k-node
+/// state-based factor's 121.8M entries) while the supernodal values are still at full size;
+/// here the values are converted and packed in place by the same arithmetic, in the same order
+/// (d = l_jj², l_ij / l_jj: CHOLMOD's ll_super_to_simplicial_numeric), the tail is given back,
+/// and the rows stay the supernodes' (Ls, shared by a supernode's columns). Same values, same
+/// pattern, so the same update and solve arithmetic: bit for bit what CHOLMOD's simplicial
+/// factor gave. The CHOLMOD factor object stays a supernodal symbolic factor (values detached),
+/// so that factorize() can refactorize with the same analysis.
+struct PackedLdlt {
+  double* x = nullptr;        ///< packed values, D_jj first in each column (cholmod_malloc'ed)
+  std::size_t xsize = 0;      ///< entries of x
+  std::vector<int> col_x;     ///< column j's values start at x + col_x[j]
+  std::vector<int> col_rows;  ///< column j's rows start at Ls + col_rows[j]
+  std::vector<int> col_nz;    ///< entries of column j
+};
+
 struct SparseCholesky::Impl {
   cholmod_common common{};
+  /// CHOLMOD's factor: supernodal LLᵀ after factorize(), simplicial LDLᵀ after modify(), or
+  /// supernodal symbolic (its values moved to `packed`) after modify_fused().
   cholmod_factor* factor = nullptr;
+  PackedLdlt packed;
   std::vector<int> inverse_perm;  ///< row -> position in the factor's ordering
-  ldlt::SolveSchedule schedule;   ///< for the simplicial factor after modify()
-  std::vector<double> diagonal;   ///< D of the simplicial factor (refreshed along update paths)
+  ldlt::SolveSchedule schedule;   ///< for the LDLᵀ factor after modify() / modify_fused()
+  std::vector<double> diagonal;   ///< D of the LDLᵀ factor (refreshed along update paths)
   std::vector<int> mark;          ///< per column: last modify() whose path reached it
   int stamp = 0;
   int solve_threads = 0;  ///< 0 automatic, 1, 2
   std::vector<double> w;  ///< n × kGroup workspace of the fused update (zero between calls)
-  /// The forward solve y = L⁻¹·P·b of the last right-hand sides b solved with the simplicial
-  /// factor, kept up to date by the fused update (only the update paths' rows change), so that
-  /// solving the same b again is only the backward half.
+  /// The forward solve y = L⁻¹·P·b of the last right-hand sides b solved with the LDLᵀ factor,
+  /// kept up to date by the fused update (only the update paths' rows change), so that solving
+  /// the same b again is only the backward half.
   Eigen::MatrixXd tracked_rhs;
   std::vector<double> forward_y;  ///< n × columns of tracked_rhs, row-major, permuted
   std::vector<double> delta;      ///< n × 3 workspace of the forward update (zero between calls)
   bool forward_valid = false;
-  /// Σ Lnz of the simplicial factor: grows when an update adds fill (the pattern changes).
+
+  [[nodiscard]] bool packed_active() const { return packed.x != nullptr; }
+  /// The factor is LDLᵀ (after an update): packed, or CHOLMOD's simplicial.
+  [[nodiscard]] bool is_ldlt() const {
+    return packed_active() || (factor != nullptr && !factor->is_super && !factor->is_ll &&
+                               factor->xtype == CHOLMOD_REAL);
+  }
+  /// The LDLᵀ factor as the solves and updates read it (is_ldlt() must hold).
+  [[nodiscard]] ldlt::FactorView view() const {
+    if (!packed_active()) return ldlt::view_of(*factor);
+    ldlt::FactorView v;
+    v.n = static_cast<int>(factor->n);
+    v.lp = packed.col_x.data();
+    v.ri = packed.col_rows.data();
+    v.lnz = packed.col_nz.data();
+    v.rows = static_cast<const int*>(factor->s);
+    v.lx = packed.x;
+    v.perm = static_cast<const int*>(factor->Perm);
+    return v;
+  }
+  /// Σ Lnz of the LDLᵀ factor: grows when an update adds fill (the pattern changes).
   [[nodiscard]] std::int64_t pattern_nnz() const {
-    const auto* lnz = static_cast<const int*>(factor->nz);
+    const ldlt::FactorView v = view();
     std::int64_t nnz = 0;
-    for (std::size_t j = 0; j < factor->n; ++j) nnz += lnz[j];
+    for (int j = 0; j < v.n; ++j) nnz += v.lnz[j];
     return nnz;
   }
   void ensure_schedule() {
     const std::int64_t nnz = pattern_nnz();
     if (schedule.pattern_nnz == nnz) return;
-    schedule = ldlt::make_schedule(*factor, nnz);
-    const auto* lp = static_cast<const int*>(factor->p);
-    const auto* lx = static_cast<const double*>(factor->x);
-    diagonal.resize(factor->n);
-    for (std::size_t j = 0; j < factor->n; ++j) diagonal[j] = lx[lp[j]];
-    mark.assign(factor->n, 0);
+    const ldlt::FactorView v = view();
+    schedule = ldlt::make_schedule(v, nnz);
+    diagonal.resize(static_cast<std::size_t>(v.n));
+    for (int j = 0; j < v.n; ++j) diagonal[static_cast<std::size_t>(j)] = v.lx[v.lp[j]];
+    mark.assign(static_cast<std::size_t>(v.n), 0);
     stamp = 0;
+  }
+  /// Supernodal LLᵀ -> packed LDLᵀ in place (see PackedLdlt); the factor must be supernodal
+  /// numeric.
+  Status to_packed_ldlt();
+  /// Packed LDLᵀ -> CHOLMOD's simplicial LDLᵀ (for cholmod_updown, when an update adds fill):
+  /// holds both copies for a moment.
+  Status to_cholmod_simplicial();
+  /// Makes the factor LDLᵀ: packed from supernodal (`packed_form`) or CHOLMOD's simplicial.
+  Status to_ldlt(bool packed_form);
+  void free_packed() {
+    if (packed.x != nullptr) {
+      cholmod_free(packed.xsize, sizeof(double), packed.x, &common);
+    }
+    packed = {};
   }
   std::vector<double> work;  ///< permuted right-hand sides, row-major
   Impl() {
@@ -60,6 +114,7 @@ struct SparseCholesky::Impl {
     common.quick_return_if_not_posdef = 1;
   }
   ~Impl() {
+    free_packed();
     if (factor != nullptr) cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
   }

@@ -8,19 +8,31 @@
 
 namespace peritwin::ldlt {
 
-SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
+FactorView view_of(const cholmod_factor& l) {
+  FactorView v;
+  v.n = static_cast<int>(l.n);
+  v.lp = static_cast<const int*>(l.p);
+  v.ri = v.lp;
+  v.lnz = static_cast<const int*>(l.nz);
+  v.rows = static_cast<const int*>(l.i);
+  v.lx = static_cast<double*>(l.x);
+  v.perm = static_cast<const int*>(l.Perm);
+  return v;
+}
+
+SolveSchedule make_schedule(const FactorView& l, std::int64_t pattern_nnz) {
   SolveSchedule schedule;
   schedule.pattern_nnz = pattern_nnz;
-  const auto n = static_cast<int>(l.n);
-  const auto* lp = static_cast<const int*>(l.p);
-  const auto* li = static_cast<const int*>(l.i);
-  const auto* lnz = static_cast<const int*>(l.nz);
+  const int n = l.n;
+  const int* lnz = l.lnz;
+  auto col = [&](int j) { return l.rows_of(j); };
   // Elimination tree: the parent of j is the smallest row below the diagonal of column j.
   std::vector<int> parent(static_cast<std::size_t>(n), -1);
   std::vector<double> weight(static_cast<std::size_t>(n), 0.0);
   for (int j = 0; j < n; ++j) {
     int p = n;
-    for (int q = lp[j] + 1; q < lp[j] + lnz[j]; ++q) p = std::min(p, li[q]);
+    const int* cj = col(j);
+    for (int e = 1; e < lnz[j]; ++e) p = std::min(p, cj[e]);
     parent[static_cast<std::size_t>(j)] = p < n ? p : -1;
     weight[static_cast<std::size_t>(j)] += lnz[j];
     if (p < n) weight[static_cast<std::size_t>(p)] += weight[static_cast<std::size_t>(j)];
@@ -99,10 +111,11 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
   auto same_below = [&](int j, int t) {  // column j+t equals column j below row j+t
     if (j + t >= n || part[static_cast<std::size_t>(j + t)] != part[static_cast<std::size_t>(j)])
       return false;
-    const int a = lp[j], b = lp[j + t];
-    if (lnz[j + t] != lnz[j] - t || lnz[j] <= t || li[a + t] != j + t) return false;
+    const int* a = col(j);
+    const int* b = col(j + t);
+    if (lnz[j + t] != lnz[j] - t || lnz[j] <= t || a[t] != j + t) return false;
     for (int q = 0; q < lnz[j + t]; ++q) {
-      if (li[b + q] != li[a + t + q]) return false;
+      if (b[q] != a[t + q]) return false;
     }
     return true;
   };
@@ -115,27 +128,28 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
   schedule.balanced = balanced;
   schedule.sorted = true;
   for (int j = 0; j < n && schedule.sorted; ++j) {
-    for (int q = lp[j] + 1; q < lp[j] + lnz[j]; ++q) {
-      schedule.sorted = schedule.sorted && li[q] > li[q - 1];
-    }
+    const int* cj = col(j);
+    for (int e = 1; e < lnz[j]; ++e) schedule.sorted = schedule.sorted && cj[e] > cj[e - 1];
   }
   schedule.nested = schedule.sorted;
   for (int j = 0; j < n && schedule.nested; ++j) {
     const int p = parent[static_cast<std::size_t>(j)];
     if (p < 0) continue;
     // Rows of j after p (sorted, p is the first below the diagonal) must be among p's rows.
-    int q = lp[p] + 1;
-    const int q_end = lp[p] + lnz[p];
-    for (int e = lp[j] + 2; e < lp[j] + lnz[j] && schedule.nested; ++e) {
-      while (q < q_end && li[q] < li[e]) ++q;
-      schedule.nested = q < q_end && li[q] == li[e];
+    const int* cp = col(p);
+    const int* cj = col(j);
+    int q = 1;
+    for (int e = 2; e < lnz[j] && schedule.nested; ++e) {
+      while (q < lnz[p] && cp[q] < cj[e]) ++q;
+      schedule.nested = q < lnz[p] && cp[q] == cj[e];
     }
   }
   // Top blocks. Rows must be sorted in the top's columns (they are in CHOLMOD's simplicial
   // factors); otherwise one block with everything inside it (thread 0 alone).
   bool sorted = true;
   for (const auto& [j0, k] : schedule.chains[0]) {
-    for (int q = lp[j0] + 1; q < lp[j0] + lnz[j0]; ++q) sorted = sorted && li[q] > li[q - 1];
+    const int* cj = col(j0);
+    for (int e = 1; e < lnz[j0]; ++e) sorted = sorted && cj[e] > cj[e - 1];
   }
   constexpr int block_columns = 64;
   for (std::size_t c = 0; c < schedule.chains[0].size();) {
@@ -162,7 +176,7 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
     double inside = 0.0, outside = 0.0;
     for (int c = schedule.top_block_start[b]; c < schedule.top_block_start[b + 1]; ++c) {
       auto& t = schedule.top_chains[static_cast<std::size_t>(c)];
-      const int* rows = li + lp[t.j] + t.k;
+      const int* rows = col(t.j) + t.k;
       const int len = lnz[t.j] - t.k;
       t.lo = static_cast<int>(std::upper_bound(rows, rows + len, last) - rows);
       inside += static_cast<double>(t.lo) * t.k;
@@ -182,7 +196,7 @@ SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz) {
     if (!sorted) m = n;
     for (int c = schedule.top_block_start[b]; c < schedule.top_block_start[b + 1]; ++c) {
       auto& t = schedule.top_chains[static_cast<std::size_t>(c)];
-      const int* rows = li + lp[t.j] + t.k;
+      const int* rows = col(t.j) + t.k;
       const int len = lnz[t.j] - t.k;
       t.mid = sorted ? static_cast<int>(std::upper_bound(rows, rows + len, m) - rows) : len;
       if (!sorted) t.lo = len;
@@ -197,7 +211,7 @@ namespace {
 /// The top's forward solve, chain by chain: solve the chain's own columns (in_chain) and scatter
 /// rows [from, to) of its shared rows below.
 template <int R, int K>
-void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bool in_chain,
+void top_forward_chain(const int* lp, const int* rows_j, const double* lx, int j, bool in_chain,
                        int from, int to, double* y) {
   double v[K][R];
   int p[K];
@@ -212,7 +226,7 @@ void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bo
       v[t][r] = a;
     }
   }
-  const int* rows = li + p[0] + K;
+  const int* rows = rows_j + K;
   for (int q = from; q < to; ++q) {
     double* yi = y + static_cast<std::size_t>(rows[q]) * R;
     double l[K];
@@ -228,15 +242,17 @@ void top_forward_chain(const int* lp, const int* li, const double* lx, int j, bo
 /// Forward solve L·y = y (unit diagonal) with a chain of K columns j..j+K-1; y is n × R row-major:
 /// the whole chain, all of its shared rows.
 template <int R, int K>
-void forward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
-                   double* y) {
-  top_forward_chain<R, K>(lp, li, lx, j, true, 0, lnz[j] - K, y);
+void forward_chain(const FactorView& l, int j, double* y) {
+  top_forward_chain<R, K>(l.lp, l.rows_of(j), l.lx, j, true, 0, l.lnz[j] - K, y);
 }
 
 /// Backward solve D·Lᵀ·x = y with a chain of K columns; x overwrites y.
 template <int R, int K>
-void backward_chain(const int* lp, const int* li, const int* lnz, const double* lx, int j,
-                    double* y) {
+void backward_chain(const FactorView& f, int j, double* y) {
+  const int* lp = f.lp;
+  const int* lnz = f.lnz;
+  const double* lx = f.lx;
+  const int* rows_j = f.rows_of(j);
   double v[K][R];
   int p[K];
   for (int t = 0; t < K; ++t) p[t] = lp[j + t];
@@ -244,7 +260,7 @@ void backward_chain(const int* lp, const int* li, const int* lnz, const double* 
     for (int r = 0; r < R; ++r) v[t][r] = y[static_cast<std::size_t>(j + t) * R + r] / lx[p[t]];
   }
   const int len = lnz[j] - K;
-  const int* rows = li + p[0] + K;
+  const int* rows = rows_j + K;
   for (int q = 0; q < len; ++q) {
     const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
     for (int t = 0; t < K; ++t) {
@@ -262,17 +278,17 @@ void backward_chain(const int* lp, const int* li, const int* lnz, const double* 
   }
 }
 
-inline int lnz_of(const cholmod_factor& l, int j) { return static_cast<const int*>(l.nz)[j]; }
+inline int lnz_of(const FactorView& l, int j) { return l.lnz[j]; }
 
 /// The top's backward solve: partial sums Σ L(i, j+t)·x_i over rows [from, to) of the chain's
 /// shared rows into s[K][R].
 template <int R, int K>
-void top_backward_partial(const int* lp, const int* li, const double* lx, int j, int from, int to,
-                          const double* y, double* s) {
+void top_backward_partial(const int* lp, const int* rows_j, const double* lx, int j, int from,
+                          int to, const double* y, double* s) {
   int p[K];
   for (int t = 0; t < K; ++t) p[t] = lp[j + t];
   double v[K][R] = {};
-  const int* rows = li + p[0] + K;
+  const int* rows = rows_j + K;
   for (int q = from; q < to; ++q) {
     const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
     for (int t = 0; t < K; ++t) {
@@ -288,7 +304,7 @@ void top_backward_partial(const int* lp, const int* li, const double* lx, int j,
 /// The top's backward solve of a chain's own columns given the two partial sums of its rows
 /// below the block; rows [0, lo) (inside the block) are summed here.
 template <int R, int K>
-void top_backward_finish(const int* lp, const int* li, const double* lx, int j, int lo,
+void top_backward_finish(const int* lp, const int* rows_j, const double* lx, int j, int lo,
                          const double* s0, const double* s1, double* y) {
   int p[K];
   for (int t = 0; t < K; ++t) p[t] = lp[j + t];
@@ -299,7 +315,7 @@ void top_backward_finish(const int* lp, const int* li, const double* lx, int j, 
           y[static_cast<std::size_t>(j + t) * R + r] / lx[p[t]] - s0[t * R + r] - s1[t * R + r];
     }
   }
-  const int* rows = li + p[0] + K;
+  const int* rows = rows_j + K;
   for (int q = 0; q < lo; ++q) {
     const double* xi = y + static_cast<std::size_t>(rows[q]) * R;
     for (int t = 0; t < K; ++t) {
@@ -359,30 +375,20 @@ class PairBarrier {
 };
 
 template <int R>
-void forward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& chains, double* y) {
-  const auto* lp = static_cast<const int*>(l.p);
-  const auto* li = static_cast<const int*>(l.i);
-  const auto* lnz = static_cast<const int*>(l.nz);
-  const auto* lx = static_cast<const double*>(l.x);
+void forward(const FactorView& l, const std::vector<std::pair<int, int>>& chains, double* y) {
   // chain.first, not a structured binding: clang 14 (the fuzz and sanitizer builds) cannot
   // capture one in a lambda.
   for (const auto& chain : chains) {
-    with_chain_length(chain.second, [&](auto K) {
-      forward_chain<R, decltype(K)::value>(lp, li, lnz, lx, chain.first, y);
-    });
+    with_chain_length(chain.second,
+                      [&](auto K) { forward_chain<R, decltype(K)::value>(l, chain.first, y); });
   }
 }
 
 template <int R>
-void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& chains, double* y) {
-  const auto* lp = static_cast<const int*>(l.p);
-  const auto* li = static_cast<const int*>(l.i);
-  const auto* lnz = static_cast<const int*>(l.nz);
-  const auto* lx = static_cast<const double*>(l.x);
+void backward(const FactorView& l, const std::vector<std::pair<int, int>>& chains, double* y) {
   for (auto it = chains.rbegin(); it != chains.rend(); ++it) {
-    with_chain_length(it->second, [&](auto K) {
-      backward_chain<R, decltype(K)::value>(lp, li, lnz, lx, it->first, y);
-    });
+    with_chain_length(it->second,
+                      [&](auto K) { backward_chain<R, decltype(K)::value>(l, it->first, y); });
   }
 }
 
@@ -393,12 +399,11 @@ void backward(const cholmod_factor& l, const std::vector<std::pair<int, int>>& c
 /// barrier per block. On one thread the same steps run in the same order, so the results are
 /// bit-identical.
 template <int R>
-void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool threaded, double* y,
+void ldl_solve(const FactorView& l, const SolveSchedule& schedule, bool threaded, double* y,
                bool do_forward = true, bool do_backward = true) {
   const auto n = static_cast<std::size_t>(l.n);
-  const auto* lp = static_cast<const int*>(l.p);
-  const auto* li = static_cast<const int*>(l.i);
-  const auto* lx = static_cast<const double*>(l.x);
+  const int* lp = l.lp;
+  const double* lx = l.lx;
   std::vector<double> second(n * R, 0.0);
   for (const auto& [j0, k] : schedule.chains[2]) {
     for (int j = j0; j < j0 + k; ++j) {
@@ -431,7 +436,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
     for (int c = c0; c < c1; ++c) {
       const auto& t = top[static_cast<std::size_t>(c)];
       with_chain_length(t.k, [&](auto K) {
-        top_forward_chain<R, decltype(K)::value>(lp, li, lx, t.j, true, 0, t.lo, y);
+        top_forward_chain<R, decltype(K)::value>(lp, l.rows_of(t.j), lx, t.j, true, 0, t.lo, y);
       });
     }
   };
@@ -442,7 +447,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const int from = me == 0 ? t.lo : t.mid;
       const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
       with_chain_length(t.k, [&](auto K) {
-        top_forward_chain<R, decltype(K)::value>(lp, li, lx, t.j, false, from, to, y);
+        top_forward_chain<R, decltype(K)::value>(lp, l.rows_of(t.j), lx, t.j, false, from, to, y);
       });
     }
   };
@@ -455,7 +460,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const int to = me == 0 ? t.mid : lnz_of(l, t.j) - t.k;
       double* s = partial_at(b, me, c);
       with_chain_length(t.k, [&](auto K) {
-        top_backward_partial<R, decltype(K)::value>(lp, li, lx, t.j, from, to, y, s);
+        top_backward_partial<R, decltype(K)::value>(lp, l.rows_of(t.j), lx, t.j, from, to, y, s);
       });
     }
   };
@@ -466,7 +471,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
       const double* s0 = partial_at(b, 0, c);
       const double* s1 = partial_at(b, 1, c);
       with_chain_length(t.k, [&](auto K) {
-        top_backward_finish<R, decltype(K)::value>(lp, li, lx, t.j, t.lo, s0, s1, y);
+        top_backward_finish<R, decltype(K)::value>(lp, l.rows_of(t.j), lx, t.j, t.lo, s0, s1, y);
       });
     }
   };
@@ -543,7 +548,7 @@ void ldl_solve(const cholmod_factor& l, const SolveSchedule& schedule, bool thre
 
 }  // namespace
 
-void solve(int rhs_columns, const cholmod_factor& l, const SolveSchedule& schedule, bool threaded,
+void solve(int rhs_columns, const FactorView& l, const SolveSchedule& schedule, bool threaded,
            double* y, bool do_forward, bool do_backward) {
   switch (rhs_columns) {
     case 1:

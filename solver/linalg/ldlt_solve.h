@@ -1,7 +1,7 @@
-// The triangular solves with a simplicial LDLᵀ factor of CHOLMOD (after rank updates), on two
-// threads: the schedule splits the factor's columns into two independent sets of elimination
-// subtrees and a pipelined top (see SolveSchedule). Results do not depend on the thread count.
-// Used by SparseCholesky::solve (sparse_cholesky.h); not an API of its own.
+// The triangular solves with a simplicial LDLᵀ factor (after rank updates), on two threads: the
+// schedule splits the factor's columns into two independent sets of elimination subtrees and a
+// pipelined top (see SolveSchedule). Results do not depend on the thread count. Used by
+// SparseCholesky::solve (sparse_cholesky.h); not an API of its own.
 #pragma once
 
 #include <cholmod.h>
@@ -12,6 +12,26 @@
 #include <vector>
 
 namespace peritwin::ldlt {
+
+/// A simplicial LDLᵀ factor as the solves and the rank update read it: column j holds lnz[j]
+/// entries, D_jj then the L_ij below the diagonal, values at lx + lp[j] and their rows (sorted,
+/// the diagonal first) at rows + ri[j]. CHOLMOD's simplicial factor has ri = lp (a row index per
+/// entry); the supernodal storage kept after the first update (cholesky_impl.h, PackedLdlt) has
+/// the rows of a supernode once, shared by its columns (column j + 1's rows start one after
+/// column j's), so the same kernels read both and do the same arithmetic on the same values.
+struct FactorView {
+  int n = 0;
+  const int* lp = nullptr;
+  const int* ri = nullptr;
+  const int* lnz = nullptr;
+  const int* rows = nullptr;
+  double* lx = nullptr;
+  const int* perm = nullptr;  ///< factor position -> row of the matrix
+  [[nodiscard]] const int* rows_of(int j) const { return rows + ri[j]; }
+};
+
+/// The view of a CHOLMOD simplicial numeric factor.
+FactorView view_of(const cholmod_factor& l);
 
 /// The columns of a simplicial LDLᵀ factor split into two sets of whole elimination subtrees
 /// (parts 1 and 2) and the rest (part 0, the "top": every ancestor of a part-1/2 column is in the
@@ -42,12 +62,12 @@ struct SolveSchedule {
 };
 
 /// The schedule of a factor whose pattern has Σ Lnz = pattern_nnz.
-SolveSchedule make_schedule(const cholmod_factor& l, std::int64_t pattern_nnz);
+SolveSchedule make_schedule(const FactorView& l, std::int64_t pattern_nnz);
 
 /// Solves in place with `rhs_columns` (1 to 3) right-hand sides stored row-major and permuted in
 /// y: the forward half L·D·z = y, the backward half Lᵀ·x = z, or both; on two threads when
 /// `threaded` and the schedule is balanced.
-void solve(int rhs_columns, const cholmod_factor& l, const SolveSchedule& schedule, bool threaded,
+void solve(int rhs_columns, const FactorView& l, const SolveSchedule& schedule, bool threaded,
            double* y, bool do_forward, bool do_backward);
 
 }  // namespace peritwin::ldlt

@@ -22,8 +22,9 @@ struct RankScalars {
   double p, beta;
 };
 
-/// Entries q in [from, to) of column j: w_i −= p·l_ij, l_ij += β·w_i for each active rank; with
-/// R tracked right-hand sides also δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
+/// Entries q in [from, to) of column j (rows li[q], values lx[q]: the column's own arrays):
+/// w_i −= p·l_ij, l_ij += β·w_i for each active rank; with R tracked right-hand sides also
+/// δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
 template <int R>
 void apply_column(const int* li, double* lx, double* w, int from, int to, const RankScalars* active,
                   int count, double* delta, const double* y_old, const double* y_new) {
@@ -113,27 +114,24 @@ inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks
 Status SparseCholesky::modify_fused(const std::vector<Column>& added,
                                     const std::vector<Column>& removed) {
   if (added.empty() && removed.empty()) return {};
-  cholmod_factor* l = impl_->factor;
-  if (l == nullptr) return failure("modify before factorize");
   auto& impl = *impl_;
-  auto& common = impl.common;
-  if (l->is_super || l->is_ll) {
-    if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
-      return failure("cholmod_change_factor failed");
-    }
-  }
+  // The supernodal factor becomes LDLᵀ in its own storage (cholesky_impl.h, PackedLdlt): no
+  // second copy of the factor, no row index per entry.
+  if (auto r = impl.to_ldlt(true); !r.ok()) return r;
   impl.ensure_schedule();
-  const auto n = static_cast<std::size_t>(l->n);
+  const ldlt::FactorView l = impl.view();
+  const auto n = static_cast<std::size_t>(l.n);
   if (impl.inverse_perm.size() != n) {
     impl.inverse_perm.assign(n, 0);
-    const int* perm = static_cast<const int*>(l->Perm);
     for (std::size_t k = 0; k < n; ++k)
-      impl.inverse_perm[static_cast<std::size_t>(perm[k])] = static_cast<int>(k);
+      impl.inverse_perm[static_cast<std::size_t>(l.perm[k])] = static_cast<int>(k);
   }
-  const auto* lp = static_cast<const int*>(l->p);
-  const auto* li = static_cast<const int*>(l->i);
-  const auto* lnz = static_cast<const int*>(l->nz);
-  auto* lx = static_cast<double*>(l->x);
+  const int* lp = l.lp;
+  const int* lnz = l.lnz;
+  double* lx = l.lx;
+  // Column j's rows and values, indexed from its diagonal (q = 0).
+  auto rows_of = [&](int j) { return l.rows_of(j); };
+  auto values_of = [&](int j) { return lx + lp[j]; };
   // Permuted, sorted columns with their signs, updates first. The fused sweep needs the rows of
   // each column below its first one to be in that column of L (no fill; true for the bond
   // vectors, whose pairs are all in the matrix's pattern); otherwise CHOLMOD does it.
@@ -153,8 +151,8 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
       std::sort(rank.entries.begin(), rank.entries.end());
       if (rank.entries.empty()) continue;
       const int first = rank.entries.front().first;
-      const int* rows = li + lp[first] + 1;
-      const int* end = li + lp[first] + lnz[first];
+      const int* rows = rows_of(first) + 1;
+      const int* end = rows_of(first) + lnz[first];
       for (std::size_t e = 1; e < rank.entries.size() && fits; ++e) {
         fits = rank.entries[e].first != rank.entries[e - 1].first &&
                std::binary_search(rows, end, rank.entries[e].first);
@@ -221,7 +219,7 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
         const int count = column_scalars(lp, lx, w, j, group, alpha, active);
         const bool moved = forward_pivot(tracked, j, fy, delta, y_old, y_new);
         if (count > 0 || moved) {
-          apply_column(tracked, li, lx, w, lp[j] + 1, lp[j] + lnz[j], active, count, delta, y_old,
+          apply_column(tracked, rows_of(j), values_of(j), w, 1, lnz[j], active, count, delta, y_old,
                        y_new);
         }
       }
@@ -238,8 +236,8 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
         if (j >= split) break;
         const int len = lnz[j] - 1;
         if (len <= 0) continue;
-        const int first = li[lp[j] + 1];
-        const int last = li[lp[j] + lnz[j] - 1];
+        const int first = rows_of(j)[1];
+        const int last = rows_of(j)[lnz[j] - 1];
         const double f = last > first ? static_cast<double>(split - first) / (last - first + 1)
                                       : (split > first ? 1.0 : 0.0);
         count += len * std::clamp(f, 0.0, 1.0);
@@ -270,10 +268,9 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
         moves[static_cast<std::size_t>(k)] = moved ? 1 : 0;
         ready.store(k + 1, std::memory_order_release);
         if (count == 0 && !moved) continue;
-        const int* rows = li + lp[j] + 1;
-        const int end = lp[j] + lnz[j];
-        const int cut = static_cast<int>(std::lower_bound(rows, li + end, split) - li);
-        apply_column(tracked, li, lx, w, lp[j] + 1, cut, active, count, delta, piv, piv + 3);
+        const int* rows = rows_of(j);
+        const int cut = static_cast<int>(std::lower_bound(rows + 1, rows + lnz[j], split) - rows);
+        apply_column(tracked, rows, values_of(j), w, 1, cut, active, count, delta, piv, piv + 3);
       }
     };
     auto thread1 = [&] {
@@ -294,8 +291,8 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
           count = counts[static_cast<std::size_t>(k)];
           moved = moves[static_cast<std::size_t>(k)] != 0;
           piv = pivots.data() + static_cast<std::size_t>(k) * 6;
-          const int* rows = li + lp[j] + 1;
-          from = static_cast<int>(std::lower_bound(rows, li + lp[j] + lnz[j], split) - li);
+          const int* rows = rows_of(j);
+          from = static_cast<int>(std::lower_bound(rows + 1, rows + lnz[j], split) - rows);
         } else {
           if (k == k0) {  // thread 0 is done with α (it published column k0 − 1 last)
             for (int spins = 0; ready.load(std::memory_order_acquire) < k0; ++spins) {
@@ -306,11 +303,11 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
           moved = forward_pivot(tracked, j, fy, delta, own_pivot, own_pivot + 3);
           piv = own_pivot;
           active = own;
-          from = lp[j] + 1;
+          from = 1;
         }
         if (count > 0 || moved) {
-          apply_column(tracked, li, lx, w, from, lp[j] + lnz[j], active, count, delta, piv,
-                       piv + 3);
+          apply_column(tracked, rows_of(j), values_of(j), w, from, lnz[j], active, count, delta,
+                       piv, piv + 3);
         }
       }
     };

@@ -42,6 +42,136 @@ Status check_after_downdate(const std::vector<double>& diagonal) {
   return {};
 }
 
+Status SparseCholesky::Impl::to_packed_ldlt() {
+  cholmod_factor* l = factor;
+  if (l == nullptr || !l->is_super || !l->is_ll || l->xtype != CHOLMOD_REAL || l->x == nullptr) {
+    return failure("packed LDLt: the factor is not a supernodal numeric LLt factor");
+  }
+  const auto n = static_cast<std::size_t>(l->n);
+  const auto nsuper = static_cast<std::size_t>(l->nsuper);
+  const auto* super = static_cast<const int*>(l->super);
+  const auto* lpi = static_cast<const int*>(l->pi);
+  const auto* lpx = static_cast<const int*>(l->px);
+  auto* lx = static_cast<double*>(l->x);
+  packed.col_x.assign(n + 1, 0);
+  packed.col_rows.assign(n, 0);
+  packed.col_nz.assign(n, 0);
+  // CHOLMOD's ll_super_to_simplicial_numeric (to_packed, LDLᵀ), values only: column j of
+  // supernode s holds rows psi + jj .. psend − 1 of Ls; d_j = l_jj², then l_ij / l_jj, written
+  // at p <= the entry's supernodal position q, so in place (q only grows).
+  std::size_t p = 0;
+  for (std::size_t s = 0; s < nsuper; ++s) {
+    const int k1 = super[s], k2 = super[s + 1];
+    const int psi = lpi[s], nsrow = lpi[s + 1] - psi;
+    const std::size_t psx = static_cast<std::size_t>(lpx[s]);
+    for (int jj = 0; jj < k2 - k1; ++jj) {
+      const auto j = static_cast<std::size_t>(k1 + jj);
+      packed.col_x[j] = static_cast<int>(p);
+      packed.col_rows[j] = psi + jj;
+      packed.col_nz[j] = nsrow - jj;
+      const std::size_t column =
+          psx + static_cast<std::size_t>(jj) * static_cast<std::size_t>(nsrow);
+      double ljj = lx[column + static_cast<std::size_t>(jj)];
+      if (ljj <= 0.0) {  // not positive definite (factorize reports it first): do not divide
+        lx[p] = ljj;
+        ljj = 1.0;
+      } else {
+        lx[p] = ljj * ljj;
+      }
+      ++p;
+      for (int ii = jj + 1; ii < nsrow; ++ii)
+        lx[p++] = lx[column + static_cast<std::size_t>(ii)] / ljj;
+    }
+  }
+  packed.col_x[n] = static_cast<int>(p);
+  // Give the tail (the diagonal blocks' upper triangles) back: cholmod_realloc cannot fail when
+  // it shrinks.
+  std::size_t xsize = l->xsize;
+  void* x = cholmod_realloc(std::max<std::size_t>(p, 1), sizeof(double), l->x, &xsize, &common);
+  if (x == nullptr) return failure("packed LDLt: cholmod_realloc failed");
+  packed.x = static_cast<double*>(x);
+  packed.xsize = xsize;
+  // The factor keeps its supernodal analysis as a symbolic factor (CHOLMOD's
+  // ll_super_to_super_symbolic, without freeing the values, which are now packed.x).
+  l->x = nullptr;
+  l->xtype = CHOLMOD_PATTERN;
+  l->minor = l->n;
+  l->is_ll = 1;
+  return {};
+}
+
+Status SparseCholesky::Impl::to_cholmod_simplicial() {
+  if (!packed_active()) return {};
+  cholmod_factor* l = factor;
+  const auto n = static_cast<std::size_t>(l->n);
+  // The rows per column, before CHOLMOD frees the supernodal pattern.
+  const auto* ls = static_cast<const int*>(l->s);
+  const std::size_t lnz = static_cast<std::size_t>(packed.col_x[n]);
+  auto* li = static_cast<int*>(cholmod_malloc(std::max<std::size_t>(lnz, 1), sizeof(int), &common));
+  if (li == nullptr) return failure("CHOLMOD simplicial factor: out of memory");
+  for (std::size_t j = 0; j < n; ++j) {
+    std::memcpy(li + packed.col_x[j], ls + packed.col_rows[j],
+                sizeof(int) * static_cast<std::size_t>(packed.col_nz[j]));
+  }
+  // Supernodal symbolic -> simplicial symbolic (Perm and ColCount only), then the simplicial
+  // numeric arrays around the packed values: Lp = col_x, Li = the rows above, Lx = packed.x.
+  if (!cholmod_change_factor(CHOLMOD_PATTERN, 0, 0, 1, 1, l, &common)) {
+    cholmod_free(std::max<std::size_t>(lnz, 1), sizeof(int), li, &common);
+    return failure("cholmod_change_factor failed");
+  }
+  auto* lp = static_cast<int*>(cholmod_malloc(n + 1, sizeof(int), &common));
+  auto* nz = static_cast<int*>(cholmod_malloc(n, sizeof(int), &common));
+  auto* prev = static_cast<int*>(cholmod_malloc(n + 2, sizeof(int), &common));
+  auto* next = static_cast<int*>(cholmod_malloc(n + 2, sizeof(int), &common));
+  if (lp == nullptr || nz == nullptr || prev == nullptr || next == nullptr) {
+    cholmod_free(n + 1, sizeof(int), lp, &common);
+    cholmod_free(n, sizeof(int), nz, &common);
+    cholmod_free(n + 2, sizeof(int), prev, &common);
+    cholmod_free(n + 2, sizeof(int), next, &common);
+    cholmod_free(std::max<std::size_t>(lnz, 1), sizeof(int), li, &common);
+    return failure("CHOLMOD simplicial factor: out of memory");
+  }
+  std::memcpy(lp, packed.col_x.data(), sizeof(int) * (n + 1));
+  std::memcpy(nz, packed.col_nz.data(), sizeof(int) * n);
+  // Columns in natural order (CHOLMOD's natural_list): head n + 1, tail n.
+  const int ni = static_cast<int>(n);
+  for (int j = 0; j < ni; ++j) {
+    next[j] = j + 1;
+    prev[j] = j - 1;
+  }
+  next[n + 1] = 0;
+  prev[n + 1] = -1;
+  next[n] = -1;
+  prev[n] = ni - 1;
+  prev[0] = ni + 1;
+  l->p = lp;
+  l->i = li;
+  l->x = packed.x;
+  l->nz = nz;
+  l->prev = prev;
+  l->next = next;
+  l->nzmax = packed.xsize;
+  l->is_monotonic = 1;
+  l->is_ll = 0;
+  l->xtype = CHOLMOD_REAL;
+  l->dtype = CHOLMOD_DOUBLE;
+  l->minor = l->n;
+  packed = {};  // the values belong to the CHOLMOD factor now
+  return {};
+}
+
+Status SparseCholesky::Impl::to_ldlt(bool packed_form) {
+  if (factor == nullptr) return failure("modify before factorize");
+  if (packed_active()) return packed_form ? Status{} : to_cholmod_simplicial();
+  if (factor->xtype != CHOLMOD_REAL) return failure("modify before factorize");
+  if (!factor->is_super && !factor->is_ll) return {};
+  if (packed_form && factor->is_super) return to_packed_ldlt();
+  if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, factor, &common)) {
+    return failure("cholmod_change_factor failed");
+  }
+  return {};
+}
+
 SparseCholesky::SparseCholesky() : impl_(std::make_unique<Impl>()) {}
 SparseCholesky::~SparseCholesky() = default;
 
@@ -50,6 +180,13 @@ SparseCholesky::SparseCholesky(const SparseCholesky& other) : impl_(std::make_un
   if (o.factor != nullptr) {
     impl_->factor = cholmod_copy_factor(o.factor, &impl_->common);
     if (impl_->factor == nullptr) throw std::bad_alloc();
+  }
+  if (o.packed_active()) {  // the LDLᵀ values kept in the supernodal storage (PackedLdlt)
+    auto* x = static_cast<double*>(cholmod_malloc(o.packed.xsize, sizeof(double), &impl_->common));
+    if (x == nullptr) throw std::bad_alloc();
+    std::memcpy(x, o.packed.x, o.packed.xsize * sizeof(double));
+    impl_->packed = o.packed;
+    impl_->packed.x = x;
   }
   // Everything the updates and solves read, so that the copy continues bit for bit as the
   // original would (the common's settings are the constructor's, never changed afterwards).
@@ -84,13 +221,64 @@ bool SparseCholesky::automatic_two_threads() {
          std::thread::hardware_concurrency() > 1;
 }
 
+Status SparseCholesky::convert_to_ldlt() { return impl_->to_ldlt(true); }
+
+bool SparseCholesky::release_values() {
+  auto& impl = *impl_;
+  cholmod_factor* l = impl.factor;
+  if (l == nullptr || !l->is_super) return false;
+  impl.free_packed();
+  if (l->xtype != CHOLMOD_PATTERN) {
+    // Supernodal numeric -> supernodal symbolic (CHOLMOD's ll_super_to_super_symbolic).
+    if (!cholmod_change_factor(CHOLMOD_PATTERN, 1, 1, 1, 1, l, &impl.common)) return false;
+  }
+  impl.schedule = {};
+  impl.diagonal.clear();
+  impl.forward_valid = false;
+  impl.w = {};
+  impl.delta = {};
+  impl.forward_y = {};
+  impl.tracked_rhs.resize(0, 0);
+  return true;
+}
+
+bool SparseCholesky::has_values() const {
+  const cholmod_factor* l = impl_->factor;
+  return l != nullptr && (impl_->packed_active() || l->xtype != CHOLMOD_PATTERN);
+}
+
 bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
 
 double SparseCholesky::factor_nonzeros() const {
   if (impl_->factor == nullptr) return 0.0;
+  if (impl_->packed_active()) return static_cast<double>(impl_->packed.xsize);
   const cholmod_factor* l = impl_->factor;
   if (l->is_super) return static_cast<double>(l->xsize);
   return static_cast<double>(l->nzmax);
+}
+
+double SparseCholesky::supernodal_nonzeros() const {
+  const cholmod_factor* l = impl_->factor;
+  return l != nullptr && l->is_super ? static_cast<double>(l->xsize) : 0.0;
+}
+
+double SparseCholesky::factor_bytes() const {
+  const cholmod_factor* l = impl_->factor;
+  if (l == nullptr) return 0.0;
+  const double n = static_cast<double>(l->n);
+  const double ints = static_cast<double>(sizeof(int));
+  double bytes = 2.0 * n * ints;  // Perm, ColCount
+  if (l->is_super) {
+    const double nsuper = static_cast<double>(l->nsuper);
+    bytes += static_cast<double>(l->ssize) * ints + 3.0 * (nsuper + 1.0) * ints;
+    if (l->x != nullptr) bytes += static_cast<double>(l->xsize) * sizeof(double);
+    if (impl_->packed_active()) {
+      bytes += static_cast<double>(impl_->packed.xsize) * sizeof(double) + 3.0 * n * ints;
+    }
+  } else if (l->xtype != CHOLMOD_PATTERN) {
+    bytes += static_cast<double>(l->nzmax) * (sizeof(double) + ints) + (4.0 * n + 5.0) * ints;
+  }
+  return bytes;
 }
 
 std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& upper,
@@ -122,6 +310,7 @@ std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& uppe
 
 Status SparseCholesky::analyze(const SparseMatrix& upper, const std::vector<int>* permutation) {
   if (!upper.isCompressed()) return failure("matrix is not compressed");
+  impl_->free_packed();
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   impl_->inverse_perm.clear();
   impl_->schedule = {};
@@ -151,6 +340,7 @@ Status SparseCholesky::factorize(const SparseMatrix& upper) {
     if (auto r = analyze(upper); !r.ok()) return r;
   }
   cholmod_sparse a = Impl::view(upper);
+  impl_->free_packed();  // the factor is the supernodal analysis again: refactorize with it
   impl_->schedule = {};
   impl_->diagonal.clear();
   impl_->forward_valid = false;
@@ -175,14 +365,9 @@ Status SparseCholesky::factorize(const SparseMatrix& upper) {
 Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   if (columns.empty()) return {};
   impl_->forward_valid = false;  // CHOLMOD's updown does not update our forward solve
+  if (auto r = impl_->to_ldlt(false); !r.ok()) return r;
   cholmod_factor* l = impl_->factor;
-  if (l == nullptr) return failure("modify before factorize");
   auto& common = impl_->common;
-  if (l->is_super || l->is_ll) {
-    if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, l, &common)) {
-      return failure("cholmod_change_factor failed");
-    }
-  }
   impl_->ensure_schedule();
   const auto n = static_cast<std::size_t>(l->n);
   if (impl_->inverse_perm.size() != n) {
@@ -252,28 +437,37 @@ Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
 }
 
 void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
-  const cholmod_factor* l = impl_->factor;
-  if (l == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
+  if (impl_->factor == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
+  auto& impl = *impl_;
   const auto cols = rhs.cols();
-  if (l->is_super || l->is_ll || l->xtype != CHOLMOD_REAL || cols < 1 || cols > 3) {
+  if (!impl.is_ldlt() || ((cols < 1 || cols > 3) && !impl.packed_active())) {
     solve_with_cholmod(rhs);
     return;
   }
-  // Simplicial LDLᵀ (after modify): our own solve with the two subtree parts on two threads.
-  const auto n = static_cast<std::size_t>(l->n);
-  const auto* lnz = static_cast<const int*>(l->nz);
+  if (cols > 3) {  // the packed factor: three columns at a time (each column's arithmetic alone)
+    for (Eigen::Index c0 = 0; c0 < cols; c0 += 3) {
+      const Eigen::Index k = std::min<Eigen::Index>(3, cols - c0);
+      Eigen::MatrixXd part = rhs.middleCols(c0, k);
+      solve(part);
+      rhs.middleCols(c0, k) = part;
+    }
+    return;
+  }
+  if (cols < 1) return;
+  // LDLᵀ (after an update): our own solve with the two subtree parts on two threads.
+  const ldlt::FactorView l = impl.view();
+  const auto n = static_cast<std::size_t>(l.n);
   std::int64_t nnz = 0;
-  for (std::size_t j = 0; j < n; ++j) nnz += lnz[j];
-  auto& impl = *impl_;
+  for (std::size_t j = 0; j < n; ++j) nnz += l.lnz[j];
   if (impl.schedule.pattern_nnz != nnz) impl.ensure_schedule();
-  const int* perm = static_cast<const int*>(l->Perm);
+  const int* perm = l.perm;
   const auto r = static_cast<std::size_t>(cols);
   const bool threaded = impl.schedule.balanced &&
                         (impl.solve_threads == 2 ||
                          (impl.solve_threads == 0 && nnz > 2'000'000 && automatic_two_threads()));
   auto run = [&](bool do_forward, bool do_backward) {
     double* y = impl.work.data();
-    ldlt::solve(static_cast<int>(r), *l, impl.schedule, threaded, y, do_forward, do_backward);
+    ldlt::solve(static_cast<int>(r), l, impl.schedule, threaded, y, do_forward, do_backward);
   };
   if (impl.forward_valid && impl.tracked_rhs.rows() == rhs.rows() &&
       impl.tracked_rhs.cols() == cols && impl.tracked_rhs == rhs) {
@@ -300,6 +494,11 @@ void SparseCholesky::solve(Eigen::MatrixXd& rhs) const {
 
 void SparseCholesky::solve_with_cholmod(Eigen::MatrixXd& rhs) const {
   if (impl_->factor == nullptr) throw std::logic_error("SparseCholesky::solve before factorize");
+  if (impl_->packed_active()) {
+    throw std::logic_error(
+        "SparseCholesky::solve_with_cholmod after modify_fused: the factor is peritwin's packed "
+        "LDLt, which CHOLMOD cannot read (solve() solves with it)");
+  }
   cholmod_dense b{};
   b.nrow = static_cast<size_t>(rhs.rows());
   b.ncol = static_cast<size_t>(rhs.cols());

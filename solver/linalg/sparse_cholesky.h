@@ -60,6 +60,17 @@ class SparseCholesky {
   /// each column to be in the factor's column of its first row (no fill), else falls back to
   /// modify(added, true) then modify(removed, false). Reports like modify().
   Status modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
+  /// Turns the supernodal LLᵀ factor into LDLᵀ in place, in its own storage (what the first
+  /// modify_fused() does, with the same values): 8 B per entry of L, the supernodes' upper
+  /// triangles given back. Solves with 1-3 columns then use peritwin's solve instead of
+  /// CHOLMOD's (another rounding); factorize() restores the supernodal factor.
+  Status convert_to_ldlt();
+  /// Frees the factor's values, keeping the analysis (factorize() computes them again). Only a
+  /// supernodal or packed factor (CHOLMOD's simplicial one has no analysis to keep): returns
+  /// whether it freed them.
+  bool release_values();
+  /// The factor has values (factorize() since the analysis or the last release_values()).
+  [[nodiscard]] bool has_values() const;
   /// Solves A·X = B in place for every column of B. After modify() (simplicial LDLᵀ) with 1-3
   /// columns this is peritwin's own triangular solve, whose two independent elimination subtrees
   /// run on two threads (same arithmetic with one); otherwise CHOLMOD's.
@@ -78,6 +89,13 @@ class SparseCholesky {
 
   [[nodiscard]] bool analyzed() const;
   [[nodiscard]] double factor_nonzeros() const;
+  /// Entries of the supernodal storage of the analysis (LLᵀ after factorize(), and what the
+  /// packed LDLᵀ was packed from); 0 for CHOLMOD's simplicial factor.
+  [[nodiscard]] double supernodal_nonzeros() const;
+  /// Bytes the factor holds (values, row indices, column pointers; not CHOLMOD's workspace):
+  /// supernodal LLᵀ after factorize(), packed LDLᵀ after modify_fused() (8 B per entry plus the
+  /// supernodes' rows), CHOLMOD's simplicial LDLᵀ after modify() (12 B per entry).
+  [[nodiscard]] double factor_bytes() const;
 
  private:
   struct Impl;

@@ -498,6 +498,8 @@ Status StaticSolver::solve() {
   t0 = std::chrono::steady_clock::now();
   auto report = cholesky_.factorize(upper_);
   ++factorizations_;
+  updated_ = false;
+  released_ = false;
   timings_.factor_s = seconds_since(t0);
   if (!report.ok()) return report;
   reference_ = factor_;
@@ -505,6 +507,11 @@ Status StaticSolver::solve() {
   t0 = std::chrono::steady_clock::now();
   solve_bases();
   timings_.solve_s = seconds_since(t0);
+  // Incremental: the factor is read again only after a rank update, which turns it into LDLᵀ:
+  // do it now (the same values as at the first update, bit for bit) so that a detail that
+  // breaks no bond for a while holds the packed factor, not the supernodal one with its
+  // diagonal blocks' upper triangles (issue 18: memory of a fleet of details).
+  if (incremental_ && cholesky_.convert_to_ldlt().ok()) modified_ = true;
   return report;
 }
 
@@ -567,9 +574,28 @@ void StaticSolver::ground_isolated(const std::vector<NodeIndex>& nodes,
   }
 }
 
+bool StaticSolver::release_factor() {
+  if (!incremental_ || preconditioned_ || updated_ || released_ || !cholesky_.has_values()) {
+    return false;
+  }
+  released_ = cholesky_.release_values();
+  return released_;
+}
+
 Status StaticSolver::update_resolve(const std::vector<SparseCholesky::Column>& added,
                                     const std::vector<SparseCholesky::Column>& removed,
                                     std::chrono::steady_clock::time_point t0) {
+  if (released_) {  // upper_ is still the released factor's matrix: the same factor again
+    Status f = cholesky_.factorize(upper_);
+    ++factorizations_;
+    released_ = false;
+    if (f.ok()) f = cholesky_.convert_to_ldlt();
+    if (!f.ok()) {
+      update_s_ += seconds_since(t0);
+      return f;
+    }
+  }
+  updated_ = true;
   modified_ = true;
   Status r = cholesky_.modify_fused(added, removed);
   ++updates_;

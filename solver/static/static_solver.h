@@ -162,6 +162,13 @@ class StaticSolver {
   [[nodiscard]] const Discretization& discretization() const { return disc_; }
   [[nodiscard]] const PdModel& model() const { return model_; }
   [[nodiscard]] const SparseCholesky& factor() const { return cholesky_; }
+  /// Incremental only: frees the factor's values while it is still the factor of the assembled
+  /// stiffness (no update since the last factorization), keeping the analysis and the solution;
+  /// the next break_bonds() or set_bond_factors() factorizes the same matrix with the same
+  /// analysis first — the same factor bit for bit — then updates it. For details that idle:
+  /// the factor is most of their memory (issue 18, a fleet of details). Returns whether it did.
+  bool release_factor();
+  [[nodiscard]] bool factor_released() const { return released_; }
   /// Number of numeric factorizations done so far.
   [[nodiscard]] int factorizations() const { return factorizations_; }
 
@@ -234,7 +241,10 @@ class StaticSolver {
   SolveTimings timings_;
   int factorizations_ = 0;
   bool incremental_ = false;
-  bool modified_ = false;  ///< the factor was updated in place (simplicial LDLᵀ now)
+  /// The factor is LDLᵀ now (updated in place, or converted after solve()).
+  bool modified_ = false;
+  bool updated_ = false;   ///< a rank update since the last factorization
+  bool released_ = false;  ///< release_factor(): factorize upper_ again before the next update
   bool preconditioned_ = false;
   double pcg_tolerance_ = 1e-12;
   int pcg_step_ = 1;

@@ -505,6 +505,43 @@ TEST(FatigueEngineFork, RefusesOtherStructuralSettingsAndTheBilinearLaw) {
   EXPECT_THROW((void)engine.fork(other), std::logic_error);
 }
 
+TEST_P(IncrementalEqualsRefactor, ReleasingTheIdleFactorChangesNoBit) {
+  // release_idle_factor frees the factor after initialize and after each rebuild; the first
+  // break after it factorizes the same stiffness with the same analysis again. The states must
+  // be those of the engine that kept its factor, bit for bit (rebuilds every 4 re-solves, so
+  // that the release after a rebuild is exercised too).
+  const auto plate = make_notched_plate(GetParam());
+  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  settings.incremental = true;
+  settings.refactor_every_resolves = 4;
+  FatigueEngine kept(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  settings.release_idle_factor = true;
+  FatigueEngine released(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(kept.initialize());
+  ASSERT_TRUE(released.initialize());
+  EXPECT_TRUE(kept.solver().factor().has_values());
+  EXPECT_FALSE(released.solver().factor().has_values());
+  EXPECT_TRUE(released.solver().factor_released());
+  EXPECT_EQ(kept.state_hash(), released.state_hash());
+  // A fork of the engine whose factor is released (a remaining-life simulation of an idle live
+  // twin) factorizes again at its first break and continues as the engine that kept its factor.
+  FatigueSettings simulation = settings;
+  simulation.release_idle_factor = false;
+  const auto fork = released.fork(simulation);
+  EXPECT_FALSE(fork->solver().factor().has_values());
+  const LoadBlock a{1000.0, 0.1, 0.0, 500}, b{1100.0, 0.1, 0.3, 700};
+  for (auto* e : {&kept, &released, fork.get()}) {
+    e->apply(a);
+    e->apply(b);
+  }
+  expect_same_state(kept, *fork);
+  ASSERT_GE(released.solves(), 6);  // re-solves after the first break and at least one rebuild
+  ASSERT_GE(released.rebuilds(), 1);
+  expect_same_state(kept, released);
+  EXPECT_EQ(kept.state_hash(), released.state_hash());
+  testing::expect_same_breaks(kept, released);
+}
+
 TEST_P(IncrementalEqualsRefactor, TiesStayThroughUpdatesAndRebuilds) {
   // A tie (Tie: a fixture outside the bonds) holds the top corners' x displacements equal. The
   // engine keeps it in every solve: rank updates with a rebuild every 4 re-solves give the

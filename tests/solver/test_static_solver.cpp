@@ -424,6 +424,107 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   EXPECT_LT((x_back - x_fresh).cwiseAbs().maxCoeff(), 1e-10 * x_fresh.cwiseAbs().maxCoeff());
 }
 
+TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStorage) {
+  // modify_fused() turns the supernodal LLᵀ factor into LDLᵀ in place, in the supernodes' own
+  // storage (cholesky_impl.h, PackedLdlt), instead of CHOLMOD's simplicial copy. The values must
+  // be CHOLMOD's conversion bit for bit: a factor converted by CHOLMOD (cholmod_change_factor,
+  // through modify() with a zero column on the last row, which changes no value) and one by
+  // modify_fused(), then the same fused update on both, must solve to identical bits.
+  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
+                                           0.01, 0.0005, 1e6);
+  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(solver.solve().ok());
+  const SparseMatrix& upper = solver.stiffness_upper();
+  const int n = static_cast<int>(upper.rows());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::vector<SparseCholesky::Column> bonds;  // bond vectors: in the pattern, no fill
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += 53) {
+    SparseCholesky::Column col;
+    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
+      for (std::size_t c = 0; c < 2; ++c) {
+        const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
+        if (f < 0) continue;
+        col.rows.push_back(f);
+        col.values.push_back(0.3 * std::sqrt(upper.coeff(f, f)) * uni(rng));
+      }
+    }
+    if (!col.rows.empty()) bonds.push_back(std::move(col));
+  }
+  ASSERT_GT(bonds.size(), 20u);
+  SparseCholesky by_cholmod, packed;
+  ASSERT_TRUE(by_cholmod.factorize(upper).ok());
+  ASSERT_TRUE(packed.factorize(upper).ok());
+  const double supernodal_entries = packed.factor_nonzeros();
+  const SparseCholesky::Column zero{{n - 1}, {0.0}};
+  ASSERT_TRUE(by_cholmod.modify({zero}, true).ok());
+  const double simplicial_entries = by_cholmod.factor_nonzeros();
+  ASSERT_TRUE(by_cholmod.modify_fused(bonds, {}).ok());
+  ASSERT_TRUE(packed.modify_fused(bonds, {}).ok());
+  // The packed factor keeps exactly the simplicial factor's entries (the supernodes' upper
+  // triangles given back), fewer than the supernodal storage.
+  EXPECT_EQ(packed.factor_nonzeros(), simplicial_entries);
+  EXPECT_LT(packed.factor_nonzeros(), supernodal_entries);
+  for (int nrhs = 1; nrhs <= 3; ++nrhs) {
+    const Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, nrhs);
+    Eigen::MatrixXd x_cholmod = b, x_packed = b;
+    by_cholmod.solve(x_cholmod);
+    packed.solve(x_packed);
+    EXPECT_TRUE(x_cholmod == x_packed) << nrhs;
+  }
+  {  // more than three columns: three at a time with the packed factor (CHOLMOD's solve before)
+    const Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, 4);
+    Eigen::MatrixXd x_cholmod = b, x_packed = b;
+    by_cholmod.solve(x_cholmod);
+    packed.solve(x_packed);
+    EXPECT_LT((x_packed - x_cholmod).cwiseAbs().maxCoeff(),
+              1e-10 * x_cholmod.cwiseAbs().maxCoeff());
+  }
+  // factorize() after an update refactorizes with the kept supernodal analysis: the factor of
+  // a fresh analysis and factorization, bit for bit.
+  {
+    SparseCholesky again, fresh;
+    ASSERT_TRUE(again.factorize(upper).ok());
+    ASSERT_TRUE(again.modify_fused(bonds, {}).ok());
+    ASSERT_TRUE(again.factorize(upper).ok());
+    EXPECT_EQ(again.factor_nonzeros(), supernodal_entries);
+    ASSERT_TRUE(fresh.factorize(upper).ok());
+    const Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, 2);
+    Eigen::MatrixXd x_again = b, x_fresh = b;
+    again.solve(x_again);
+    fresh.solve(x_fresh);
+    EXPECT_TRUE(x_again == x_fresh);
+  }
+  // CHOLMOD's own solve cannot read the packed factor: refused, not wrong.
+  Eigen::MatrixXd x = Eigen::MatrixXd::Ones(n, 1);
+  EXPECT_THROW(packed.solve_with_cholmod(x), std::logic_error);
+  // An update that needs fill (a column coupling the first and last rows, not in the pattern)
+  // falls back to CHOLMOD's updown: the packed factor becomes CHOLMOD's simplicial one with the
+  // same values, so both factors take the same path to the same bits; the result is the
+  // matrix with the column added, checked against a fresh factorization of it.
+  const SparseCholesky::Column fill{
+      {0, n - 1}, {0.5 * std::sqrt(upper.coeff(0, 0)), 0.5 * std::sqrt(upper.coeff(n - 1, n - 1))}};
+  ASSERT_TRUE(by_cholmod.modify_fused({fill}, {}).ok());
+  ASSERT_TRUE(packed.modify_fused({fill}, {}).ok());
+  ASSERT_TRUE(packed.modify_fused({}, bonds).ok());
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(n, 2);
+  Eigen::MatrixXd x_packed = b, x_fresh = b;
+  packed.solve_with_cholmod(x_packed);  // CHOLMOD's factor again: its solve works
+  Eigen::MatrixXd x_cholmod = b;
+  ASSERT_TRUE(by_cholmod.modify_fused({}, bonds).ok());
+  by_cholmod.solve_with_cholmod(x_cholmod);
+  EXPECT_TRUE(x_cholmod == x_packed);
+  SparseMatrix with_fill = upper;
+  with_fill.coeffRef(0, 0) += fill.values[0] * fill.values[0];
+  with_fill.coeffRef(n - 1, n - 1) += fill.values[1] * fill.values[1];
+  with_fill.coeffRef(0, n - 1) += fill.values[0] * fill.values[1];
+  with_fill.makeCompressed();
+  SparseCholesky fresh;
+  ASSERT_TRUE(fresh.factorize(with_fill).ok());
+  fresh.solve_with_cholmod(x_fresh);
+  EXPECT_LT((x_packed - x_fresh).cwiseAbs().maxCoeff(), 1e-10 * x_fresh.cwiseAbs().maxCoeff());
+}
+
 // Bond stiffness factors (bilinear softening, 003): bond-based model only.
 class BondFactors : public ::testing::Test {
  protected:

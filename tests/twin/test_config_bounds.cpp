@@ -116,6 +116,7 @@ TEST(ConfigLimitsTable, DefaultsWithoutTheTable) {
   EXPECT_EQ(l.max_batch_seconds, 60.0);
   EXPECT_EQ(l.max_sources, 16);
   EXPECT_EQ(l.max_rejects_per_second, 10.0);
+  EXPECT_FALSE(l.release_idle_factor);
 }
 
 TEST(ConfigLimitsTable, EveryKeyParsed) {
@@ -123,7 +124,8 @@ TEST(ConfigLimitsTable, EveryKeyParsed) {
                                             "max_p = 5000\n"  // an integer where a real goes
                                             "max_batch_seconds = 2.5\n"
                                             "max_sources = 3\n"
-                                            "max_rejects_per_second = 0.5\n"),
+                                            "max_rejects_per_second = 0.5\n"
+                                            "release_idle_factor = true\n"),
                                       "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   const LimitsConfig& l = r.config->details[0].limits;
@@ -132,6 +134,7 @@ TEST(ConfigLimitsTable, EveryKeyParsed) {
   EXPECT_EQ(l.max_batch_seconds, 2.5);
   EXPECT_EQ(l.max_sources, 3);
   EXPECT_EQ(l.max_rejects_per_second, 0.5);
+  EXPECT_TRUE(l.release_idle_factor);
 }
 
 TEST(ConfigLimitsTable, BadValuesNamedWithTheirKeyPaths) {
@@ -521,8 +524,7 @@ TEST(ConfigServedDetails, OnlyTheServedDetailsAreReturnedAndCountedAgainstTheLim
   ASSERT_EQ(one.config->details.size(), 1u);
   EXPECT_EQ(one.config->details[0].id, "large");
 
-  const ConfigResult both =
-      parse_config(text, "two.toml", ConfigLimits{limit, {"small", "large"}});
+  const ConfigResult both = parse_config(text, "two.toml", ConfigLimits{limit, {"small", "large"}});
   ASSERT_EQ(both.errors.size(), 1u) << both.error_text();
   EXPECT_EQ(both.errors[0].path, "detail[1].grid.dx");
 
@@ -530,8 +532,7 @@ TEST(ConfigServedDetails, OnlyTheServedDetailsAreReturnedAndCountedAgainstTheLim
       parse_config(text, "two.toml", ConfigLimits{1024 * kGiB, {"small", "nope"}});
   ASSERT_EQ(unknown.errors.size(), 1u) << unknown.error_text();
   EXPECT_EQ(unknown.errors[0].path, "--details");
-  EXPECT_EQ(unknown.errors[0].reason,
-            "no detail \"nope\" in the file (its details: small, large)");
+  EXPECT_EQ(unknown.errors[0].reason, "no detail \"nope\" in the file (its details: small, large)");
 }
 
 TEST(ConfigResourceBounds, HostileGeometryEndsInErrorsNotExceptions) {

@@ -89,7 +89,11 @@
 //                        distinct load sources per detail; a batch from a new source beyond it is
 //                        rejected), max_rejects_per_second 10 (> 0: health turns "degraded" while
 //                        the rejects, duplicates not counted, exceed this rate averaged over the
-//                        last 10 s)
+//                        last 10 s), release_idle_factor false (true: the detail holds no
+//                        Cholesky factor from a factorization until its next bond break, which
+//                        factorizes again first, bit-identically: about a third of the memory of
+//                        a detail that idles, for one factorization at its first break; for
+//                        fleets, docs/benchmarks.md "Fleet")
 //   [detail.sensor]      for peritwin-stream (raw samples -> cycles; the daemon ignores it):
 //                        scale 1 (finite, != 0) and offset 0 (N, finite): the load is
 //                        P = scale * measured + offset (strain or volts to newtons), gate 0 (N,
@@ -239,6 +243,8 @@ struct LimitsConfig {
   double max_batch_seconds = 60.0;       ///< s; health "degraded" while one batch takes longer
   std::int64_t max_sources = 16;         ///< distinct load sources of the detail
   double max_rejects_per_second = 10.0;  ///< over the last 10 s, duplicates not counted
+  /// Free the factor while the detail breaks no bond (FatigueSettings::release_idle_factor).
+  bool release_idle_factor = false;
 };
 
 /// [detail.sensor]: how peritwin-stream turns a sensor's samples into loads and cycles.

@@ -607,6 +607,7 @@ void read_limits(Context& ctx, const toml::table& t, const std::string& path, Li
           "must be >= 1 (got " + std::to_string(l.max_sources) + ")");
   l.max_rejects_per_second =
       opt(r, "max_rejects_per_second", l.max_rejects_per_second, Bound::positive);
+  l.release_idle_factor = r.boolean("release_idle_factor", l.release_idle_factor);
   r.finish();
 }
 

@@ -131,15 +131,18 @@ Expected<std::shared_ptr<const DetailModel>> DetailModel::build(const DetailConf
   return std::shared_ptr<const DetailModel>(std::move(m));
 }
 
-FatigueSettings DetailModel::engine_settings(double a2_factor) const {
+FatigueSettings DetailModel::engine_settings(double a2_factor, bool live) const {
   FatigueSettings s = settings_;
+  // Only the live twin idles between breaks; a remaining-life simulation breaks bonds from its
+  // first blocks, so it keeps its factor.
+  s.release_idle_factor = live && config_.limits.release_idle_factor;
   s.strain.A2 *= a2_factor;
   s.bilinear.A *= a2_factor;  // the bilinear law's growth coefficient (003 Eq. 27) plays A2's role
   return s;
 }
 
-std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor) const {
-  const FatigueSettings s = engine_settings(a2_factor);
+std::unique_ptr<FatigueEngine> DetailModel::make_engine(double a2_factor, bool live) const {
+  const FatigueSettings s = engine_settings(a2_factor, live);
   return std::make_unique<FatigueEngine>(specimen_.disc, specimen_.model, specimen_.supports,
                                          specimen_.loads, s);
 }

@@ -57,10 +57,12 @@ class DetailModel {
   [[nodiscard]] std::uint64_t signature() const { return signature_; }
 
   /// A new engine on this model (not initialized); the phase II coefficient A2 scaled by
-  /// `a2_factor` (the life band).
-  [[nodiscard]] std::unique_ptr<FatigueEngine> make_engine(double a2_factor = 1.0) const;
-  /// The settings make_engine(a2_factor) builds its engine with (for FatigueEngine::fork).
-  [[nodiscard]] FatigueSettings engine_settings(double a2_factor = 1.0) const;
+  /// `a2_factor` (the life band). `live`: the twin's own engine, which frees its factor while it
+  /// breaks no bond when the config says so ([detail.limits] release_idle_factor).
+  [[nodiscard]] std::unique_ptr<FatigueEngine> make_engine(double a2_factor = 1.0,
+                                                           bool live = false) const;
+  /// The settings make_engine(a2_factor, live) builds its engine with (for FatigueEngine::fork).
+  [[nodiscard]] FatigueSettings engine_settings(double a2_factor = 1.0, bool live = false) const;
 
  private:
   DetailModel() = default;

@@ -16,7 +16,7 @@ Twin::Twin(std::shared_ptr<const DetailModel> model, Options options)
 Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailModel> model,
                                              Options options) {
   std::unique_ptr<Twin> twin(new Twin(std::move(model), options));
-  twin->engine_ = twin->model_->make_engine();
+  twin->engine_ = twin->model_->make_engine(1.0, true);
   if (!twin->engine_->initialize()) {
     return peritwin::failure(
         "detail " + twin->detail_id() +
