@@ -387,12 +387,15 @@ Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(const DetailConfi
   auto twin = Twin::create(model, twin_options);
   if (!twin) return failure(twin.error().message());
   d->twin = std::move(*twin);
-  const double factor_entries = d->twin->engine().solver().factor().factor_nonzeros();
+  const SparseCholesky& factor = d->twin->engine().solver().factor();
   spdlog::info(
-      "[{}] model: {} nodes, {} bonds, factor {} entries ({} of values), initial solve in {:.2f} s "
+      "[{}] model: {} nodes, {} bonds, factor {} entries ({}{}), initial solve in {:.2f} s "
       "(estimated memory {} with its life engines, docs/limits.md)",
       config.id, model->disc().num_nodes(), model->disc().num_bonds(),
-      config_internal::format_count(factor_entries), format_bytes(8.0 * factor_entries),
+      config_internal::format_count(factor.factor_nonzeros()), format_bytes(factor.factor_bytes()),
+      factor.has_values() ? ""
+                          : ", values released until the next break: [detail.limits] "
+                            "release_idle_factor",
       seconds(Clock::now() - t0), format_bytes(estimate_resources(config).bytes));
   {
     const messages::Mesh mesh = detail_mesh(*model);
