@@ -39,6 +39,7 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
+#include "bench/proc_status.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -89,16 +90,6 @@ std::string fleet_config(int details, double dx, bool release_idle_factors) {
     out += d + "\n";
   }
   return out;
-}
-
-/// VmRSS or VmHWM of `pid` in MB (from /proc/<pid>/status), NaN if unreadable.
-double proc_mb(pid_t pid, const std::string& key) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(key + ":", 0) == 0) return std::stod(line.substr(key.size() + 1)) / 1024.0;
-  }
-  return std::nan("");
 }
 
 /// One detail's producer and what its STATEs said.
@@ -275,8 +266,8 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
           .count();
   out.window_s = window;
   out.loud_ended = loud.ended;
-  out.rss_mb = proc_mb(daemon, "VmRSS");
-  out.rss_peak_mb = proc_mb(daemon, "VmHWM");
+  out.rss_mb = bench::proc_status_mb("VmRSS", std::to_string(daemon), std::nan(""));
+  out.rss_peak_mb = bench::proc_status_mb("VmHWM", std::to_string(daemon), std::nan(""));
   std::int64_t cycles = 0;
   for (const Feed& f : fleet.feeds()) {
     cycles += f.cycles - f.cycles_at_start;

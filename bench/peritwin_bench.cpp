@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "bench/dynamics_bench.h"
+#include "bench/proc_status.h"
 #include "replay/cycle_blocks.h"
 #include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
@@ -44,17 +45,6 @@ double peak_rss_mb() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // ru_maxrss is in KiB on Linux
 }
 
-/// A line "Key:   123 kB" of /proc/self/status, in MB (0 when absent).
-double proc_status_mb(const std::string& key) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind(key + ":", 0) == 0)
-      return std::strtod(line.c_str() + key.size() + 1, nullptr) / 1024.0;
-  }
-  return 0.0;
-}
-
 /// Peak resident memory per phase: VmHWM read at the end of a phase, then reset to the current
 /// VmRSS (writing 5 to /proc/self/clear_refs, Linux ≥ 4.0), so each phase reports its own peak.
 /// `reset_ok` is false where the kernel refuses the reset (the peaks are then cumulative).
@@ -63,9 +53,10 @@ class PhasePeaks {
   PhasePeaks() { reset(); }
   /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
   void mark(peritwin::tools::JsonLine& line, const std::string& name) {
-    const double peak = proc_status_mb("VmHWM");
+    const double peak = peritwin::bench::proc_status_mb("VmHWM");
     line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(peak, 1);
-    line["rss_after_" + name + "_mb"] = peritwin::tools::fixed(proc_status_mb("VmRSS"), 1);
+    line["rss_after_" + name + "_mb"] =
+        peritwin::tools::fixed(peritwin::bench::proc_status_mb("VmRSS"), 1);
     note(name, peak);
     reset();
   }
@@ -80,9 +71,11 @@ class PhasePeaks {
   [[nodiscard]] const std::string& peak_phase() const { return peak_phase_; }
   [[nodiscard]] bool reset_ok() const { return reset_ok_; }
   /// The process's peak over all phases (getrusage's ru_maxrss follows the resets).
-  [[nodiscard]] double peak_mb() const { return std::max(overall_, proc_status_mb("VmHWM")); }
+  [[nodiscard]] double peak_mb() const {
+    return std::max(overall_, peritwin::bench::proc_status_mb("VmHWM"));
+  }
   void reset() {
-    overall_ = std::max(overall_, proc_status_mb("VmHWM"));
+    overall_ = std::max(overall_, peritwin::bench::proc_status_mb("VmHWM"));
     std::ofstream clear("/proc/self/clear_refs");
     clear << "5";
     clear.flush();
@@ -334,7 +327,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
         peaks.mark(line, "first_update");
         first_update = false;
       } else {
-        const double peak = proc_status_mb("VmHWM");
+        const double peak = peritwin::bench::proc_status_mb("VmHWM");
         double& slot = engine.rebuilds() != rebuilds_before ? peak_rebuilds : peak_updates;
         slot = std::max(slot, peak);
         peaks.reset();

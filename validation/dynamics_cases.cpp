@@ -26,6 +26,24 @@ std::unique_ptr<dynamics::ExplicitDynamics> make_dynamics(const Discretization& 
   return std::move(d.value());
 }
 
+/// The setup every case shares: the spec's kernel, material and step, and its threads and
+/// lattice calibration when the spec has them; 2D cases are plane stress (bond-based PD's).
+template <class Spec>
+dynamics::DynamicsSetup setup_of(const Spec& spec, dynamics::Dimension dimension) {
+  dynamics::DynamicsSetup setup;
+  setup.dimension = dimension;
+  if (dimension == dynamics::Dimension::two) setup.plane = PlaneCondition::plane_stress;
+  setup.kernel = spec.kernel;
+  setup.youngs_modulus = spec.youngs_modulus;
+  setup.density = spec.density;
+  setup.time_step = spec.time_step;
+  if constexpr (requires { spec.threads; }) setup.threads = spec.threads;
+  if constexpr (requires { spec.lattice_calibrated; }) {
+    setup.lattice_calibrated = spec.lattice_calibrated;
+  }
+  return setup;
+}
+
 }  // namespace
 
 // ---- D1 ----------------------------------------------------------------------------------------
@@ -60,14 +78,7 @@ BarResult run_bar(const BarSpec& spec) {
   // Nodes at x = (i + ½)Δx on (0, L); m image nodes at −(k + ½)Δx.
   const Discretization disc = dynamics::bar_discretization(-(m - 0.5) * spec.dx, inner + m, spec.dx,
                                                            m * spec.dx, spec.area);
-  dynamics::DynamicsSetup setup;
-  setup.dimension = dynamics::Dimension::one;
-  setup.kernel = spec.kernel;
-  setup.youngs_modulus = spec.youngs_modulus;
-  setup.density = spec.density;
-  setup.time_step = spec.time_step;
-  setup.threads = spec.threads;
-  setup.lattice_calibrated = spec.lattice_calibrated;
+  dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::one);
   auto dyn = make_dynamics(disc, setup);
   for (int k = 0; k < m; ++k) dyn->add_image_node(m - 1 - k, m + k, -1.0, 1.0);
   const double strain0 = spec.force / (spec.youngs_modulus * spec.area);
@@ -130,12 +141,7 @@ PacketResult run_packet(const PacketSpec& spec) {
   const int count = static_cast<int>(std::lround(spec.length / spec.dx));
   const Discretization disc =
       dynamics::bar_discretization(0.5 * spec.dx, count, spec.dx, spec.m * spec.dx, spec.area);
-  dynamics::DynamicsSetup setup;
-  setup.dimension = dynamics::Dimension::one;
-  setup.kernel = spec.kernel;
-  setup.youngs_modulus = spec.youngs_modulus;
-  setup.density = spec.density;
-  setup.time_step = spec.time_step;
+  dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::one);
   auto dyn = make_dynamics(disc, setup);
   PacketResult r;
   r.classical_speed = std::sqrt(spec.youngs_modulus / spec.density);
@@ -212,15 +218,7 @@ CrackResult run_semi_infinite_crack(const CrackSpec& spec) {
   crack.path = {Point{-dx, 0.0}, Point{spec.crack - 1e-9, 0.0}};
   g.notches.push_back(crack);
   const Discretization disc = discretize(g, dx, horizon);
-  dynamics::DynamicsSetup setup;
-  setup.dimension = dynamics::Dimension::two;
-  setup.plane = PlaneCondition::plane_stress;
-  setup.kernel = spec.kernel;
-  setup.youngs_modulus = spec.youngs_modulus;
-  setup.density = spec.density;
-  setup.time_step = spec.time_step;
-  setup.threads = spec.threads;
-  setup.lattice_calibrated = spec.lattice_calibrated;
+  dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::two);
   auto dyn = make_dynamics(disc, setup);
   // The traction σ(t) on y = H (and y = −H) as a body force σ/Δ on the outermost node row (the
   // row's volume Δ²h carries the force σΔh). 001 Fig. 14 (the loading) is lost; Freund's solution
@@ -311,13 +309,7 @@ ShearPlateResult run_shear_plate(const ShearPlateSpec& spec) {
   crack.path = {Point{x_left + 1e-9 * dx, y_crack}, Point{x_right - 1e-9 * dx, y_crack}};
   g.notches.push_back(crack);
   const Discretization disc = discretize(g, dx, spec.horizon_ratio * dx);
-  dynamics::DynamicsSetup setup;
-  setup.dimension = dynamics::Dimension::two;
-  setup.plane = PlaneCondition::plane_stress;
-  setup.kernel = spec.kernel;
-  setup.youngs_modulus = spec.youngs_modulus;
-  setup.density = spec.density;
-  setup.threads = spec.threads;
+  dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::two);
   setup.time_step = 1e-30;  // placeholder: the real step needs the stable one
   auto probe = make_dynamics(disc, setup);
   setup.time_step = spec.time_step > 0 ? spec.time_step : 0.9 * probe->stable_time_step();
