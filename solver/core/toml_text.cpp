@@ -25,6 +25,14 @@ std::optional<UnsafeTomlCharacter> find_unsafe_toml_character(std::string_view t
   bool line_start = true;  // only blanks so far on this line
   bool header = false;     // on a [table] or [[array]] header line
   unsigned char last = 0;  // the last non-blank character outside strings on this line
+  // Where a value may be: after a key's '=' (until the line ends outside brackets), in an array,
+  // after an inline table's '='. There a run of characters that starts unquoted is one bare token
+  // up to a blank or the line's end (inside brackets also ',', ']' or '}'), and toml++ reads a
+  // quote, '=', ',', '.' or '[' in it as part of the token, not as a string's start or structure:
+  // `x = -"0=" <U+FEF7>` (found by fuzz_key_file) must be checked as outside a string.
+  std::string open;  // the arrays ('[') and inline tables ('{') open, innermost last
+  bool in_value = false;
+  bool bare = false;
   while (i < t.size()) {
     const unsigned char c = at(i);
     if (c == '#') {
@@ -36,7 +44,7 @@ std::optional<UnsafeTomlCharacter> find_unsafe_toml_character(std::string_view t
     // fuzz_key_file), so they are checked as outside a string.
     const bool string_may_start =
         line_start || last == '=' || last == '[' || last == ',' || last == '{' || last == '.';
-    if ((c == '"' || c == '\'') && string_may_start) {
+    if ((c == '"' || c == '\'') && string_may_start && !bare) {
       const bool basic = c == '"';
       const bool multi = at(i + 1) == c && at(i + 2) == c;
       for (int k = 0; k < (multi ? 3 : 1); ++k) next();
@@ -67,20 +75,61 @@ std::optional<UnsafeTomlCharacter> find_unsafe_toml_character(std::string_view t
       continue;
     }
     if (c >= 0x80) return refuse(header ? "in a table header" : "outside a string or comment");
+    const bool blank = c == ' ' || c == '\t' || c == '\r' || c == '\n';
+    if (bare && !blank && !(!open.empty() && (c == ',' || c == ']' || c == '}'))) {
+      line_start = false;
+      last = 'v';  // inside a bare token: nothing here opens a string or a bracket
+      next();
+      continue;
+    }
+    bare = false;
     if (c == '\n') {
       line_start = true;
       header = false;
       last = 0;
+      if (open.empty()) in_value = false;
     } else if (c == '[') {
       if (line_start && depth == 0) {
         header = true;
       } else if (!header) {
         ++depth;
+        open.push_back('[');
+        in_value = true;
       }
     } else if (c == ']' && !header && depth > 0) {
       --depth;
+      if (!open.empty() && open.back() == '[') open.pop_back();
+    } else if (c == '{' && !header) {
+      open.push_back('{');
+      in_value = false;  // a key comes first
+    } else if (c == '}' && !header) {
+      if (!open.empty() && open.back() == '{') open.pop_back();
+      in_value = true;
+    } else if (c == ',' && !open.empty() && open.back() == '{') {
+      in_value = false;  // the next key of the inline table
+    } else if (c == '=' && !header) {
+      if (in_value) {
+        bare = true;  // an '=' where a value is: part of a bare token
+        line_start = false;
+        last = 'v';
+        next();
+        continue;
+      }
+      in_value = true;
+    } else if (!blank && !header && in_value && c != ',' && c != '\'' && c != '"') {
+      bare = true;
+      line_start = false;
+      last = 'v';
+      next();
+      continue;
+    } else if (!blank && !header && in_value && (c == '\'' || c == '"')) {
+      bare = true;  // a quote where no string may start (e.g. after a bare token's blank)
+      line_start = false;
+      last = 'v';
+      next();
+      continue;
     }
-    if (c != ' ' && c != '\t' && c != '\r' && c != '\n') {
+    if (!blank) {
       line_start = false;
       last = c;
     }
