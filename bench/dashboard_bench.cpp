@@ -73,6 +73,7 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
+#include "bench/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -84,27 +85,14 @@ namespace {
 namespace fs = std::filesystem;
 using peritwin::bench::Clock;
 using peritwin::bench::percentile;
+using peritwin::bench::proc_status_kb;
+using peritwin::bench::read_text;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
 
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 // --- /proc
 // ----------------------------------------------------------------------------------------
-
-/// A field of /proc/<pid>/status in kB (VmRSS, VmHWM), or -1.
-std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::atoll(line.c_str() + field.size() + 1);
-  }
-  return -1;
-}
 
 /// utime + stime of a process (all its threads) in seconds, or -1.
 double proc_cpu_s(pid_t pid) {
@@ -615,7 +603,7 @@ int main(int argc, char** argv) {
     history_min = history_min < 0 ? n : std::min(history_min, n);
     history_max = std::max(history_max, n);
   }
-  const std::int64_t rss_after_warmup = proc_status_kb(dashboard, "VmRSS");
+  const std::int64_t rss_after_warmup = proc_status_kb("VmRSS", std::to_string(dashboard));
 
   // Measurement: an SSE client, then `rate` states per second per detail for `seconds`.
   const auto per_detail = static_cast<std::int64_t>(std::llround(rate * seconds));
@@ -670,8 +658,8 @@ int main(int argc, char** argv) {
   }
   const double window_s = since(t0);
   const double cpu_s = proc_cpu_s(dashboard) - cpu0;
-  const std::int64_t rss_end = proc_status_kb(dashboard, "VmRSS");
-  const std::int64_t rss_peak = proc_status_kb(dashboard, "VmHWM");
+  const std::int64_t rss_end = proc_status_kb("VmRSS", std::to_string(dashboard));
+  const std::int64_t rss_peak = proc_status_kb("VmHWM", std::to_string(dashboard));
   const double load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
   // The last events.
   for (const auto t1 = Clock::now();

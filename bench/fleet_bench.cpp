@@ -39,7 +39,7 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
-#include "bench/proc_status.h"
+#include "bench/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -56,13 +56,6 @@ using bench::since;
 
 constexpr const char* kSource = "fleet";
 
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// `text` with the first `from` replaced by `to`; throws when it is not there (the example
 /// changed: the bench must be updated).
 std::string edit(std::string text, const std::string& from, const std::string& to) {
@@ -73,7 +66,8 @@ std::string edit(std::string text, const std::string& from, const std::string& t
 
 /// The fleet's config: `details` copies of the B1 example at grid spacing `dx`.
 std::string fleet_config(int details, double dx, bool release_idle_factors) {
-  const std::string b1 = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+  const std::string b1 =
+      bench::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
   std::string out;
   for (int i = 0; i < details; ++i) {
     char id[16];

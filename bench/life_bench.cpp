@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/proc_status.h"
+#include "bench/proc_files.h"
 #include "solver/model/fatigue_law.h"
 #include "tools/cli_checks.h"
 #include "tools/json_line.h"

@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "bench/dynamics_bench.h"
-#include "bench/proc_status.h"
+#include "bench/proc_files.h"
 #include "replay/cycle_blocks.h"
 #include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"

@@ -45,6 +45,7 @@
 #include <thread>
 
 #include "bench/child_process.h"
+#include "bench/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -56,19 +57,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using peritwin::bench::Clock;
+using peritwin::bench::proc_status_kb;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
-
-/// A field of /proc/<pid>/status in kB (VmRSS, VmHWM), or -1.
-std::int64_t proc_status_kb(pid_t pid, const std::string& field) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind(field + ":", 0) == 0) return std::atoll(line.c_str() + field.size() + 1);
-  }
-  return -1;
-}
 
 /// The B1 example made cheap per batch: each edit's first string must occur once.
 std::string soak_config_text(const std::string& example) {
@@ -274,7 +266,7 @@ int main(int argc, char** argv) {
   }
   tools::JsonLine samples = tools::JsonLine::array();
   auto sample = [&] {
-    const std::int64_t rss = proc_status_kb(daemon, "VmRSS");
+    const std::int64_t rss = proc_status_kb("VmRSS", std::to_string(daemon));
     samples.push_back({{"batches", producer.applied()}, {"rss_kb", rss}});
     return rss;
   };
@@ -296,7 +288,7 @@ int main(int argc, char** argv) {
     ok = producer.run_to(target, 120.0, [&] {
       if (since(last_poll) >= 1.0) {
         last_poll = Clock::now();
-        note(proc_status_kb(daemon, "VmRSS"));
+        note(proc_status_kb("VmRSS", std::to_string(daemon)));
       }
       return since(t0) < max_seconds && daemon_alive();
     });
@@ -307,8 +299,8 @@ int main(int argc, char** argv) {
   const double seconds = since(t0);
   const std::int64_t applied = producer.applied();
   const bool alive = daemon_alive();
-  const std::int64_t rss_end = alive ? proc_status_kb(daemon, "VmRSS") : -1;
-  const std::int64_t rss_peak = alive ? proc_status_kb(daemon, "VmHWM") : -1;
+  const std::int64_t rss_end = alive ? proc_status_kb("VmRSS", std::to_string(daemon)) : -1;
+  const std::int64_t rss_peak = alive ? proc_status_kb("VmHWM", std::to_string(daemon)) : -1;
   if (alive && samples.back()["batches"] != applied) {
     samples.push_back({{"batches", applied}, {"rss_kb", rss_end}});
   }
