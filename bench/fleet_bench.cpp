@@ -212,13 +212,17 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
     return out;
   }
   const auto t0 = Clock::now();
-  while (!fleet.all_seen() && since(t0) < 1800.0 && waitpid(daemon, nullptr, WNOHANG) == 0) {
+  bool daemon_exited = false;  // reaped here: stop_child would wait for it in vain
+  while (!fleet.all_seen() && since(t0) < 1800.0 && !daemon_exited) {
     messages::handle_lcm(lcm, 20);
+    daemon_exited = waitpid(daemon, nullptr, WNOHANG) != 0;
   }
   out.startup_s = since(t0);
   if (!fleet.all_seen()) {
-    out.error = "not every detail published its first STATE (see daemon-" + name + ".log)";
-    bench::stop_child(daemon, 300.0);
+    out.error = std::string(daemon_exited ? "the daemon exited before" : "not") +
+                " every detail published its first STATE (see " +
+                (work / ("daemon-" + name + ".log")).string() + ")";
+    if (!daemon_exited) bench::stop_child(daemon, 300.0);
     return out;
   }
   const auto start = Clock::now();
