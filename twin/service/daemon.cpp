@@ -715,14 +715,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   log_crack_events(d);
   if (options_.deterministic && twin.life().state_seq == twin.state_seq()) {
     // The synchronous estimate of this state (the LifeWorker logs the asynchronous ones).
-    const LifeEstimate& e = twin.life();
-    spdlog::info(
-        "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in {:.2f} s "
-        "({})",
-        d.id, e.state_seq, e.start_cycles, e.central, e.low, e.high, e.wall_s,
-        e.coarse   ? "on the coarser grid of [detail.life] dx"
-        : e.forked ? "forked from the live factor"
-                   : "rebuilt from the state");
+    log_life_estimate(d.id, twin.life());
   }
   if (twin.failure() != Failure::none) {
     d.failed = true;
@@ -865,9 +858,7 @@ void Daemon::checkpoint(Detail& d, const char* why) {
 void Daemon::submit_life(Detail& d) {
   if (!d.life) return;
   if (auto e = d.life->take()) {
-    d.twin->set_life(*e);
-    spdlog::info("[{}] remaining life at state_seq {}: {:.0f} cycles [{:.0f}, {:.0f}]", d.id,
-                 e->state_seq, e->central, e->low, e->high);
+    d.twin->set_life(*e);  // the LifeWorker logged it when it finished
     publish_state(d);
   }
   if (d.twin->failure() == Failure::none && !d.life->busy() &&

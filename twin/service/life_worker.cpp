@@ -4,6 +4,17 @@
 
 namespace peritwin::twin {
 
+void log_life_estimate(const std::string& detail_id, const LifeEstimate& e) {
+  // Every estimate's cost and the state it started from (issue 18 item 3).
+  spdlog::info(
+      "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in {:.2f} s "
+      "({})",
+      detail_id, e.state_seq, e.start_cycles, e.central, e.low, e.high, e.wall_s,
+      e.coarse   ? "on the coarser grid of [detail.life] dx"
+      : e.forked ? "forked from the live factor"
+                 : "rebuilt from the state");
+}
+
 LifeWorker::LifeWorker() : thread_([this] { run(); }) {}
 
 LifeWorker::~LifeWorker() {
@@ -54,14 +65,7 @@ void LifeWorker::run() {
     e.seq = job.seq;
     e.source = job.source;
     if (!cancel_.load()) {
-      // Every estimate's cost and the state it started from (issue 18 item 3).
-      spdlog::info(
-          "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in "
-          "{:.2f} s ({})",
-          job.model->config().id, e.state_seq, e.start_cycles, e.central, e.low, e.high, e.wall_s,
-          e.coarse   ? "on the coarser grid of [detail.life] dx"
-          : e.forked ? "forked from the live factor"
-                     : "rebuilt from the state");
+      log_life_estimate(job.model->config().id, e);
     }
     std::lock_guard lock(mutex_);
     running_ = false;

@@ -7,11 +7,16 @@
 #include <condition_variable>
 #include <mutex>
 #include <optional>
+#include <string>
 #include <thread>
 
 #include "twin/model/twin.h"
 
 namespace peritwin::twin {
+
+/// One log line per remaining-life estimate of detail `detail_id`: the state it belongs to, the
+/// cycle it started from, the life and band, its wall time and how the simulations started.
+void log_life_estimate(const std::string& detail_id, const LifeEstimate& e);
 
 class LifeWorker {
  public:
