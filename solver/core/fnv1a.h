@@ -58,10 +58,54 @@ class Fnv1a64 {
     packed(reinterpret_cast<const std::uint8_t*>(s.data()), s.size());
   }
 
+  /// word() over each value's bits, in a register: the state hash's bulk (per-bond lives).
+  void reals(const double* p, std::size_t n) {
+    std::uint64_t h = h_;
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ std::bit_cast<std::uint64_t>(p[i])) * kPrime;
+    h_ = h;
+  }
+
   [[nodiscard]] std::uint64_t get() const { return h_; }
+  /// A hash that continues from `state` (a get() of one that stopped there).
+  static Fnv1a64 from(std::uint64_t state) {
+    Fnv1a64 h;
+    h.h_ = state;
+    return h;
+  }
 
  private:
   std::uint64_t h_ = kOffsetBasis;
+};
+
+/// Two FNV-1a 64 hashes fed the same words, `first` usually after some words of its own: a
+/// twin's state hash and its engine's hash in one pass over the engine's state. The two
+/// multiply chains are independent, so the pass costs about what one hash costs.
+struct Fnv1a64Pair {
+  Fnv1a64 first, second;
+  void word(std::uint64_t w) {
+    first.word(w);
+    second.word(w);
+  }
+  void real(double v) { word(std::bit_cast<std::uint64_t>(v)); }
+  void integer(std::int64_t v) { word(static_cast<std::uint64_t>(v)); }
+  void packed(const std::uint8_t* p, std::size_t n) {
+    first.packed(p, n);
+    second.packed(p, n);
+  }
+  void packed(std::string_view s) {
+    first.packed(s);
+    second.packed(s);
+  }
+  void reals(const double* p, std::size_t n) {
+    std::uint64_t a = first.get(), b = second.get();
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto w = std::bit_cast<std::uint64_t>(p[i]);
+      a = (a ^ w) * Fnv1a64::kPrime;
+      b = (b ^ w) * Fnv1a64::kPrime;
+    }
+    first = Fnv1a64::from(a);
+    second = Fnv1a64::from(b);
+  }
 };
 
 /// FNV-1a 64 of a byte string.

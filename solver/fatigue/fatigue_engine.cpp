@@ -881,27 +881,35 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
   return true;
 }
 
-void hash_field(Fnv1a64& h, double v) { h.real(v); }
-void hash_field(Fnv1a64& h, std::int64_t v) { h.integer(v); }
-void hash_field(Fnv1a64& h, bool v) { h.integer(v ? 1 : 0); }
-void hash_field(Fnv1a64& h, const std::string& v) { h.packed(v); }
-void hash_field(Fnv1a64& h, const std::vector<std::uint8_t>& v) { h.packed(v.data(), v.size()); }
-void hash_field(Fnv1a64& h, const LoadBlock& v) {
-  h.real(v.p_max);
-  h.real(v.r);
-  h.real(v.alpha);
-  h.integer(v.count);
+namespace {
+
+/// for_each_field over the engine's own state, with export_state()'s two differences read in
+/// place: the intact flags are the solver's, and a pending key with no pending cycles is {}.
+template <class Hash>
+void hash_engine_state(Hash& h, const EngineState& state, const std::vector<std::uint8_t>& intact) {
+  for_each_field(state, [&](std::string_view key, const auto& field) {
+    if (key == "intact") {
+      hash_field(h, intact);
+    } else if (key == "pending_key" && state.pending_cycles == 0) {
+      hash_field(h, LoadBlock{});
+    } else {
+      hash_field(h, field);
+    }
+  });
 }
-void hash_field(Fnv1a64& h, const BreakEvent& v) {
-  h.integer(v.cycle);
-  h.integer(v.bond);
-  h.integer(static_cast<std::int64_t>(v.cause));
+
+}  // namespace
+
+void FatigueEngine::hash_state(Fnv1a64& h) const {
+  hash_engine_state(h, state_, solver_->intact());
+}
+void FatigueEngine::hash_state(Fnv1a64Pair& h) const {
+  hash_engine_state(h, state_, solver_->intact());
 }
 
 std::uint64_t FatigueEngine::state_hash() const {
   Fnv1a64 h;
-  const EngineState state = export_state();
-  for_each_field(state, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+  hash_state(h);
   return h.get();
 }
 

@@ -222,16 +222,48 @@ void for_each_field(State& s, Visit&& visit) {
 }
 
 /// Adds a state field to a word-wise FNV-1a 64 hash (solver/core/fnv1a.h): numbers by their bits,
-/// strings and byte arrays packed, vectors with their length first.
-void hash_field(Fnv1a64& h, double v);
-void hash_field(Fnv1a64& h, std::int64_t v);
-void hash_field(Fnv1a64& h, bool v);
-void hash_field(Fnv1a64& h, const std::string& v);
-void hash_field(Fnv1a64& h, const LoadBlock& v);
-void hash_field(Fnv1a64& h, const BreakEvent& v);
-void hash_field(Fnv1a64& h, const std::vector<std::uint8_t>& v);
-template <class T>
-void hash_field(Fnv1a64& h, const std::vector<T>& v) {
+/// strings and byte arrays packed, vectors with their length first. `Hash` is Fnv1a64 or
+/// Fnv1a64Pair (the same words into two hashes).
+template <class Hash>
+void hash_field(Hash& h, double v) {
+  h.real(v);
+}
+template <class Hash>
+void hash_field(Hash& h, std::int64_t v) {
+  h.integer(v);
+}
+template <class Hash>
+void hash_field(Hash& h, bool v) {
+  h.integer(v ? 1 : 0);
+}
+template <class Hash>
+void hash_field(Hash& h, const std::string& v) {
+  h.packed(v);
+}
+template <class Hash>
+void hash_field(Hash& h, const std::vector<std::uint8_t>& v) {
+  h.packed(v.data(), v.size());
+}
+template <class Hash>
+void hash_field(Hash& h, const std::vector<double>& v) {
+  h.integer(static_cast<std::int64_t>(v.size()));
+  h.reals(v.data(), v.size());
+}
+template <class Hash>
+void hash_field(Hash& h, const LoadBlock& v) {
+  h.real(v.p_max);
+  h.real(v.r);
+  h.real(v.alpha);
+  h.integer(v.count);
+}
+template <class Hash>
+void hash_field(Hash& h, const BreakEvent& v) {
+  h.integer(v.cycle);
+  h.integer(v.bond);
+  h.integer(static_cast<std::int64_t>(v.cause));
+}
+template <class Hash, class T>
+void hash_field(Hash& h, const std::vector<T>& v) {
   h.integer(static_cast<std::int64_t>(v.size()));
   for (const T& x : v) hash_field(h, x);
 }
@@ -313,6 +345,10 @@ class FatigueEngine {
   bool import_state(const EngineState& state);
   /// Word-wise FNV-1a 64 over export_state(), field by field in for_each_field's order.
   [[nodiscard]] std::uint64_t state_hash() const;
+  /// Adds what state_hash() hashes to `h`, read in place (export_state() copies every bond's
+  /// fields; the daemon hashes after every batch).
+  void hash_state(Fnv1a64& h) const;
+  void hash_state(Fnv1a64Pair& h) const;
 
  private:
   [[nodiscard]] bool dose_mode() const;

@@ -245,6 +245,21 @@ TEST(BilinearEngine, ExportImportResumesBitIdentically) {
   ASSERT_EQ(first.pending_cycles(), 300);
   ASSERT_GT(first.broken_bonds(), 0);
   const EngineState saved = first.export_state();
+  // The hash read in place equals the hash of the exported copy, with cycles pending (their key
+  // hashed) and with none (the key exported and hashed as {}).
+  const auto hash_of_copy = [](const FatigueEngine& engine) {
+    Fnv1a64 copy;
+    const EngineState state = engine.export_state();
+    for_each_field(state,
+                   [&copy](std::string_view, const auto& field) { hash_field(copy, field); });
+    return copy.get();
+  };
+  EXPECT_EQ(first.state_hash(), hash_of_copy(first));
+  FatigueEngine whole(plate.disc, plate.model, plate.supports, plate.loads, f);
+  ASSERT_TRUE(whole.initialize());
+  whole.apply({1000.0, 0.1, 0.0, 500});
+  ASSERT_EQ(whole.pending_cycles(), 0);
+  EXPECT_EQ(whole.state_hash(), hash_of_copy(whole));
   FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(resumed.initialize());
   ASSERT_TRUE(resumed.import_state(saved));

@@ -353,6 +353,35 @@ TEST(LoadBlockValidation, RejectsWhatCannotBeApplied) {
 namespace peritwin {
 namespace {
 
+/// The state hash the way it was first defined: word-wise FNV-1a over export_state()'s copy.
+std::uint64_t hash_of_exported_state(const FatigueEngine& engine) {
+  Fnv1a64 h;
+  const EngineState state = engine.export_state();
+  for_each_field(state, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+  return h.get();
+}
+
+TEST(EngineState, HashReadInPlaceEqualsTheHashOfTheExportedCopy) {
+  // state_hash() reads the engine's fields in place (the solver's intact flags); the oracle hashes
+  // export_state()'s copy. A pair of hashes fed the same words gives each one's value.
+  const auto plate = make_notched_plate(ModelKind::bond_based);
+  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(engine.initialize());
+  for (const LoadBlock& block :
+       {LoadBlock{1000.0, 0.1, 0.0, 333}, LoadBlock{900.0, 0.2, 0.0, 400}}) {
+    engine.apply(block);
+    EXPECT_EQ(engine.state_hash(), hash_of_exported_state(engine));
+    Fnv1a64Pair pair{Fnv1a64::from(12345), Fnv1a64{}};
+    engine.hash_state(pair);
+    Fnv1a64 alone = Fnv1a64::from(12345);
+    engine.hash_state(alone);
+    EXPECT_EQ(pair.first.get(), alone.get());
+    EXPECT_EQ(pair.second.get(), engine.state_hash());
+  }
+  EXPECT_GT(engine.broken_bonds(), 5);  // the intact flags hashed are not all ones
+}
+
 TEST(EngineState, ExportImportResumesBitIdentically) {
   // Checkpoint contract: stop anywhere (here in the middle of a dose accumulation), restore into a
   // fresh engine, continue: the final state equals the uninterrupted run bit for bit.

@@ -1,6 +1,7 @@
 // Twin: every reject reason, exactly-once bookkeeping, state messages, checkpoint resume.
 #include <unistd.h>
 
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -58,6 +59,41 @@ TEST_F(TwinTest, CompactTensionDetailReportsTheAstmStressIntensity) {
   auto extrapolated = make_twin(b1_model(other));
   ASSERT_TRUE(extrapolated->apply(batch(1, {{4000.0, 0.1, 0.0, 1}})).applied());
   EXPECT_NEAR(state_message(*extrapolated, 0).k_i, 10.05496e6, 0.25 * 10.05496e6);
+}
+
+/// Same numbers, bit for bit (NaN equal to NaN).
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+TEST_F(TwinTest, TheCrackReportKeptAcrossBatchesEqualsAFreshMeasurement) {
+  // The twin measures its cracks again only after a break, a re-solve or a new P_max or α: after
+  // each batch its report equals measure_cracks() of the same state, bit for bit.
+  auto twin = make_twin(model_);
+  const std::vector<LoadBlock> blocks{{500.0, 0.1, 0.0, 10},    {500.0, 0.1, 0.0, 10},
+                                      {4000.0, 0.1, 0.0, 9000}, {4000.0, 0.1, 0.0, 3000},
+                                      {500.0, 0.1, 0.0, 10},    {500.0, 0.2, 0.0, 20},
+                                      {600.0, 0.1, 0.1, 10},    {4000.0, 0.1, 0.0, 2000}};
+  std::int64_t seq = 0;
+  for (const LoadBlock& block : blocks) {
+    ASSERT_TRUE(twin->apply(batch(++seq, {block})).applied());
+    const CrackReport fresh = measure_cracks(*model_, twin->engine(), &*twin->last_block());
+    const CrackReport& kept = twin->cracks();
+    ASSERT_EQ(kept.cracks.size(), fresh.cracks.size()) << seq;
+    EXPECT_EQ(kept.merges.size(), fresh.merges.size()) << seq;
+    EXPECT_TRUE(same_bits(kept.max_damage, fresh.max_damage)) << seq;
+    EXPECT_TRUE(same_bits(kept.k_i, fresh.k_i)) << seq;
+    EXPECT_TRUE(same_bits(kept.k_ii, fresh.k_ii)) << seq;
+    for (std::size_t c = 0; c < kept.cracks.size(); ++c) {
+      EXPECT_TRUE(same_bits(kept.cracks[c].crack.length, fresh.cracks[c].crack.length)) << seq;
+      ASSERT_EQ(kept.cracks[c].k.size(), fresh.cracks[c].k.size()) << seq;
+      for (std::size_t t = 0; t < kept.cracks[c].k.size(); ++t) {
+        EXPECT_TRUE(same_bits(kept.cracks[c].k[t].k_i, fresh.cracks[c].k[t].k_i)) << seq;
+      }
+    }
+  }
+  EXPECT_GT(twin->broken_bonds(), 0);  // the sequence broke bonds
+  EXPECT_GT(twin->cracks().main_length(), 0.0);
 }
 
 struct RejectCase {
@@ -235,6 +271,11 @@ TEST_F(TwinTest, ExactlyOnceInOrderPerSource) {
   ASSERT_TRUE(reference->apply(batch(1, {b[0]}, "gauge-2")).applied());
   EXPECT_EQ(reference->state_hash(), twin->state_hash());
   EXPECT_EQ(reference->engine().total_cycles(), 1000 + 900 + 800 + 700 + 1000);
+  // Every STATE carries both hashes, taken in one pass: each equals its own computation.
+  const Twin::Hashes both = twin->hashes();
+  EXPECT_EQ(both.state, twin->state_hash());
+  EXPECT_EQ(both.engine, twin->engine_hash());
+  EXPECT_NE(both.state, both.engine);
 }
 
 TEST_F(TwinTest, StateMessage) {

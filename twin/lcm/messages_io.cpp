@@ -178,8 +178,9 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
   m.remaining_life_source = life.source;
   m.failure = static_cast<std::int8_t>(twin.failure());
   m.end_of_life_cycle = twin.end_of_life_cycle();
-  m.state_hash = twin.state_hash_hex();
-  m.engine_hash = hex64(twin.engine_hash());
+  const Twin::Hashes hashes = twin.hashes();
+  m.state_hash = hex64(hashes.state);
+  m.engine_hash = hex64(hashes.engine);
   return m;
 }
 

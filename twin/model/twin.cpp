@@ -102,7 +102,18 @@ std::int64_t Twin::applied_seq(const std::string& source) const {
 std::int64_t Twin::broken_bonds() const { return engine_->broken_bonds() - model_->precut_bonds(); }
 
 void Twin::refresh() {
-  report_ = measure_cracks(*model_, *engine_, last_block_ ? &*last_block_ : nullptr);
+  const ReportKey key{engine_->break_events().size(),
+                      engine_->solves(),
+                      engine_->rebuilds(),
+                      engine_->increments(),
+                      engine_->failed(),
+                      last_block_.has_value(),
+                      last_block_ ? last_block_->p_max : 0.0,
+                      last_block_ ? last_block_->alpha : 0.0};
+  if (report_key_ != key) {
+    report_ = measure_cracks(*model_, *engine_, last_block_ ? &*last_block_ : nullptr);
+    report_key_ = key;
+  }
   failure_ = end_of_life(*model_, *engine_);
 }
 
@@ -166,19 +177,25 @@ Outcome Twin::apply(const Batch& batch) {
 
 namespace {
 
-void hash_field(Fnv1a64& h, const std::map<std::string, std::int64_t>& applied) {
+template <class Hash>
+void hash_field(Hash& h, const std::map<std::string, std::int64_t>& applied) {
   h.integer(static_cast<std::int64_t>(applied.size()));
   for (const auto& [source, seq] : applied) {
     h.packed(source);
     h.integer(seq);
   }
 }
-void hash_field(Fnv1a64& h, const std::optional<LoadBlock>& block) {
+template <class Hash>
+void hash_field(Hash& h, const std::optional<LoadBlock>& block) {
   h.integer(block ? 1 : 0);
   if (block) peritwin::hash_field(h, *block);
 }
-void hash_field(Fnv1a64& h, Failure failure) { h.integer(static_cast<std::int64_t>(failure)); }
-void hash_field(Fnv1a64& h, const RollingSpectrum& spectrum) {
+template <class Hash>
+void hash_field(Hash& h, Failure failure) {
+  h.integer(static_cast<std::int64_t>(failure));
+}
+template <class Hash>
+void hash_field(Hash& h, const RollingSpectrum& spectrum) {
   h.integer(static_cast<std::int64_t>(spectrum.blocks().size()));
   for (const auto& b : spectrum.blocks()) peritwin::hash_field(h, b);
 }
@@ -186,15 +203,25 @@ using peritwin::hash_field;
 
 }  // namespace
 
-std::uint64_t Twin::state_hash() const {
-  // Equal hashes <=> bit-identical states (up to 64-bit collisions).
+Fnv1a64 Twin::own_fields_hash() const {
   Fnv1a64 h;
   for_each_own_field(*this, [&h](std::string_view, const auto& field, Hashed hashed) {
     if (hashed == Hashed::yes) hash_field(h, field);
   });
-  const EngineState engine = engine_->export_state();
-  for_each_field(engine, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+  return h;
+}
+
+std::uint64_t Twin::state_hash() const {
+  // Equal hashes <=> bit-identical states (up to 64-bit collisions).
+  Fnv1a64 h = own_fields_hash();
+  engine_->hash_state(h);
   return h.get();
+}
+
+Twin::Hashes Twin::hashes() const {
+  Fnv1a64Pair pair{own_fields_hash(), Fnv1a64{}};
+  engine_->hash_state(pair);
+  return {pair.first.get(), pair.second.get()};
 }
 
 std::string Twin::state_hash_hex() const { return hex64(state_hash()); }

@@ -149,6 +149,12 @@ class Twin {
   /// intact bonds, cycles, break events, bilinear damage). Not over the life estimate.
   [[nodiscard]] std::uint64_t state_hash() const;
   [[nodiscard]] std::string state_hash_hex() const;
+  struct Hashes {
+    std::uint64_t state = 0;   ///< state_hash()
+    std::uint64_t engine = 0;  ///< engine_hash()
+  };
+  /// state_hash() and engine_hash() in one pass over the engine's state (every STATE has both).
+  [[nodiscard]] Hashes hashes() const;
 
   /// Remaining life ----------------------------------------------------------------------------
   [[nodiscard]] LifeJob life_job() const;
@@ -202,7 +208,8 @@ class Twin {
 
  private:
   Twin(std::shared_ptr<const DetailModel> model, Options options);
-  void refresh();  ///< crack report and failure from the engine
+  void refresh();                                 ///< crack report and failure from the engine
+  [[nodiscard]] Fnv1a64 own_fields_hash() const;  ///< the twin's own hashed fields
 
   std::shared_ptr<const DetailModel> model_;
   Options options_;
@@ -216,6 +223,18 @@ class Twin {
   std::int64_t cycles_before_state_ = 0;
   std::optional<LoadBlock> last_block_;
   CrackReport report_;
+  /// What report_ was measured from: the cracks and K change only with a break, a re-solve or
+  /// the last block's P_max and α, so a batch that changes none of them keeps report_ (finding the
+  /// cracks replays every break event: the largest part of a quiet batch's cost).
+  struct ReportKey {
+    std::size_t events = 0;
+    int solves = 0, rebuilds = 0;
+    std::int64_t increments = 0;
+    bool failed = false, has_block = false;
+    double p_max = 0.0, alpha = 0.0;
+    bool operator==(const ReportKey&) const = default;
+  };
+  std::optional<ReportKey> report_key_;
   Failure failure_ = Failure::none;
   LifeEstimate life_;
   RollingSpectrum spectrum_;

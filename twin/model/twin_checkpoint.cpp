@@ -260,6 +260,7 @@ Status Twin::restore(const CheckpointData& d) {
   }
   if (!engine_->import_state(engine)) return fail("the engine state does not fit the model");
   const Failure stored = failure_;
+  report_key_.reset();  // a new engine state: measured afresh
   refresh();
   cycles_before_state_ = engine_->total_cycles();
   if (failure_ != stored) {
