@@ -180,6 +180,9 @@ struct Options {
   int worker_threads = 0;  ///< the daemon's --worker-threads in the first run (0: its default)
   bool one_thread = true;  ///< the second run with --worker-threads 1
   bool release_idle_factors = false;  ///< [detail.limits] release_idle_factor in every detail
+  /// The quiet producers' phases: spread evenly over one period (independent sensors), or all
+  /// publishing at the same instant (a burst of details-1 batches every period).
+  bool aligned_phases = false;
 };
 
 /// One daemon run on `url` with `extra` daemon arguments.
@@ -226,12 +229,15 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
     return out;
   }
   const auto start = Clock::now();
+  const auto quiet_period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / o.quiet_rate));
+  const auto quiet = static_cast<std::int64_t>(fleet.feeds().size()) - 1;
+  std::int64_t quiet_index = 0;
   for (Feed& f : fleet.feeds()) {
     f.cycles_at_start = f.cycles;
     f.next_send = start;
+    if (!f.loud && !o.aligned_phases) f.next_send += quiet_period * quiet_index++ / quiet;
   }
-  const auto quiet_period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(1.0 / o.quiet_rate));
   std::int64_t loud_sent = 0;
   // The window ends after --seconds, or when the loud detail reaches its end of life (it breaks
   // no more bonds then).
@@ -310,6 +316,9 @@ int main(int argc, char** argv) {
   app.add_flag("--release-idle-factors", o.release_idle_factors,
                "every detail frees its Cholesky factor while it breaks no bond ([detail.limits] "
                "release_idle_factor)");
+  app.add_flag("--aligned-phases", o.aligned_phases,
+               "every quiet detail publishes at the same instant (default: phases spread evenly "
+               "over the period, as independent sensors)");
   CLI11_PARSE(app, argc, argv);
   o.one_thread = !no_one_thread;
 
@@ -354,6 +363,7 @@ int main(int argc, char** argv) {
   line["bench"] = "fleet";
   line["details"] = o.details;
   line["release_idle_factors"] = o.release_idle_factors;
+  line["quiet_phases"] = o.aligned_phases ? "aligned" : "spread";
   line["nodes_per_detail"] = o.nodes_per_detail;
   line["dx_m"] = tools::fixed(dx, 6);
   line["startup_s"] = tools::fixed(pool.startup_s, 2);
