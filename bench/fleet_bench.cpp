@@ -8,9 +8,13 @@
 // ...; remaining-life estimates, field snapshots, pictures and results off (the bench measures the
 // ingest, not the estimates: those are reported by `peritwin-bench fatigue`), checkpoints as in
 // the example (every 100 batches). Detail d00 is loud: its producer sends 4 kN, R 0.1 blocks of
-// --loud-cycles cycles in lockstep (the next batch as soon as the previous one is applied), so
-// that it breaks bonds throughout; every other detail is quiet: a batch of 10 cycles at 500 N
-// (far below any bond's fatigue life) every 1/--quiet-rate s. The latency of a quiet batch is
+// --loud-cycles (50) cycles in lockstep (the next batch as soon as the previous one is applied),
+// so that it breaks bonds throughout (the first at about 1900 cycles; loud_breaking_batches counts
+// the batches that broke one; --loud-pre-cycles gives it that many cycles in one batch before the
+// window). Every other detail is quiet: a batch of 10 cycles at 500 N (far below any
+// bond's fatigue life) every 1/--quiet-rate s, the quiet details' phases spread evenly over that
+// period as independent sensors' would be (--aligned-phases: all at the same instant, a burst of
+// details-1 batches every period). The latency of a quiet batch is
 // from its publication to the first STATE showing it applied. The measured window is --seconds,
 // or shorter when the loud detail reaches its end-of-life criterion (8 mm of crack) before.
 //
@@ -22,6 +26,7 @@
 //   {"bench":"fleet","details":…,"nodes_per_detail":…,"dx_m":…,"startup_s":…,
 //    "startup_s_per_detail":…,"rss_mb":…,"rss_peak_mb":…,"rss_mb_per_detail":…,"cycles_per_s":…,
 //    "quiet_batches":…,"quiet_p50_ms":…,"quiet_p99_ms":…,"loud_batches":…,"loud_broken_bonds":…,
+//    "loud_cycles_before_window":…,"loud_breaking_batches":…,
 //    "window_s":…,"loud_end_of_life":…,"worker_threads":…,"startup_s_one_thread":…,
 //    "quiet_p50_ms_one_thread":…,"quiet_p99_ms_one_thread":…,"quiet_p99_one_thread_over_pool":…,
 //    "goals":{…},"transport":"tcpq"}
@@ -91,6 +96,7 @@ struct Feed {
   std::string id;
   bool loud = false;
   std::int64_t next_seq = 1, applied = 0, broken_bonds = 0, cycles = 0, cycles_at_start = -1;
+  std::int64_t breaking_states = 0;  ///< STATEs with more broken bonds than the one before
   bool seen = false;
   bool ended = false;  ///< its end-of-life criterion was met: it applies nothing more
   Clock::time_point ended_at{};
@@ -142,6 +148,7 @@ class Fleet {
     if (it == index_.end()) return;
     Feed& f = feeds_[it->second];
     f.seen = true;
+    if (s->broken_bonds > f.broken_bonds) ++f.breaking_states;
     f.broken_bonds = s->broken_bonds;
     f.cycles = s->total_cycles;
     f.applied = std::max(f.applied, messages::applied_seq(*s, kSource));
@@ -167,7 +174,8 @@ struct RunResult {
   std::string error;
   double startup_s = 0, rss_mb = 0, rss_peak_mb = 0, cycles_per_s = 0;
   std::vector<double> quiet_ms;
-  std::int64_t loud_batches = 0, loud_broken = 0;
+  std::int64_t loud_batches = 0, loud_broken = 0, loud_breaking = 0;
+  std::int64_t loud_cycles_before = 0;  ///< the loud detail's cycles when the window opened
   double window_s = 0;
   bool loud_ended = false;  ///< the loud detail reached its end of life (the window ended there)
 };
@@ -177,6 +185,10 @@ struct Options {
   int nodes_per_detail = 4000;
   double seconds = 30.0, quiet_rate = 5.0;
   std::int64_t loud_cycles = 50;
+  /// Cycles the loud detail gets in one batch before the window opens (0: none). The window
+  /// then skips the first breaks, which are the heaviest batches: with release_idle_factor a
+  /// detail that breaks a bond after a pause factorizes again.
+  std::int64_t loud_pre_cycles = 0;
   int worker_threads = 0;  ///< the daemon's --worker-threads in the first run (0: its default)
   bool one_thread = true;  ///< the second run with --worker-threads 1
   bool release_idle_factors = false;  ///< [detail.limits] release_idle_factor in every detail
@@ -228,6 +240,15 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
     if (!daemon_exited) bench::stop_child(daemon, 300.0);
     return out;
   }
+  Feed& loud = fleet.feeds().front();
+  if (o.loud_pre_cycles > 0) {
+    fleet.publish(loud, 4000.0, o.loud_pre_cycles);
+    const auto t_pre = Clock::now();
+    while (!loud.in_flight.empty() && since(t_pre) < 600.0) messages::handle_lcm(lcm, 20);
+    loud.latency_ms.clear();
+    loud.breaking_states = 0;
+  }
+  out.loud_cycles_before = loud.cycles;
   const auto start = Clock::now();
   const auto quiet_period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / o.quiet_rate));
@@ -241,7 +262,6 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
   std::int64_t loud_sent = 0;
   // The window ends after --seconds, or when the loud detail reaches its end of life (it breaks
   // no more bonds then).
-  const Feed& loud = fleet.feeds().front();
   while (since(start) < o.seconds && !loud.ended) {
     const auto now = Clock::now();
     for (Feed& f : fleet.feeds()) {
@@ -278,6 +298,7 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
     if (f.loud) {
       out.loud_batches = static_cast<std::int64_t>(f.latency_ms.size());
       out.loud_broken = f.broken_bonds;
+      out.loud_breaking = f.breaking_states;
     } else {
       out.quiet_ms.insert(out.quiet_ms.end(), f.latency_ms.begin(), f.latency_ms.end());
     }
@@ -311,6 +332,10 @@ int main(int argc, char** argv) {
   app.add_option("--worker-threads", o.worker_threads,
                  "the daemon's --worker-threads in the first run (default 0: its default)")
       ->check(CLI::Range(0, 1024));
+  app.add_option("--loud-pre-cycles", o.loud_pre_cycles,
+                 "cycles the loud detail gets in one batch before the window (default 0; B1 at 4 "
+                 "kN breaks its first bond at about 1900)")
+      ->check(CLI::NonNegativeNumber);
   bool no_one_thread = false;
   app.add_flag("--no-one-thread", no_one_thread, "skip the comparison run with one worker thread");
   app.add_flag("--release-idle-factors", o.release_idle_factors,
@@ -377,6 +402,9 @@ int main(int argc, char** argv) {
   line["quiet_p99_ms"] = tools::fixed(p99, 2);
   line["loud_batches"] = pool.loud_batches;
   line["loud_broken_bonds"] = pool.loud_broken;
+  line["loud_cycles_before_window"] = pool.loud_cycles_before;
+  // Loud batches whose STATE shows more broken bonds than the one before (each a re-solve).
+  line["loud_breaking_batches"] = pool.loud_breaking;
   line["window_s"] = tools::fixed(pool.window_s, 1);
   line["loud_end_of_life"] = pool.loud_ended;
   line["worker_threads"] = o.worker_threads;  // 0: the daemon's default (the cores, at least 2)
@@ -388,6 +416,7 @@ int main(int argc, char** argv) {
     line["quiet_p99_ms_one_thread"] = tools::fixed(p99_one, 2);
     line["quiet_p99_one_thread_over_pool"] = tools::fixed(p99_one / p99, 2);
     line["loud_batches_one_thread"] = single.loud_batches;
+    line["loud_breaking_batches_one_thread"] = single.loud_breaking;
     line["rss_mb_one_thread"] = tools::fixed(single.rss_mb, 1);
   }
   line["goals"] = {{"rss_mb_at_32x4000", 1536},
