@@ -375,8 +375,9 @@ TEST(ResourceEstimate, FamilySizeIsTheLatticeCount) {
 TEST(ResourceEstimate, ExampleCountsAndTheFactorBoundAgainstTheRealFactor) {
   // The B1 example (3,720 nodes), state-based (mixed form, 3 unknowns per node) and bond-based:
   // the estimate's nodes are exact, its bonds, unknowns and matrix entries within 1 %, and its
-  // factor entries bound CHOLMOD's supernodal factor from above by at most 1.5x (measured 1.08x
-  // and 1.10x; docs/limits.md).
+  // factor entries bound CHOLMOD's supernodal factor from above by at most 2x (measured 1.78x and
+  // 1.77x since the precut bonds left the pattern; 1.24-1.25x at 60k nodes, where a lower bound
+  // matters; docs/limits.md).
   const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   for (const ModelKind kind : {ModelKind::state_based, ModelKind::bond_based}) {
@@ -399,7 +400,7 @@ TEST(ResourceEstimate, ExampleCountsAndTheFactorBoundAgainstTheRealFactor) {
     EXPECT_NEAR(e.matrix_nonzeros, matrix, 0.01 * matrix);
     const double factor = solver.factor().factor_nonzeros();
     EXPECT_GE(e.factor_nonzeros, factor);
-    EXPECT_LE(e.factor_nonzeros, 1.5 * factor);
+    EXPECT_LE(e.factor_nonzeros, 2.0 * factor);
     // The life band (a2_scatter) keeps three simulations besides the live engine.
     EXPECT_EQ(e.engines, 4);
     EXPECT_EQ(e.bytes, e.model_bytes + 4 * e.engine_bytes);
