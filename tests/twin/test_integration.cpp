@@ -353,6 +353,71 @@ TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   daemon.stop();
 }
 
+TEST_F(MemqTest, OneSharedLifeThreadEstimatesEveryDetailsFinalState) {
+  // Three copies of B1 with asynchronous estimates on one shared life thread (life_threads 1):
+  // the details take turns on it, and each one's STATE ends with the estimate of its final state,
+  // equal to the synchronous estimate of that state.
+  const std::vector<std::string> ids = {"a", "b", "c"};
+  std::string text;
+  for (const auto& id : ids) {
+    text += b1_text("every_batches = 10",
+                    {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
+                     {"band = \"a2_scatter\"", "band = \"none\""},
+                     {"a2_relative_scatter = 0.2", ""},
+                     {"id = \"b1-ct\"", "id = \"" + id + "\""},
+                     {"\"results/b1-ct\"", "\"results/" + id + "\""}}) +
+            "\n";
+  }
+  const TwinConfig config = config_of(text);
+  ASSERT_EQ(config.details.size(), ids.size());
+  options_.deterministic = false;
+  options_.life_threads = 1;
+  const auto batches = history(4);
+  lcm::LCM lcm("memq://");
+  Daemon daemon(lcm, config, options_);
+  const Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << message_of(started);
+  struct Sink {
+    std::map<std::string, peritwin_msgs::damage_state_t> last;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::damage_state_t* m) {
+      last[m->detail_id] = *m;
+    }
+  } sink;
+  lcm.subscribe("PERITWIN_.*_STATE", &Sink::on, &sink);
+  for (const Batch& b : batches) {
+    for (const auto& id : ids) {
+      Batch copy = b;
+      copy.detail_id = id;
+      const auto m = batch_message(copy, 0);
+      lcm.publish(messages::channel(id, messages::Kind::kLoad), &m);
+    }
+  }
+  const auto all_estimated = [&] {
+    return std::all_of(ids.begin(), ids.end(), [&](const std::string& id) {
+      const auto it = sink.last.find(id);
+      return it != sink.last.end() && it->second.remaining_life_seq == 4;
+    });
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+  while (!all_estimated() && std::chrono::steady_clock::now() < deadline) daemon.poll(50);
+  ASSERT_TRUE(all_estimated()) << "not every detail has the estimate of state 4 in " << kGiveUpS
+                               << " s";
+  auto twin = testing::make_twin(testing::b1_model(config.details[0]));
+  ASSERT_NE(twin, nullptr);
+  for (const auto& b : batches) {
+    Batch copy = b;
+    copy.detail_id = ids[0];
+    ASSERT_TRUE(twin->apply(copy).applied());
+  }
+  twin->estimate_life_now();
+  ASSERT_TRUE(std::isfinite(twin->life().central));
+  for (const auto& id : ids) {
+    EXPECT_EQ(sink.last[id].state_seq, 4) << id;
+    EXPECT_EQ(sink.last[id].remaining_cycles, twin->life().central) << id;
+  }
+  daemon.stop();
+}
+
 TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat) {
   // Two details on one daemon. Detail b1-ct's worker is held inside its first batch (the test
   // hook stands in for a batch that takes minutes); meanwhile b2-cts applies its batches and

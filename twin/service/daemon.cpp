@@ -99,6 +99,15 @@ int worker_thread_count(int requested, std::size_t details) {
                                                   std::max<std::size_t>(1, details)));
 }
 
+/// DaemonOptions::life_threads resolved: 0 = half the cores (at least 1), never more than the
+/// details with estimates.
+int life_thread_count(int requested, std::size_t estimating) {
+  const int cores = static_cast<int>(std::thread::hardware_concurrency());
+  const int wanted = requested > 0 ? requested : std::max(1, cores / 2);
+  return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
+                                                  std::max<std::size_t>(1, estimating)));
+}
+
 }  // namespace
 
 std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
@@ -246,6 +255,16 @@ Status Daemon::start() {
   if (Status keys = load_keys(); !keys) return keys;
   const std::size_t n = config_.details.size();
   const int threads = worker_thread_count(options_.worker_threads, n);
+  if (!options_.deterministic) {
+    const auto estimating = static_cast<std::size_t>(
+        std::count_if(config_.details.begin(), config_.details.end(),
+                      [](const DetailConfig& c) { return c.life.estimates(); }));
+    if (estimating > 0) {
+      life_pool_ = std::make_unique<LifePool>(life_thread_count(options_.life_threads, estimating));
+      spdlog::info("remaining-life estimates: {} thread(s) shared by {} detail(s)",
+                   life_pool_->threads(), estimating);
+    }
+  }
   // Build and factor the details `threads` at a time; the first failure in config order is the
   // one reported. With one thread the resident memory's growth over a build is that detail's.
   std::vector<std::optional<Expected<std::unique_ptr<Detail>>>> built(n);
@@ -440,7 +459,7 @@ Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(const DetailConfi
   if (options_.deterministic) d->twin->catch_up_life();
   if (options_.results) d->outputs = std::make_unique<DetailOutputs>(*d->twin);
   if (!options_.deterministic && config.life.estimates()) {
-    d->life = std::make_unique<LifeWorker>();
+    d->life = std::make_unique<LifeWorker>(*life_pool_);
   }
   d->state_channel = messages::channel(config.id, messages::Kind::kState);
   d->field_channel = messages::channel(config.id, messages::Kind::kField);

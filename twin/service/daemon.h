@@ -33,8 +33,8 @@
 //
 // The service is the daemon's core and also runs in-process in tests (memq://) and in the ingest
 // benchmark. Modes: deterministic (remaining life synchronously at fixed state_seq points,
-// reproducible) or not (a LifeWorker thread per detail; estimates are published with the seq
-// they belong to).
+// reproducible) or not (a LifePool of DaemonOptions::life_threads threads shared by the details,
+// one LifeWorker slot each; estimates are published with the seq they belong to).
 #pragma once
 
 #include <atomic>
@@ -79,6 +79,10 @@ struct DaemonOptions {
   /// at least 2; never more than there are details. With 1, a detail's long batch delays every
   /// other detail's (the fleet benchmark's comparison).
   int worker_threads = 0;
+  /// Threads that compute the remaining-life estimates of every detail (non-deterministic mode):
+  /// 0 = half the machine's cores, at least 1; never more than the details with estimates. Each
+  /// running estimate holds a copy of its detail's engine and factor, so this also bounds them.
+  int life_threads = 0;
   /// Test hook: called on a detail's worker thread before each received batch is applied.
   std::function<void(const std::string& detail_id)> before_apply;
 };
@@ -160,6 +164,8 @@ class Daemon {
   lcm::LCM& lcm_;
   TwinConfig config_;
   DaemonOptions options_;
+  /// Before details_: their LifeWorkers are destroyed (cancelled) before the pool.
+  std::unique_ptr<LifePool> life_pool_;
   std::vector<std::unique_ptr<Detail>> details_;
   std::unique_ptr<Outbox> outbox_;
   // The worker pool: details with something to do, each at most once (Detail::scheduled).

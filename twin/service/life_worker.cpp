@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+
 namespace peritwin::twin {
 
 void log_life_estimate(const std::string& detail_id, const LifeEstimate& e) {
@@ -15,62 +17,84 @@ void log_life_estimate(const std::string& detail_id, const LifeEstimate& e) {
                  : "rebuilt from the state");
 }
 
-LifeWorker::LifeWorker() : thread_([this] { run(); }) {}
+LifePool::LifePool(int threads) {
+  for (int k = 0; k < std::max(1, threads); ++k) threads_.emplace_back([this] { run(); });
+}
 
-LifeWorker::~LifeWorker() {
+LifePool::~LifePool() {
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
-    cancel_ = true;
   }
   wake_.notify_all();
-  thread_.join();
+  for (auto& t : threads_) t.join();
 }
 
-void LifeWorker::submit(LifeJob job) {
-  {
-    std::lock_guard lock(mutex_);
-    pending_ = std::move(job);
-  }
-  wake_.notify_all();
-}
-
-bool LifeWorker::busy() const {
-  std::lock_guard lock(mutex_);
-  return running_ || pending_.has_value();
-}
-
-std::optional<LifeEstimate> LifeWorker::take() {
-  std::lock_guard lock(mutex_);
-  std::optional<LifeEstimate> out;
-  out.swap(done_);
-  return out;
-}
-
-void LifeWorker::run() {
+void LifePool::run() {
+  std::unique_lock lock(mutex_);
   while (true) {
-    LifeJob job;
-    {
-      std::unique_lock lock(mutex_);
-      wake_.wait(lock, [this] { return stop_ || pending_.has_value(); });
-      if (stop_) return;
-      job = std::move(*pending_);
-      pending_.reset();
-      running_ = true;
-    }
+    wake_.wait(lock, [this] { return stop_ || !ready_.empty(); });
+    if (stop_) return;
+    LifeWorker* slot = ready_.front();
+    ready_.pop_front();
+    slot->queued_ = false;
+    LifeJob job = std::move(*slot->pending_);
+    slot->pending_.reset();
+    slot->running_ = true;
+    lock.unlock();
     LifeEstimate e =
-        estimate_life(*job.model, job.state, job.spectrum, true, &cancel_, job.engine.get());
+        estimate_life(*job.model, job.state, job.spectrum, true, &slot->cancel_, job.engine.get());
     job.engine.reset();  // its factor copy goes before the next job's
     e.state_seq = job.state_seq;
     e.seq = job.seq;
     e.source = job.source;
-    if (!cancel_.load()) {
-      log_life_estimate(job.model->config().id, e);
+    const bool cancelled = slot->cancel_.load();
+    if (!cancelled) log_life_estimate(job.model->config().id, e);
+    lock.lock();
+    slot->running_ = false;
+    if (!cancelled) slot->done_ = std::move(e);
+    if (slot->pending_ && !slot->cancel_) {  // submitted while it ran: to the back of the queue
+      slot->queued_ = true;
+      ready_.push_back(slot);
+      wake_.notify_one();
     }
-    std::lock_guard lock(mutex_);
-    running_ = false;
-    if (!stop_) done_ = std::move(e);
+    finished_.notify_all();
   }
+}
+
+LifeWorker::LifeWorker(LifePool& pool) : pool_(pool) {}
+
+LifeWorker::~LifeWorker() {
+  std::unique_lock lock(pool_.mutex_);
+  cancel_ = true;
+  if (queued_) {
+    pool_.ready_.erase(std::find(pool_.ready_.begin(), pool_.ready_.end(), this));
+    queued_ = false;
+  }
+  pool_.finished_.wait(lock, [this] { return !running_; });
+}
+
+void LifeWorker::submit(LifeJob job) {
+  {
+    std::lock_guard lock(pool_.mutex_);
+    pending_ = std::move(job);
+    if (queued_ || running_) return;  // it keeps its place; a running one re-queues itself
+    queued_ = true;
+    pool_.ready_.push_back(this);
+  }
+  pool_.wake_.notify_one();
+}
+
+bool LifeWorker::busy() const {
+  std::lock_guard lock(pool_.mutex_);
+  return running_ || pending_.has_value();
+}
+
+std::optional<LifeEstimate> LifeWorker::take() {
+  std::lock_guard lock(pool_.mutex_);
+  std::optional<LifeEstimate> out;
+  out.swap(done_);
+  return out;
 }
 
 }  // namespace peritwin::twin

@@ -69,6 +69,12 @@ int main(int argc, char** argv) {
                  "threads that apply the details' batches and build them at start (default 0: "
                  "the machine's cores, at least 2; never more than the details served)")
       ->check(CLI::Range(0, 1024));
+  int life_threads = 0;
+  app.add_option("--life-threads", life_threads,
+                 "threads that compute the remaining-life estimates of all details (default 0: "
+                 "half the machine's cores, at least 1; never more than the details with "
+                 "estimates); each running estimate holds a copy of its detail's factor")
+      ->check(CLI::Range(0, 1024));
   std::string max_memory;
   app.add_option("--max-memory", max_memory,
                  "refuse a config whose estimated memory exceeds this: bytes, suffix K/M/G/T "
@@ -147,6 +153,7 @@ int main(int argc, char** argv) {
     options.results = !no_results;
     options.fresh_start = fresh_start;
     options.worker_threads = worker_threads;
+    options.life_threads = life_threads;
     peritwin::twin::Daemon daemon(lcm, *loaded.config, options);
     spdlog::info("peritwin: {} detail(s) from {}, LCM \"{}\", state in {}, {} mode",
                  loaded.config->details.size(), config_file,
