@@ -507,6 +507,48 @@ TEST(ConfigResourceBounds, AllDetailsTogetherRefusedAtTheLargest) {
       << r.errors[0].message();
 }
 
+TEST(ConfigResourceBounds, AllDetailsTogetherCountTheLifeEnginesOfTheConcurrentEstimatesOnly) {
+  // Three copies of the B1 example, each with its live engine and three life engines (A2 band).
+  // Every detail's life engines at once (concurrent_life_estimates 0) is over the limit; those of
+  // one detail at a time (the daemon's one shared life thread) is under it, and the refusal of a
+  // smaller limit says so.
+  std::ifstream in(examples_dir() + "/b1-ct-al6061.toml");
+  const std::string example((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text;
+  for (const std::string id : {"a", "b", "c"}) {
+    std::string copy = example;
+    for (const auto& [from, to] :
+         {std::pair<std::string, std::string>{"id = \"b1-ct\"", "id = \"" + id + "\""},
+          {"\"results/b1-ct\"", "\"results/" + id + "\""}}) {
+      const auto at = copy.find(from);
+      ASSERT_NE(at, std::string::npos) << from;
+      copy.replace(at, from.size(), to);
+    }
+    text += copy + "\n";
+  }
+  const ConfigResult unlimited = parse_config(text, "three.toml", ConfigLimits{1024 * kGiB});
+  ASSERT_TRUE(unlimited.ok()) << unlimited.error_text();
+  const ResourceEstimate e = estimate_resources(unlimited.config->details[0]);
+  ASSERT_EQ(e.engines, 4);
+  const double one_at_a_time = 3 * (e.model_bytes + e.engine_bytes) + 3 * e.engine_bytes;
+  const double all_at_once = 3 * e.bytes;
+  const auto limit = static_cast<std::uint64_t>(0.5 * (one_at_a_time + all_at_once));
+
+  const ConfigResult every = parse_config(text, "three.toml", ConfigLimits{limit, {}, 0});
+  ASSERT_EQ(every.errors.size(), 1u) << every.error_text();
+  EXPECT_NE(every.errors[0].reason.find("the 3 details would need an estimated"), std::string::npos)
+      << every.errors[0].message();
+  const ConfigResult one = parse_config(text, "three.toml", ConfigLimits{limit, {}, 1});
+  EXPECT_TRUE(one.ok()) << one.error_text();
+  const ConfigResult smaller = parse_config(
+      text, "three.toml", ConfigLimits{static_cast<std::uint64_t>(0.9 * one_at_a_time), {}, 1});
+  ASSERT_EQ(smaller.errors.size(), 1u) << smaller.error_text();
+  EXPECT_NE(smaller.errors[0].reason.find(
+                "together (remaining-life simulations of at most 1 detail(s) at once)"),
+            std::string::npos)
+      << smaller.errors[0].message();
+}
+
 TEST(ConfigServedDetails, OnlyTheServedDetailsAreReturnedAndCountedAgainstTheLimit) {
   // The daemon's --details (a fleet sharing one config): two plates over the limit together, each
   // under it alone. Serving one: accepted, that detail only; serving both: refused as before; an

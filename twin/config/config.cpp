@@ -320,6 +320,7 @@ ConfigResult parse_config(std::string_view text, std::string_view file_name,
     ctx.max_memory_bytes =
         ctx.default_memory_limit ? default_memory_limit() : limits.max_memory_bytes;
     ctx.served_details = limits.served_details;
+    ctx.concurrent_life_estimates = limits.concurrent_life_estimates;
     TwinConfig config = config_internal::parse_document(ctx, root);
     std::stable_sort(ctx.errors.begin(), ctx.errors.end(), [](const auto& a, const auto& b) {
       return a.line != b.line ? a.line < b.line : a.column < b.column;

@@ -315,6 +315,10 @@ struct ConfigLimits {
   /// config): the whole file is still checked, but only these details are returned and counted
   /// against max_memory_bytes; an id the file does not have is an error. Empty: every detail.
   std::vector<std::string> served_details{};
+  /// Remaining-life estimates this process runs at once (the daemon's --life-threads, or its
+  /// worker threads in deterministic mode): all details together are counted with the life
+  /// engines of only this many, the largest. 0 = every detail's at once.
+  int concurrent_life_estimates = 0;
 };
 
 /// 75 % of the machine's physical memory (sysconf(_SC_PHYS_PAGES) · sysconf(_SC_PAGE_SIZE)); 8 GiB

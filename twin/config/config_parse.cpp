@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <system_error>
 
@@ -781,9 +782,14 @@ void check_resources(Context& ctx, const std::vector<Sized>& sized) {
   bool refused = false;
   double total = 0.0;
   const Sized* largest = nullptr;
+  // Each detail's live engine and model, plus the life engines of at most
+  // concurrent_life_estimates details at once (the largest; every detail's when 0).
+  std::vector<double> life_bytes;
   for (const Sized& s : sized) {
     const ResourceEstimate& e = s.estimate;
-    total += e.bytes;
+    const double life = (e.engines - 1) * e.engine_bytes;
+    total += e.bytes - life;
+    life_bytes.push_back(life);
     if (largest == nullptr || e.bytes > largest->estimate.bytes) largest = &s;
     const double index =
         std::max({2.0 * e.bonds, e.unknowns, e.matrix_nonzeros, e.factor_nonzeros});
@@ -799,12 +805,23 @@ void check_resources(Context& ctx, const std::vector<Sized>& sized) {
       refused = true;
     }
   }
+  std::sort(life_bytes.begin(), life_bytes.end(), std::greater<>());
+  const std::size_t estimating =
+      ctx.concurrent_life_estimates > 0
+          ? std::min(life_bytes.size(), static_cast<std::size_t>(ctx.concurrent_life_estimates))
+          : life_bytes.size();
+  for (std::size_t i = 0; i < estimating; ++i) total += life_bytes[i];
   if (!refused && largest != nullptr && ctx.max_memory_bytes > 0 && total > limit) {
+    const std::string at_once = ctx.concurrent_life_estimates > 0
+                                    ? " (remaining-life simulations of at most " +
+                                          std::to_string(ctx.concurrent_life_estimates) +
+                                          " detail(s) at once)"
+                                    : "";
     refuse(ctx, *largest,
            "the " + std::to_string(sized.size()) + " details would need an estimated " +
-               format_bytes(total) + " together, more than the memory limit " + limit_text +
-               "; this, the largest, needs " + format_bytes(largest->estimate.bytes) + " (" +
-               describe(largest->estimate) + ")" + remedy + ", or raise the limit");
+               format_bytes(total) + " together" + at_once + ", more than the memory limit " +
+               limit_text + "; this, the largest, needs " + format_bytes(largest->estimate.bytes) +
+               " (" + describe(largest->estimate) + ")" + remedy + ", or raise the limit");
   }
 }
 

@@ -31,6 +31,7 @@ struct Context {
   bool default_memory_limit = false;  ///< max_memory_bytes is default_memory_limit()
   /// ConfigLimits::served_details (empty: every detail is served).
   std::vector<std::string> served_details{};
+  int concurrent_life_estimates = 0;  ///< ConfigLimits::concurrent_life_estimates
   void error(const toml::source_region& where, std::string path, std::string reason);
   [[nodiscard]] SourceRef ref(const toml::node& node, std::string path) const;
 };

@@ -93,8 +93,7 @@ double resident_bytes() {
 
 /// DaemonOptions::worker_threads resolved: 0 = the cores (at least 2), never more than details.
 int worker_thread_count(int requested, std::size_t details) {
-  const int cores = static_cast<int>(std::thread::hardware_concurrency());
-  const int wanted = requested > 0 ? requested : std::max(2, cores);
+  const int wanted = default_worker_threads(requested);
   return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
                                                   std::max<std::size_t>(1, details)));
 }
@@ -102,13 +101,22 @@ int worker_thread_count(int requested, std::size_t details) {
 /// DaemonOptions::life_threads resolved: 0 = half the cores (at least 1), never more than the
 /// details with estimates.
 int life_thread_count(int requested, std::size_t estimating) {
-  const int cores = static_cast<int>(std::thread::hardware_concurrency());
-  const int wanted = requested > 0 ? requested : std::max(1, cores / 2);
+  const int wanted = default_life_threads(requested);
   return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
                                                   std::max<std::size_t>(1, estimating)));
 }
 
 }  // namespace
+
+int default_worker_threads(int requested) {
+  return requested > 0 ? requested
+                       : std::max(2, static_cast<int>(std::thread::hardware_concurrency()));
+}
+
+int default_life_threads(int requested) {
+  return requested > 0 ? requested
+                       : std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / 2);
+}
 
 std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
                                        const std::string& detail_id) {

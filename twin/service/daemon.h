@@ -87,6 +87,12 @@ struct DaemonOptions {
   std::function<void(const std::string& detail_id)> before_apply;
 };
 
+/// DaemonOptions::worker_threads and life_threads as given (0 = the default) resolved to a
+/// count, before the cap by the number of details: the cores (at least 2) and half the cores
+/// (at least 1).
+[[nodiscard]] int default_worker_threads(int requested);
+[[nodiscard]] int default_life_threads(int requested);
+
 class Daemon {
  public:
   Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options);

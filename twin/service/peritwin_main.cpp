@@ -94,8 +94,14 @@ int main(int argc, char** argv) {
   spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
   spdlog::set_level(spdlog::level::from_str(log_level));
 
+  // Remaining-life simulations run at most this many details at once: on the shared life
+  // threads, or in deterministic mode on the worker threads (docs/limits.md).
+  const int concurrent_life_estimates = deterministic
+                                            ? peritwin::twin::default_worker_threads(worker_threads)
+                                            : peritwin::twin::default_life_threads(life_threads);
   const auto loaded = peritwin::twin::load_config(
-      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0), served_details});
+      config_file, {peritwin::twin::parse_byte_size(max_memory).value_or(0), served_details,
+                    concurrent_life_estimates});
   if (!loaded.ok()) {
     for (const auto& e : loaded.errors) spdlog::error("config: {}", e.message());
     return kExitUsage;
