@@ -323,6 +323,30 @@ TEST(Ties, MalformedTiesAreRejected) {
   }
 }
 
+/// Rank-one update columns shaped like bonds: every `stride`-th bond's free DOFs at both ends,
+/// with random values of order 0.3·√K_ff (seeded), so that an update stays in the pattern.
+std::vector<SparseCholesky::Column> random_bond_columns(const testing::TensionPlate& plate,
+                                                        const StaticSolver& solver,
+                                                        BondIndex stride, unsigned seed) {
+  const SparseMatrix& upper = solver.stiffness_upper();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  std::vector<SparseCholesky::Column> columns;
+  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += stride) {
+    SparseCholesky::Column col;
+    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
+      for (std::size_t c = 0; c < 2; ++c) {
+        const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
+        if (f < 0) continue;
+        col.rows.push_back(f);
+        col.values.push_back(0.3 * std::sqrt(upper.coeff(f, f)) * uni(rng));
+      }
+    }
+    if (!col.rows.empty()) columns.push_back(std::move(col));
+  }
+  return columns;
+}
+
 TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
   // The simplicial LDLᵀ solve after modify() is peritwin's own (two elimination subtrees on two
   // threads): equal to CHOLMOD's solve to round-off, and bit-identical on one or two threads.
@@ -371,21 +395,8 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   const SparseMatrix& upper = solver.stiffness_upper();
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::vector<SparseCholesky::Column> added;  // bond vectors (pairs in the pattern: no fill)
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += 37) {
-    SparseCholesky::Column col;
-    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
-      for (std::size_t c = 0; c < 2; ++c) {
-        const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
-        if (f < 0) continue;
-        col.rows.push_back(f);
-        col.values.push_back(0.3 * std::sqrt(upper.coeff(f, f)) * uni(rng));
-      }
-    }
-    if (!col.rows.empty()) added.push_back(std::move(col));
-  }
+  // Bond vectors (pairs in the pattern: no fill).
+  const std::vector<SparseCholesky::Column> added = random_bond_columns(plate, solver, 37, 5);
   ASSERT_GT(added.size(), 40u);  // more than one sweep of 16 ranks
   const std::vector<SparseCholesky::Column> removed(added.begin(),
                                                     added.begin() + added.size() / 2);
@@ -436,21 +447,8 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
   ASSERT_TRUE(solver.solve().ok());
   const SparseMatrix& upper = solver.stiffness_upper();
   const int n = static_cast<int>(upper.rows());
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::vector<SparseCholesky::Column> bonds;  // bond vectors: in the pattern, no fill
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += 53) {
-    SparseCholesky::Column col;
-    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
-      for (std::size_t c = 0; c < 2; ++c) {
-        const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
-        if (f < 0) continue;
-        col.rows.push_back(f);
-        col.values.push_back(0.3 * std::sqrt(upper.coeff(f, f)) * uni(rng));
-      }
-    }
-    if (!col.rows.empty()) bonds.push_back(std::move(col));
-  }
+  // Bond vectors: in the pattern, no fill.
+  const std::vector<SparseCholesky::Column> bonds = random_bond_columns(plate, solver, 53, 7);
   ASSERT_GT(bonds.size(), 20u);
   SparseCholesky by_cholmod, packed;
   ASSERT_TRUE(by_cholmod.factorize(upper).ok());
