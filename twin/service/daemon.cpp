@@ -91,19 +91,21 @@ double resident_bytes() {
                 : 0.0;
 }
 
+/// A thread count of at least 1 and at most `users` (details, or details with estimates).
+int capped_threads(int wanted, std::size_t users) {
+  return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(std::max(1, wanted)), 1,
+                                                  std::max<std::size_t>(1, users)));
+}
+
 /// DaemonOptions::worker_threads resolved: 0 = the cores (at least 2), never more than details.
 int worker_thread_count(int requested, std::size_t details) {
-  const int wanted = default_worker_threads(requested);
-  return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
-                                                  std::max<std::size_t>(1, details)));
+  return capped_threads(default_worker_threads(requested), details);
 }
 
 /// DaemonOptions::life_threads resolved: 0 = half the cores (at least 1), never more than the
 /// details with estimates.
 int life_thread_count(int requested, std::size_t estimating) {
-  const int wanted = default_life_threads(requested);
-  return static_cast<int>(std::clamp<std::size_t>(static_cast<std::size_t>(wanted), 1,
-                                                  std::max<std::size_t>(1, estimating)));
+  return capped_threads(default_life_threads(requested), estimating);
 }
 
 }  // namespace
