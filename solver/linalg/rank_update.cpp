@@ -4,10 +4,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "solver/linalg/cholesky_impl.h"
 
@@ -109,6 +112,224 @@ inline int column_scalars(const int* lp, double* lx, double* w, int j, int ranks
   return count;
 }
 
+/// A column of the fused update in the factor's ordering, its entries sorted by row, with its sign
+/// (+1 update, −1 downdate).
+struct Rank {
+  std::vector<std::pair<int, double>> entries;
+  double sign;
+};
+
+/// Permuted, sorted columns with their signs, updates first. The fused sweep needs the rows of
+/// each column below its first one to be in that column of L (no fill; true for the bond
+/// vectors, whose pairs are all in the matrix's pattern); returns false otherwise (CHOLMOD then
+/// does it).
+bool fused_ranks(const std::vector<int>& inverse_perm, const ldlt::FactorView& l,
+                 const std::vector<SparseCholesky::Column>& added,
+                 const std::vector<SparseCholesky::Column>& removed, std::vector<Rank>& ranks) {
+  bool fits = true;
+  for (int pass = 0; pass < 2 && fits; ++pass) {
+    for (const auto& c : pass == 0 ? added : removed) {
+      Rank rank{{}, pass == 0 ? 1.0 : -1.0};
+      for (std::size_t e = 0; e < c.rows.size(); ++e) {
+        rank.entries.emplace_back(inverse_perm[static_cast<std::size_t>(c.rows[e])], c.values[e]);
+      }
+      std::sort(rank.entries.begin(), rank.entries.end());
+      if (rank.entries.empty()) continue;
+      const int first = rank.entries.front().first;
+      const int* rows = l.rows_of(first) + 1;
+      const int* end = l.rows_of(first) + l.lnz[first];
+      for (std::size_t e = 1; e < rank.entries.size() && fits; ++e) {
+        fits = rank.entries[e].first != rank.entries[e - 1].first &&
+               std::binary_search(rows, end, rank.entries[e].first);
+      }
+      ranks.push_back(std::move(rank));
+    }
+  }
+  return fits;
+}
+
+/// What a sweep reads and writes: the factor's columns, the workspace W (n × kGroup, row j's
+/// kGroup entries together), and the tracked forward solve y with its change δ.
+struct Sweep {
+  ldlt::FactorView l;
+  double* w;
+  int tracked;
+  double* delta;
+  double* fy;
+  [[nodiscard]] const int* rows_of(int j) const { return l.rows_of(j); }
+  [[nodiscard]] double* values_of(int j) const { return l.lx + l.lp[j]; }
+};
+
+/// Where a group's sweep goes: loads the group's ranks (from `first` on) into W and α, and
+/// returns the union of their elimination-tree paths in increasing order in `path`. Columns
+/// reached for the first time in this call of modify_fused (mark ≠ all_stamp) go to `touched`.
+void group_path(const Sweep& s, const std::vector<int>& parent, const std::vector<Rank>& ranks,
+                std::size_t first, int group, int gstamp, double* alpha,
+                std::vector<int>& group_mark, std::vector<int>& mark, int all_stamp,
+                std::vector<int>& touched, std::vector<int>& path) {
+  path.clear();
+  for (int r = 0; r < group; ++r) {
+    const Rank& rank = ranks[first + static_cast<std::size_t>(r)];
+    alpha[r] = rank.sign;
+    for (const auto& [row, value] : rank.entries) {
+      s.w[static_cast<std::size_t>(row) * kGroup + static_cast<std::size_t>(r)] = value;
+    }
+    for (int j = rank.entries.front().first;
+         j >= 0 && group_mark[static_cast<std::size_t>(j)] != gstamp;
+         j = parent[static_cast<std::size_t>(j)]) {
+      group_mark[static_cast<std::size_t>(j)] = gstamp;
+      path.push_back(j);
+      if (mark[static_cast<std::size_t>(j)] != all_stamp) {
+        mark[static_cast<std::size_t>(j)] = all_stamp;
+        touched.push_back(j);
+      }
+    }
+  }
+  std::sort(path.begin(), path.end());
+}
+
+/// One group along its path on the calling thread.
+void sweep_one_thread(const Sweep& s, const std::vector<int>& path, int group, double* alpha) {
+  RankScalars active[kGroup];
+  double y_old[3], y_new[3];
+  for (int j : path) {
+    const int count = column_scalars(s.l.lp, s.l.lx, s.w, j, group, alpha, active);
+    const bool moved = forward_pivot(s.tracked, j, s.fy, s.delta, y_old, y_new);
+    if (count > 0 || moved) {
+      apply_column(s.tracked, s.rows_of(j), s.values_of(j), s.w, 1, s.l.lnz[j], active, count,
+                   s.delta, y_old, y_new);
+    }
+  }
+}
+
+/// The split row S of the two-thread sweep: balances the path's entries below S against the
+/// others (rows assumed spread evenly between a column's first and last row).
+int balanced_split(const Sweep& s, const std::vector<int>& path, double entries, int n) {
+  auto below = [&](int split) {
+    double count = 0.0;
+    for (int j : path) {
+      if (j >= split) break;
+      const int len = s.l.lnz[j] - 1;
+      if (len <= 0) continue;
+      const int first = s.rows_of(j)[1];
+      const int last = s.rows_of(j)[s.l.lnz[j] - 1];
+      const double f = last > first ? static_cast<double>(split - first) / (last - first + 1)
+                                    : (split > first ? 1.0 : 0.0);
+      count += len * std::clamp(f, 0.0, 1.0);
+    }
+    return count;
+  };
+  int lo_split = path.front(), hi_split = n;
+  while (hi_split - lo_split > 1) {
+    const int mid = lo_split + (hi_split - lo_split) / 2;
+    (below(mid) < 0.5 * entries ? lo_split : hi_split) = mid;
+  }
+  return hi_split;
+}
+
+/// What thread 0 publishes to thread 1 for the path's columns below the split row: each column's
+/// scalars, active count, forward pivots (y_old[3], y_new[3]) and whether its y moved; `ready`
+/// counts the columns published. Kept across groups (reused storage).
+struct Handoff {
+  std::vector<RankScalars> scalars;
+  std::vector<int> counts;
+  std::vector<double> pivots;
+  std::vector<std::uint8_t> moves;
+  std::atomic<int> ready{0};
+  int split = 0;  ///< S: rows below it are thread 0's
+  int k0 = 0;     ///< the path's first column at or after S
+};
+
+/// Thread 0: the scalars of the path's columns below S (it owns w_j there), published one by one,
+/// and their rows below S.
+void sweep_lower(const Sweep& s, const std::vector<int>& path, int group, double* alpha,
+                 Handoff& h) {
+  for (int k = 0; k < h.k0; ++k) {
+    const int j = path[static_cast<std::size_t>(k)];
+    RankScalars* active = h.scalars.data() + static_cast<std::size_t>(k) * kGroup;
+    const int count = column_scalars(s.l.lp, s.l.lx, s.w, j, group, alpha, active);
+    double* piv = h.pivots.data() + static_cast<std::size_t>(k) * 6;
+    const bool moved = forward_pivot(s.tracked, j, s.fy, s.delta, piv, piv + 3);
+    h.counts[static_cast<std::size_t>(k)] = count;
+    h.moves[static_cast<std::size_t>(k)] = moved ? 1 : 0;
+    h.ready.store(k + 1, std::memory_order_release);
+    if (count == 0 && !moved) continue;
+    const int* rows = s.rows_of(j);
+    const int cut = static_cast<int>(std::lower_bound(rows + 1, rows + s.l.lnz[j], h.split) - rows);
+    apply_column(s.tracked, rows, s.values_of(j), s.w, 1, cut, active, count, s.delta, piv,
+                 piv + 3);
+  }
+}
+
+/// Thread 1: the rows from S on of the columns below S, with thread 0's published scalars; then
+/// the columns from S on, alone.
+void sweep_upper(const Sweep& s, const std::vector<int>& path, int group, double* alpha,
+                 Handoff& h) {
+  const int columns = static_cast<int>(path.size());
+  for (int k = 0; k < columns; ++k) {
+    const int j = path[static_cast<std::size_t>(k)];
+    const RankScalars* active;
+    int count;
+    int from;
+    bool moved;
+    const double* piv;
+    RankScalars own[kGroup];
+    double own_pivot[6];
+    if (k < h.k0) {
+      for (int spins = 0; h.ready.load(std::memory_order_acquire) <= k; ++spins) {
+        if (spins > 2000) std::this_thread::yield();
+      }
+      active = h.scalars.data() + static_cast<std::size_t>(k) * kGroup;
+      count = h.counts[static_cast<std::size_t>(k)];
+      moved = h.moves[static_cast<std::size_t>(k)] != 0;
+      piv = h.pivots.data() + static_cast<std::size_t>(k) * 6;
+      const int* rows = s.rows_of(j);
+      from = static_cast<int>(std::lower_bound(rows + 1, rows + s.l.lnz[j], h.split) - rows);
+    } else {
+      if (k == h.k0) {  // thread 0 is done with α (it published column k0 − 1 last)
+        for (int spins = 0; h.ready.load(std::memory_order_acquire) < h.k0; ++spins) {
+          if (spins > 2000) std::this_thread::yield();
+        }
+      }
+      count = column_scalars(s.l.lp, s.l.lx, s.w, j, group, alpha, own);
+      moved = forward_pivot(s.tracked, j, s.fy, s.delta, own_pivot, own_pivot + 3);
+      piv = own_pivot;
+      active = own;
+      from = 1;
+    }
+    if (count > 0 || moved) {
+      apply_column(s.tracked, s.rows_of(j), s.values_of(j), s.w, from, s.l.lnz[j], active, count,
+                   s.delta, piv, piv + 3);
+    }
+  }
+}
+
+/// One group along its path on two threads. Rows below the split row S belong to thread 0, the
+/// others to thread 1. For the path's columns below S, thread 0 computes the scalars (it owns
+/// w_j) and publishes them; thread 1 follows with its rows. Columns from S on are thread 1's
+/// alone. Every entry gets the same operations as on one thread.
+void sweep_two_threads(const Sweep& s, const std::vector<int>& path, int group, double* alpha,
+                       double entries, Handoff& h) {
+  const int columns = static_cast<int>(path.size());
+  h.split = balanced_split(s, path, entries, s.l.n);
+  h.k0 = static_cast<int>(std::lower_bound(path.begin(), path.end(), h.split) - path.begin());
+  h.scalars.resize(static_cast<std::size_t>(columns) * kGroup);
+  h.counts.assign(static_cast<std::size_t>(columns), 0);
+  h.pivots.resize(static_cast<std::size_t>(columns) * 6);  // y_old[3], y_new[3] per column
+  h.moves.assign(static_cast<std::size_t>(columns), 0);
+  h.ready.store(0);
+  std::thread helper;
+  try {
+    helper = std::thread([&] { sweep_upper(s, path, group, alpha, h); });
+  } catch (const std::system_error&) {
+    sweep_lower(s, path, group, alpha, h);
+    sweep_upper(s, path, group, alpha, h);
+    return;
+  }
+  sweep_lower(s, path, group, alpha, h);
+  helper.join();
+}
+
 }  // namespace
 
 Status SparseCholesky::modify_fused(const std::vector<Column>& added,
@@ -126,51 +347,18 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
     for (std::size_t k = 0; k < n; ++k)
       impl.inverse_perm[static_cast<std::size_t>(l.perm[k])] = static_cast<int>(k);
   }
-  const int* lp = l.lp;
-  const int* lnz = l.lnz;
-  double* lx = l.lx;
-  // Column j's rows and values, indexed from its diagonal (q = 0).
-  auto rows_of = [&](int j) { return l.rows_of(j); };
-  auto values_of = [&](int j) { return lx + lp[j]; };
-  // Permuted, sorted columns with their signs, updates first. The fused sweep needs the rows of
-  // each column below its first one to be in that column of L (no fill; true for the bond
-  // vectors, whose pairs are all in the matrix's pattern); otherwise CHOLMOD does it.
-  struct Rank {
-    std::vector<std::pair<int, double>> entries;
-    double sign;
-  };
   std::vector<Rank> ranks;
-  bool fits = impl.schedule.sorted && impl.schedule.nested;
-  for (int pass = 0; pass < 2 && fits; ++pass) {
-    for (const auto& c : pass == 0 ? added : removed) {
-      Rank rank{{}, pass == 0 ? 1.0 : -1.0};
-      for (std::size_t e = 0; e < c.rows.size(); ++e) {
-        rank.entries.emplace_back(impl.inverse_perm[static_cast<std::size_t>(c.rows[e])],
-                                  c.values[e]);
-      }
-      std::sort(rank.entries.begin(), rank.entries.end());
-      if (rank.entries.empty()) continue;
-      const int first = rank.entries.front().first;
-      const int* rows = rows_of(first) + 1;
-      const int* end = rows_of(first) + lnz[first];
-      for (std::size_t e = 1; e < rank.entries.size() && fits; ++e) {
-        fits = rank.entries[e].first != rank.entries[e - 1].first &&
-               std::binary_search(rows, end, rank.entries[e].first);
-      }
-      ranks.push_back(std::move(rank));
-    }
-  }
+  const bool fits = impl.schedule.sorted && impl.schedule.nested &&
+                    fused_ranks(impl.inverse_perm, l, added, removed, ranks);
   if (!fits) {
     Status r = modify(added, true);
     if (r.ok()) r = modify(removed, false);
     return r;
   }
   if (impl.w.size() != n * kGroup) impl.w.assign(n * kGroup, 0.0);
-  double* w = impl.w.data();
   const int tracked = impl.forward_valid ? static_cast<int>(impl.tracked_rhs.cols()) : 0;
   if (impl.delta.size() != n * 3) impl.delta.assign(n * 3, 0.0);
-  double* delta = impl.delta.data();
-  double* fy = impl.forward_y.data();
+  const Sweep sweep{l, impl.w.data(), tracked, impl.delta.data(), impl.forward_y.data()};
   if (++impl.stamp == 0) {
     std::fill(impl.mark.begin(), impl.mark.end(), 0);
     impl.stamp = 1;
@@ -179,151 +367,26 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
   std::vector<int> touched;
   std::vector<int> path;
   std::vector<int> group_mark(n, 0);
-  std::vector<RankScalars> scalars;
-  std::vector<int> counts;
-  std::vector<double> pivots;
-  std::vector<std::uint8_t> moves;
+  Handoff handoff;
   for (std::size_t g0 = 0; g0 < ranks.size(); g0 += kGroup) {
     const int group = static_cast<int>(std::min<std::size_t>(kGroup, ranks.size() - g0));
     double alpha[kGroup];
-    path.clear();
     const int gstamp = static_cast<int>(g0 / kGroup) + 1;
-    for (int r = 0; r < group; ++r) {
-      const Rank& rank = ranks[g0 + static_cast<std::size_t>(r)];
-      alpha[r] = rank.sign;
-      for (const auto& [row, value] : rank.entries) {
-        w[static_cast<std::size_t>(row) * kGroup + static_cast<std::size_t>(r)] = value;
-      }
-      for (int j = rank.entries.front().first;
-           j >= 0 && group_mark[static_cast<std::size_t>(j)] != gstamp;
-           j = impl.schedule.parent[static_cast<std::size_t>(j)]) {
-        group_mark[static_cast<std::size_t>(j)] = gstamp;
-        path.push_back(j);
-        if (impl.mark[static_cast<std::size_t>(j)] != all_stamp) {
-          impl.mark[static_cast<std::size_t>(j)] = all_stamp;
-          touched.push_back(j);
-        }
-      }
-    }
-    std::sort(path.begin(), path.end());
-    const int columns = static_cast<int>(path.size());
+    group_path(sweep, impl.schedule.parent, ranks, g0, group, gstamp, alpha, group_mark, impl.mark,
+               all_stamp, touched, path);
     double entries = 0.0;
-    for (int j : path) entries += lnz[j];
+    for (int j : path) entries += l.lnz[j];
     const bool threaded =
         impl.solve_threads == 2 ||
         (impl.solve_threads == 0 && entries > 200'000 && SparseCholesky::automatic_two_threads());
-    if (!threaded) {
-      RankScalars active[kGroup];
-      double y_old[3], y_new[3];
-      for (int j : path) {
-        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
-        const bool moved = forward_pivot(tracked, j, fy, delta, y_old, y_new);
-        if (count > 0 || moved) {
-          apply_column(tracked, rows_of(j), values_of(j), w, 1, lnz[j], active, count, delta, y_old,
-                       y_new);
-        }
-      }
-      continue;
+    if (threaded) {
+      sweep_two_threads(sweep, path, group, alpha, entries, handoff);
+    } else {
+      sweep_one_thread(sweep, path, group, alpha);
     }
-    // Two threads: rows below the split row S belong to thread 0, the others to thread 1. For the
-    // path's columns below S, thread 0 computes the scalars (it owns w_j) and publishes them;
-    // thread 1 follows with its rows. Columns from S on are thread 1's alone. Every entry gets
-    // the same operations as on one thread. S balances the entries (rows assumed spread evenly
-    // between a column's first and last row).
-    auto below = [&](int split) {
-      double count = 0.0;
-      for (int j : path) {
-        if (j >= split) break;
-        const int len = lnz[j] - 1;
-        if (len <= 0) continue;
-        const int first = rows_of(j)[1];
-        const int last = rows_of(j)[lnz[j] - 1];
-        const double f = last > first ? static_cast<double>(split - first) / (last - first + 1)
-                                      : (split > first ? 1.0 : 0.0);
-        count += len * std::clamp(f, 0.0, 1.0);
-      }
-      return count;
-    };
-    int lo_split = path.front(), hi_split = static_cast<int>(n);
-    while (hi_split - lo_split > 1) {
-      const int mid = lo_split + (hi_split - lo_split) / 2;
-      (below(mid) < 0.5 * entries ? lo_split : hi_split) = mid;
-    }
-    const int split = hi_split;
-    const int k0 =
-        static_cast<int>(std::lower_bound(path.begin(), path.end(), split) - path.begin());
-    scalars.resize(static_cast<std::size_t>(columns) * kGroup);
-    counts.assign(static_cast<std::size_t>(columns), 0);
-    pivots.resize(static_cast<std::size_t>(columns) * 6);  // y_old[3], y_new[3] per column
-    moves.assign(static_cast<std::size_t>(columns), 0);
-    std::atomic<int> ready{0};
-    auto thread0 = [&] {
-      for (int k = 0; k < k0; ++k) {
-        const int j = path[static_cast<std::size_t>(k)];
-        RankScalars* active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
-        const int count = column_scalars(lp, lx, w, j, group, alpha, active);
-        double* piv = pivots.data() + static_cast<std::size_t>(k) * 6;
-        const bool moved = forward_pivot(tracked, j, fy, delta, piv, piv + 3);
-        counts[static_cast<std::size_t>(k)] = count;
-        moves[static_cast<std::size_t>(k)] = moved ? 1 : 0;
-        ready.store(k + 1, std::memory_order_release);
-        if (count == 0 && !moved) continue;
-        const int* rows = rows_of(j);
-        const int cut = static_cast<int>(std::lower_bound(rows + 1, rows + lnz[j], split) - rows);
-        apply_column(tracked, rows, values_of(j), w, 1, cut, active, count, delta, piv, piv + 3);
-      }
-    };
-    auto thread1 = [&] {
-      for (int k = 0; k < columns; ++k) {
-        const int j = path[static_cast<std::size_t>(k)];
-        const RankScalars* active;
-        int count;
-        int from;
-        bool moved;
-        const double* piv;
-        RankScalars own[kGroup];
-        double own_pivot[6];
-        if (k < k0) {
-          for (int spins = 0; ready.load(std::memory_order_acquire) <= k; ++spins) {
-            if (spins > 2000) std::this_thread::yield();
-          }
-          active = scalars.data() + static_cast<std::size_t>(k) * kGroup;
-          count = counts[static_cast<std::size_t>(k)];
-          moved = moves[static_cast<std::size_t>(k)] != 0;
-          piv = pivots.data() + static_cast<std::size_t>(k) * 6;
-          const int* rows = rows_of(j);
-          from = static_cast<int>(std::lower_bound(rows + 1, rows + lnz[j], split) - rows);
-        } else {
-          if (k == k0) {  // thread 0 is done with α (it published column k0 − 1 last)
-            for (int spins = 0; ready.load(std::memory_order_acquire) < k0; ++spins) {
-              if (spins > 2000) std::this_thread::yield();
-            }
-          }
-          count = column_scalars(lp, lx, w, j, group, alpha, own);
-          moved = forward_pivot(tracked, j, fy, delta, own_pivot, own_pivot + 3);
-          piv = own_pivot;
-          active = own;
-          from = 1;
-        }
-        if (count > 0 || moved) {
-          apply_column(tracked, rows_of(j), values_of(j), w, from, lnz[j], active, count, delta,
-                       piv, piv + 3);
-        }
-      }
-    };
-    std::thread helper;
-    try {
-      helper = std::thread(thread1);
-    } catch (const std::system_error&) {
-      thread0();
-      thread1();
-      continue;
-    }
-    thread0();
-    helper.join();
   }
   for (int j : touched) {
-    impl.diagonal[static_cast<std::size_t>(j)] = lx[lp[j]];
+    impl.diagonal[static_cast<std::size_t>(j)] = l.lx[l.lp[j]];
   }
   if (!removed.empty()) {
     if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
