@@ -89,6 +89,151 @@ Point quarter_point(const BoundaryPiece& arc, long j) {
   }
 }
 
+/// A rounded corner: the tangent points on the two edges at its vertex and the arc's centre.
+struct Corner {
+  double tangent = 0.0;  ///< distance from the vertex to each tangent point
+  Point in, out, centre;
+  bool counterclockwise = true;
+};
+
+/// Each vertex on its own: finite, distinct from the previous one, a finite fillet radius >= 0,
+/// and an arc edge's radii at its two ends that agree.
+Status check_vertices(const std::vector<PolygonVertex>& vertices) {
+  const std::size_t n = vertices.size();
+  const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
+  for (std::size_t k = 0; k < n; ++k) {
+    const PolygonVertex& v = vertices[k];
+    const Point from = vertices[prev(k)].at;
+    if (!std::isfinite(v.at.x) || !std::isfinite(v.at.y)) {
+      return Error{vertex_name(k), "coordinates must be finite"};
+    }
+    if (same(v.at, from)) {
+      return Error{vertex_name(k), "coincides with the previous vertex " + vertex_name(prev(k))};
+    }
+    if (!(v.fillet >= 0.0) || !std::isfinite(v.fillet)) {
+      return Error{vertex_name(k), "the fillet radius must be finite and >= 0"};
+    }
+    if (v.edge != PolygonVertex::Edge::straight) {
+      const double r0 = point_distance(v.arc_centre, from);
+      const double r1 = point_distance(v.arc_centre, v.at);
+      if (!(r0 > 0.0)) {
+        return Error{vertex_name(k), "the arc centre coincides with the previous vertex"};
+      }
+      if (std::abs(r1 - r0) > 1e-6 * r0) {
+        return Error{vertex_name(k), "the arc ends " + number(r1) +
+                                         " m from its centre but starts (at vertex " +
+                                         vertex_name(prev(k)) + ") " + number(r0) +
+                                         " m from it: the radii must agree to 1e-6"};
+      }
+    }
+  }
+  return {};
+}
+
+/// Fillets: the tangent points on the two edges at the corner and the arc's centre; each straight
+/// edge must then hold its two ends' tangents.
+Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& vertices) {
+  const std::size_t n = vertices.size();
+  const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
+  const auto next = [n](std::size_t k) { return (k + 1) % n; };
+  std::vector<Corner> corners(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const PolygonVertex& v = vertices[k];
+    if (v.fillet == 0.0) continue;
+    if (v.edge != PolygonVertex::Edge::straight ||
+        vertices[next(k)].edge != PolygonVertex::Edge::straight) {
+      return Error{vertex_name(k), "a fillet needs straight edges on both sides of its vertex"};
+    }
+    const Point a = vertices[prev(k)].at;
+    const Point b = vertices[next(k)].at;
+    const double la = point_distance(v.at, a);
+    const double lb = point_distance(v.at, b);
+    const Point u1{(a.x - v.at.x) / la, (a.y - v.at.y) / la};
+    const Point u2{(b.x - v.at.x) / lb, (b.y - v.at.y) / lb};
+    const double cross = u1.x * u2.y - u1.y * u2.x;
+    const double dot = std::clamp(u1.x * u2.x + u1.y * u2.y, -1.0, 1.0);
+    if (cross == 0.0) {
+      return Error{vertex_name(k), "no corner to round: the edges at the vertex are collinear"};
+    }
+    const double half = 0.5 * std::acos(dot);  // half the corner angle θ between the edges
+    Corner& c = corners[k];
+    c.tangent = v.fillet / std::tan(half);  // tangent length r·cot(θ/2)
+    c.in = {v.at.x + c.tangent * u1.x, v.at.y + c.tangent * u1.y};
+    c.out = {v.at.x + c.tangent * u2.x, v.at.y + c.tangent * u2.y};
+    const double bx = u1.x + u2.x;
+    const double by = u1.y + u2.y;
+    const double bl = std::hypot(bx, by);
+    const double reach = v.fillet / std::sin(half);  // vertex to centre along the bisector
+    c.centre = {v.at.x + reach * bx / bl, v.at.y + reach * by / bl};
+    c.counterclockwise = orientation(c.centre, c.in, c.out) > 0;
+  }
+  for (std::size_t k = 0; k < n; ++k) {  // each straight edge holds its two ends' tangents
+    if (vertices[k].edge != PolygonVertex::Edge::straight) continue;
+    const double need = corners[prev(k)].tangent + corners[k].tangent;
+    const double have = point_distance(vertices[prev(k)].at, vertices[k].at);
+    if (need > have * (1.0 + 1e-12)) {
+      return Error{vertex_name(k), "the fillets need " + number(need) +
+                                       " m of the edge from vertex " + vertex_name(prev(k)) +
+                                       ", which is " + number(have) + " m long"};
+    }
+  }
+  return corners;
+}
+
+/// The boundary pieces in drawing order: each vertex's edge from the previous vertex (or the end
+/// of its fillet) to this vertex (or the start of its fillet), then this vertex's fillet arc.
+std::vector<BoundaryPiece> boundary_pieces(const std::vector<PolygonVertex>& vs,
+                                           const std::vector<Corner>& corners) {
+  const std::size_t n = vs.size();
+  const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
+  std::vector<BoundaryPiece> boundary;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PolygonVertex& v = vs[k];
+    const std::size_t p = prev(k);
+    const Point from = vs[p].fillet > 0 ? corners[p].out : vs[p].at;
+    const Point to = v.fillet > 0 ? corners[k].in : v.at;
+    const int index = static_cast<int>(k);
+    if (v.edge == PolygonVertex::Edge::straight) {
+      if (!same(from, to)) boundary.push_back({from, to, false, {}, 0.0, 0.0, 0.0, index});
+    } else {
+      boundary.push_back(
+          make_arc(from, to, v.arc_centre, v.edge == PolygonVertex::Edge::arc_ccw, index));
+    }
+    if (v.fillet > 0) {
+      boundary.push_back(make_arc(corners[k].in, corners[k].out, corners[k].centre,
+                                  corners[k].counterclockwise, index));
+    }
+  }
+  return boundary;
+}
+
+/// The flattened boundary (segments flat[i] -> flat[i + 1], closed) is simple: no segment turns
+/// back along the next one, and no two non-adjacent segments meet.
+Status check_simple(const std::vector<Point>& flat, const std::vector<int>& flat_vertex) {
+  const std::size_t m = flat.size();
+  for (std::size_t i = 0; i < m; ++i) {
+    const Point a0 = flat[i];
+    const Point a1 = flat[(i + 1) % m];
+    // Adjacent segments may only share their common end: no turning back along the same line.
+    const Point b1 = flat[(i + 2) % m];
+    if (orientation(a0, a1, b1) == 0.0 &&
+        (a1.x - a0.x) * (b1.x - a1.x) + (a1.y - a0.y) * (b1.y - a1.y) < 0.0) {
+      return Error{vertex_name(static_cast<std::size_t>(flat_vertex[i])),
+                   "the boundary turns back on itself"};
+    }
+    for (std::size_t j = i + 2; j < m; ++j) {
+      if (i == 0 && j + 1 == m) continue;  // the last segment is adjacent to the first
+      if (segments_cross(a0, a1, flat[j], flat[(j + 1) % m])) {
+        return Error{vertex_name(static_cast<std::size_t>(flat_vertex[j])),
+                     "the boundary crosses itself (the edge to this vertex meets the edge to "
+                     "vertex " +
+                         vertex_name(static_cast<std::size_t>(flat_vertex[i])) + ")"};
+      }
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 bool segments_cross(Point p1, Point p2, Point q1, Point q2) {
@@ -137,104 +282,22 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
     return failure("a polygon may have at most " + std::to_string(kMaxVertices) +
                    " vertices (got " + std::to_string(n) + ")");
   }
-  const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
-  const auto next = [n](std::size_t k) { return (k + 1) % n; };
-  for (std::size_t k = 0; k < n; ++k) {
-    const PolygonVertex& v = vertices[k];
-    const Point from = vertices[prev(k)].at;
-    if (!std::isfinite(v.at.x) || !std::isfinite(v.at.y)) {
-      return Error{vertex_name(k), "coordinates must be finite"};
-    }
-    if (same(v.at, from)) {
-      return Error{vertex_name(k), "coincides with the previous vertex " + vertex_name(prev(k))};
-    }
-    if (!(v.fillet >= 0.0) || !std::isfinite(v.fillet)) {
-      return Error{vertex_name(k), "the fillet radius must be finite and >= 0"};
-    }
-    if (v.edge != PolygonVertex::Edge::straight) {
-      const double r0 = point_distance(v.arc_centre, from);
-      const double r1 = point_distance(v.arc_centre, v.at);
-      if (!(r0 > 0.0)) {
-        return Error{vertex_name(k), "the arc centre coincides with the previous vertex"};
-      }
-      if (std::abs(r1 - r0) > 1e-6 * r0) {
-        return Error{vertex_name(k), "the arc ends " + number(r1) +
-                                         " m from its centre but starts (at vertex " +
-                                         vertex_name(prev(k)) + ") " + number(r0) +
-                                         " m from it: the radii must agree to 1e-6"};
-      }
-    }
-  }
-
-  // Fillets: the tangent points on the two edges at the corner and the arc's centre.
-  struct Corner {
-    double tangent = 0.0;  ///< distance from the vertex to each tangent point
-    Point in, out, centre;
-    bool counterclockwise = true;
-  };
-  std::vector<Corner> corners(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const PolygonVertex& v = vertices[k];
-    if (v.fillet == 0.0) continue;
-    if (v.edge != PolygonVertex::Edge::straight ||
-        vertices[next(k)].edge != PolygonVertex::Edge::straight) {
-      return Error{vertex_name(k), "a fillet needs straight edges on both sides of its vertex"};
-    }
-    const Point a = vertices[prev(k)].at;
-    const Point b = vertices[next(k)].at;
-    const double la = point_distance(v.at, a);
-    const double lb = point_distance(v.at, b);
-    const Point u1{(a.x - v.at.x) / la, (a.y - v.at.y) / la};
-    const Point u2{(b.x - v.at.x) / lb, (b.y - v.at.y) / lb};
-    const double cross = u1.x * u2.y - u1.y * u2.x;
-    const double dot = std::clamp(u1.x * u2.x + u1.y * u2.y, -1.0, 1.0);
-    if (cross == 0.0) {
-      return Error{vertex_name(k), "no corner to round: the edges at the vertex are collinear"};
-    }
-    const double half = 0.5 * std::acos(dot);  // half the corner angle θ between the edges
-    Corner& c = corners[k];
-    c.tangent = v.fillet / std::tan(half);  // tangent length r·cot(θ/2)
-    c.in = {v.at.x + c.tangent * u1.x, v.at.y + c.tangent * u1.y};
-    c.out = {v.at.x + c.tangent * u2.x, v.at.y + c.tangent * u2.y};
-    const double bx = u1.x + u2.x;
-    const double by = u1.y + u2.y;
-    const double bl = std::hypot(bx, by);
-    const double reach = v.fillet / std::sin(half);  // vertex to centre along the bisector
-    c.centre = {v.at.x + reach * bx / bl, v.at.y + reach * by / bl};
-    c.counterclockwise = orientation(c.centre, c.in, c.out) > 0;
-  }
-  for (std::size_t k = 0; k < n; ++k) {  // each straight edge holds its two ends' tangents
-    if (vertices[k].edge != PolygonVertex::Edge::straight) continue;
-    const double need = corners[prev(k)].tangent + corners[k].tangent;
-    const double have = point_distance(vertices[prev(k)].at, vertices[k].at);
-    if (need > have * (1.0 + 1e-12)) {
-      return Error{vertex_name(k), "the fillets need " + number(need) +
-                                       " m of the edge from vertex " + vertex_name(prev(k)) +
-                                       ", which is " + number(have) + " m long"};
-    }
-  }
+  if (Status valid = check_vertices(vertices); !valid) return valid.error();
+  auto corners = fillet_corners(vertices);
+  if (!corners) return corners.error();
 
   Polygon polygon;
   polygon.vertices_ = std::move(vertices);
-  const auto& vs = polygon.vertices_;
-  for (std::size_t k = 0; k < n; ++k) {
-    const PolygonVertex& v = vs[k];
-    const std::size_t p = prev(k);
-    const Point from = vs[p].fillet > 0 ? corners[p].out : vs[p].at;
-    const Point to = v.fillet > 0 ? corners[k].in : v.at;
-    const int index = static_cast<int>(k);
-    if (v.edge == PolygonVertex::Edge::straight) {
-      if (!same(from, to)) polygon.boundary_.push_back({from, to, false, {}, 0.0, 0.0, 0.0, index});
-    } else {
-      polygon.boundary_.push_back(
-          make_arc(from, to, v.arc_centre, v.edge == PolygonVertex::Edge::arc_ccw, index));
-    }
-    if (v.fillet > 0) {
-      polygon.boundary_.push_back(make_arc(corners[k].in, corners[k].out, corners[k].centre,
-                                           corners[k].counterclockwise, index));
-    }
-  }
+  polygon.boundary_ = boundary_pieces(polygon.vertices_, *corners);
+  std::vector<Point> flat;
+  std::vector<int> flat_vertex;  // the drawn vertex of the flat segment starting at flat[i]
+  polygon.trace_boundary(flat, flat_vertex);
+  if (Status simple = check_simple(flat, flat_vertex); !simple) return simple.error();
+  if (!(polygon.area() > 0.0)) return failure("the polygon encloses no area");
+  return polygon;
+}
 
+void Polygon::trace_boundary(std::vector<Point>& flat, std::vector<int>& flat_vertex) {
   // y-monotone parts for the inside test, the bounding box, and a flattened copy (arcs as chords
   // of at most 2°) for the self-intersection check.
   constexpr double inf = std::numeric_limits<double>::infinity();
@@ -245,14 +308,12 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
     box.x_max = std::max(box.x_max, q.x);
     box.y_max = std::max(box.y_max, q.y);
   };
-  std::vector<Point> flat;
-  std::vector<int> flat_vertex;  // the drawn vertex of the flat segment starting at flat[i]
-  for (const BoundaryPiece& piece : polygon.boundary_) {
+  for (const BoundaryPiece& piece : boundary_) {
     grow(piece.from);
     flat.push_back(piece.from);
     flat_vertex.push_back(piece.vertex);
     if (!piece.arc) {
-      polygon.monotone_.push_back({piece.from, piece.to, false, {}, 0.0, 1.0});
+      monotone_.push_back({piece.from, piece.to, false, {}, 0.0, 1.0});
       continue;
     }
     Point a = piece.from;
@@ -262,7 +323,7 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
       grow(q);
       if (j % 2 != 0) {  // top or bottom: a monotone part ends here
         const double mid = 0.5 * (angle_a + angle);
-        polygon.monotone_.push_back(
+        monotone_.push_back(
             {a, q, true, piece.centre, piece.radius, std::cos(mid) >= 0 ? 1.0 : -1.0});
         a = q;
         angle_a = angle;
@@ -270,7 +331,7 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
     }
     const double end = piece.start + piece.sweep;
     const double mid = 0.5 * (angle_a + end);
-    polygon.monotone_.push_back(
+    monotone_.push_back(
         {a, piece.to, true, piece.centre, piece.radius, std::cos(mid) >= 0 ? 1.0 : -1.0});
     const auto chords = static_cast<int>(std::ceil(std::abs(piece.sweep) / (2.0 * kPi / 180.0)));
     for (int c = 1; c < chords; ++c) {
@@ -280,31 +341,7 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
       flat_vertex.push_back(piece.vertex);
     }
   }
-  polygon.box_ = box;
-
-  const std::size_t m = flat.size();
-  for (std::size_t i = 0; i < m; ++i) {
-    const Point a0 = flat[i];
-    const Point a1 = flat[(i + 1) % m];
-    // Adjacent segments may only share their common end: no turning back along the same line.
-    const Point b1 = flat[(i + 2) % m];
-    if (orientation(a0, a1, b1) == 0.0 &&
-        (a1.x - a0.x) * (b1.x - a1.x) + (a1.y - a0.y) * (b1.y - a1.y) < 0.0) {
-      return Error{vertex_name(static_cast<std::size_t>(flat_vertex[i])),
-                   "the boundary turns back on itself"};
-    }
-    for (std::size_t j = i + 2; j < m; ++j) {
-      if (i == 0 && j + 1 == m) continue;  // the last segment is adjacent to the first
-      if (segments_cross(a0, a1, flat[j], flat[(j + 1) % m])) {
-        return Error{vertex_name(static_cast<std::size_t>(flat_vertex[j])),
-                     "the boundary crosses itself (the edge to this vertex meets the edge to "
-                     "vertex " +
-                         vertex_name(static_cast<std::size_t>(flat_vertex[i])) + ")"};
-      }
-    }
-  }
-  if (!(polygon.area() > 0.0)) return failure("the polygon encloses no area");
-  return polygon;
+  box_ = box;
 }
 
 bool Polygon::contains(Point p) const {

@@ -94,6 +94,10 @@ class Polygon {
   [[nodiscard]] double perimeter() const;
 
  private:
+  /// From boundary_: the y-monotone parts (monotone_), the bounding box (box_), and a flattened
+  /// copy for the self-intersection check (arcs as chords of at most 2°; flat_vertex[i] is the
+  /// drawn vertex of the segment starting at flat[i]).
+  void trace_boundary(std::vector<Point>& flat, std::vector<int>& flat_vertex);
   /// A y-monotone part of a piece: a segment, or an arc on one side (±1) of its centre.
   struct Monotone {
     Point a;
