@@ -2,16 +2,15 @@
 
 #include <poll.h>
 #include <spdlog/spdlog.h>
-#include <sys/eventfd.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <deque>
 #include <map>
+#include <optional>
 #include <thread>
 
 #include "messages/channels.h"
@@ -19,8 +18,8 @@
 #include "solver/linalg/sparse_cholesky.h"
 #include "twin/config/config_toml.h"
 #include "twin/config/resources.h"
-#include "twin/io/checkpoint_io.h"
 #include "twin/lcm/messages_io.h"
+#include "twin/service/checkpoint_store.h"
 #include "twin/service/duplicate_twin.h"
 
 namespace peritwin::twin {
@@ -29,11 +28,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr std::string_view kCheckpointPrefix = "checkpoint";
-constexpr std::size_t kCheckpointsKept = 3;
-/// Every detail gets a turn at least this often, for its chores (finished life estimates, timed
-/// checkpoints, the reject log summary), whether batches come or not.
-constexpr auto kWorkerChoresPeriod = std::chrono::milliseconds(100);
 /// A detail's mesh is published again at most this often, however many requests come.
 constexpr double kMeshRepublishS = 1.0;
 /// Window of STATUS reject_rate and of the reject log summary.
@@ -45,13 +39,6 @@ double seconds(Clock::duration d) { return std::chrono::duration<double>(d).coun
 std::int64_t now_ns() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
       .count();
-}
-
-template <class Message>
-std::vector<std::uint8_t> encode(const Message& m) {
-  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
-  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return bytes;
 }
 
 const char* verdict_name(Verdict v) {
@@ -125,54 +112,8 @@ std::filesystem::path detail_state_dir(const std::filesystem::path& state_dir,
   return state_dir / detail_id;
 }
 
-struct Daemon::Received {
-  std::vector<std::uint8_t> bytes;
-  std::int64_t recv_utime = 0;  ///< LCM's receive time, us since the Unix epoch
-};
-
-struct Daemon::Outgoing {
-  std::string channel;
-  std::vector<std::uint8_t> bytes;
-  std::int64_t recv_utime = 0;  ///< of the batch this STATE answers (latency), 0 otherwise
-};
-
-/// Messages the workers want published, taken out by the LCM thread; an eventfd wakes it.
-class Daemon::Outbox {
- public:
-  Outbox() : wake_fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {}
-  ~Outbox() {
-    if (wake_fd_ >= 0) ::close(wake_fd_);
-  }
-  Outbox(const Outbox&) = delete;
-  Outbox& operator=(const Outbox&) = delete;
-
-  void push(Outgoing m) {
-    {
-      std::lock_guard lock(mutex_);
-      queue_.push_back(std::move(m));
-    }
-    if (wake_fd_ >= 0) {
-      const std::uint64_t one = 1;
-      [[maybe_unused]] const auto n = ::write(wake_fd_, &one, sizeof one);
-    }
-  }
-  std::deque<Outgoing> take() {
-    if (wake_fd_ >= 0) {
-      std::uint64_t count = 0;
-      [[maybe_unused]] const auto n = ::read(wake_fd_, &count, sizeof count);
-    }
-    std::lock_guard lock(mutex_);
-    return std::exchange(queue_, {});
-  }
-  [[nodiscard]] int wake_fd() const { return wake_fd_; }
-
- private:
-  int wake_fd_;
-  std::mutex mutex_;
-  std::deque<Outgoing> queue_;
-};
-
-struct Daemon::Detail {
+/// A detail's queue (scheduler.h) with everything its turns work on.
+struct Daemon::Detail : DetailQueue {
   // Set up by start(); afterwards only the worker running the detail's turn touches these (one at
   // a time: Detail::scheduled) and stop(), after the workers have been joined.
   Daemon* daemon = nullptr;
@@ -187,24 +128,15 @@ struct Daemon::Detail {
   std::vector<peritwin_msgs::detail_mesh_t> mesh_chunks;
   Clock::time_point mesh_published{};
   std::string mesh_requester;  ///< of a request not answered yet; "" = none
-  std::filesystem::path state_dir;
-  std::int64_t checkpoint_seq = -1;  ///< state_seq of the newest checkpoint on disk
-  SeqBySource checkpointed;          ///< applied seq per source of that checkpoint
-  Clock::time_point last_checkpoint;
+  std::unique_ptr<CheckpointStore> checkpoints;
   Clock::time_point reject_log_window;  ///< start of the current 1-s reject log window
   std::int64_t rejects_unlogged = 0;    ///< rejects in the window after its first one
   std::map<std::string, std::int64_t> unlogged_by_kind;
   double max_batch_seconds = 60.0;
   double max_rejects_per_second = 10.0;
 
-  // Shared between the LCM thread and the workers, under `mutex`.
-  std::mutex mutex;
-  std::condition_variable idle;                ///< tick(): no longer scheduled
-  std::deque<Received> inbox;                  ///< received, not yet applied, in arrival order
+  // Shared between the LCM thread and the workers, under DetailQueue::mutex.
   std::deque<Clock::time_point> reject_times;  ///< rejects of the last kRejectRateWindowS
-  /// On the pool's ready queue or in a turn on a worker: never on two workers at once, so its
-  /// batches are applied one after another in arrival order.
-  bool scheduled = false;
 
   // Written by the worker, read by the heartbeat.
   std::atomic<std::int64_t> busy_since_ns{0};  ///< steady clock; 0 = idle
@@ -220,13 +152,10 @@ struct Daemon::Detail {
 };
 
 Daemon::Daemon(lcm::LCM& lcm, TwinConfig config, DaemonOptions options)
-    : lcm_(lcm),
-      config_(std::move(config)),
-      options_(std::move(options)),
-      outbox_(std::make_unique<Outbox>()) {}
+    : lcm_(lcm), config_(std::move(config)), options_(std::move(options)) {}
 
 Daemon::~Daemon() {
-  stop_workers();
+  scheduler_.stop();
   for (auto& d : details_) {
     if (d->subscription != nullptr) lcm_.unsubscribe(d->subscription);
     if (d->mesh_subscription != nullptr) lcm_.unsubscribe(d->mesh_subscription);
@@ -248,12 +177,7 @@ void Daemon::fail(std::string why) {
     if (error_.empty()) error_ = std::move(why);
   }
   failed_.store(true);
-  for (auto& d : details_) {
-    std::lock_guard lock(d->mutex);
-    d->idle.notify_all();
-  }
-  std::lock_guard lock(pool_mutex_);
-  pool_wake_.notify_all();
+  scheduler_.wake_all();
 }
 
 Status Daemon::start() {
@@ -262,7 +186,7 @@ Status Daemon::start() {
       "BLAS kernel: {} (states are bit-identical on the same kernel; "
       "OPENBLAS_CORETYPE pins it)",
       blas_kernel_name());
-  if (Status keys = load_keys(); !keys) return keys;
+  if (Status keys = ingest_.load_keys(config_.auth); !keys) return keys;
   const std::size_t n = config_.details.size();
   const int threads = worker_thread_count(options_.worker_threads, n);
   if (!options_.deterministic) {
@@ -304,6 +228,7 @@ Status Daemon::start() {
   for (auto& b : built) {
     if (!*b) return b->error();
     details_.push_back(std::move(**b));
+    scheduler_.add(*details_.back());
     if (Status s = subscribe_detail(*details_.back()); !s) return s;
   }
   for (auto& d : details_) {
@@ -314,50 +239,14 @@ Status Daemon::start() {
   }
   flush_outbox();
   heartbeat(true);
-  next_chores_ = Clock::now() + kWorkerChoresPeriod;
   // Several details: the pool spreads them over the cores, so a detail's re-solve keeps to one
   // thread instead of taking the core the other details' batches run on (same arithmetic).
   SparseCholesky::allow_automatic_two_threads(n <= 1);
-  for (int k = 0; k < threads; ++k) workers_.emplace_back([this] { run_worker(); });
+  scheduler_.start(threads, [this](DetailQueue& queue, const Received* batch) {
+    run_turn(static_cast<Detail&>(queue), batch);
+  });
   spdlog::info("{} worker thread(s) apply the batches of {} detail(s){}", threads, n,
                n > 1 ? ", each detail's re-solves on one thread" : "");
-  return {};
-}
-
-Status Daemon::load_keys() {
-  if (!config_.auth) {
-    spdlog::warn(
-        "no [auth] in the config: load batches are not authenticated and STATE/REJECT are not "
-        "signed, so anyone on the bus can feed or impersonate this twin (messages/README.md, "
-        "Authentication)");
-    return {};
-  }
-  const AuthConfig& auth = *config_.auth;
-  auto keys = messages::KeyRing::load(auth.key_file);
-  if (!keys) return failure("[auth] key_file: " + keys.error().message());
-  keys_ = std::move(*keys);
-  daemon_key_ = keys_->find(auth.daemon_key);
-  if (daemon_key_ == nullptr) {
-    return failure("[auth] daemon_key: the key file " + auth.key_file + " has no key \"" +
-                   auth.daemon_key + "\" to sign STATE and REJECT with");
-  }
-  if (!auth.sources.empty()) {
-    for (const auto& source : auth.sources) {
-      if (keys_->find(source) == nullptr) {
-        return failure("[auth] sources: the key file " + auth.key_file +
-                       " has no key for source \"" + source + "\"");
-      }
-    }
-    allowed_sources_ = auth.sources;
-  } else {
-    // Every key but the daemon's own: a producer never needs the daemon's key.
-    for (const auto& id : keys_->ids()) {
-      if (id != auth.daemon_key) allowed_sources_.push_back(id);
-    }
-  }
-  std::sort(allowed_sources_.begin(), allowed_sources_.end());
-  spdlog::info("authentication on: {} source(s) allowed, STATE and REJECT signed with key \"{}\"",
-               allowed_sources_.size(), auth.daemon_key);
   return {};
 }
 
@@ -381,26 +270,6 @@ void Daemon::log_crack_events(Detail& d) {
     }
   }
   d.logged_crack_id = newest;
-}
-
-Outcome Daemon::authenticate(const Received& r, const Decoded& decoded) const {
-  const std::string& source = decoded.batch->source_id;
-  if (!std::binary_search(allowed_sources_.begin(), allowed_sources_.end(), source)) {
-    return {Verdict::auth, "source_id",
-            "source \"" + source + "\" is not allowed: no key for it in the daemon's key file" +
-                (config_.auth->sources.empty() ? std::string() : " or not in [auth] sources")};
-  }
-  if (decoded.auth_tag.empty()) {
-    return {Verdict::auth, "auth_tag",
-            "unsigned: this daemon requires an HMAC-SHA256 tag with the key of source \"" + source +
-                "\""};
-  }
-  if (!messages::tag_matches(*keys_->find(source), r.bytes.data(), decoded.signed_size,
-                             decoded.auth_tag)) {
-    return {Verdict::auth, "auth_tag",
-            "wrong tag: not signed with the key of source \"" + source + "\""};
-  }
-  return {};
 }
 
 Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(const DetailConfig& config) {
@@ -450,22 +319,18 @@ Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(const DetailConfi
         "stretch); set [detail.limits] max_p",
         config.id);
   }
-  d->state_dir = detail_state_dir(options_.state_dir, config.id);
+  d->checkpoints = std::make_unique<CheckpointStore>(
+      config.id, detail_state_dir(options_.state_dir, config.id), options_.checkpoints);
   if (options_.checkpoints) {
-    if (Status resumed = resume(*d); !resumed) return resumed.error();
+    if (Status resumed = d->checkpoints->resume(*d->twin, options_.fresh_start); !resumed) {
+      return resumed.error();
+    }
     // Before the first STATE: a state dir we cannot write to would lose every batch applied
     // from here on at the next crash.
-    try {
-      std::filesystem::create_directories(d->state_dir);
-      const auto probe = d->state_dir / ".writable";
-      write_file_atomically(probe, "peritwin", true);
-      std::filesystem::remove(probe);
-    } catch (const std::exception& e) {
-      return failure("[" + config.id + "] the state dir " + d->state_dir.string() +
-                     " is not writable, so no checkpoint could be kept: " + e.what());
-    }
+    if (Status writable = d->checkpoints->check_writable(); !writable) return writable.error();
   }
-  d->last_checkpoint = d->reject_log_window = Clock::now();
+  d->reject_log_window = Clock::now();
+  d->checkpoints->restart_period(d->reject_log_window);
   if (options_.deterministic) d->twin->catch_up_life();
   if (options_.results) d->outputs = std::make_unique<DetailOutputs>(*d->twin);
   if (!options_.deterministic && config.life.estimates()) {
@@ -504,72 +369,15 @@ Status Daemon::subscribe_detail(Detail& d) {
   return {};
 }
 
-Status Daemon::resume(Detail& d) {
-  const auto files = list_checkpoints(d.state_dir, kCheckpointPrefix);
-  if (files.empty()) {
-    spdlog::info("[{}] no checkpoint in {}: starting from the virgin state", d.id,
-                 d.state_dir.string());
-    return {};
-  }
-  std::vector<std::string> refused;
-  for (const auto& file : files) {
-    CheckpointData data;
-    try {
-      data = read_checkpoint(file.path);
-    } catch (const CheckpointError& e) {
-      refused.emplace_back(e.what());
-      continue;
-    }
-    if (const Status matches = d.twin->check_checkpoint(data, static_cast<std::int64_t>(file.seq));
-        !matches) {
-      refused.push_back(file.path.string() + ": " + matches.error().message());
-      continue;
-    }
-    for (const auto& r : refused) spdlog::warn("[{}] skipping checkpoint {}", d.id, r);
-    if (const Status restored = d.twin->restore(data); !restored) {
-      return failure(file.path.string() + ": " + restored.error().message());
-    }
-    d.checkpoint_seq = d.twin->state_seq();
-    d.checkpointed = d.twin->applied();
-    spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", d.id,
-                 file.path.string(), d.twin->state_seq(), d.twin->engine().total_cycles(),
-                 d.twin->state_hash_hex());
-    const auto written = data.strings.find("blas_kernel");
-    if (written != data.strings.end() && written->second != blas_kernel_name()) {
-      spdlog::warn(
-          "[{}] the checkpoint was written on BLAS kernel {}, this process runs {}: the run "
-          "goes on correctly, but its states now agree with an uninterrupted run only to "
-          "rounding, not bit for bit (set OPENBLAS_CORETYPE={} to match)",
-          d.id, written->second, blas_kernel_name(), written->second);
-    }
-    return {};
-  }
-  std::string why = "[" + d.id + "] none of the " + std::to_string(files.size()) +
-                    " checkpoint(s) in " + d.state_dir.string() + " is valid:";
-  for (const auto& r : refused) why += "\n  " + r;
-  if (options_.fresh_start) {
-    spdlog::warn("{}", why);
-    spdlog::warn("[{}] --fresh-start: starting from the virgin state", d.id);
-    return {};
-  }
-  return failure(why +
-                 "\nStarting from the virgin state would silently forget every applied cycle: "
-                 "repair or move the files away, or start with --fresh-start");
-}
-
 void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
   if (failed()) return;
+  const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
+  if (scheduler_.receive(d, {{data, data + rbuf->data_size}, rbuf->recv_utime},
+                         static_cast<std::size_t>(std::max(1, options_.queue_capacity)))) {
+    return;
+  }
   {
     std::lock_guard lock(d.mutex);
-    if (d.inbox.size() < static_cast<std::size_t>(std::max(1, options_.queue_capacity))) {
-      const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
-      d.inbox.push_back({{data, data + rbuf->data_size}, rbuf->recv_utime});
-      if (!d.scheduled) {
-        d.scheduled = true;
-        schedule(d);
-      }
-      return;
-    }
     d.reject_times.push_back(Clock::now());
   }
   ++d.errors;
@@ -605,73 +413,18 @@ void Daemon::publish_mesh(Detail& d) {
   const std::int64_t utime = now_utime();
   for (auto& m : d.mesh_chunks) {
     m.utime = utime;
-    outbox_->push({d.mesh_channel, encode(m), 0});
+    outbox_.push({d.mesh_channel, encode(m), 0});
   }
 }
 
-void Daemon::schedule(Detail& d) {
-  std::lock_guard lock(pool_mutex_);
-  ready_.push_back(&d);
-  pool_wake_.notify_one();
-}
-
-void Daemon::run_worker() {
-  for (;;) {
-    Detail* d = nullptr;
-    bool chores_due = false;
-    {
-      std::unique_lock lock(pool_mutex_);
-      pool_wake_.wait_until(lock, next_chores_,
-                            [&] { return pool_stop_ || !ready_.empty() || failed(); });
-      if (failed()) return;
-      if (!ready_.empty()) {
-        d = ready_.front();
-        ready_.pop_front();
-      } else if (pool_stop_) {
-        return;  // every detail's inbox is empty: a detail with batches is always on ready_
-      } else if (Clock::now() >= next_chores_) {
-        next_chores_ = Clock::now() + kWorkerChoresPeriod;
-        chores_due = true;
-      }
-    }
-    if (chores_due) schedule_chores();
-    if (d != nullptr) run_turn(*d);
-  }
-}
-
-void Daemon::schedule_chores() {
-  for (auto& d : details_) {
-    std::lock_guard lock(d->mutex);
-    if (!d->scheduled) {
-      d->scheduled = true;
-      schedule(*d);
-    }
-  }
-}
-
-void Daemon::run_turn(Detail& d) {
-  std::optional<Received> received;
-  {
-    std::lock_guard lock(d.mutex);
-    if (!d.inbox.empty()) {
-      received = std::move(d.inbox.front());
-      d.inbox.pop_front();
-    }
-  }
-  if (received && !failed()) {
+void Daemon::run_turn(Detail& d, const Received* batch) {
+  if (batch != nullptr) {
     d.busy_since_ns = now_ns();
     if (options_.before_apply) options_.before_apply(d.id);
-    apply_received(d, *received);
+    apply_received(d, *batch);
     d.busy_since_ns = 0;
   }
   if (!failed()) worker_chores(d);
-  std::lock_guard lock(d.mutex);
-  if (!d.inbox.empty() && !failed()) {
-    schedule(d);  // to the back of the queue: details with batches waiting take turns
-  } else {
-    d.scheduled = false;
-    d.idle.notify_all();
-  }
 }
 
 void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
@@ -698,39 +451,30 @@ void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
     spdlog::debug("[{}] duplicate: {}", d.id, outcome.why);
   }
   auto m = reject_message(d.id, source, seq, outcome, now_utime());
-  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
-  outbox_->push({d.reject_channel, encode(m), 0});
+  if (ingest_.daemon_key() != nullptr) messages::sign(m, *ingest_.daemon_key());
+  outbox_.push({d.reject_channel, encode(m), 0});
 }
 
 void Daemon::apply_received(Detail& d, const Received& r) {
   Twin& twin = *d.twin;
-  const Decoded decoded = decode_batch(r.bytes.data(), r.bytes.size());
-  if (!decoded.batch) {
-    reject(d, "", -1, decoded.error);
+  const Ingested ingested = ingest_.run(twin, r);
+  if (ingested.step == Ingested::Step::rejected) {
+    reject(d, ingested.source, ingested.seq, ingested.outcome);
     return;
   }
-  const Batch& batch = *decoded.batch;
-  if (keys_) {
-    if (const Outcome denied = authenticate(r, decoded); !denied.applied()) {
-      reject(d, batch.source_id, batch.seq, denied);
-      return;
-    }
-  }
-  Outcome outcome;
-  try {
-    outcome = twin.apply(batch);
-  } catch (const std::exception& e) {
+  if (ingested.step == Ingested::Step::threw) {
     // The engine threw half-way through the batch: the model can no longer be trusted. Stop
     // without checkpointing it; a restart resumes from the last checkpoint.
-    reject(d, batch.source_id, batch.seq, {Verdict::internal, "message", e.what()});
-    fail("[" + d.id + "] internal error applying seq " + std::to_string(batch.seq) + " of \"" +
-         batch.source_id + "\": " + e.what());
+    reject(d, ingested.source, ingested.seq, ingested.outcome);
+    fail("[" + d.id + "] internal error applying seq " + std::to_string(ingested.seq) + " of \"" +
+         ingested.source + "\": " + ingested.outcome.why);
     return;
   }
+  const Outcome& outcome = ingested.outcome;
   d.duplicates = twin.counters().duplicates;
   d.gaps = twin.counters().gaps;
   if (!outcome.applied()) {
-    reject(d, batch.source_id, batch.seq, outcome);
+    reject(d, ingested.source, ingested.seq, outcome);
     // Duplicates and gaps: tell the producer where to resume.
     if (outcome.verdict == Verdict::duplicate || outcome.verdict == Verdict::gap) {
       publish_state(d);
@@ -739,7 +483,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   }
   d.state_seq = twin.state_seq();
   spdlog::debug("[{}] applied {}#{}: state_seq {}, {} cycles, {} broken bonds", d.id,
-                batch.source_id, batch.seq, twin.state_seq(), twin.engine().total_cycles(),
+                ingested.source, ingested.seq, twin.state_seq(), twin.engine().total_cycles(),
                 twin.broken_bonds());
   log_crack_events(d);
   if (options_.deterministic && twin.life().state_seq == twin.state_seq()) {
@@ -768,14 +512,14 @@ void Daemon::apply_received(Detail& d, const Received& r) {
 }
 
 void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {
-  auto m = state_message(*d.twin, now_utime(), d.checkpointed);
-  if (daemon_key_ != nullptr) messages::sign(m, *daemon_key_);
-  outbox_->push({d.state_channel, encode(m), recv_utime});
+  auto m = state_message(*d.twin, now_utime(), d.checkpoints->checkpointed());
+  if (ingest_.daemon_key() != nullptr) messages::sign(m, *ingest_.daemon_key());
+  outbox_.push({d.state_channel, encode(m), recv_utime});
 }
 
 void Daemon::publish_fields(Detail& d) {
   for (const auto& m : field_messages(*d.twin, now_utime(), d.mesh_hash)) {
-    outbox_->push({d.field_channel, encode(m), 0});
+    outbox_.push({d.field_channel, encode(m), 0});
   }
 }
 
@@ -823,13 +567,7 @@ bool Daemon::publish_status(Detail& d, const char* health) {
 }
 
 void Daemon::flush_outbox() {
-  for (auto& m : outbox_->take()) {
-    lcm_.publish(m.channel, m.bytes.data(), static_cast<unsigned>(m.bytes.size()));
-    if (options_.record_latency && m.recv_utime > 0) {
-      // From LCM's receive time (wall clock, us): includes the wait in the inbox.
-      latencies_.push_back(1e-6 * static_cast<double>(now_utime() - m.recv_utime));
-    }
-  }
+  outbox_.flush(lcm_, options_.record_latency ? &latencies_ : nullptr);
 }
 
 void Daemon::heartbeat(bool force) {
@@ -842,11 +580,10 @@ void Daemon::heartbeat(bool force) {
 void Daemon::worker_chores(Detail& d) {
   submit_life(d);
   const auto now = Clock::now();
-  const double every = d.twin->model().config().checkpoint.every_seconds;
-  if (every > 0 && seconds(now - d.last_checkpoint) >= every) {
-    const std::int64_t before = d.checkpoint_seq;
+  if (d.checkpoints->due(d.twin->model().config().checkpoint.every_seconds, now)) {
+    const std::int64_t before = d.checkpoints->seq();
     checkpoint(d, "every_seconds");
-    if (d.checkpoint_seq != before) publish_state(d);  // checkpointed_seq moved
+    if (d.checkpoints->seq() != before) publish_state(d);  // checkpointed_seq moved
   }
   if (seconds(now - d.reject_log_window) >= kRejectLogPeriodS) log_reject_summary(d);
 }
@@ -865,22 +602,11 @@ void Daemon::log_reject_summary(Detail& d) {
 }
 
 void Daemon::checkpoint(Detail& d, const char* why) {
-  d.last_checkpoint = Clock::now();
-  if (!options_.checkpoints || d.checkpoint_seq == d.twin->state_seq()) return;
-  const auto path = checkpoint_path(d.state_dir, kCheckpointPrefix,
-                                    static_cast<std::uint64_t>(d.twin->state_seq()));
-  try {
-    const auto t0 = Clock::now();
-    std::filesystem::create_directories(d.state_dir);
-    write_checkpoint(path, d.twin->to_checkpoint());
-    prune_checkpoints(d.state_dir, kCheckpointPrefix, kCheckpointsKept);
-    d.checkpoint_seq = d.twin->state_seq();
-    d.checkpointed = d.twin->applied();
+  const Expected<bool> written = d.checkpoints->write(*d.twin, why);
+  if (!written) {
+    fail(written.error().message());
+  } else if (*written) {
     ++checkpoints_written_;
-    spdlog::info("[{}] checkpoint ({}): {} in {:.3f} s", d.id, why, path.string(),
-                 seconds(Clock::now() - t0));
-  } catch (const std::exception& e) {
-    fail("[" + d.id + "] cannot write checkpoint " + path.string() + ": " + e.what());
   }
 }
 
@@ -897,10 +623,7 @@ void Daemon::submit_life(Detail& d) {
 }
 
 void Daemon::tick() {
-  for (auto& d : details_) {
-    std::unique_lock lock(d->mutex);
-    d->idle.wait(lock, [&] { return !d->scheduled || failed(); });
-  }
+  for (auto& d : details_) scheduler_.wait_idle(*d);
   flush_outbox();
   heartbeat(false);
   answer_mesh_requests();
@@ -911,7 +634,7 @@ bool Daemon::poll(int timeout_ms) {
   flush_outbox();
   heartbeat(false);
   const int lcm_fd = lcm_.getFileno();
-  pollfd fds[2] = {{outbox_->wake_fd(), POLLIN, 0}, {lcm_fd, POLLIN, 0}};
+  pollfd fds[2] = {{outbox_.wake_fd(), POLLIN, 0}, {lcm_fd, POLLIN, 0}};
   const nfds_t n = lcm_fd >= 0 ? 2 : 1;
   const int ready = ::poll(fds, n, std::max(0, timeout_ms));
   if (ready > 0 && n == 2 && (fds[1].revents & (POLLIN | POLLERR | POLLHUP)) != 0) {
@@ -930,28 +653,16 @@ bool Daemon::poll(int timeout_ms) {
   return !failed();
 }
 
-void Daemon::stop_workers() {
-  {
-    std::lock_guard lock(pool_mutex_);
-    pool_stop_ = true;
-  }
-  pool_wake_.notify_all();
-  for (auto& w : workers_) {
-    if (w.joinable()) w.join();
-  }
-  workers_.clear();
-}
-
 void Daemon::stop() {
   if (stopped_) return;
   stopped_ = true;
-  stop_workers();  // every batch received is applied first
+  scheduler_.stop();  // every batch received is applied first
   for (auto& d : details_) {
     d->life.reset();  // cancels a running estimate
     if (!failed()) {
-      const std::int64_t before = d->checkpoint_seq;
+      const std::int64_t before = d->checkpoints->seq();
       checkpoint(*d, "stop");
-      if (d->checkpoint_seq != before) publish_state(*d);  // now durable
+      if (d->checkpoints->seq() != before) publish_state(*d);  // now durable
     }
     if (d->outputs) d->outputs->finish(*d->twin);
     spdlog::info(

@@ -31,6 +31,12 @@
 // Each detail's state is a pure function of its config and the batches in its arrival order:
 // threads change when a state is published, never what it is.
 //
+// The parts, each in its own file: ingest.h (decode, authenticate, apply one batch), outbox.h
+// (what the workers queue for the LCM thread to publish), checkpoint_store.h (a detail's
+// checkpoints: resume, write, rotation), scheduler.h (the worker threads and the per-detail
+// inboxes). This class composes them per detail with the twin, its results and its life worker,
+// and publishes STATUS and MESH from the LCM thread.
+//
 // The service is the daemon's core and also runs in-process in tests (memq://) and in the ingest
 // benchmark. Modes: deterministic (remaining life synchronously at fixed state_seq points,
 // reproducible) or not (a LifePool of DaemonOptions::life_threads threads shared by the details,
@@ -39,24 +45,21 @@
 
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
-#include <deque>
 #include <filesystem>
 #include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <mutex>
-#include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include "messages/auth.h"
-#include "messages/codec.h"
 #include "twin/config/config.h"
 #include "twin/io/detail_outputs.h"
 #include "twin/model/twin.h"
+#include "twin/service/ingest.h"
 #include "twin/service/life_worker.h"
+#include "twin/service/outbox.h"
+#include "twin/service/scheduler.h"
 
 namespace peritwin::twin {
 
@@ -126,30 +129,18 @@ class Daemon {
 
  private:
   struct Detail;
-  struct Received;
-  struct Outgoing;
-  class Outbox;
-  Status load_keys();
-  /// With [auth]: the batch's source is allowed and its tag is the source key's; else AUTH.
-  [[nodiscard]] Outcome authenticate(const Received& r, const messages::Decoded& decoded) const;
   /// The detail's model, twin, checkpoint and results (no LCM): runs on a start-up thread.
   Expected<std::unique_ptr<Detail>> build_detail(const DetailConfig& config);
   /// LCM thread: the detail's channels and subscriptions.
   Status subscribe_detail(Detail& d);
-  Status resume(Detail& d);
   void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
   /// LCM thread: a mesh_request_t for this detail marks its mesh to be published again.
   void on_mesh_request(Detail& d, const lcm::ReceiveBuffer* rbuf);
   /// LCM thread: publishes the meshes asked for, once kMeshRepublishS has passed since the last.
   void answer_mesh_requests();
   void publish_mesh(Detail& d);
-  /// Puts a detail on the pool's ready queue (caller holds d.mutex and has set d.scheduled).
-  void schedule(Detail& d);
-  void run_worker();
-  /// One turn of a detail on a worker: at most one batch, then its chores.
-  void run_turn(Detail& d);
-  /// Every kWorkerChoresPeriod: a chores-only turn for each detail that is not scheduled.
-  void schedule_chores();
+  /// One turn of a detail on a worker (Scheduler::Turn): the batch if any, then its chores.
+  void run_turn(Detail& d, const Received* batch);
   void apply_received(Detail& d, const Received& r);
   void reject(Detail& d, const std::string& source, std::int64_t seq, const Outcome& outcome);
   void worker_chores(Detail& d);
@@ -163,34 +154,25 @@ class Daemon {
   void submit_life(Detail& d);
   /// Logs the cracks found and joined since the last call (one line each).
   static void log_crack_events(Detail& d);
-  void stop_workers();
   void fail(std::string why);
   [[nodiscard]] bool failed() const { return failed_.load(); }
 
   lcm::LCM& lcm_;
   TwinConfig config_;
   DaemonOptions options_;
+  std::atomic<bool> failed_{false};
   /// Before details_: their LifeWorkers are destroyed (cancelled) before the pool.
   std::unique_ptr<LifePool> life_pool_;
   std::vector<std::unique_ptr<Detail>> details_;
-  std::unique_ptr<Outbox> outbox_;
-  // The worker pool: details with something to do, each at most once (Detail::scheduled).
-  std::mutex pool_mutex_;  ///< taken after a Detail::mutex, never before
-  std::condition_variable pool_wake_;
-  std::deque<Detail*> ready_;
-  std::chrono::steady_clock::time_point next_chores_;
-  bool pool_stop_ = false;
-  std::vector<std::thread> workers_;
-  std::optional<messages::KeyRing> keys_;          ///< [auth] key_file; none = unauthenticated
-  const messages::AuthKey* daemon_key_ = nullptr;  ///< signs STATE and REJECT
-  std::vector<std::string> allowed_sources_;       ///< sorted; with keys_ only
+  Ingest ingest_;
+  Outbox outbox_;
+  Scheduler scheduler_{failed_};
   std::chrono::steady_clock::time_point started_;
   std::chrono::steady_clock::time_point last_status_;
   std::vector<double> latencies_;
   std::atomic<std::int64_t> checkpoints_written_{0};
   mutable std::mutex error_mutex_;
   std::string error_;
-  std::atomic<bool> failed_{false};
   bool stopped_ = false;
 };
 
