@@ -73,7 +73,7 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -85,31 +85,12 @@ namespace {
 namespace fs = std::filesystem;
 using peritwin::bench::Clock;
 using peritwin::bench::percentile;
-using peritwin::bench::proc_status_kb;
-using peritwin::bench::read_text;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
-
-// --- /proc
-// ----------------------------------------------------------------------------------------
-
-/// utime + stime of a process (all its threads) in seconds, or -1.
-double proc_cpu_s(pid_t pid) {
-  const std::string text = read_text("/proc/" + std::to_string(pid) + "/stat");
-  const auto paren = text.rfind(')');  // the command name may hold spaces
-  if (paren == std::string::npos) return -1.0;
-  std::istringstream in(text.substr(paren + 2));
-  std::string field;
-  // After ") ": state (3), ppid, pgrp, session, tty_nr, tpgid, flags, minflt, cminflt, majflt,
-  // cmajflt, utime (14), stime (15).
-  std::vector<std::string> fields;
-  while (fields.size() < 13 && in >> field) fields.push_back(field);
-  if (fields.size() < 13) return -1.0;
-  const double ticks =
-      static_cast<double>(std::atoll(fields[11].c_str()) + std::atoll(fields[12].c_str()));
-  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
+using peritwin::core::proc_cpu_s;
+using peritwin::core::proc_status_kb;
+using peritwin::core::read_text;
 
 // --- HTTP
 // -----------------------------------------------------------------------------------------
