@@ -73,7 +73,8 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
+#include "core/program.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -83,33 +84,15 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace peritwin;
 using peritwin::bench::Clock;
 using peritwin::bench::percentile;
-using peritwin::bench::proc_status_kb;
-using peritwin::bench::read_text;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
-
-// --- /proc
-// ----------------------------------------------------------------------------------------
-
-/// utime + stime of a process (all its threads) in seconds, or -1.
-double proc_cpu_s(pid_t pid) {
-  const std::string text = read_text("/proc/" + std::to_string(pid) + "/stat");
-  const auto paren = text.rfind(')');  // the command name may hold spaces
-  if (paren == std::string::npos) return -1.0;
-  std::istringstream in(text.substr(paren + 2));
-  std::string field;
-  // After ") ": state (3), ppid, pgrp, session, tty_nr, tpgid, flags, minflt, cminflt, majflt,
-  // cmajflt, utime (14), stime (15).
-  std::vector<std::string> fields;
-  while (fields.size() < 13 && in >> field) fields.push_back(field);
-  if (fields.size() < 13) return -1.0;
-  const double ticks =
-      static_cast<double>(std::atoll(fields[11].c_str()) + std::atoll(fields[12].c_str()));
-  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
+using peritwin::core::proc_cpu_s;
+using peritwin::core::proc_status_kb;
+using peritwin::core::read_text;
 
 // --- HTTP
 // -----------------------------------------------------------------------------------------
@@ -455,11 +438,8 @@ class ReferenceSubscriber {
   std::string error_;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using namespace peritwin;
-  CLI::App app{"peritwin-bench-dashboard: STATE-to-SSE latency, CPU and RSS of the dashboard"};
+/// The command line.
+struct Options {
   int details = 100;
   double rate = 10.0, seconds = 30.0;
   std::int64_t warmup = static_cast<std::int64_t>(10000);
@@ -468,110 +448,234 @@ int main(int argc, char** argv) {
       (fs::read_symlink("/proc/self/exe").parent_path() / "peritwin-dashboard").string();
   bool keep = false, sse_quickack = false, reference = false;
   int sse_clients = 1;
-  app.add_option("--details", details, "details publishing (default 100)")
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--details", o.details, "details publishing (default 100)")
       ->check(CLI::Range(1, 999));
-  app.add_option("--rate", rate, "states per second per detail (default 10)")
+  app.add_option("--rate", o.rate, "states per second per detail (default 10)")
       ->check(CLI::Range(0.01, 10000.0));
-  app.add_option("--seconds", seconds, "measurement window (default 30)")
+  app.add_option("--seconds", o.seconds, "measurement window (default 30)")
       ->check(CLI::Range(0.5, 86400.0));
-  app.add_option("--warmup", warmup,
+  app.add_option("--warmup", o.warmup,
                  "states per detail published before the window, as fast as they are taken "
                  "(default 10000: the history bound, full histories)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{10'000'000}));
-  app.add_option("--lcm-url", lcm_url, "use this tcpq URL instead of starting a hub");
-  app.add_option("--dashboard", dashboard_bin,
+  app.add_option("--lcm-url", o.lcm_url, "use this tcpq URL instead of starting a hub");
+  app.add_option("--dashboard", o.dashboard_bin,
                  "the peritwin-dashboard binary (default: next to this one)");
-  app.add_option("--sse-clients", sse_clients,
+  app.add_option("--sse-clients", o.sse_clients,
                  "clients on /api/events, the first one timed (default 1; 0: none, no latency)")
       ->check(CLI::Range(0, 100));
-  app.add_flag("--sse-quickack", sse_quickack,
+  app.add_flag("--sse-quickack", o.sse_quickack,
                "TCP_QUICKACK on the SSE client before every receive (a diagnosis: no delayed ACKs "
                "from the client, unlike a browser)");
-  app.add_flag("--lcm-reference", reference,
+  app.add_flag("--lcm-reference", o.reference,
                "also time each STATE to a second LCM subscriber in this process (the hub's share "
                "of the latency; the hub then relays every STATE twice)");
-  app.add_flag("--keep", keep, "keep the work directory (hub and dashboard logs)");
-  CLI11_PARSE(app, argc, argv);
+  app.add_flag("--keep", o.keep, "keep the work directory (hub and dashboard logs)");
+}
 
-  const fs::path work =
-      fs::temp_directory_path() / ("peritwin_bench_dashboard_" + std::to_string(getpid()));
-  fs::create_directories(work);
-  pid_t hub = -1, dashboard = -1;
-  std::unique_ptr<lcm::LCM> lcm;
-  auto cleanup = [&] {
-    lcm.reset();
-    if (dashboard > 0) stop_child(dashboard, 30.0);
-    if (hub > 0) stop_child(hub, 30.0);
-    if (!keep) fs::remove_all(work);
+/// What the warm-up measured.
+struct Warmup {
+  double seconds = 0.0, cpu_s = 0.0;
+  std::vector<double> history_ms;  // per request, as the client sees it
+  std::int64_t history_min = -1, history_max = -1, rss_kb = -1;
+};
+
+/// What the window measured.
+struct Window {
+  double seconds = 0.0, cpu_s = 0.0, load_average = 0.0;
+  std::int64_t published = 0, rss_end = -1, rss_peak = -1, cycle_mismatches = 0;
+  std::int64_t status_events = 0;
+  std::vector<double> latencies, lcm_latencies;
+  int dashboard_exit = -1;
+};
+
+constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
+
+/// The JSON line of the run.
+tools::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& m) {
+  const std::vector<double>& latencies = m.latencies;
+  const double p99 = percentile(latencies, 0.99);
+  auto over_goal = [&](const std::vector<double>& v) {
+    return v.empty() ? std::nan("")
+                     : static_cast<double>(std::count_if(
+                           v.begin(), v.end(), [&](double x) { return x > kGoalP99Ms; })) /
+                           static_cast<double>(v.size());
   };
-  auto fail = [&](const std::string& why) {
-    std::cerr << "peritwin-bench-dashboard: " << why << " (logs kept in " << work.string() << ")\n";
-    keep = true;
+  const double cpu_fraction = m.seconds > 0 ? m.cpu_s / m.seconds : 0.0;
+  const double rss_mb = static_cast<double>(m.rss_end) / 1024.0;
+  const double peak_mb = static_cast<double>(m.rss_peak) / 1024.0;
+  const auto missing = m.published - static_cast<std::int64_t>(latencies.size());
+  const auto total_warmup = static_cast<double>(o.warmup) * o.details;
+  tools::JsonLine line;
+  line["bench"] = "dashboard";
+  line["details"] = o.details;
+  line["states_per_s_per_detail"] = o.rate;
+  line["states_per_s"] = tools::fixed(static_cast<double>(m.published) / m.seconds, 1);
+  line["duration_s"] = tools::fixed(m.seconds, 2);
+  line["warmup_states_per_detail"] = o.warmup;
+  line["warmup_s"] = tools::fixed(w.seconds, 1);
+  line["warmup_cpu_us_per_state"] =
+      total_warmup > 0 ? tools::JsonLine(tools::fixed(1e6 * w.cpu_s / total_warmup, 1))
+                       : tools::JsonLine(nullptr);
+  line["history_points_min"] = w.history_min;
+  line["history_points_max"] = w.history_max;
+  line["history_get_ms"] = {
+      {"mean", tools::fixed(std::accumulate(w.history_ms.begin(), w.history_ms.end(), 0.0) /
+                                static_cast<double>(w.history_ms.size()),
+                            2)},
+      {"max", tools::fixed(*std::max_element(w.history_ms.begin(), w.history_ms.end()), 2)}};
+  line["published"] = m.published;
+  line["events"] = static_cast<std::int64_t>(latencies.size());
+  line["missing_events"] = o.sse_clients > 0 ? tools::JsonLine(missing) : tools::JsonLine(nullptr);
+  line["cycle_mismatches"] = m.cycle_mismatches;
+  line["sse_clients"] = o.sse_clients;
+  line["status_events"] = m.status_events;
+  tools::JsonLine lat;
+  lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
+  lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
+  lat["p99"] = tools::fixed(p99, 2);
+  lat["max"] = tools::fixed(
+      latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
+  lat["over_goal_fraction"] = tools::fixed(over_goal(latencies), 4);
+  line["latency_ms"] = lat;
+  if (o.reference) {
+    line["lcm_reference_latency_ms"] = {
+        {"events", static_cast<std::int64_t>(m.lcm_latencies.size())},
+        {"p50", tools::fixed(percentile(m.lcm_latencies, 0.50), 2)},
+        {"p99", tools::fixed(percentile(m.lcm_latencies, 0.99), 2)},
+        {"max", tools::fixed(percentile(m.lcm_latencies, 1.0), 2)},
+        {"over_goal_fraction", tools::fixed(over_goal(m.lcm_latencies), 4)}};
+  }
+  line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
+  line["cpu_us_per_state"] =
+      m.published > 0
+          ? tools::JsonLine(tools::fixed(1e6 * m.cpu_s / static_cast<double>(m.published), 1))
+          : tools::JsonLine(nullptr);
+  line["rss_after_warmup_mb"] = tools::fixed(static_cast<double>(w.rss_kb) / 1024.0, 1);
+  line["rss_mb"] = tools::fixed(rss_mb, 1);
+  line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
+  line["goals"] = {
+      {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
+  line["pass"] = {{"p99", o.sse_clients > 0 ? tools::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
+                                            : tools::JsonLine(nullptr)},
+                  {"cpu", cpu_fraction <= kGoalCpu},
+                  {"rss", peak_mb <= kGoalRssMb}};
+  line["load_average_1min"] = m.load_average;
+  line["sse_quickack"] = o.sse_quickack;
+  line["dashboard_exit"] = m.dashboard_exit;
+  line["transport"] = o.lcm_url.rfind("tcpq://", 0) == 0 ? "tcpq" : o.lcm_url;
+  return line;
+}
+
+/// One run: the hub and the dashboard as child processes, the states published from here.
+class Run {
+ public:
+  explicit Run(Options& o)
+      : o_(o),
+        work_(fs::temp_directory_path() /
+              ("peritwin_bench_dashboard_" + std::to_string(getpid()))) {
+    fs::create_directories(work_);
+  }
+  void cleanup() {
+    lcm_.reset();
+    if (dashboard_ > 0) stop_child(dashboard_, 30.0);
+    if (hub_ > 0) stop_child(hub_, 30.0);
+    if (!o_.keep) fs::remove_all(work_);
+  }
+  /// Says why, keeps the work directory, cleans up; the exit code 3.
+  int fail(const std::string& why) {
+    std::cerr << "peritwin-bench-dashboard: " << why << " (logs kept in " << work_.string()
+              << ")\n";
+    o_.keep = true;
     cleanup();
     return 3;
-  };
-  if (lcm_url.empty()) {
+  }
+  /// The hub (unless --lcm-url), the dashboard up to its HTTP port, LCM; an exit code on failure.
+  std::optional<int> start();
+  /// States 1..warmup of every detail as fast as they go, until the dashboard counted them all.
+  std::optional<int> warm_up(Warmup& w);
+  /// The SSE clients, then `rate` states per second per detail for `seconds`.
+  std::optional<int> measure(Window& m);
+
+ private:
+  bool dashboard_alive() const { return waitpid(dashboard_, nullptr, WNOHANG) == 0; }
+  void publish_status(int i, std::int64_t last_seq) {
+    const auto st = status_message(i, last_seq, since(started_));
+    lcm_->publish(status_channel_[static_cast<std::size_t>(i)], &st);
+  }
+
+  Options& o_;
+  fs::path work_;
+  pid_t hub_ = -1, dashboard_ = -1;
+  std::unique_ptr<lcm::LCM> lcm_;
+  int http_port_ = -1;
+  std::vector<std::string> state_channel_, status_channel_;
+  Clock::time_point started_;
+};
+
+std::optional<int> Run::start() {
+  if (o_.lcm_url.empty()) {
     const int port = twin::free_loopback_port();
-    hub = spawn(
+    hub_ = spawn(
         {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
-        "/dev/null", (work / "hub.log").string());
-    if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+        "/dev/null", (work_ / "hub.log").string());
+    if (hub_ < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
       return fail("the LCM hub did not come up on port " + std::to_string(port));
     }
-    lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
+    o_.lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
   }
-  const fs::path out_file = work / "dashboard.out", log_file = work / "dashboard.log";
-  dashboard =
-      spawn({dashboard_bin, "--lcm-url", lcm_url, "--listen", "127.0.0.1:0", "--log-level", "info"},
-            out_file.string(), log_file.string());
-  if (dashboard < 0) return fail("cannot start " + dashboard_bin);
-  auto dashboard_alive = [&] { return waitpid(dashboard, nullptr, WNOHANG) == 0; };
-  int http_port = -1;
+  const fs::path out_file = work_ / "dashboard.out", log_file = work_ / "dashboard.log";
+  dashboard_ = spawn(
+      {o_.dashboard_bin, "--lcm-url", o_.lcm_url, "--listen", "127.0.0.1:0", "--log-level", "info"},
+      out_file.string(), log_file.string());
+  if (dashboard_ < 0) return fail("cannot start " + o_.dashboard_bin);
   for (const auto t0 = Clock::now(); since(t0) < 60.0 && dashboard_alive();) {
     std::smatch m;
     const std::string out = read_text(out_file);
     if (std::regex_search(out, m, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")) &&
         read_text(log_file).find("subscribed to") != std::string::npos) {
-      http_port = std::stoi(m[1]);
+      http_port_ = std::stoi(m[1]);
       break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  if (http_port < 0) return fail("the dashboard did not come up");
+  if (http_port_ < 0) return fail("the dashboard did not come up");
 
-  lcm = std::make_unique<lcm::LCM>(lcm_url);
-  if (!lcm->good() || !messages::transport_up(*lcm)) return fail("cannot open LCM at " + lcm_url);
-  messages::handle_lcm(*lcm, 0);  // TCP_NODELAY on the publisher's socket, as the daemon's
-  std::vector<std::string> state_channel, status_channel;
-  for (int i = 0; i < details; ++i) {
-    state_channel.push_back(messages::channel(detail_id(i), messages::Kind::kState));
-    status_channel.push_back(messages::channel(detail_id(i), messages::Kind::kStatus));
+  lcm_ = std::make_unique<lcm::LCM>(o_.lcm_url);
+  if (!lcm_->good() || !messages::transport_up(*lcm_)) {
+    return fail("cannot open LCM at " + o_.lcm_url);
   }
-  const auto started = Clock::now();
-  auto publish_status = [&](int i, std::int64_t last_seq) {
-    const auto st = status_message(i, last_seq, since(started));
-    lcm->publish(status_channel[static_cast<std::size_t>(i)], &st);
-  };
+  messages::handle_lcm(*lcm_, 0);  // TCP_NODELAY on the publisher's socket, as the daemon's
+  for (int i = 0; i < o_.details; ++i) {
+    state_channel_.push_back(messages::channel(detail_id(i), messages::Kind::kState));
+    status_channel_.push_back(messages::channel(detail_id(i), messages::Kind::kStatus));
+  }
+  started_ = Clock::now();
+  return std::nullopt;
+}
 
-  // Warm-up: states 1..warmup of every detail as fast as they go, then wait for the dashboard to
-  // have counted them all.
+std::optional<int> Run::warm_up(Warmup& w) {
+  const int details = o_.details;
+  const std::int64_t warmup = o_.warmup;
   for (int i = 0; i < details; ++i) publish_status(i, 0);
-  const double cpu_before_warmup = proc_cpu_s(dashboard);
+  const double cpu_before_warmup = proc_cpu_s(dashboard_);
   const auto warmup_t0 = Clock::now();
   for (std::int64_t seq = 1; seq <= warmup; ++seq) {
     for (int i = 0; i < details; ++i) {
       const auto s = state_message(i, seq);
-      lcm->publish(state_channel[static_cast<std::size_t>(i)], &s);
+      lcm_->publish(state_channel_[static_cast<std::size_t>(i)], &s);
     }
-    if (!messages::transport_up(*lcm)) return fail("connection to the LCM hub lost");
+    if (!messages::transport_up(*lcm_)) return fail("connection to the LCM hub lost");
     if (seq % 1000 == 0 && !dashboard_alive()) return fail("the dashboard died in the warm-up");
   }
   for (int i = 0; i < details; ++i) publish_status(i, warmup);
   const std::int64_t expected_details = details;
   bool counted = false;
-  std::int64_t history_min = -1, history_max = -1;
   for (const auto t0 = Clock::now(); since(t0) < 600.0 && dashboard_alive();) {
-    if (const auto body = http_get(http_port, "/api/details")) {
+    if (const auto body = http_get(http_port_, "/api/details")) {
       const auto j = nlohmann::json::parse(*body, nullptr, false);
       std::int64_t complete = 0;
       if (j.is_object() && j.contains("details")) {
@@ -589,35 +693,38 @@ int main(int argc, char** argv) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
-  const double warmup_s = since(warmup_t0);
-  const double warmup_cpu_s = proc_cpu_s(dashboard) - cpu_before_warmup;
+  w.seconds = since(warmup_t0);
+  w.cpu_s = proc_cpu_s(dashboard_) - cpu_before_warmup;
   if (!counted) return fail("the dashboard did not count every warm-up state within 600 s");
-  std::vector<double> history_ms;  // per request, as the client sees it
   for (int i = 0; i < details; ++i) {
     const auto h0 = Clock::now();
-    const auto body = http_get(http_port, "/api/details/" + detail_id(i) + "/history");
-    history_ms.push_back(1e3 * since(h0));
+    const auto body = http_get(http_port_, "/api/details/" + detail_id(i) + "/history");
+    w.history_ms.push_back(1e3 * since(h0));
     if (!body) return fail("no history for " + detail_id(i));
     const auto j = nlohmann::json::parse(*body, nullptr, false);
     const auto n = j.is_object() ? static_cast<std::int64_t>(j["cycles"].size()) : -1;
-    history_min = history_min < 0 ? n : std::min(history_min, n);
-    history_max = std::max(history_max, n);
+    w.history_min = w.history_min < 0 ? n : std::min(w.history_min, n);
+    w.history_max = std::max(w.history_max, n);
   }
-  const std::int64_t rss_after_warmup = proc_status_kb("VmRSS", std::to_string(dashboard));
+  w.rss_kb = proc_status_kb("VmRSS", std::to_string(dashboard_));
+  return std::nullopt;
+}
 
-  // Measurement: an SSE client, then `rate` states per second per detail for `seconds`.
-  const auto per_detail = static_cast<std::int64_t>(std::llround(rate * seconds));
+std::optional<int> Run::measure(Window& m) {
+  const int details = o_.details;
+  const std::int64_t warmup = o_.warmup;
+  const auto per_detail = static_cast<std::int64_t>(std::llround(o_.rate * o_.seconds));
   Matcher matcher(details, warmup + 1, per_detail);
   Matcher lcm_matcher(details, warmup + 1, per_detail);
   std::unique_ptr<ReferenceSubscriber> ref;
-  if (reference) {
-    ref = std::make_unique<ReferenceSubscriber>(lcm_url, lcm_matcher);
+  if (o_.reference) {
+    ref = std::make_unique<ReferenceSubscriber>(o_.lcm_url, lcm_matcher);
     if (!ref->error().empty()) return fail(ref->error());
   }
   std::vector<std::unique_ptr<SseClient>> sse;  // the first one timed
-  for (int c = 0; c < sse_clients; ++c) {
+  for (int c = 0; c < o_.sse_clients; ++c) {
     sse.push_back(
-        std::make_unique<SseClient>(http_port, c == 0 ? &matcher : nullptr, sse_quickack));
+        std::make_unique<SseClient>(http_port_, c == 0 ? &matcher : nullptr, o_.sse_quickack));
     if (!sse.back()->error().empty()) return fail(sse.back()->error());
     for (const auto t0 = Clock::now(); !sse.back()->connected() && since(t0) < 10.0;) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
@@ -625,10 +732,10 @@ int main(int argc, char** argv) {
     if (!sse.back()->connected()) return fail("no answer on /api/events");
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  const double state_period_s = 1.0 / (rate * static_cast<double>(details));
+  const double state_period_s = 1.0 / (o_.rate * static_cast<double>(details));
   const double status_period_s = 1.0 / static_cast<double>(details);
   const std::int64_t total_states = per_detail * details;
-  const double cpu0 = proc_cpu_s(dashboard);
+  const double cpu0 = proc_cpu_s(dashboard_);
   const auto t0 = Clock::now();
   std::int64_t k_state = 0, k_status = 0;
   auto due = [&](std::int64_t k, double period) {
@@ -652,100 +759,56 @@ int main(int argc, char** argv) {
     const auto at = Clock::now();
     matcher.published(i, seq, at);
     if (ref) lcm_matcher.published(i, seq, at);
-    lcm->publish(state_channel[static_cast<std::size_t>(i)], &s);
+    lcm_->publish(state_channel_[static_cast<std::size_t>(i)], &s);
     ++k_state;
-    if (k_state % 1000 == 0 && (!messages::transport_up(*lcm) || !dashboard_alive())) break;
+    if (k_state % 1000 == 0 && (!messages::transport_up(*lcm_) || !dashboard_alive())) break;
   }
-  const double window_s = since(t0);
-  const double cpu_s = proc_cpu_s(dashboard) - cpu0;
-  const std::int64_t rss_end = proc_status_kb("VmRSS", std::to_string(dashboard));
-  const std::int64_t rss_peak = proc_status_kb("VmHWM", std::to_string(dashboard));
-  const double load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
+  m.seconds = since(t0);
+  m.published = k_state;
+  m.cpu_s = proc_cpu_s(dashboard_) - cpu0;
+  m.rss_end = proc_status_kb("VmRSS", std::to_string(dashboard_));
+  m.rss_peak = proc_status_kb("VmHWM", std::to_string(dashboard_));
+  m.load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
   // The last events.
   for (const auto t1 = Clock::now();
-       sse_clients > 0 && since(t1) < 2.0 &&
+       o_.sse_clients > 0 && since(t1) < 2.0 &&
        static_cast<std::int64_t>(matcher.latencies_ms().size()) < k_state;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  const std::vector<double> latencies = matcher.latencies_ms();
+  m.latencies = matcher.latencies_ms();
   ref.reset();
-  const std::vector<double> lcm_latencies = lcm_matcher.latencies_ms();
+  m.lcm_latencies = lcm_matcher.latencies_ms();
   const bool alive = dashboard_alive();
-  const int dashboard_exit = alive ? stop_child(dashboard, 30.0) : -1;
-  dashboard = -1;
+  m.dashboard_exit = alive ? stop_child(dashboard_, 30.0) : -1;
+  dashboard_ = -1;
   if (!alive) return fail("the dashboard died during the window");
+  m.cycle_mismatches = matcher.cycle_mismatches();
+  m.status_events = sse.empty() ? 0 : sse.front()->status_events();
+  return std::nullopt;
+}
 
-  constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
-  const double p99 = percentile(latencies, 0.99);
-  auto over_goal = [&](const std::vector<double>& v) {
-    return v.empty() ? std::nan("")
-                     : static_cast<double>(std::count_if(
-                           v.begin(), v.end(), [&](double x) { return x > kGoalP99Ms; })) /
-                           static_cast<double>(v.size());
-  };
-  const double cpu_fraction = window_s > 0 ? cpu_s / window_s : 0.0;
-  const double rss_mb = static_cast<double>(rss_end) / 1024.0;
-  const double peak_mb = static_cast<double>(rss_peak) / 1024.0;
-  const auto missing = k_state - static_cast<std::int64_t>(latencies.size());
-  const auto total_warmup = static_cast<double>(warmup) * details;
-  tools::JsonLine line;
-  line["bench"] = "dashboard";
-  line["details"] = details;
-  line["states_per_s_per_detail"] = rate;
-  line["states_per_s"] = tools::fixed(static_cast<double>(k_state) / window_s, 1);
-  line["duration_s"] = tools::fixed(window_s, 2);
-  line["warmup_states_per_detail"] = warmup;
-  line["warmup_s"] = tools::fixed(warmup_s, 1);
-  line["warmup_cpu_us_per_state"] =
-      total_warmup > 0 ? tools::JsonLine(tools::fixed(1e6 * warmup_cpu_s / total_warmup, 1))
-                       : tools::JsonLine(nullptr);
-  line["history_points_min"] = history_min;
-  line["history_points_max"] = history_max;
-  line["history_get_ms"] = {
-      {"mean", tools::fixed(std::accumulate(history_ms.begin(), history_ms.end(), 0.0) /
-                                static_cast<double>(history_ms.size()),
-                            2)},
-      {"max", tools::fixed(*std::max_element(history_ms.begin(), history_ms.end()), 2)}};
-  line["published"] = k_state;
-  line["events"] = static_cast<std::int64_t>(latencies.size());
-  line["missing_events"] = sse_clients > 0 ? tools::JsonLine(missing) : tools::JsonLine(nullptr);
-  line["cycle_mismatches"] = matcher.cycle_mismatches();
-  line["sse_clients"] = sse_clients;
-  line["status_events"] = sse.empty() ? 0 : sse.front()->status_events();
-  tools::JsonLine lat;
-  lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
-  lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
-  lat["p99"] = tools::fixed(p99, 2);
-  lat["max"] = tools::fixed(
-      latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
-  lat["over_goal_fraction"] = tools::fixed(over_goal(latencies), 4);
-  line["latency_ms"] = lat;
-  if (reference) {
-    line["lcm_reference_latency_ms"] = {
-        {"events", static_cast<std::int64_t>(lcm_latencies.size())},
-        {"p50", tools::fixed(percentile(lcm_latencies, 0.50), 2)},
-        {"p99", tools::fixed(percentile(lcm_latencies, 0.99), 2)},
-        {"max", tools::fixed(percentile(lcm_latencies, 1.0), 2)},
-        {"over_goal_fraction", tools::fixed(over_goal(lcm_latencies), 4)}};
-  }
-  line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
-  line["cpu_us_per_state"] =
-      k_state > 0 ? tools::JsonLine(tools::fixed(1e6 * cpu_s / static_cast<double>(k_state), 1))
-                  : tools::JsonLine(nullptr);
-  line["rss_after_warmup_mb"] = tools::fixed(static_cast<double>(rss_after_warmup) / 1024.0, 1);
-  line["rss_mb"] = tools::fixed(rss_mb, 1);
-  line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
-  line["goals"] = {
-      {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
-  line["pass"] = {{"p99", sse_clients > 0 ? tools::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
-                                          : tools::JsonLine(nullptr)},
-                  {"cpu", cpu_fraction <= kGoalCpu},
-                  {"rss", peak_mb <= kGoalRssMb}};
-  line["load_average_1min"] = load_average;
-  line["sse_quickack"] = sse_quickack;
-  line["dashboard_exit"] = dashboard_exit;
-  line["transport"] = lcm_url.rfind("tcpq://", 0) == 0 ? "tcpq" : lcm_url;
-  tools::print_line(line);
-  cleanup();
+/// The benchmark; the exit code.
+int run(Options o) {
+  Run r(o);
+  if (auto rc = r.start()) return *rc;
+  Warmup w;
+  if (auto rc = r.warm_up(w)) return *rc;
+  Window m;
+  if (auto rc = r.measure(m)) return *rc;
+  tools::print_line(dashboard_line(o, w, m));
+  r.cleanup();
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-bench-dashboard: STATE-to-SSE latency, CPU and RSS of the dashboard"};
+  Options o;
+  add_options(app, o);
+  if (const auto rc =
+          peritwin::core::parse_options(app, argc, argv, peritwin::core::ParseErrors::cli11)) {
+    return *rc;
+  }
+  return run(std::move(o));
 }

@@ -44,7 +44,7 @@
 
 #include "bench/child_process.h"
 #include "bench/percentile.h"
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -71,8 +71,7 @@ std::string edit(std::string text, const std::string& from, const std::string& t
 
 /// The fleet's config: `details` copies of the B1 example at grid spacing `dx`.
 std::string fleet_config(int details, double dx, bool release_idle_factors) {
-  const std::string b1 =
-      bench::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+  const std::string b1 = core::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
   std::string out;
   for (int i = 0; i < details; ++i) {
     char id[16];
@@ -300,8 +299,8 @@ RunResult run(const Options& o, const std::string& url, const fs::path& config,
           .count();
   out.window_s = window;
   out.loud_ended = loud.ended;
-  out.rss_mb = bench::proc_status_mb("VmRSS", std::to_string(daemon), std::nan(""));
-  out.rss_peak_mb = bench::proc_status_mb("VmHWM", std::to_string(daemon), std::nan(""));
+  out.rss_mb = core::proc_status_mb("VmRSS", std::to_string(daemon), std::nan(""));
+  out.rss_peak_mb = core::proc_status_mb("VmHWM", std::to_string(daemon), std::nan(""));
   std::int64_t cycles = 0;
   for (const Feed& f : fleet.feeds()) {
     cycles += f.cycles - f.cycles_at_start;

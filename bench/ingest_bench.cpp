@@ -33,6 +33,7 @@
 #include <iostream>
 #include <thread>
 
+#include "core/program.h"
 #include "replay/replay_tool.h"
 #include "tests/support/loopback_port.h"
 #include "tools/json_line.h"
@@ -49,11 +50,10 @@ double percentile(std::vector<double> v, double p) {
   return v[std::min(i, v.size() - 1)];
 }
 
-}  // namespace
+using namespace peritwin;
 
-int main(int argc, char** argv) {
-  using namespace peritwin;
-  CLI::App app{"peritwin-bench-ingest: load cycles absorbed per second by the daemon over tcpq"};
+/// The command line.
+struct Options {
   std::string config_file = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml";
   std::string lcm_url;
   std::int64_t cycles = 1'000'000;
@@ -62,27 +62,138 @@ int main(int argc, char** argv) {
   std::size_t latency_window = 2;
   bool no_results = false;
   replay::BatchingOptions batching;
-  app.add_option("--config", config_file, "detail configuration (default: the B1 example)");
-  app.add_option("--cycles", cycles, "single-cycle blocks to send (default 1000000)")
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--config", o.config_file, "detail configuration (default: the B1 example)");
+  app.add_option("--cycles", o.cycles, "single-cycle blocks to send (default 1000000)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--window", window, "batches in flight in the throughput phase (default 64)")
+  app.add_option("--window", o.window, "batches in flight in the throughput phase (default 64)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--latency-cycles", latency_cycles,
+  app.add_option("--latency-cycles", o.latency_cycles,
                  "single-cycle blocks of the latency phase (default 100000)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--latency-window", latency_window,
+  app.add_option("--latency-window", o.latency_window,
                  "batches in flight in the latency phase (default 2)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--lcm-url", lcm_url, "use this LCM URL instead of starting a hub");
-  app.add_flag("--no-results", no_results, "do not write the HDF5 results");
-  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most")
+  app.add_option("--lcm-url", o.lcm_url, "use this LCM URL instead of starting a hub");
+  app.add_flag("--no-results", o.no_results, "do not write the HDF5 results");
+  app.add_option("--batch-blocks", o.batching.max_blocks, "blocks per batch at most")
       ->check(CLI::PositiveNumber);
-  app.add_option("--batch-cycles", batching.max_cycles, "cycles per batch at most")
+  app.add_option("--batch-cycles", o.batching.max_cycles, "cycles per batch at most")
       ->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
+}
 
+/// LCM's Java TCP hub on a free loopback port, `lcm_url` set to it; -1 (said on stderr) when it
+/// does not come up.
+pid_t start_hub(std::string& lcm_url) {
+  pid_t hub = -1;
+  const int port = twin::free_loopback_port();
+  const std::string port_text = std::to_string(port);
+  const char* args[] = {
+      "java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", port_text.c_str(), nullptr};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  if (posix_spawnp(&hub, "java", &actions, nullptr, const_cast<char**>(args), environ) != 0) {
+    std::cerr << "peritwin-bench-ingest: cannot start java (LCM hub)\n";
+    return -1;
+  }
+  posix_spawn_file_actions_destroy(&actions);
+  if (!twin::wait_for_loopback_port(port, 30.0)) {
+    std::cerr << "peritwin-bench-ingest: the LCM hub did not come up on port " << port << '\n';
+    kill(hub, SIGTERM);
+    waitpid(hub, nullptr, 0);
+    return -1;
+  }
+  lcm_url = "tcpq://127.0.0.1:" + port_text;
+  return hub;
+}
+
+/// What the producer side measured.
+struct Phases {
+  replay::ReplayResult result, latency_result;
+  double seconds = 0.0;
+  std::size_t num_latency_batches = 0, num_batches = 0;
+};
+
+/// The warm-up batch, the latency phase and the throughput phase, over their own LCM.
+Phases run_phases(const Options& o, const std::string& detail_id) {
+  auto history = [&](std::int64_t n, const char* source) {
+    std::vector<LoadBlock> blocks;
+    for (std::int64_t i = 0; i < n; ++i) {
+      blocks.push_back({200.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
+    }
+    return replay::make_twin_batches(blocks, detail_id, source, o.batching);
+  };
+  auto latency_batches = history(o.latency_cycles, "bench-latency");
+  auto batches = history(o.cycles, "bench");
+  Phases out;
+  out.num_latency_batches = latency_batches.size();
+  out.num_batches = batches.size();
+  lcm::LCM lcm(o.lcm_url);
+  // Warm-up: one batch of another source in lockstep, so that both LCM clients are known to
+  // the hub (a fresh subscription is registered asynchronously) before the clock starts.
+  replay::ReplayOptions warm_options;
+  warm_options.lockstep = true;
+  warm_options.resend_after_s = 0.5;
+  replay::LcmReplayer warm_up(
+      lcm, replay::make_twin_batches({{200.0, 0.1, 0.0, 1}}, detail_id, "warm-up", o.batching),
+      warm_options);
+  if (!warm_up.run({}, {}).ok) {
+    std::cerr << "peritwin-bench-ingest: no answer from the daemon\n";
+  }
+  // Latency phase: a producer that keeps `latency_window` batches in flight, so that the
+  // latency is the daemon's and not a queue the benchmark builds on purpose.
+  replay::ReplayOptions latency_options;
+  latency_options.window = o.latency_window;
+  replay::LcmReplayer latency_replayer(lcm, std::move(latency_batches), latency_options);
+  out.latency_result = latency_replayer.run({}, {});
+  // Throughput phase: `window` batches in flight; the daemon is saturated.
+  replay::ReplayOptions options;
+  options.window = o.window;
+  replay::LcmReplayer replayer(lcm, std::move(batches), options);
+  const auto t0 = std::chrono::steady_clock::now();
+  out.result = replayer.run({}, {});
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+/// The JSON line: `latencies` in order of application (the warm-up batch, the latency phase,
+/// the throughput phase).
+tools::JsonLine ingest_line(const Options& o, const Phases& p, const std::vector<double>& latencies,
+                            std::int64_t broken) {
+  const auto first = std::min<std::size_t>(1, latencies.size());
+  const auto split = std::min(latencies.size(), first + p.num_latency_batches);
+  const std::vector<double> paced(latencies.begin() + static_cast<std::ptrdiff_t>(first),
+                                  latencies.begin() + static_cast<std::ptrdiff_t>(split));
+  const std::vector<double> saturated(latencies.begin() + static_cast<std::ptrdiff_t>(split),
+                                      latencies.end());
+  tools::JsonLine line;
+  line["bench"] = "ingest";
+  line["cycles_per_s"] = tools::fixed(static_cast<double>(o.cycles) / p.seconds, 1);
+  line["p50_ms"] = tools::fixed(1e3 * percentile(paced, 0.50), 3);
+  line["p99_ms"] = tools::fixed(1e3 * percentile(paced, 0.99), 3);
+  line["latency_window"] = o.latency_window;
+  line["saturated_p50_ms"] = tools::fixed(1e3 * percentile(saturated, 0.50), 3);
+  line["saturated_p99_ms"] = tools::fixed(1e3 * percentile(saturated, 0.99), 3);
+  line["window"] = o.window;
+  line["batches"] = p.num_batches;
+  line["cycles"] = static_cast<long long>(o.cycles);
+  line["blocks_per_batch"] =
+      static_cast<std::size_t>(o.cycles) / std::max<std::size_t>(1, p.num_batches);
+  line["broken_bonds"] = static_cast<long long>(broken);
+  line["transport"] = "tcpq";
+  line["results"] = !o.no_results;
+  line["resends"] = static_cast<long long>(p.result.rewinds + p.latency_result.rewinds);
+  return line;
+}
+
+/// The benchmark; the exit code.
+int run(Options o) {
   spdlog::set_level(spdlog::level::warn);
-  auto loaded = twin::load_config(config_file);
+  auto loaded = twin::load_config(o.config_file);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return 2;
@@ -98,28 +209,7 @@ int main(int argc, char** argv) {
   detail.output.directory = (work / "results").string();
 
   pid_t hub = -1;
-  if (lcm_url.empty()) {
-    const int port = twin::free_loopback_port();
-    const std::string port_text = std::to_string(port);
-    const char* args[] = {
-        "java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", port_text.c_str(), nullptr};
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-    if (posix_spawnp(&hub, "java", &actions, nullptr, const_cast<char**>(args), environ) != 0) {
-      std::cerr << "peritwin-bench-ingest: cannot start java (LCM hub)\n";
-      return 3;
-    }
-    posix_spawn_file_actions_destroy(&actions);
-    if (!twin::wait_for_loopback_port(port, 30.0)) {
-      std::cerr << "peritwin-bench-ingest: the LCM hub did not come up on port " << port << '\n';
-      kill(hub, SIGTERM);
-      waitpid(hub, nullptr, 0);
-      return 3;
-    }
-    lcm_url = "tcpq://127.0.0.1:" + port_text;
-  }
+  if (o.lcm_url.empty() && (hub = start_hub(o.lcm_url)) < 0) return 3;
   auto stop_hub = [&] {
     if (hub > 0) {
       kill(hub, SIGTERM);
@@ -133,11 +223,11 @@ int main(int argc, char** argv) {
   std::vector<double> latencies;
   std::int64_t broken = -1;
   std::thread daemon_thread([&] {
-    lcm::LCM lcm(lcm_url);
+    lcm::LCM lcm(o.lcm_url);
     twin::DaemonOptions options;
     options.state_dir = work / "state";
     options.checkpoints = false;
-    options.results = !no_results;
+    options.results = !o.no_results;
     options.record_latency = true;
     twin::Daemon daemon(lcm, config, options);
     const Status started = lcm.good() ? daemon.start() : Status{failure("LCM is not good")};
@@ -159,78 +249,25 @@ int main(int argc, char** argv) {
     stop_hub();
     return 3;
   }
-
-  auto history = [&](std::int64_t n, const char* source) {
-    std::vector<LoadBlock> blocks;
-    for (std::int64_t i = 0; i < n; ++i) {
-      blocks.push_back({200.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
-    }
-    return replay::make_twin_batches(blocks, detail.id, source, batching);
-  };
-  auto latency_batches = history(latency_cycles, "bench-latency");
-  auto batches = history(cycles, "bench");
-  const auto num_latency_batches = latency_batches.size();
-  const auto num_batches = batches.size();
-  replay::ReplayResult result, latency_result;
-  double seconds = 0.0;
-  {
-    lcm::LCM lcm(lcm_url);
-    // Warm-up: one batch of another source in lockstep, so that both LCM clients are known to
-    // the hub (a fresh subscription is registered asynchronously) before the clock starts.
-    replay::ReplayOptions warm_options;
-    warm_options.lockstep = true;
-    warm_options.resend_after_s = 0.5;
-    replay::LcmReplayer warm_up(
-        lcm, replay::make_twin_batches({{200.0, 0.1, 0.0, 1}}, detail.id, "warm-up", batching),
-        warm_options);
-    if (!warm_up.run({}, {}).ok) {
-      std::cerr << "peritwin-bench-ingest: no answer from the daemon\n";
-    }
-    // Latency phase: a producer that keeps `latency_window` batches in flight, so that the
-    // latency is the daemon's and not a queue the benchmark builds on purpose.
-    replay::ReplayOptions latency_options;
-    latency_options.window = latency_window;
-    replay::LcmReplayer latency_replayer(lcm, std::move(latency_batches), latency_options);
-    latency_result = latency_replayer.run({}, {});
-    // Throughput phase: `window` batches in flight; the daemon is saturated.
-    replay::ReplayOptions options;
-    options.window = window;
-    replay::LcmReplayer replayer(lcm, std::move(batches), options);
-    const auto t0 = std::chrono::steady_clock::now();
-    result = replayer.run({}, {});
-    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
+  const Phases phases = run_phases(o, detail.id);
   stop = true;
   daemon_thread.join();
   stop_hub();
-  if (!latency_result.ok || !result.ok) {
-    std::cerr << "peritwin-bench-ingest: " << latency_result.error << " " << result.error << "\n";
+  if (!phases.latency_result.ok || !phases.result.ok) {
+    std::cerr << "peritwin-bench-ingest: " << phases.latency_result.error << " "
+              << phases.result.error << "\n";
     return 3;
   }
-  // Latencies in order of application: the warm-up batch, the latency phase, the throughput phase.
-  const auto first = std::min<std::size_t>(1, latencies.size());
-  const auto split = std::min(latencies.size(), first + num_latency_batches);
-  const std::vector<double> paced(latencies.begin() + static_cast<std::ptrdiff_t>(first),
-                                  latencies.begin() + static_cast<std::ptrdiff_t>(split));
-  const std::vector<double> saturated(latencies.begin() + static_cast<std::ptrdiff_t>(split),
-                                      latencies.end());
-  tools::JsonLine line;
-  line["bench"] = "ingest";
-  line["cycles_per_s"] = tools::fixed(static_cast<double>(cycles) / seconds, 1);
-  line["p50_ms"] = tools::fixed(1e3 * percentile(paced, 0.50), 3);
-  line["p99_ms"] = tools::fixed(1e3 * percentile(paced, 0.99), 3);
-  line["latency_window"] = latency_window;
-  line["saturated_p50_ms"] = tools::fixed(1e3 * percentile(saturated, 0.50), 3);
-  line["saturated_p99_ms"] = tools::fixed(1e3 * percentile(saturated, 0.99), 3);
-  line["window"] = window;
-  line["batches"] = num_batches;
-  line["cycles"] = static_cast<long long>(cycles);
-  line["blocks_per_batch"] =
-      static_cast<std::size_t>(cycles) / std::max<std::size_t>(1, num_batches);
-  line["broken_bonds"] = static_cast<long long>(broken);
-  line["transport"] = "tcpq";
-  line["results"] = !no_results;
-  line["resends"] = static_cast<long long>(result.rewinds + latency_result.rewinds);
-  tools::print_line(line);
+  tools::print_line(ingest_line(o, phases, latencies, broken));
   return broken == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-bench-ingest: load cycles absorbed per second by the daemon over tcpq"};
+  Options o;
+  add_options(app, o);
+  if (const auto rc = core::parse_options(app, argc, argv, core::ParseErrors::cli11)) return *rc;
+  return run(std::move(o));
 }

@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
 #include "solver/model/fatigue_law.h"
 #include "tools/cli_checks.h"
 #include "tools/json_line.h"
@@ -75,7 +75,7 @@ tools::JsonLine run_coarse(const DetailModel& model, const EngineState& state,
   tools::JsonLine out;
   out["dx_m"] = dx;
   out["wall_s"] = tools::fixed(estimate.wall_s, 2);
-  out["rss_peak_mb"] = tools::fixed(bench::proc_status_mb("VmHWM"), 1);
+  out["rss_peak_mb"] = tools::fixed(core::proc_status_mb("VmHWM"), 1);
   out["central"] = tools::whole(estimate.central);
   out["low"] = tools::whole(estimate.low);
   out["high"] = tools::whole(estimate.high);
@@ -107,7 +107,7 @@ tools::JsonLine run_mode(const DetailModel& model, const FatigueEngine& live,
       estimate_life(model, state, spectrum, !sequential, nullptr, fork ? &live : nullptr, &stats);
   tools::JsonLine out;
   out["wall_s"] = tools::fixed(estimate.wall_s, 2);
-  out["rss_peak_mb"] = tools::fixed(bench::proc_status_mb("VmHWM"), 1);
+  out["rss_peak_mb"] = tools::fixed(core::proc_status_mb("VmHWM"), 1);
   out["central"] = tools::whole(estimate.central);
   out["low"] = tools::whole(estimate.low);
   out["high"] = tools::whole(estimate.high);
@@ -176,7 +176,7 @@ int run(const Options& o) {
     }
   }
   const double live_s = seconds_since(t0);
-  const double live_peak_mb = bench::proc_status_mb("VmHWM");  // build and live run
+  const double live_peak_mb = core::proc_status_mb("VmHWM");  // build and live run
   const EngineState state = live->export_state();
 
   tools::JsonLine line;

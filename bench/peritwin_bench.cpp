@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "bench/dynamics_bench.h"
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
 #include "replay/cycle_blocks.h"
 #include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
@@ -53,10 +53,10 @@ class PhasePeaks {
   PhasePeaks() { reset(); }
   /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
   void mark(peritwin::tools::JsonLine& line, const std::string& name) {
-    const double peak = peritwin::bench::proc_status_mb("VmHWM");
+    const double peak = peritwin::core::proc_status_mb("VmHWM");
     line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(peak, 1);
     line["rss_after_" + name + "_mb"] =
-        peritwin::tools::fixed(peritwin::bench::proc_status_mb("VmRSS"), 1);
+        peritwin::tools::fixed(peritwin::core::proc_status_mb("VmRSS"), 1);
     note(name, peak);
     reset();
   }
@@ -72,10 +72,10 @@ class PhasePeaks {
   [[nodiscard]] bool reset_ok() const { return reset_ok_; }
   /// The process's peak over all phases (getrusage's ru_maxrss follows the resets).
   [[nodiscard]] double peak_mb() const {
-    return std::max(overall_, peritwin::bench::proc_status_mb("VmHWM"));
+    return std::max(overall_, peritwin::core::proc_status_mb("VmHWM"));
   }
   void reset() {
-    overall_ = std::max(overall_, peritwin::bench::proc_status_mb("VmHWM"));
+    overall_ = std::max(overall_, peritwin::core::proc_status_mb("VmHWM"));
     std::ofstream clear("/proc/self/clear_refs");
     clear << "5";
     clear.flush();
@@ -327,7 +327,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
         peaks.mark(line, "first_update");
         first_update = false;
       } else {
-        const double peak = peritwin::bench::proc_status_mb("VmHWM");
+        const double peak = peritwin::core::proc_status_mb("VmHWM");
         double& slot = engine.rebuilds() != rebuilds_before ? peak_rebuilds : peak_updates;
         slot = std::max(slot, peak);
         peaks.reset();

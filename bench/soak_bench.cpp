@@ -40,12 +40,14 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <sstream>
 #include <thread>
 
 #include "bench/child_process.h"
-#include "bench/proc_files.h"
+#include "core/proc_files.h"
+#include "core/program.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
@@ -56,11 +58,12 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace peritwin;
 using peritwin::bench::Clock;
-using peritwin::bench::proc_status_kb;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
+using peritwin::core::proc_status_kb;
 
 /// The B1 example made cheap per batch: each edit's first string must occur once.
 std::string soak_config_text(const std::string& example) {
@@ -166,11 +169,8 @@ class Producer {
   std::string error_;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using namespace peritwin;
-  CLI::App app{"peritwin-bench-soak: the daemon's RSS over many single-block batches (tcpq)"};
+/// The command line.
+struct Options {
   std::int64_t batches = 1'000'000;
   std::int64_t window = 256;
   double max_seconds = 3600.0;
@@ -178,156 +178,101 @@ int main(int argc, char** argv) {
   std::string daemon_bin = (fs::read_symlink("/proc/self/exe").parent_path() / "peritwin").string();
   bool keep = false;
   std::int64_t warm_up = 10'000;
-  app.add_option("--batches", batches, "single-block batches to publish (default 1000000)")
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--batches", o.batches, "single-block batches to publish (default 1000000)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--window", window, "batches in flight beyond the applied one (default 256)")
+  app.add_option("--window", o.window, "batches in flight beyond the applied one (default 256)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--max-seconds", max_seconds, "stop publishing after this long (default 3600)")
+  app.add_option("--max-seconds", o.max_seconds, "stop publishing after this long (default 3600)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--config", config_file,
+  app.add_option("--config", o.config_file,
                  "detail configuration, used as it is (default: the B1 example at dx = 2.5 mm, "
                  "no life estimates, no fields, checkpoints every 1000 batches)");
-  app.add_option("--lcm-url", lcm_url, "use this tcpq/udpm URL instead of starting a hub");
-  app.add_option("--daemon", daemon_bin, "the peritwin binary (default: next to this one)");
-  app.add_option("--warm-up", warm_up,
+  app.add_option("--lcm-url", o.lcm_url, "use this tcpq/udpm URL instead of starting a hub");
+  app.add_option("--daemon", o.daemon_bin, "the peritwin binary (default: next to this one)");
+  app.add_option("--warm-up", o.warm_up,
                  "batches before the start sample (default 10000, at most a tenth of --batches)")
       ->check(CLI::PositiveNumber);
-  app.add_flag("--keep", keep, "keep the work directory (config, daemon log, checkpoints)");
-  CLI11_PARSE(app, argc, argv);
+  app.add_flag("--keep", o.keep, "keep the work directory (config, daemon log, checkpoints)");
+}
 
-  const fs::path work =
-      fs::temp_directory_path() / ("peritwin_bench_soak_" + std::to_string(getpid()));
-  fs::create_directories(work);
-  if (config_file.empty()) {
-    const std::string text =
-        soak_config_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
-    if (text.empty()) {
-      std::cerr << "peritwin-bench-soak: the B1 example no longer has the lines this bench edits\n";
-      return 2;
-    }
-    config_file = (work / "soak.toml").string();
-    std::ofstream(config_file) << text;
-  }
-  const auto loaded = twin::load_config(config_file);
-  if (!loaded.ok()) {
-    std::cerr << loaded.error_text();
-    return 2;
-  }
-  const std::string detail = loaded.config->details.front().id;
-
-  pid_t hub = -1, daemon = -1;
-  std::unique_ptr<lcm::LCM> lcm;
-  std::unique_ptr<Producer> producer_owner;
-  auto cleanup = [&] {
-    producer_owner.reset();  // unsubscribes while the hub is still there
-    lcm.reset();
-    if (daemon > 0) stop_child(daemon, 600.0);
-    if (hub > 0) stop_child(hub, 60.0);
-    if (!keep) fs::remove_all(work);
-  };
-  if (lcm_url.empty()) {
-    const int port = twin::free_loopback_port();
-    hub = spawn(
-        {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
-        "/dev/null", (work / "hub.log").string());
-    if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
-      std::cerr << "peritwin-bench-soak: the LCM hub did not come up on port " << port << "\n";
-      cleanup();
-      return 3;
-    }
-    lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
-  }
-  const std::string daemon_log = (work / "daemon.log").string();
-  daemon = spawn({daemon_bin, "--config", config_file, "--lcm-url", lcm_url, "--state-dir",
-                  (work / "state").string(), "--no-results", "--log-level", "warn"},
-                 "/dev/null", daemon_log);
-  if (daemon < 0) {
-    std::cerr << "peritwin-bench-soak: cannot start " << daemon_bin << "\n";
-    cleanup();
-    return 3;
-  }
-
-  lcm = std::make_unique<lcm::LCM>(lcm_url);
-  if (!lcm->good() || !messages::transport_up(*lcm)) {
-    std::cerr << "peritwin-bench-soak: cannot open LCM at " << lcm_url << "\n";
-    cleanup();
-    return 3;
-  }
-  producer_owner = std::make_unique<Producer>(*lcm, detail, window);
-  Producer& producer = *producer_owner;
-  auto daemon_alive = [&] { return waitpid(daemon, nullptr, WNOHANG) == 0; };
-  // Warm-up: batch 1 alone, resent until applied (the daemon builds its model meanwhile).
-  if (!producer.run_to(1, 600.0, daemon_alive) || producer.applied() < 1) {
-    std::cerr << "peritwin-bench-soak: the daemon did not apply the first batch: "
-              << producer.error() << " (see " << daemon_log << ")\n";
-    keep = true;
-    cleanup();
-    return 3;
-  }
+/// The daemon's RSS over the run: the samples and the numbers of the JSON line.
+struct Measurement {
   tools::JsonLine samples = tools::JsonLine::array();
+  std::int64_t rss_first = -1, rss_start = -1, rss_end = -1, rss_peak = -1, applied = 0;
+  std::vector<std::int64_t> tenth_max;
+  double seconds = 0.0;
+  bool ok = false, alive = false;
+};
+
+/// Publishes the batches after the first one (applied), sampling the daemon's VmRSS.
+Measurement measure(Options& o, Producer& producer, pid_t daemon,
+                    const std::function<bool()>& daemon_alive) {
+  Measurement m;
   auto sample = [&] {
     const std::int64_t rss = proc_status_kb("VmRSS", std::to_string(daemon));
-    samples.push_back({{"batches", producer.applied()}, {"rss_kb", rss}});
+    m.samples.push_back({{"batches", producer.applied()}, {"rss_kb", rss}});
     return rss;
   };
-  const std::int64_t rss_first = sample();
+  m.rss_first = sample();
   // Warm-up: the allocator's and LCM's buffers, HDF5's on the first checkpoints.
-  warm_up = std::clamp<std::int64_t>(warm_up, 1, std::max<std::int64_t>(1, batches / 10));
-  bool ok = producer.run_to(warm_up, 120.0, daemon_alive);
-  const std::int64_t rss_start = ok && producer.applied() >= warm_up ? sample() : -1;
+  o.warm_up = std::clamp<std::int64_t>(o.warm_up, 1, std::max<std::int64_t>(1, o.batches / 10));
+  m.ok = producer.run_to(o.warm_up, 120.0, daemon_alive);
+  m.rss_start = m.ok && producer.applied() >= o.warm_up ? sample() : -1;
   const auto t0 = Clock::now();
   // The highest RSS of each tenth, from a sample every second: a daemon whose RSS swings (a life
   // estimate's model copy comes and goes) is compared by its upper envelope, not by two samples
   // that may fall on a swing.
-  std::vector<std::int64_t> tenth_max;
   auto last_poll = Clock::now();
-  for (int tenth = 1; tenth <= 10 && ok && rss_start >= 0; ++tenth) {
-    const std::int64_t target = warm_up + (batches - warm_up) * tenth / 10;
-    tenth_max.push_back(-1);
-    auto note = [&](std::int64_t rss) { tenth_max.back() = std::max(tenth_max.back(), rss); };
-    ok = producer.run_to(target, 120.0, [&] {
+  for (int tenth = 1; tenth <= 10 && m.ok && m.rss_start >= 0; ++tenth) {
+    const std::int64_t target = o.warm_up + (o.batches - o.warm_up) * tenth / 10;
+    m.tenth_max.push_back(-1);
+    auto note = [&](std::int64_t rss) { m.tenth_max.back() = std::max(m.tenth_max.back(), rss); };
+    m.ok = producer.run_to(target, 120.0, [&] {
       if (since(last_poll) >= 1.0) {
         last_poll = Clock::now();
         note(proc_status_kb("VmRSS", std::to_string(daemon)));
       }
-      return since(t0) < max_seconds && daemon_alive();
+      return since(t0) < o.max_seconds && daemon_alive();
     });
     if (producer.applied() < target) break;  // --max-seconds, or the daemon is gone
-    if (target > warm_up) note(sample());
+    if (target > o.warm_up) note(sample());
   }
-  while (!tenth_max.empty() && tenth_max.back() < 0) tenth_max.pop_back();
-  const double seconds = since(t0);
-  const std::int64_t applied = producer.applied();
-  const bool alive = daemon_alive();
-  const std::int64_t rss_end = alive ? proc_status_kb("VmRSS", std::to_string(daemon)) : -1;
-  const std::int64_t rss_peak = alive ? proc_status_kb("VmHWM", std::to_string(daemon)) : -1;
-  if (alive && samples.back()["batches"] != applied) {
-    samples.push_back({{"batches", applied}, {"rss_kb", rss_end}});
+  while (!m.tenth_max.empty() && m.tenth_max.back() < 0) m.tenth_max.pop_back();
+  m.seconds = since(t0);
+  m.applied = producer.applied();
+  m.alive = daemon_alive();
+  m.rss_end = m.alive ? proc_status_kb("VmRSS", std::to_string(daemon)) : -1;
+  m.rss_peak = m.alive ? proc_status_kb("VmHWM", std::to_string(daemon)) : -1;
+  if (m.alive && m.samples.back()["batches"] != m.applied) {
+    m.samples.push_back({{"batches", m.applied}, {"rss_kb", m.rss_end}});
   }
-  const int daemon_exit = alive ? stop_child(daemon, 600.0) : -1;
-  daemon = -1;
-  if (!ok || !alive) {
-    std::cerr << "peritwin-bench-soak: "
-              << (!alive ? "the daemon died (see " + daemon_log + ")" : producer.error()) << "\n";
-    keep = true;
-  }
-  const double measured = static_cast<double>(std::max<std::int64_t>(0, applied - warm_up));
-  const double growth_kb = static_cast<double>(rss_end - rss_start);
+  return m;
+}
+
+/// The JSON line of the run.
+tools::JsonLine soak_line(const Options& o, const Measurement& m, const Producer& producer,
+                          int daemon_exit) {
+  const std::vector<std::int64_t>& tenth_max = m.tenth_max;
+  const double measured = static_cast<double>(std::max<std::int64_t>(0, m.applied - o.warm_up));
+  const double growth_kb = static_cast<double>(m.rss_end - m.rss_start);
   tools::JsonLine line;
   line["bench"] = "soak";
-  line["batches"] = applied;
-  line["warm_up_batches"] = warm_up;
-  line["complete"] = applied >= batches;
-  line["seconds"] = tools::fixed(seconds, 1);
-  line["batches_per_s"] = tools::fixed(measured / std::max(seconds, 1e-9), 1);
-  line["rss_first_batch_kb"] = rss_first;
-  line["rss_start_kb"] = rss_start;
-  line["rss_end_kb"] = rss_end;
-  line["rss_peak_kb"] = rss_peak;
-  const bool measured_rss = rss_start > 0 && rss_end > 0 && measured > 0;
+  line["batches"] = m.applied;
+  line["warm_up_batches"] = o.warm_up;
+  line["complete"] = m.applied >= o.batches;
+  line["seconds"] = tools::fixed(m.seconds, 1);
+  line["batches_per_s"] = tools::fixed(measured / std::max(m.seconds, 1e-9), 1);
+  line["rss_first_batch_kb"] = m.rss_first;
+  line["rss_start_kb"] = m.rss_start;
+  line["rss_end_kb"] = m.rss_end;
+  line["rss_peak_kb"] = m.rss_peak;
+  const bool measured_rss = m.rss_start > 0 && m.rss_end > 0 && measured > 0;
   line["growth_percent"] =
       measured_rss
-          ? tools::JsonLine(tools::fixed(100.0 * growth_kb / static_cast<double>(rss_start), 2))
+          ? tools::JsonLine(tools::fixed(100.0 * growth_kb / static_cast<double>(m.rss_start), 2))
           : tools::JsonLine(nullptr);
   line["growth_kb_per_million_batches"] =
       measured_rss ? tools::JsonLine(tools::fixed(1e6 * growth_kb / measured, 1))
@@ -346,14 +291,116 @@ int main(int argc, char** argv) {
                         *std::max_element(tenth_max.begin(), tenth_max.begin() + half)),
                 2))
           : tools::JsonLine(nullptr);
-  line["samples"] = samples;
+  line["samples"] = m.samples;
   line["broken_bonds"] = producer.broken_bonds();
   line["resends"] = producer.resends();
   line["daemon_exit"] = daemon_exit;
-  line["transport"] = lcm_url.rfind("tcpq://", 0) == 0 ? "tcpq" : lcm_url;
-  tools::print_line(line);
+  line["transport"] = o.lcm_url.rfind("tcpq://", 0) == 0 ? "tcpq" : o.lcm_url;
+  return line;
+}
+
+/// The config file to run (the B1 example edited, written to `work`, unless --config); the
+/// detail's id, or "" (said on stderr) when it cannot be had.
+std::string prepare_config(Options& o, const fs::path& work) {
+  if (o.config_file.empty()) {
+    const std::string text =
+        soak_config_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+    if (text.empty()) {
+      std::cerr << "peritwin-bench-soak: the B1 example no longer has the lines this bench edits\n";
+      return {};
+    }
+    o.config_file = (work / "soak.toml").string();
+    std::ofstream(o.config_file) << text;
+  }
+  const auto loaded = twin::load_config(o.config_file);
+  if (!loaded.ok()) {
+    std::cerr << loaded.error_text();
+    return {};
+  }
+  return loaded.config->details.front().id;
+}
+
+/// The soak run; the exit code.
+int run(Options o) {
+  const fs::path work =
+      fs::temp_directory_path() / ("peritwin_bench_soak_" + std::to_string(getpid()));
+  fs::create_directories(work);
+  const std::string detail = prepare_config(o, work);
+  if (detail.empty()) return 2;
+
+  pid_t hub = -1, daemon = -1;
+  std::unique_ptr<lcm::LCM> lcm;
+  std::unique_ptr<Producer> producer_owner;
+  auto cleanup = [&] {
+    producer_owner.reset();  // unsubscribes while the hub is still there
+    lcm.reset();
+    if (daemon > 0) stop_child(daemon, 600.0);
+    if (hub > 0) stop_child(hub, 60.0);
+    if (!o.keep) fs::remove_all(work);
+  };
+  if (o.lcm_url.empty()) {
+    const int port = twin::free_loopback_port();
+    hub = spawn(
+        {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
+        "/dev/null", (work / "hub.log").string());
+    if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+      std::cerr << "peritwin-bench-soak: the LCM hub did not come up on port " << port << "\n";
+      cleanup();
+      return 3;
+    }
+    o.lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
+  }
+  const std::string daemon_log = (work / "daemon.log").string();
+  daemon = spawn({o.daemon_bin, "--config", o.config_file, "--lcm-url", o.lcm_url, "--state-dir",
+                  (work / "state").string(), "--no-results", "--log-level", "warn"},
+                 "/dev/null", daemon_log);
+  if (daemon < 0) {
+    std::cerr << "peritwin-bench-soak: cannot start " << o.daemon_bin << "\n";
+    cleanup();
+    return 3;
+  }
+
+  lcm = std::make_unique<lcm::LCM>(o.lcm_url);
+  if (!lcm->good() || !messages::transport_up(*lcm)) {
+    std::cerr << "peritwin-bench-soak: cannot open LCM at " << o.lcm_url << "\n";
+    cleanup();
+    return 3;
+  }
+  producer_owner = std::make_unique<Producer>(*lcm, detail, o.window);
+  Producer& producer = *producer_owner;
+  const std::function<bool()> daemon_alive = [&] { return waitpid(daemon, nullptr, WNOHANG) == 0; };
+  // Warm-up: batch 1 alone, resent until applied (the daemon builds its model meanwhile).
+  if (!producer.run_to(1, 600.0, daemon_alive) || producer.applied() < 1) {
+    std::cerr << "peritwin-bench-soak: the daemon did not apply the first batch: "
+              << producer.error() << " (see " << daemon_log << ")\n";
+    o.keep = true;
+    cleanup();
+    return 3;
+  }
+  const Measurement m = measure(o, producer, daemon, daemon_alive);
+  const int daemon_exit = m.alive ? stop_child(daemon, 600.0) : -1;
+  daemon = -1;
+  if (!m.ok || !m.alive) {
+    std::cerr << "peritwin-bench-soak: "
+              << (!m.alive ? "the daemon died (see " + daemon_log + ")" : producer.error()) << "\n";
+    o.keep = true;
+  }
+  tools::print_line(soak_line(o, m, producer, daemon_exit));
   const std::int64_t broken = producer.broken_bonds();
   cleanup();
-  if (!ok || !alive || daemon_exit != 0) return 3;
+  if (!m.ok || !m.alive || daemon_exit != 0) return 3;
   return broken == 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-bench-soak: the daemon's RSS over many single-block batches (tcpq)"};
+  Options o;
+  add_options(app, o);
+  if (const auto rc =
+          peritwin::core::parse_options(app, argc, argv, peritwin::core::ParseErrors::cli11)) {
+    return *rc;
+  }
+  return run(std::move(o));
 }

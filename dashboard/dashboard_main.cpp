@@ -12,17 +12,18 @@
 // for the hub), 2 bad usage (nothing started), 3 runtime failure (the address cannot be bound,
 // LCM cannot open the URL). A tcpq hub that is down is waited for, as the daemon does.
 #include <netinet/tcp.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <thread>
 
+#include "core/exit_codes.h"
+#include "core/program.h"
+#include "core/stop_signal.h"
 #include "dashboard/backfill.h"
 #include "dashboard/server.h"
 #include "dashboard/store.h"
@@ -36,13 +37,9 @@
 
 namespace {
 
-std::atomic<int> g_signal{0};
-
-extern "C" void on_signal(int signal) { g_signal.store(signal); }
-
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 2;
-constexpr int kExitRuntime = 3;
+using peritwin::core::kExitOk;
+using peritwin::core::kExitRuntime;
+using peritwin::core::kExitUsage;
 
 struct Listen {
   std::string host;
@@ -100,12 +97,7 @@ int main(int argc, char** argv) {
                  "(<DIR>/<id>.h5 or <DIR>/*/<id>.h5)");
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? kExitOk : kExitUsage;
-  }
+  if (const auto rc = peritwin::core::parse_options(app, argc, argv)) return *rc;
   const auto address = parse_listen(listen);
   if (!address) {
     std::fprintf(stderr, "--listen: expected HOST:PORT (e.g. 127.0.0.1:8080), got \"%s\"\n",
@@ -113,19 +105,10 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
 
-  auto logger = spdlog::stderr_color_mt("peritwin-dashboard");
-  spdlog::set_default_logger(logger);
-  spdlog::set_pattern("%Y-%m-%d %H:%M:%S.%e %^%l%$ %v");
-  spdlog::set_level(spdlog::level::from_str(log_level));
-  if (lcm_url.empty()) {
-    if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
-  }
+  peritwin::core::set_up_logging("peritwin-dashboard", log_level);
+  lcm_url = peritwin::core::lcm_url_or_default(lcm_url);
 
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGTERM, &sa, nullptr);
-  sigaction(SIGINT, &sa, nullptr);
+  peritwin::core::install_stop_handler();
   // A browser that goes away mid-write must not kill the process.
   signal(SIGPIPE, SIG_IGN);
 
@@ -182,7 +165,7 @@ int main(int argc, char** argv) {
 
   int rc = kExitOk;
   try {
-    peritwin::twin::HubConnection hub(lcm_url, [] { return g_signal.load() == 0; });
+    peritwin::twin::HubConnection hub(lcm_url, peritwin::core::keep_running);
     const std::unique_ptr<lcm::LCM> connection = hub.open();
     if (!connection) {
       if (!hub.error().empty()) {
@@ -201,7 +184,7 @@ int main(int argc, char** argv) {
       // Mesh requests are looked for every 0.1 s, not after every message (at 1100 messages/s
       // that was 1100 passes over every detail under the store's mutex).
       auto requests_due = peritwin::dashboard::Clock::time_point{};
-      while (g_signal.load() == 0) {
+      while (peritwin::core::keep_running()) {
         if (!hub.connected()) {
           hub.reconnect(lcm);
         } else {
@@ -223,7 +206,8 @@ int main(int argc, char** argv) {
     spdlog::critical("runtime failure: {}", e.what());
     rc = kExitRuntime;
   }
-  if (const int s = g_signal.load(); s != 0) spdlog::info("signal {} received: stopping", s);
+  if (const int s = peritwin::core::stop_signal(); s != 0)
+    spdlog::info("signal {} received: stopping", s);
   store.close();
   server.stop();
   http.join();

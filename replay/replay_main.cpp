@@ -33,29 +33,30 @@
 // source that already has batches (without --continue/--resume), 3 runtime failure (LCM, no
 // progress; a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <csignal>
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <limits>
 
+#include "core/exit_codes.h"
+#include "core/program.h"
+#include "core/stop_signal.h"
 #include "messages/auth.h"
 #include "messages/transport.h"
+#include "replay/in_process_twin.h"
 #include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "tools/cli_checks.h"
 #include "twin/io/detail_outputs.h"
 
 namespace {
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int signal) { g_signal.store(signal); }
-constexpr int kExitOk = 0, kExitUsage = 2, kExitRuntime = 3;
-}  // namespace
 
-int main(int argc, char** argv) {
-  using namespace peritwin;
-  CLI::App app{"peritwin-replay: recorded load history -> load blocks -> the twin"};
+using namespace peritwin;
+using core::kExitOk;
+using core::kExitRuntime;
+using core::kExitUsage;
+
+/// The command line.
+struct Options {
   std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
   replay::ProducerKeyOptions keys;
   std::string generate_key_file;
@@ -63,256 +64,293 @@ int main(int argc, char** argv) {
   bool lockstep = false, in_process = false, json = false;
   bool append = false, resume = false;
   std::string residue = "half";
+  std::string results_dir;
   replay::SeriesRules series_rules;
   replay::BatchingOptions batching;
-  replay::ReplayOptions options;
+  replay::ReplayOptions replay;
+};
+
+void add_options(CLI::App& app, Options& o) {
   // Required unless --generate-key-file (checked after parsing).
-  app.add_option("--config", config_file, "detail configuration (TOML), required");
-  app.add_option("--history", history, "load history file, required");
-  app.add_option("--format", format, "series|cycles|spectrum|lcm-log (default cycles)")
+  app.add_option("--config", o.config_file, "detail configuration (TOML), required");
+  app.add_option("--history", o.history, "load history file, required");
+  app.add_option("--format", o.format, "series|cycles|spectrum|lcm-log (default cycles)")
       ->check(CLI::IsMember({"series", "cycles", "spectrum", "lcm-log"}));
-  app.add_option("--residue", residue,
+  app.add_option("--residue", o.residue,
                  "series: the rainflow residue at the end of the history: half (ASTM E1049-85, "
                  "default), whole (each range a whole cycle, conservative) or keep (not applied)")
       ->check(CLI::IsMember({"half", "whole", "keep"}));
-  app.add_option("--gate", series_rules.gate,
+  app.add_option("--gate", o.series_rules.gate,
                  "series: hysteresis gate (N); load ranges up to it are no reversals (default 0)")
       ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
-  app.add_option("--alpha-bin", series_rules.alpha_bin,
+  app.add_option("--alpha-bin", o.series_rules.alpha_bin,
                  "series: round each cycle's load angle to a multiple of this (rad; 0 = none)")
       ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
-  app.add_option("--detail", detail_id, "detail id (default: the config's first detail)");
-  app.add_option("--source", source_id, "source id of the batches (default replay)");
-  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
-  app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch before the next");
+  app.add_option("--detail", o.detail_id, "detail id (default: the config's first detail)");
+  app.add_option("--source", o.source_id, "source id of the batches (default replay)");
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
+  app.add_flag("--lockstep", o.lockstep, "wait for the daemon to apply each batch before the next");
   auto* in_process_opt =
-      app.add_flag("--in-process", in_process,
+      app.add_flag("--in-process", o.in_process,
                    "run the twin library here (no LCM, no daemon; ignores --key-file)");
-  std::string results_dir;
-  app.add_option("--results", results_dir,
+  app.add_option("--results", o.results_dir,
                  "with --in-process: write the daemon's results files (HDF5 + XDMF, PNGs with "
                  "[detail.output] png) to this directory")
       ->needs(in_process_opt);
-  replay::add_key_options(app, keys);
+  replay::add_key_options(app, o.keys);
   auto* generate_opt =
-      app.add_option("--generate-key-file", generate_key_file,
+      app.add_option("--generate-key-file", o.generate_key_file,
                      "write a new key file (random keys, mode 0600, never overwrites) and exit");
-  app.add_option("--key-ids", key_ids,
+  app.add_option("--key-ids", o.key_ids,
                  "ids of the generated keys, comma-separated (default: --source and "
                  "--daemon-key, i.e. replay,peritwin)")
       ->delimiter(',')
       ->needs(generate_opt);
-  app.add_flag("--json", json, "JSON lines: one per state update, then a summary");
-  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 1024)")
+  app.add_flag("--json", o.json, "JSON lines: one per state update, then a summary");
+  app.add_option("--batch-blocks", o.batching.max_blocks, "blocks per batch at most (default 1024)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--batch-cycles", batching.max_cycles,
+  app.add_option("--batch-cycles", o.batching.max_cycles,
                  "close a batch once it holds this many cycles (default 1000)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
+  app.add_option("--window", o.replay.window, "batches in flight without --lockstep (256)")
       ->check(CLI::PositiveNumber);
   auto* continue_opt = app.add_flag(
-      "--continue", append,
+      "--continue", o.append,
       "the daemon already has batches of --source: number this history's after them (append)");
-  app.add_flag("--resume", resume,
+  app.add_flag("--resume", o.resume,
                "the daemon already has batches of --source from this same history: number them "
                "from 1 again, the applied ones are duplicates (finish an interrupted replay)")
       ->excludes(continue_opt);
-  app.add_option("--give-up-after", options.give_up_after_s,
+  app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress before failing (default 120)")
       ->check(peritwin::cli::finite_positive());
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? kExitOk : kExitUsage;
-  }
-  options.lockstep = lockstep;
-  if (!generate_key_file.empty()) {
-    if (key_ids.empty()) key_ids = {source_id, keys.daemon_key_id};
-    if (const Status written = messages::write_key_file(generate_key_file, key_ids); !written) {
-      std::cerr << "peritwin-replay: " << written.error().message() << "\n";
-      return kExitUsage;
-    }
-    std::cerr << "peritwin-replay: wrote " << generate_key_file << " (mode 0600), keys:";
-    for (const auto& id : key_ids) std::cerr << " " << id;
-    std::cerr << "\n";
-    return kExitOk;
-  }
-  if (config_file.empty() || history.empty()) {
-    std::cerr << "peritwin-replay: " << (config_file.empty() ? "--config" : "--history")
-              << " is required\nRun with --help for more information.\n";
-    return kExitUsage;
-  }
+}
 
-  // The memory bound (75 % of physical memory) only where the model is built: in-process.
-  const auto loaded =
-      twin::load_config(config_file, {in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
-  if (!loaded.ok()) {
-    std::cerr << loaded.error_text();
+/// --generate-key-file: writes the key file and says so.
+int generate_key_file(Options o) {
+  if (o.key_ids.empty()) o.key_ids = {o.source_id, o.keys.daemon_key_id};
+  if (const Status written = messages::write_key_file(o.generate_key_file, o.key_ids); !written) {
+    std::cerr << "peritwin-replay: " << written.error().message() << "\n";
     return kExitUsage;
   }
-  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, detail_id);
-  if (detail == nullptr) {
-    std::cerr << "peritwin-replay: no detail \"" << detail_id << "\" in " << config_file << "\n";
-    return kExitUsage;
-  }
-  const auto fmt = format == "series"     ? replay::InputFormat::series
-                   : format == "spectrum" ? replay::InputFormat::spectrum
-                   : format == "lcm-log"  ? replay::InputFormat::lcm_log
-                                          : replay::InputFormat::cycles;
-  series_rules.residue = residue == "whole"  ? replay::ResidueRule::whole
-                         : residue == "keep" ? replay::ResidueRule::keep
-                                             : replay::ResidueRule::half;
-  series_rules.compressed_bonds_fatigue = detail->fatigue.compressed_bonds_fatigue;
-  const auto read = replay::read_history(history, fmt, detail->id, series_rules);
+  std::cerr << "peritwin-replay: wrote " << o.generate_key_file << " (mode 0600), keys:";
+  for (const auto& id : o.key_ids) std::cerr << " " << id;
+  std::cerr << "\n";
+  return kExitOk;
+}
+
+/// The blocks of --history, checked by the daemon's rule; an exit code when they cannot be read
+/// or are invalid.
+std::optional<int> read_history(Options& o, const twin::DetailConfig& detail,
+                                replay::HistoryBlocks& out) {
+  const auto fmt = o.format == "series"     ? replay::InputFormat::series
+                   : o.format == "spectrum" ? replay::InputFormat::spectrum
+                   : o.format == "lcm-log"  ? replay::InputFormat::lcm_log
+                                            : replay::InputFormat::cycles;
+  o.series_rules.residue = o.residue == "whole"  ? replay::ResidueRule::whole
+                           : o.residue == "keep" ? replay::ResidueRule::keep
+                                                 : replay::ResidueRule::half;
+  o.series_rules.compressed_bonds_fatigue = detail.fatigue.compressed_bonds_fatigue;
+  auto read = replay::read_history(o.history, fmt, detail.id, o.series_rules);
   if (!read) {
     std::cerr << "peritwin-replay: " << read.error().message() << "\n";
     return kExitUsage;
   }
-  const replay::HistoryBlocks& history_blocks = *read;
-  if (const Status valid = replay::check_blocks(history_blocks.blocks); !valid) {
-    std::cerr << "peritwin-replay: " << history << ": history " << valid.error().message()
+  out = std::move(*read);
+  if (const Status valid = replay::check_blocks(out.blocks); !valid) {
+    std::cerr << "peritwin-replay: " << o.history << ": history " << valid.error().message()
               << " (the daemon would reject it)\n";
     return kExitUsage;
   }
-  if (source_id.empty() || source_id.size() > twin::kMaxSourceIdLength) {
+  return std::nullopt;
+}
+
+/// The keys, before anything is published: a missing one is a usage error.
+std::optional<int> load_keys(const Options& o, replay::ReplayAuth& auth) {
+  if (!o.keys.key_file.empty() && o.in_process) {
+    std::cerr << "peritwin-replay: --in-process publishes and receives nothing: --key-file "
+                 "ignored\n";
+    return std::nullopt;
+  }
+  auto loaded_keys = replay::load_producer_keys(o.keys, o.source_id);
+  if (!loaded_keys) {
+    std::cerr << "peritwin-replay: " << loaded_keys.error().message() << "\n";
+    return kExitUsage;
+  }
+  auth = std::move(*loaded_keys);
+  if (o.keys.sign_only) {
+    std::cerr << "peritwin-replay: --sign-only: the daemon's STATE and REJECT are not "
+                 "verified\n";
+  }
+  return std::nullopt;
+}
+
+/// The history's numbers on stderr before the run.
+void report_history(const Options& o, const twin::DetailConfig& detail,
+                    const replay::HistoryBlocks& history, std::size_t batches) {
+  std::int64_t cycles = 0;
+  for (const auto& b : history.blocks) cycles += b.count;
+  std::cerr << "peritwin-replay: " << o.history << ": " << history.blocks.size() << " blocks, "
+            << cycles << " cycles -> " << batches << " batches for " << detail.id
+            << (o.in_process ? " (in-process)"
+                : o.lockstep ? " (lockstep)"
+                             : "")
+            << "\n";
+  if (!history.note.empty()) std::cerr << "peritwin-replay: " << history.note << "\n";
+  if (history.conversion && !o.json) {
+    std::cerr << "peritwin-replay: " << replay::describe_skipped(*history.conversion) << "\n";
+  }
+}
+
+/// --in-process: the batches applied here, with --results the daemon's results files written.
+int replay_in_process(const Options& o, const twin::DetailConfig& detail,
+                      const std::vector<twin::Batch>& batches, replay::StatePrinter& printer,
+                      std::optional<peritwin_msgs::damage_state_t>& final_state) {
+  twin::DetailConfig run_detail = detail;
+  std::unique_ptr<twin::DetailOutputs> outputs;
+  replay::TwinObserver on_twin;
+  if (!o.results_dir.empty()) {
+    run_detail.output.directory = o.results_dir;
+    on_twin = [&outputs](const twin::Twin& t, bool last) {
+      if (!outputs) {
+        outputs = std::make_unique<twin::DetailOutputs>(t);
+      } else if (!last) {
+        outputs->record(t);
+      }
+      if (last) outputs->finish(t);
+    };
+  }
+  const auto r = replay::run_in_process(run_detail, batches, printer.callback(), on_twin);
+  if (!r.error.empty()) {
+    std::cerr << "peritwin-replay: " << r.error << "\n";
+    return kExitUsage;
+  }
+  final_state = r.final_state;
+  return kExitOk;
+}
+
+/// Over LCM: what the daemon has applied of --source decides the numbering (--continue,
+/// --resume), then the batches are published; the final state, or an exit code.
+int replay_over_lcm(const Options& o, const twin::DetailConfig& detail,
+                    const replay::HistoryBlocks& history, std::vector<twin::Batch> batches,
+                    replay::ReplayAuth auth, replay::StatePrinter& printer,
+                    std::optional<peritwin_msgs::damage_state_t>& final_state) {
+  const std::string lcm_url = core::lcm_url_or_default(o.lcm_url);
+  // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
+  const auto hub = messages::tcpq_hub(lcm_url);
+  if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+    std::cerr << "peritwin-replay: LCM hub " << lcm_url << " unreachable: " << up.error().message()
+              << "\n";
+    return kExitRuntime;
+  }
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good() || !messages::transport_up(lcm)) {
+    std::cerr << "peritwin-replay: cannot open LCM at \"" << messages::shown_url(lcm_url) << "\"\n";
+    return kExitRuntime;
+  }
+  core::install_stop_handler();
+  replay::ReplayResult r;
+  bool lost = false;
+  {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
+    std::int64_t applied = 0;
+    {
+      replay::BatchSender probe(lcm, detail.id, o.source_id, o.replay, auth);
+      probe.on_state(printer.callback());
+      const auto learned = probe.probe_applied(core::keep_running);
+      if (!learned) {
+        std::cerr << "peritwin-replay: "
+                  << (messages::transport_up(lcm) ? "" : "LCM hub " + lcm_url + ": ")
+                  << learned.error().message() << "\n";
+        return kExitRuntime;
+      }
+      applied = *learned;
+    }
+    if (applied > 0 && !o.append && !o.resume) {
+      std::cerr << "peritwin-replay: source '" << o.source_id << "' already has batches up to seq "
+                << applied << " applied on detail " << detail.id
+                << "; use --continue to append this history after them, --resume to finish an "
+                   "interrupted replay of the same history, or a new --source\n";
+      return kExitUsage;
+    }
+    if (applied > 0 && o.append) {
+      batches = replay::make_twin_batches(history.blocks, detail.id, o.source_id, o.batching,
+                                          applied + 1);
+      std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
+                << applied + static_cast<std::int64_t>(batches.size()) << "\n";
+    } else if (applied > 0) {
+      std::cerr << "peritwin-replay: --resume: seqs 1 to " << applied
+                << " are already applied, sending from " << applied + 1 << "\n";
+    }
+    replay::LcmReplayer replayer(lcm, std::move(batches), o.replay, std::move(auth));
+    r = replayer.run(printer.callback(), core::keep_running);
+    lost = !messages::transport_up(lcm);
+  }
+  std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
+            << " resend(s)\n";
+  if (!r.ok) {
+    std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
+              << "\n";
+    return kExitRuntime;
+  }
+  final_state = r.final_state;
+  return kExitOk;
+}
+
+/// The replay of `o` (after --generate-key-file and the required options); the exit code.
+int run(Options o) {
+  // The memory bound (75 % of physical memory) only where the model is built: in-process.
+  const auto loaded = twin::load_config(
+      o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
+  if (!loaded.ok()) {
+    std::cerr << loaded.error_text();
+    return kExitUsage;
+  }
+  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, o.detail_id);
+  if (detail == nullptr) {
+    std::cerr << "peritwin-replay: no detail \"" << o.detail_id << "\" in " << o.config_file
+              << "\n";
+    return kExitUsage;
+  }
+  replay::HistoryBlocks history;
+  if (auto rc = read_history(o, *detail, history)) return *rc;
+  if (o.source_id.empty() || o.source_id.size() > twin::kMaxSourceIdLength) {
     std::cerr << "peritwin-replay: --source must have 1 to 64 characters\n";
     return kExitUsage;
   }
-  // The keys, before anything is published: a missing one is a usage error.
   replay::ReplayAuth auth;
-  if (!keys.key_file.empty() && in_process) {
-    std::cerr << "peritwin-replay: --in-process publishes and receives nothing: --key-file "
-                 "ignored\n";
-  } else {
-    auto loaded_keys = replay::load_producer_keys(keys, source_id);
-    if (!loaded_keys) {
-      std::cerr << "peritwin-replay: " << loaded_keys.error().message() << "\n";
-      return kExitUsage;
-    }
-    auth = std::move(*loaded_keys);
-    if (keys.sign_only) {
-      std::cerr << "peritwin-replay: --sign-only: the daemon's STATE and REJECT are not "
-                   "verified\n";
-    }
-  }
-  auto batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching);
-  std::int64_t cycles = 0;
-  for (const auto& b : history_blocks.blocks) cycles += b.count;
-  std::cerr << "peritwin-replay: " << history << ": " << history_blocks.blocks.size() << " blocks, "
-            << cycles << " cycles -> " << batches.size() << " batches for " << detail->id
-            << (in_process ? " (in-process)"
-                : lockstep ? " (lockstep)"
-                           : "")
-            << "\n";
-  if (!history_blocks.note.empty()) std::cerr << "peritwin-replay: " << history_blocks.note << "\n";
-  if (history_blocks.conversion && !json) {
-    std::cerr << "peritwin-replay: " << replay::describe_skipped(*history_blocks.conversion)
-              << "\n";
-  }
+  if (auto rc = load_keys(o, auth)) return *rc;
+  auto batches = replay::make_twin_batches(history.blocks, detail->id, o.source_id, o.batching);
+  report_history(o, *detail, history, batches.size());
 
-  std::int64_t last_seq = -2, last_life = -2;
-  auto print = [&](const peritwin_msgs::damage_state_t& s) {
-    if (s.state_seq == last_seq && s.remaining_life_seq == last_life) return;
-    last_seq = s.state_seq;
-    last_life = s.remaining_life_seq;
-    std::cout << (json ? twin::state_json(s) : replay::describe(s)) << std::endl;
-  };
-
+  replay::StatePrinter printer(o.json);
   std::optional<peritwin_msgs::damage_state_t> final_state;
-  if (in_process) {
-    twin::DetailConfig run_detail = *detail;
-    std::unique_ptr<twin::DetailOutputs> outputs;
-    replay::TwinObserver on_twin;
-    if (!results_dir.empty()) {
-      run_detail.output.directory = results_dir;
-      on_twin = [&outputs](const twin::Twin& t, bool last) {
-        if (!outputs) {
-          outputs = std::make_unique<twin::DetailOutputs>(t);
-        } else if (!last) {
-          outputs->record(t);
-        }
-        if (last) outputs->finish(t);
-      };
-    }
-    const auto r = replay::run_in_process(run_detail, batches, print, on_twin);
-    if (!r.error.empty()) {
-      std::cerr << "peritwin-replay: " << r.error << "\n";
-      return kExitUsage;
-    }
-    final_state = r.final_state;
-  } else {
-    if (lcm_url.empty()) {
-      if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
-    }
-    // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
-    const auto hub = messages::tcpq_hub(lcm_url);
-    if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
-      std::cerr << "peritwin-replay: LCM hub " << lcm_url
-                << " unreachable: " << up.error().message() << "\n";
-      return kExitRuntime;
-    }
-    lcm::LCM lcm(lcm_url);
-    if (!lcm.good() || !messages::transport_up(lcm)) {
-      std::cerr << "peritwin-replay: cannot open LCM at \"" << messages::shown_url(lcm_url)
-                << "\"\n";
-      return kExitRuntime;
-    }
-    struct sigaction sa {};
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGTERM, &sa, nullptr);
-    sigaction(SIGINT, &sa, nullptr);
-    replay::ReplayResult r;
-    bool lost = false;
-    {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
-      std::int64_t applied = 0;
-      {
-        replay::BatchSender probe(lcm, detail->id, source_id, options, auth);
-        probe.on_state(print);
-        const auto learned = probe.probe_applied([] { return g_signal.load() == 0; });
-        if (!learned) {
-          std::cerr << "peritwin-replay: "
-                    << (messages::transport_up(lcm) ? "" : "LCM hub " + lcm_url + ": ")
-                    << learned.error().message() << "\n";
-          return kExitRuntime;
-        }
-        applied = *learned;
-      }
-      if (applied > 0 && !append && !resume) {
-        std::cerr << "peritwin-replay: source '" << source_id << "' already has batches up to seq "
-                  << applied << " applied on detail " << detail->id
-                  << "; use --continue to append this history after them, --resume to finish an "
-                     "interrupted replay of the same history, or a new --source\n";
-        return kExitUsage;
-      }
-      if (applied > 0 && append) {
-        batches = replay::make_twin_batches(history_blocks.blocks, detail->id, source_id, batching,
-                                            applied + 1);
-        std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
-                  << applied + static_cast<std::int64_t>(batches.size()) << "\n";
-      } else if (applied > 0) {
-        std::cerr << "peritwin-replay: --resume: seqs 1 to " << applied
-                  << " are already applied, sending from " << applied + 1 << "\n";
-      }
-      replay::LcmReplayer replayer(lcm, std::move(batches), options, std::move(auth));
-      r = replayer.run(print, [] { return g_signal.load() == 0; });
-      lost = !messages::transport_up(lcm);
-    }
-    std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
-              << " resend(s)\n";
-    if (!r.ok) {
-      std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
-                << "\n";
-      return kExitRuntime;
-    }
-    final_state = r.final_state;
-  }
-  if (json && final_state) {
+  const int rc = o.in_process ? replay_in_process(o, *detail, batches, printer, final_state)
+                              : replay_over_lcm(o, *detail, history, std::move(batches),
+                                                std::move(auth), printer, final_state);
+  if (rc != kExitOk) return rc;
+  if (o.json && final_state) {
     std::vector<messages::SummaryObject> extra;
-    if (history_blocks.conversion) {
-      extra.push_back({"skipped_cycles", replay::skipped_cycles(*history_blocks.conversion)});
+    if (history.conversion) {
+      extra.push_back({"skipped_cycles", replay::skipped_cycles(*history.conversion)});
     }
     std::cout << twin::summary_json(*final_state, extra) << std::endl;
   }
   return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-replay: recorded load history -> load blocks -> the twin"};
+  Options o;
+  add_options(app, o);
+  if (const auto rc = core::parse_options(app, argc, argv)) return *rc;
+  o.replay.lockstep = o.lockstep;
+  if (!o.generate_key_file.empty()) return generate_key_file(std::move(o));
+  if (o.config_file.empty() || o.history.empty()) {
+    std::cerr << "peritwin-replay: " << (o.config_file.empty() ? "--config" : "--history")
+              << " is required\nRun with --help for more information.\n";
+    return kExitUsage;
+  }
+  return run(std::move(o));
 }

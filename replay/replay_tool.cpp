@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <set>
 
@@ -128,43 +129,6 @@ ReplayResult LcmReplayer::run(
   return result;
 }
 
-InProcessResult run_in_process(
-    const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
-    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
-    const TwinObserver& on_twin) {
-  InProcessResult result;
-  auto model = twin::DetailModel::build(detail);
-  if (!model) {
-    result.error = model.error().message();
-    return result;
-  }
-  auto created = twin::Twin::create(*model, {twin::LifeMode::synchronous, true});
-  if (!created) {
-    result.error = created.error().message();
-    return result;
-  }
-  auto t = std::move(*created);
-  t->catch_up_life();
-  auto state = twin::state_message(*t, twin::now_utime());
-  if (on_state) on_state(state);
-  if (on_twin) on_twin(*t, false);
-  for (const auto& b : batches) {
-    const auto outcome = t->apply(b);
-    if (outcome.verdict == twin::Verdict::failed) break;
-    if (!outcome.applied()) {
-      result.error = "batch " + std::to_string(b.seq) + ": " + outcome.what + ": " + outcome.why;
-      if (on_twin) on_twin(*t, true);
-      return result;
-    }
-    state = twin::state_message(*t, twin::now_utime());
-    if (on_state) on_state(state);
-    if (on_twin) on_twin(*t, false);
-  }
-  if (on_twin) on_twin(*t, true);
-  result.final_state = state;
-  return result;
-}
-
 std::string describe(const peritwin_msgs::damage_state_t& s) {
   char buf[320];
   std::string life = "remaining life not estimated yet";
@@ -184,6 +148,13 @@ std::string describe(const peritwin_msgs::damage_state_t& s) {
                 static_cast<long long>(s.state_seq), static_cast<long long>(s.total_cycles),
                 static_cast<long long>(s.broken_bonds), 1e3 * twin::crack_length(s));
   return buf + life;
+}
+
+void StatePrinter::print(const peritwin_msgs::damage_state_t& s) {
+  if (s.state_seq == last_seq_ && s.remaining_life_seq == last_life_) return;
+  last_seq_ = s.state_seq;
+  last_life_ = s.remaining_life_seq;
+  std::cout << (json_ ? twin::state_json(s) : describe(s)) << std::endl;
 }
 
 }  // namespace peritwin::replay

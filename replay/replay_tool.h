@@ -1,5 +1,6 @@
 // The replay tool's engine room: recorded histories -> batches of load blocks -> the twin, either
-// over LCM to a daemon (LcmReplayer) or in-process (run_in_process). See replay/replay_main.cpp.
+// over LCM to a daemon (LcmReplayer) or in-process (run_in_process, replay/in_process_twin.h). See
+// replay/replay_main.cpp.
 //
 // Batching: replay/batcher.h (make_twin_batches). Seq numbers are 1, 2, 3, ... per run by
 // default, so a daemon that already applied some of them drops those as duplicates and a replay is
@@ -22,6 +23,7 @@
 #include "messages/auth.h"
 #include "replay/batch_sender.h"
 #include "replay/batcher.h"
+#include "replay/in_process_twin.h"
 #include "replay/load_history.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "twin/config/config.h"
@@ -84,24 +86,24 @@ class LcmReplayer {
   BatchSender sender_;
 };
 
-/// Applies the batches to a fresh Twin of `detail` (deterministic mode: remaining life
-/// synchronously at the fixed points), calling on_state after every batch and once for the
-/// initial state. Returns the final state message; error set when the model cannot be built.
-/// on_twin (optional) sees the twin where on_state sees its message (`last` false), and once more
-/// after the last batch (`last` true): where peritwin-replay --results hangs the daemon's
-/// results writer (twin/io/detail_outputs.h), which this library does not link.
-struct InProcessResult {
-  std::optional<peritwin_msgs::damage_state_t> final_state;
-  std::string error;
-};
-using TwinObserver = std::function<void(const twin::Twin&, bool last)>;
-InProcessResult run_in_process(
-    const twin::DetailConfig& detail, const std::vector<twin::Batch>& batches,
-    const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
-    const TwinObserver& on_twin = {});
-
 /// "state 12: 12000 cycles, 36 broken bonds, crack 1.00 mm, remaining 48000 cycles [40000,
 /// 56000] (estimated at seq 10)".
 std::string describe(const peritwin_msgs::damage_state_t& state);
+
+/// The state lines of peritwin-replay and peritwin-stream on stdout: each state once (a new
+/// state_seq or remaining_life_seq), as twin::state_json with `json`, else describe(); flushed.
+class StatePrinter {
+ public:
+  explicit StatePrinter(bool json) : json_(json) {}
+  void print(const peritwin_msgs::damage_state_t& state);
+  /// print() as the on_state callback of a BatchSender or run_in_process (refers to this).
+  std::function<void(const peritwin_msgs::damage_state_t&)> callback() {
+    return [this](const peritwin_msgs::damage_state_t& s) { print(s); };
+  }
+
+ private:
+  bool json_;
+  std::int64_t last_seq_ = -2, last_life_ = -2;
+};
 
 }  // namespace peritwin::replay

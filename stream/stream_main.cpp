@@ -44,7 +44,6 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
@@ -55,20 +54,23 @@
 #include <map>
 #include <memory>
 
+#include "core/exit_codes.h"
+#include "core/program.h"
+#include "core/stop_signal.h"
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/transport.h"
+#include "replay/in_process_twin.h"
 #include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "stream/stream_tool.h"
 #include "tools/cli_checks.h"
 
 namespace {
-std::atomic<int> g_signal{0};
-extern "C" void on_signal(int signal) { g_signal.store(signal); }
-constexpr int kExitOk = 0, kExitUsage = 2, kExitRuntime = 3;
-
 using namespace peritwin;
+using core::kExitOk;
+using core::kExitRuntime;
+using core::kExitUsage;
 
 /// Lines from a descriptor as they arrive (stdin, a FILE, a FIFO, a TCP connection).
 class LineInput {
@@ -171,43 +173,6 @@ class SamplesInput {
   lcm::Subscription* sub_ = nullptr;
 };
 
-/// The twin in this process (deterministic mode, as peritwin-replay --in-process).
-class InProcessTwin {
- public:
-  static Expected<std::unique_ptr<InProcessTwin>, std::string> create(
-      const twin::DetailConfig& detail) {
-    auto model = twin::DetailModel::build(detail);
-    if (!model) return model.error().message();
-    auto created = twin::Twin::create(*model, {twin::LifeMode::synchronous, true});
-    if (!created) return created.error().message();
-    auto t = std::make_unique<InProcessTwin>();
-    t->twin_ = std::move(*created);
-    t->twin_->catch_up_life();
-    t->state = twin::state_message(*t->twin_, twin::now_utime());
-    return t;
-  }
-  /// False (why set) when the batch is refused for another reason than the end of life.
-  bool apply(const twin::Batch& b, std::string& why) {
-    if (ended_) return true;  // the end of life was reached: the rest is not applied
-    const auto outcome = twin_->apply(b);
-    if (outcome.verdict == twin::Verdict::failed) {
-      ended_ = true;
-      return true;
-    }
-    if (!outcome.applied()) {
-      why = "batch " + std::to_string(b.seq) + ": " + outcome.what + ": " + outcome.why;
-      return false;
-    }
-    state = twin::state_message(*twin_, twin::now_utime());
-    return true;
-  }
-  peritwin_msgs::damage_state_t state;
-
- private:
-  std::unique_ptr<twin::Twin> twin_;
-  bool ended_ = false;
-};
-
 int listen_on(int port) {
   const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return -1;
@@ -224,367 +189,422 @@ int listen_on(int port) {
   return fd;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"peritwin-stream: live load samples -> rainflow -> batches -> the twin"};
+/// The command line.
+struct Options {
   std::string config_file, detail_id, input, lcm_url, source_id = "stream", state_file;
   std::string residue = "half";
   bool lockstep = false, in_process = false, json = false;
   replay::BatchingOptions batching;
-  replay::ReplayOptions options;
-  app.add_option("--config", config_file, "detail configuration (TOML)")->required();
-  app.add_option("--detail", detail_id, "detail id (default: the config's first detail)");
-  app.add_option("--input", input, "-|FILE|FIFO|tcp://127.0.0.1:PORT|lcm")->required();
-  app.add_option("--lcm-url", lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
-  app.add_option("--source", source_id, "source id of the batches (default stream)");
-  app.add_option("--state-file", state_file,
+  replay::ReplayOptions replay;
+  replay::ProducerKeyOptions keys;
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--config", o.config_file, "detail configuration (TOML)")->required();
+  app.add_option("--detail", o.detail_id, "detail id (default: the config's first detail)");
+  app.add_option("--input", o.input, "-|FILE|FIFO|tcp://127.0.0.1:PORT|lcm")->required();
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
+  app.add_option("--source", o.source_id, "source id of the batches (default stream)");
+  app.add_option("--state-file", o.state_file,
                  "keep the stream's state here (atomic, checksummed): a restart continues it");
-  app.add_flag("--json", json, "JSON lines: one per state update, then a summary");
-  app.add_option("--batch-cycles", batching.max_cycles,
+  app.add_flag("--json", o.json, "JSON lines: one per state update, then a summary");
+  app.add_option("--batch-cycles", o.batching.max_cycles,
                  "close a batch once it holds this many cycles (default 1000)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--batch-blocks", batching.max_blocks, "blocks per batch at most (default 1024)")
+  app.add_option("--batch-blocks", o.batching.max_blocks, "blocks per batch at most (default 1024)")
       ->check(CLI::PositiveNumber);
-  app.add_option("--batch-seconds", batching.max_seconds,
+  app.add_option("--batch-seconds", o.batching.max_seconds,
                  "close a batch after this much sample time (s; default 0 = off)")
       ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
   auto* lockstep_opt =
-      app.add_flag("--lockstep", lockstep, "wait for the daemon to apply each batch");
-  app.add_option("--window", options.window, "batches in flight without --lockstep (256)")
+      app.add_flag("--lockstep", o.lockstep, "wait for the daemon to apply each batch");
+  app.add_option("--window", o.replay.window, "batches in flight without --lockstep (256)")
       ->check(CLI::PositiveNumber)
       ->excludes(lockstep_opt);
-  app.add_option("--residue", residue,
+  app.add_option("--residue", o.residue,
                  "the rainflow residue at the end of input: half (default, ASTM E1049-85, as the "
                  "replay), whole (conservative) or keep (not applied)")
       ->check(CLI::IsMember({"half", "whole", "keep"}));
   auto* in_process_opt =
-      app.add_flag("--in-process", in_process, "run the twin library here (no daemon)");
-  replay::ProducerKeyOptions keys;
-  replay::add_key_options(app, keys)->excludes(in_process_opt);
-  app.add_option("--give-up-after", options.give_up_after_s,
+      app.add_flag("--in-process", o.in_process, "run the twin library here (no daemon)");
+  replay::add_key_options(app, o.keys)->excludes(in_process_opt);
+  app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress from the daemon before failing (default 120)")
       ->check(peritwin::cli::finite_positive());
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? kExitOk : kExitUsage;
-  }
-  options.lockstep = lockstep;
-  batching.merge_identical = true;
-  const auto rule = residue == "whole"  ? replay::ResidueRule::whole
-                    : residue == "keep" ? replay::ResidueRule::keep
-                                        : replay::ResidueRule::half;
-  const auto loaded =
-      twin::load_config(config_file, {in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
-  if (!loaded.ok()) {
-    std::cerr << loaded.error_text();
-    return kExitUsage;
-  }
-  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, detail_id);
-  if (detail == nullptr) {
-    std::cerr << "peritwin-stream: no detail \"" << detail_id << "\" in " << config_file << "\n";
-    return kExitUsage;
-  }
-  if (source_id.empty() || source_id.size() > twin::kMaxSourceIdLength) {
-    std::cerr << "peritwin-stream: --source must have 1 to 64 characters\n";
-    return kExitUsage;
-  }
-  if (in_process && !state_file.empty()) {
-    std::cerr << "peritwin-stream: --state-file needs a daemon (the in-process twin is not "
-                 "persisted)\n";
-    return kExitUsage;
-  }
+}
 
-  // The keys, before anything is read or published: a missing one is a usage error.
-  auto auth = replay::load_producer_keys(keys, source_id);
-  if (!auth) {
-    std::cerr << "peritwin-stream: " << auth.error().message() << "\n";
-    return kExitUsage;
-  }
-  if (keys.sign_only) {
-    std::cerr << "peritwin-stream: --sign-only: the daemon's STATE and REJECT are not verified\n";
-  }
+/// Where the samples come from (--input).
+struct Input {
+  enum class Kind { fd, tcp, lcm } kind = Kind::fd;
+  int fd = -1, port = 0;
+  bool seekable = false;  ///< a FILE: a restart skips the lines already counted
+};
 
-  // The input.
-  enum class In { fd, tcp, lcm } kind = In::fd;
-  int fd = -1, listen_fd = -1, conn_fd = -1, port = 0;
-  bool seekable = false;
+/// Parses --input and opens a FILE or FIFO; an exit code when it cannot.
+std::optional<int> open_input(const std::string& input, Input& in) {
   if (input == "-") {
-    fd = STDIN_FILENO;
+    in.fd = STDIN_FILENO;
   } else if (input == "lcm") {
-    kind = In::lcm;
+    in.kind = Input::Kind::lcm;
   } else if (input.starts_with("tcp://")) {
-    kind = In::tcp;
+    in.kind = Input::Kind::tcp;
     const std::string rest = input.substr(6);
     const auto colon = rest.rfind(':');
     if (colon == std::string::npos || rest.substr(0, colon) != "127.0.0.1" ||
-        (port = std::atoi(rest.c_str() + colon + 1)) <= 0 || port > 65535) {
+        (in.port = std::atoi(rest.c_str() + colon + 1)) <= 0 || in.port > 65535) {
       std::cerr << "peritwin-stream: --input " << input
                 << ": expected tcp://127.0.0.1:PORT (loopback only)\n";
       return kExitUsage;
     }
   } else {
-    fd = ::open(input.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) {
+    in.fd = ::open(input.c_str(), O_RDONLY | O_CLOEXEC);
+    if (in.fd < 0) {
       std::cerr << "peritwin-stream: " << input << ": cannot open: " << std::strerror(errno)
                 << "\n";
       return kExitUsage;
     }
     struct stat st {};
-    seekable = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+    in.seekable = ::fstat(in.fd, &st) == 0 && S_ISREG(st.st_mode);
   }
+  return std::nullopt;
+}
 
-  // The state file, if any.
-  std::optional<stream::Pipeline> pipeline;
-  std::vector<twin::Batch> resend;
-  if (!state_file.empty() && std::filesystem::exists(state_file)) {
-    auto restored = stream::load_state(state_file, *detail, source_id, batching);
-    if (!restored) {
-      std::cerr << "peritwin-stream: corrupt state file " << restored.error() << "\n";
+/// The checks of the options against the config; an exit code when they fail.
+std::optional<int> check_options(const Options& o, const twin::DetailConfig* detail) {
+  if (detail == nullptr) {
+    std::cerr << "peritwin-stream: no detail \"" << o.detail_id << "\" in " << o.config_file
+              << "\n";
+    return kExitUsage;
+  }
+  if (o.source_id.empty() || o.source_id.size() > twin::kMaxSourceIdLength) {
+    std::cerr << "peritwin-stream: --source must have 1 to 64 characters\n";
+    return kExitUsage;
+  }
+  if (o.in_process && !o.state_file.empty()) {
+    std::cerr << "peritwin-stream: --state-file needs a daemon (the in-process twin is not "
+                 "persisted)\n";
+    return kExitUsage;
+  }
+  return std::nullopt;
+}
+
+/// The pipeline and the batches not acknowledged of an existing --state-file; an exit code when
+/// it is corrupt.
+std::optional<int> restore_state(const Options& o, const twin::DetailConfig& detail, bool seekable,
+                                 std::optional<stream::Pipeline>& pipeline,
+                                 std::vector<twin::Batch>& resend) {
+  auto restored = stream::load_state(o.state_file, detail, o.source_id, o.batching);
+  if (!restored) {
+    std::cerr << "peritwin-stream: corrupt state file " << restored.error() << "\n";
+    return kExitUsage;
+  }
+  pipeline.emplace(std::move(restored->pipeline));
+  resend = std::move(restored->unacknowledged);
+  auto& c = pipeline->counts;
+  std::uint64_t lost = 0;
+  if (!seekable) {
+    const auto received = stream::read_received(o.state_file);
+    if (received && *received > c.samples) lost = *received - c.samples;
+    c.lost_samples += lost;
+  }
+  std::cerr << "peritwin-stream: resumed from " << o.state_file << ": " << c.samples << " samples, "
+            << c.batches << " batches (next seq " << pipeline->next_seq() << ", " << resend.size()
+            << " not acknowledged); lost_samples " << lost
+            << (seekable ? " (a FILE input: the lines after line " + std::to_string(c.input_lines) +
+                               " are read again)"
+                         : " (read after the last persisted state, not counted)")
+            << "\n";
+  return std::nullopt;
+}
+
+/// LCM at `url` (a tcpq hub probed first); an exit code when it cannot be opened.
+std::optional<int> open_lcm(const std::string& url, std::unique_ptr<lcm::LCM>& lcm) {
+  const auto hub = messages::tcpq_hub(url);
+  if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+    std::cerr << "peritwin-stream: LCM hub " << url << " unreachable: " << up.error().message()
+              << "\n";
+    return kExitRuntime;
+  }
+  lcm = std::make_unique<lcm::LCM>(url);
+  if (!lcm->good() || !messages::transport_up(*lcm)) {
+    std::cerr << "peritwin-stream: cannot open LCM at \"" << messages::shown_url(url) << "\"\n";
+    return kExitRuntime;
+  }
+  return std::nullopt;
+}
+
+/// --input lcm: the subscription, with --key-file the samples verified too (with the key of each
+/// message's source_id), unless --sign-only (the key file then holds only this stream's key).
+std::optional<int> subscribe_samples(const Options& o, lcm::LCM& lcm, const std::string& detail_id,
+                                     std::map<std::string, std::int64_t> taken,
+                                     std::unique_ptr<SamplesInput>& samples_in) {
+  std::optional<messages::KeyRing> ring;
+  if (!o.keys.key_file.empty() && !o.keys.sign_only) {
+    auto loaded_ring = messages::KeyRing::load(o.keys.key_file);
+    if (!loaded_ring) {
+      std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
       return kExitUsage;
     }
-    pipeline.emplace(std::move(restored->pipeline));
-    resend = std::move(restored->unacknowledged);
-    auto& c = pipeline->counts;
-    std::uint64_t lost = 0;
-    if (!seekable) {
-      const auto received = stream::read_received(state_file);
-      if (received && *received > c.samples) lost = *received - c.samples;
-      c.lost_samples += lost;
-    }
-    std::cerr << "peritwin-stream: resumed from " << state_file << ": " << c.samples << " samples, "
-              << c.batches << " batches (next seq " << pipeline->next_seq() << ", " << resend.size()
-              << " not acknowledged); lost_samples " << lost
-              << (seekable ? " (a FILE input: the lines after line " +
-                                 std::to_string(c.input_lines) + " are read again)"
-                           : " (read after the last persisted state, not counted)")
-              << "\n";
+    ring = std::move(*loaded_ring);
+  } else {
+    std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
+                 "--sign-only): anyone on the bus can feed this stream\n";
+  }
+  samples_in = std::make_unique<SamplesInput>(lcm, detail_id, std::move(ring), std::move(taken));
+  return std::nullopt;
+}
+
+/// One run of the stream: set_up(), then loop() to the end of input, then finish().
+class Stream {
+ public:
+  Stream(const Options& o, const twin::DetailConfig& detail, Input in)
+      : o_(o), detail_(detail), in_(in), printer_(o.json) {}
+  Stream(const Stream&) = delete;
+  Stream& operator=(const Stream&) = delete;
+  ~Stream() {
+    if (conn_fd_ >= 0) ::close(conn_fd_);
+    if (listen_fd_ >= 0) ::close(listen_fd_);
   }
 
-  // Where the batches go.
-  if (lcm_url.empty()) {
-    if (const char* env = std::getenv("LCM_DEFAULT_URL")) lcm_url = env;
+  /// The state file, LCM, the twin or the daemon, the TCP listener; an exit code when one fails.
+  std::optional<int> set_up(replay::ReplayAuth auth);
+  /// Reads the input and delivers the batches until its end, a signal or an error.
+  void loop();
+  /// The residue and the last batch, then waits for the daemon; the report and the summary.
+  int finish();
+
+ private:
+  std::optional<int> set_up_sender(replay::ReplayAuth auth, std::vector<twin::Batch> resend);
+  bool deliver();
+  void take(double t, double p, double alpha);
+  void take_line(const std::string& line);
+  bool read_input(bool backlog, std::vector<std::string>& lines);
+  void save_state(const std::vector<twin::Batch>& pending) {
+    if (const Status saved = stream::save_state(o_.state_file, *pipeline_, pending); !saved) {
+      error_ = saved.error().message();
+    }
   }
-  std::unique_ptr<lcm::LCM> lcm;
-  if (!in_process || kind == In::lcm) {
-    const auto hub = messages::tcpq_hub(lcm_url);
-    if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
-      std::cerr << "peritwin-stream: LCM hub " << lcm_url
-                << " unreachable: " << up.error().message() << "\n";
-      return kExitRuntime;
-    }
-    lcm = std::make_unique<lcm::LCM>(lcm_url);
-    if (!lcm->good() || !messages::transport_up(*lcm)) {
-      std::cerr << "peritwin-stream: cannot open LCM at \"" << messages::shown_url(lcm_url)
-                << "\"\n";
-      return kExitRuntime;
-    }
+
+  const Options& o_;
+  const twin::DetailConfig& detail_;
+  Input in_;
+  replay::StatePrinter printer_;
+  std::optional<stream::Pipeline> pipeline_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<SamplesInput> samples_in_;
+  std::unique_ptr<replay::BatchSender> sender_;
+  std::unique_ptr<replay::InProcessTwin> local_;
+  int listen_fd_ = -1, conn_fd_ = -1;
+  std::uint64_t skip_lines_ = 0, bad_reported_ = 0;
+  std::vector<twin::Batch> closed_;
+  std::string error_;
+  LineInput lines_in_;
+};
+
+std::optional<int> Stream::set_up(replay::ReplayAuth auth) {
+  std::vector<twin::Batch> resend;
+  if (!o_.state_file.empty() && std::filesystem::exists(o_.state_file)) {
+    if (auto rc = restore_state(o_, detail_, in_.seekable, pipeline_, resend)) return rc;
+  }
+  // Where the batches go.
+  const std::string lcm_url = core::lcm_url_or_default(o_.lcm_url);
+  if (!o_.in_process || in_.kind == Input::Kind::lcm) {
+    if (auto rc = open_lcm(lcm_url, lcm_)) return rc;
   }
   // Subscribed before anything else happens on the bus (the probe, the first state printed):
   // a sample message published once the stream has said it is up is never missed.
-  std::unique_ptr<SamplesInput> samples_in;
-  if (kind == In::lcm) {
-    // With --key-file the samples are verified too (with the key of each message's source_id),
-    // unless --sign-only (the key file then holds only this stream's key).
-    std::optional<messages::KeyRing> ring;
-    if (!keys.key_file.empty() && !keys.sign_only) {
-      auto loaded_ring = messages::KeyRing::load(keys.key_file);
-      if (!loaded_ring) {
-        std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
-        return kExitUsage;
-      }
-      ring = std::move(*loaded_ring);
-    } else {
-      std::cerr << "peritwin-stream: the samples on the bus are not verified (no --key-file, or "
-                   "--sign-only): anyone on the bus can feed this stream\n";
+  if (in_.kind == Input::Kind::lcm) {
+    if (auto rc = subscribe_samples(
+            o_, *lcm_, detail_.id,
+            pipeline_ ? pipeline_->samples_taken : std::map<std::string, std::int64_t>{},
+            samples_in_)) {
+      return rc;
     }
-    samples_in = std::make_unique<SamplesInput>(
-        *lcm, detail->id, std::move(ring),
-        pipeline ? pipeline->samples_taken : std::map<std::string, std::int64_t>{});
   }
-  struct sigaction sa {};
-  sa.sa_handler = on_signal;
-  sigemptyset(&sa.sa_mask);
-  sigaction(SIGTERM, &sa, nullptr);
-  sigaction(SIGINT, &sa, nullptr);
+  core::install_stop_handler();
   std::signal(SIGPIPE, SIG_IGN);
-
-  std::int64_t last_seq = -2, last_life = -2;
-  auto print = [&](const peritwin_msgs::damage_state_t& s) {
-    if (s.state_seq == last_seq && s.remaining_life_seq == last_life) return;
-    last_seq = s.state_seq;
-    last_life = s.remaining_life_seq;
-    std::cout << (json ? twin::state_json(s) : replay::describe(s)) << std::endl;
-  };
-  std::unique_ptr<replay::BatchSender> sender;
-  std::unique_ptr<InProcessTwin> local;
-  if (in_process) {
-    auto created = InProcessTwin::create(*detail);
+  if (o_.in_process) {
+    auto created = replay::InProcessTwin::create(detail_);
     if (!created) {
       std::cerr << "peritwin-stream: " << created.error() << "\n";
       return kExitUsage;
     }
-    local = std::move(*created);
-    print(local->state);
-    if (!pipeline) pipeline.emplace(*detail, source_id, batching, 1);
-  } else {
-    sender = std::make_unique<replay::BatchSender>(*lcm, detail->id, source_id, options,
-                                                   std::move(*auth));
-    sender->on_state(print);
-    const auto learned = sender->probe_applied([] { return g_signal.load() == 0; });
-    if (!learned) {
-      std::cerr << "peritwin-stream: " << learned.error().message() << "\n";
-      return kExitRuntime;
-    }
-    const std::int64_t applied = *learned;
-    if (!pipeline) {
-      pipeline.emplace(*detail, source_id, batching, applied + 1);
-      if (applied > 0) {
-        std::cerr << "peritwin-stream: source '" << source_id << "' has batches up to seq "
-                  << applied << " applied on detail " << detail->id
-                  << ": this stream's batches follow from " << applied + 1 << "\n";
-      }
-    } else {
-      const std::int64_t held = resend.empty() ? pipeline->next_seq() : resend.front().seq;
-      if (applied + 1 < held) {
-        std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
-                  << source_id << "', but " << state_file << " holds batches from seq " << held
-                  << " only (the daemon lost acknowledged batches?)\n";
-        return kExitRuntime;
-      }
-      if (applied >= pipeline->next_seq()) {
-        std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
-                  << source_id << "', beyond this state file's next seq " << pipeline->next_seq()
-                  << ": another producer uses this source (use another --source)\n";
-        return kExitUsage;
-      }
-      for (auto& b : resend) {
-        if (b.seq > applied) sender->add(std::move(b));
-      }
-    }
+    local_ = std::move(*created);
+    printer_.print(local_->state());
+    if (!pipeline_) pipeline_.emplace(detail_, o_.source_id, o_.batching, 1);
+  } else if (auto rc = set_up_sender(std::move(auth), std::move(resend))) {
+    return rc;
   }
-  stream::Pipeline& pipe = *pipeline;
-  if (kind == In::tcp) {
-    listen_fd = listen_on(port);
-    if (listen_fd < 0) {
-      std::cerr << "peritwin-stream: cannot listen on 127.0.0.1:" << port << ": "
+  if (in_.kind == Input::Kind::tcp) {
+    listen_fd_ = listen_on(in_.port);
+    if (listen_fd_ < 0) {
+      std::cerr << "peritwin-stream: cannot listen on 127.0.0.1:" << in_.port << ": "
                 << std::strerror(errno) << "\n";
       return kExitRuntime;
     }
-    std::cerr << "peritwin-stream: listening on tcp://127.0.0.1:" << port << "\n";
+    std::cerr << "peritwin-stream: listening on tcp://127.0.0.1:" << in_.port << "\n";
   }
   // A FILE input after a restart: the lines the state has counted are skipped.
-  std::uint64_t skip_lines = seekable ? pipe.counts.input_lines : 0;
-  if (!seekable) pipe.counts.input_lines = 0;
+  skip_lines_ = in_.seekable ? pipeline_->counts.input_lines : 0;
+  if (!in_.seekable) pipeline_->counts.input_lines = 0;
+  return std::nullopt;
+}
 
-  std::vector<twin::Batch> closed;
-  std::string error;
-  std::uint64_t bad_reported = 0;
-  auto deliver = [&]() -> bool {
-    if (closed.empty()) return true;
-    if (!state_file.empty()) {
-      std::vector<twin::Batch> pending =
-          sender ? sender->unacknowledged() : std::vector<twin::Batch>{};
-      pending.insert(pending.end(), closed.begin(), closed.end());
-      if (const Status saved = stream::save_state(state_file, pipe, pending); !saved) {
-        error = saved.error().message();
-        return false;
-      }
+/// The sender to the daemon: what the daemon has applied of --source decides the first seq (or,
+/// with a state file, which of its batches are sent again).
+std::optional<int> Stream::set_up_sender(replay::ReplayAuth auth, std::vector<twin::Batch> resend) {
+  sender_ = std::make_unique<replay::BatchSender>(*lcm_, detail_.id, o_.source_id, o_.replay,
+                                                  std::move(auth));
+  sender_->on_state(printer_.callback());
+  const auto learned = sender_->probe_applied(core::keep_running);
+  if (!learned) {
+    std::cerr << "peritwin-stream: " << learned.error().message() << "\n";
+    return kExitRuntime;
+  }
+  const std::int64_t applied = *learned;
+  if (!pipeline_) {
+    pipeline_.emplace(detail_, o_.source_id, o_.batching, applied + 1);
+    if (applied > 0) {
+      std::cerr << "peritwin-stream: source '" << o_.source_id << "' has batches up to seq "
+                << applied << " applied on detail " << detail_.id
+                << ": this stream's batches follow from " << applied + 1 << "\n";
     }
-    for (auto& b : closed) {
-      if (sender) {
-        sender->add(std::move(b));
-      } else if (!local->apply(b, error)) {
-        return false;
-      } else {
-        print(local->state);
-      }
-    }
-    closed.clear();
-    return true;
-  };
-  auto take = [&](double t, double p, double alpha) {
-    if (pipe.last_time && !(t > *pipe.last_time)) {
-      if (bad_reported++ < 5) {
-        std::cerr << "peritwin-stream: sample at t = " << t << " s skipped: time not after "
-                  << *pipe.last_time << " s\n";
-      }
-      ++pipe.counts.bad_lines;
-      return;
-    }
-    pipe.sample(t, p, alpha, closed);
-  };
-  auto take_line = [&](const std::string& line) {
-    ++pipe.counts.input_lines;
-    const auto parsed = stream::parse_line(line);
-    if (parsed.kind == stream::ParsedLine::Kind::sample) {
-      take(parsed.t, parsed.p, parsed.alpha);
-    } else if (parsed.kind == stream::ParsedLine::Kind::bad) {
-      ++pipe.counts.bad_lines;
-      if (bad_reported++ < 5) {
-        std::cerr << "peritwin-stream: "
-                  << (kind == In::tcp ? input
-                      : input == "-"  ? "stdin"
-                                      : input)
-                  << ": line " << pipe.counts.input_lines << " skipped: " << parsed.why << "\n";
-      }
-    }
-  };
+    return std::nullopt;
+  }
+  const std::int64_t held = resend.empty() ? pipeline_->next_seq() : resend.front().seq;
+  if (applied + 1 < held) {
+    std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
+              << o_.source_id << "', but " << o_.state_file << " holds batches from seq " << held
+              << " only (the daemon lost acknowledged batches?)\n";
+    return kExitRuntime;
+  }
+  if (applied >= pipeline_->next_seq()) {
+    std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
+              << o_.source_id << "', beyond this state file's next seq " << pipeline_->next_seq()
+              << ": another producer uses this source (use another --source)\n";
+    return kExitUsage;
+  }
+  for (auto& b : resend) {
+    if (b.seq > applied) sender_->add(std::move(b));
+  }
+  return std::nullopt;
+}
 
-  LineInput lines_in;
+/// The closed batches to the daemon or the twin (persisted first with a state file); false
+/// (error_ set) when that fails.
+bool Stream::deliver() {
+  if (closed_.empty()) return true;
+  if (!o_.state_file.empty()) {
+    std::vector<twin::Batch> pending =
+        sender_ ? sender_->unacknowledged() : std::vector<twin::Batch>{};
+    pending.insert(pending.end(), closed_.begin(), closed_.end());
+    save_state(pending);
+    if (!error_.empty()) return false;
+  }
+  for (auto& b : closed_) {
+    if (sender_) {
+      sender_->add(std::move(b));
+    } else if (!local_->apply(b, error_)) {
+      return false;
+    } else {
+      printer_.print(local_->state());
+    }
+  }
+  closed_.clear();
+  return true;
+}
+
+void Stream::take(double t, double p, double alpha) {
+  stream::Pipeline& pipe = *pipeline_;
+  if (pipe.last_time && !(t > *pipe.last_time)) {
+    if (bad_reported_++ < 5) {
+      std::cerr << "peritwin-stream: sample at t = " << t << " s skipped: time not after "
+                << *pipe.last_time << " s\n";
+    }
+    ++pipe.counts.bad_lines;
+    return;
+  }
+  pipe.sample(t, p, alpha, closed_);
+}
+
+void Stream::take_line(const std::string& line) {
+  stream::Pipeline& pipe = *pipeline_;
+  ++pipe.counts.input_lines;
+  const auto parsed = stream::parse_line(line);
+  if (parsed.kind == stream::ParsedLine::Kind::sample) {
+    take(parsed.t, parsed.p, parsed.alpha);
+  } else if (parsed.kind == stream::ParsedLine::Kind::bad) {
+    ++pipe.counts.bad_lines;
+    if (bad_reported_++ < 5) {
+      std::cerr << "peritwin-stream: "
+                << (in_.kind == Input::Kind::tcp ? o_.input
+                    : o_.input == "-"            ? "stdin"
+                                                 : o_.input)
+                << ": line " << pipe.counts.input_lines << " skipped: " << parsed.why << "\n";
+    }
+  }
+}
+
+/// The lines of the input available now (none with a backlog): the FILE, FIFO or stdin, or the
+/// TCP connection (accepting one when there is none). False at the end of input.
+bool Stream::read_input(bool backlog, std::vector<std::string>& lines) {
+  const int wait_ms = sender_ ? 0 : 50;
+  if (backlog) return true;
+  if (in_.kind == Input::Kind::fd) {
+    return lines_in_.read(in_.fd, wait_ms, lines);
+  } else if (in_.kind == Input::Kind::tcp) {
+    if (conn_fd_ < 0) {
+      pollfd p{listen_fd_, POLLIN, 0};
+      if (::poll(&p, 1, wait_ms) > 0) {
+        conn_fd_ = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
+        lines_in_ = LineInput{};
+      }
+    } else if (!lines_in_.read(conn_fd_, wait_ms, lines)) {
+      ::close(conn_fd_);
+      conn_fd_ = -1;
+    }
+  }
+  return true;
+}
+
+void Stream::loop() {
+  stream::Pipeline& pipe = *pipeline_;
   bool input_open = true;
   bool lines_idle = false;  // the last pass read no line: wait for the input or the bus
   std::vector<std::string> lines;
-  while (input_open && g_signal.load() == 0) {
+  while (input_open && core::keep_running()) {
     // Back-pressure: a FILE is read no faster than the daemon applies.
     const bool backlog =
-        sender && sender->last_seq() - std::max<std::int64_t>(sender->acked_seq(), 0) >
-                      static_cast<std::int64_t>(4 * std::max<std::size_t>(options.window, 1));
+        sender_ && sender_->last_seq() - std::max<std::int64_t>(sender_->acked_seq(), 0) >
+                       static_cast<std::int64_t>(4 * std::max<std::size_t>(o_.replay.window, 1));
     // One wait over the input and the bus: a sample that closes a batch is read the moment it
     // arrives, not after an LCM wait (which cost up to 20 ms of latency per batch, issue 16).
-    const int input_fd = kind == In::fd    ? fd
-                         : kind == In::tcp ? (conn_fd >= 0 ? conn_fd : listen_fd)
-                                           : -1;
-    if (sender && lines_idle) {
-      pollfd p[2] = {{input_fd, POLLIN, 0}, {lcm->getFileno(), POLLIN, 0}};
+    const int input_fd = in_.kind == Input::Kind::fd    ? in_.fd
+                         : in_.kind == Input::Kind::tcp ? (conn_fd_ >= 0 ? conn_fd_ : listen_fd_)
+                                                        : -1;
+    if (sender_ && lines_idle) {
+      pollfd p[2] = {{input_fd, POLLIN, 0}, {lcm_->getFileno(), POLLIN, 0}};
       const nfds_t n = input_fd >= 0 && !backlog ? 2 : 1;
       if (n == 1) p[0] = p[1];
       ::poll(p, n, 20);
     }
-    const int wait_ms = sender ? 0 : 50;
     lines.clear();
-    if (!backlog) {
-      if (kind == In::fd) {
-        input_open = lines_in.read(fd, wait_ms, lines);
-      } else if (kind == In::tcp) {
-        if (conn_fd < 0) {
-          pollfd p{listen_fd, POLLIN, 0};
-          if (::poll(&p, 1, wait_ms) > 0) {
-            conn_fd = ::accept4(listen_fd, nullptr, nullptr, SOCK_CLOEXEC);
-            lines_in = LineInput{};
-          }
-        } else if (!lines_in.read(conn_fd, wait_ms, lines)) {
-          ::close(conn_fd);
-          conn_fd = -1;
-        }
-      }
-    }
+    input_open = read_input(backlog, lines);
     for (const auto& line : lines) {
-      if (skip_lines > 0) {
-        --skip_lines;
+      if (skip_lines_ > 0) {
+        --skip_lines_;
         continue;
       }
       take_line(line);
     }
-    if (samples_in) {
-      if (!sender && twin::handle_lcm(*lcm, 50) < 0 && errno != EINTR) {
-        error = "LCM failed while receiving";
+    if (samples_in_) {
+      if (!sender_ && twin::handle_lcm(*lcm_, 50) < 0 && errno != EINTR) {
+        error_ = "LCM failed while receiving";
         break;
       }
-      while (!samples_in->inbox.empty()) {
-        const auto s = std::move(samples_in->inbox.front());
-        samples_in->inbox.pop_front();
+      while (!samples_in_->inbox.empty()) {
+        const auto s = std::move(samples_in_->inbox.front());
+        samples_in_->inbox.pop_front();
         for (std::size_t i = 0; i < s.p.size(); ++i) {
           take(s.time(i), s.p[i], s.alpha.empty() ? 0.0 : s.alpha[i]);
         }
@@ -592,68 +612,107 @@ int main(int argc, char** argv) {
       }
     }
     if (!deliver()) break;
-    if (!state_file.empty()) stream::write_received(state_file, pipe.counts.samples);
+    if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
     lines_idle = lines.empty();
-    if (sender && sender->pump(0) == replay::BatchSender::Progress::failed) {
-      error = sender->error();
+    if (sender_ && sender_->pump(0) == replay::BatchSender::Progress::failed) {
+      error_ = sender_->error();
       break;
     }
   }
-  if (error.empty()) {
-    pipe.finish(rule, closed);
-    if (!deliver()) {
-      // error set
-    } else if (sender) {
-      if (!state_file.empty()) {
-        if (const Status saved = stream::save_state(state_file, pipe, sender->unacknowledged());
-            !saved) {
-          error = saved.error().message();
-        }
-      }
-      sender->finish();
-      while (error.empty()) {
-        const auto p = sender->pump(20);
+}
+
+/// The "stream" and "skipped_cycles" objects of the --json summary.
+std::vector<messages::SummaryObject> summary_extra(const stream::Pipeline& pipe) {
+  const auto& rf = pipe.rainflow();
+  replay::ConversionStats conversion = pipe.conversion();
+  conversion.nonfinite_samples = rf.nonfinite_samples;
+  conversion.reversals = rf.reversals;
+  return {{"stream",
+           {{"samples", static_cast<double>(pipe.counts.samples)},
+            {"nonfinite_samples", static_cast<double>(rf.nonfinite_samples)},
+            {"bad_lines", static_cast<double>(pipe.counts.bad_lines)},
+            {"reversals", static_cast<double>(rf.reversals)},
+            {"cycles", static_cast<double>(pipe.counts.block_cycles)},
+            {"batches", static_cast<double>(pipe.counts.batches)},
+            {"lost_samples", static_cast<double>(pipe.counts.lost_samples)}}},
+          {"skipped_cycles", replay::skipped_cycles(conversion)}};
+}
+
+int Stream::finish() {
+  stream::Pipeline& pipe = *pipeline_;
+  const replay::ResidueRule rule = o_.residue == "whole"  ? replay::ResidueRule::whole
+                                   : o_.residue == "keep" ? replay::ResidueRule::keep
+                                                          : replay::ResidueRule::half;
+  if (error_.empty()) {
+    pipe.finish(rule, closed_);
+    if (deliver() && sender_) {
+      if (!o_.state_file.empty()) save_state(sender_->unacknowledged());
+      sender_->finish();
+      while (error_.empty()) {
+        const auto p = sender_->pump(20);
         if (p == replay::BatchSender::Progress::done) break;
-        if (p == replay::BatchSender::Progress::failed) error = sender->error();
+        if (p == replay::BatchSender::Progress::failed) error_ = sender_->error();
       }
-      if (error.empty() && !state_file.empty()) {
-        if (const Status saved = stream::save_state(state_file, pipe, sender->unacknowledged());
-            !saved) {
-          error = saved.error().message();
-        }
-      }
+      if (error_.empty() && !o_.state_file.empty()) save_state(sender_->unacknowledged());
     }
   }
-  if (!state_file.empty()) stream::write_received(state_file, pipe.counts.samples);
-  if (conn_fd >= 0) ::close(conn_fd);
-  if (listen_fd >= 0) ::close(listen_fd);
+  if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
+  if (conn_fd_ >= 0) ::close(conn_fd_);
+  if (listen_fd_ >= 0) ::close(listen_fd_);
+  conn_fd_ = listen_fd_ = -1;
   const auto& rf = pipe.rainflow();
   std::cerr << "peritwin-stream: " << pipe.counts.samples << " samples (" << rf.nonfinite_samples
             << " non-finite, " << pipe.counts.bad_lines << " bad lines), " << rf.reversals
             << " reversals, " << pipe.counts.block_cycles << " cycles in " << pipe.counts.batches
             << " batches, lost_samples " << pipe.counts.lost_samples << "\n";
-  if (!error.empty()) {
-    std::cerr << "peritwin-stream: " << error << "\n";
+  if (!error_.empty()) {
+    std::cerr << "peritwin-stream: " << error_ << "\n";
     return kExitRuntime;
   }
   std::optional<peritwin_msgs::damage_state_t> final_state;
-  if (local) final_state = local->state;
-  if (sender) final_state = sender->last_state();
-  if (json && final_state) {
-    replay::ConversionStats conversion = pipe.conversion();
-    conversion.nonfinite_samples = rf.nonfinite_samples;
-    conversion.reversals = rf.reversals;
-    std::vector<messages::SummaryObject> extra{
-        {"stream",
-         {{"samples", static_cast<double>(pipe.counts.samples)},
-          {"nonfinite_samples", static_cast<double>(rf.nonfinite_samples)},
-          {"bad_lines", static_cast<double>(pipe.counts.bad_lines)},
-          {"reversals", static_cast<double>(rf.reversals)},
-          {"cycles", static_cast<double>(pipe.counts.block_cycles)},
-          {"batches", static_cast<double>(pipe.counts.batches)},
-          {"lost_samples", static_cast<double>(pipe.counts.lost_samples)}}},
-        {"skipped_cycles", replay::skipped_cycles(conversion)}};
-    std::cout << twin::summary_json(*final_state, extra) << std::endl;
+  if (local_) final_state = local_->state();
+  if (sender_) final_state = sender_->last_state();
+  if (o_.json && final_state) {
+    std::cout << twin::summary_json(*final_state, summary_extra(pipe)) << std::endl;
   }
   return kExitOk;
+}
+
+/// The stream of `o` to its end; the exit code.
+int run(Options o) {
+  o.replay.lockstep = o.lockstep;
+  o.batching.merge_identical = true;
+  const auto loaded = twin::load_config(
+      o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
+  if (!loaded.ok()) {
+    std::cerr << loaded.error_text();
+    return kExitUsage;
+  }
+  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, o.detail_id);
+  if (auto rc = check_options(o, detail)) return *rc;
+  // The keys, before anything is read or published: a missing one is a usage error.
+  auto auth = replay::load_producer_keys(o.keys, o.source_id);
+  if (!auth) {
+    std::cerr << "peritwin-stream: " << auth.error().message() << "\n";
+    return kExitUsage;
+  }
+  if (o.keys.sign_only) {
+    std::cerr << "peritwin-stream: --sign-only: the daemon's STATE and REJECT are not verified\n";
+  }
+  Input in;
+  if (auto rc = open_input(o.input, in)) return *rc;
+  Stream stream(o, *detail, in);
+  if (auto rc = stream.set_up(std::move(*auth))) return *rc;
+  stream.loop();
+  return stream.finish();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"peritwin-stream: live load samples -> rainflow -> batches -> the twin"};
+  Options o;
+  add_options(app, o);
+  if (const auto rc = core::parse_options(app, argc, argv)) return *rc;
+  return run(std::move(o));
 }

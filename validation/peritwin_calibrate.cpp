@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "core/exit_codes.h"
+#include "core/program.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "tools/cli_checks.h"
 #include "tools/json_line.h"
@@ -28,9 +30,9 @@ namespace {
 using namespace peritwin;
 using namespace peritwin::validation;
 
-constexpr int kExitOk = 0;
-constexpr int kExitUsage = 2;
-constexpr int kExitFailed = 3;
+using core::kExitOk;
+using core::kExitUsage;
+constexpr int kExitFailed = core::kExitRuntime;  // the calibration failed
 
 /// A finite number in the open interval (lo, hi).
 CLI::Validator finite_open(double lo, double hi) {
@@ -209,21 +211,19 @@ tools::JsonLine result_json(const Inputs& in, const CalibrationResult& cal,
   return j;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{
-      "peritwin-calibrate: the strain-range fatigue law's parameters (000 Eq. 14-20) for your "
-      "material, grid and PD model, as a [detail.fatigue] table to paste into a detail config.\n"
-      "A2 (phase II, depends on dx and the horizon) is calibrated by 000 App. A: PD runs of an "
-      "ASTM E647 compact-tension coupon (B1's, scaled to --width, with your material) at the "
-      "calibration load, A2 rescaled until the PD life to K_max = K_c equals the life the Paris "
-      "law gives (integral form, docs/validation.md). m2 = Paris M (000 Eq. 25). A1, m1 (phase I) "
-      "come from strain-life data (000 Eq. 23) if you give any, else B1's Al 6061-T6 values (000 "
-      "Eq. 48). Then the PD and Paris lives at other loads as a check.\n"
-      "Units: SI (Pa, m, N) except the Paris constant C, whose units --paris-units states.\n"
-      "Exit codes: 0 calibrated, 2 bad input, 3 calibration failed."};
+/// The command line: the inputs, and what only steers the run.
+struct Options {
   Inputs in;
+  double paris_c = 0.0, phi0 = 0.0, thickness = 0.0, p_max = 0.0;
+  std::vector<std::string> sn_points;
+  double m1 = 0.0, a1 = 0.0, intercept = 0.0;
+  CLI::Option *m1_opt = nullptr, *a1_opt = nullptr, *intercept_opt = nullptr, *limit_opt = nullptr;
+  double a2_trial = 0.0;
+  bool no_check = false, dry_run = false, json = false;
+};
+
+void add_options(CLI::App& app, Options& o) {
+  Inputs& in = o.in;
   CalibrationSetup& s = in.setup;
   Material& mat = s.coupon.material;
   // Material.
@@ -238,8 +238,7 @@ int main(int argc, char** argv) {
       ->required()
       ->check(cli::finite_positive());
   // Paris law.
-  double paris_c = 0.0;
-  app.add_option("--paris-c", paris_c,
+  app.add_option("--paris-c", o.paris_c,
                  "Paris constant C of da/dN = C dK^M, in the units of --paris-units")
       ->required()
       ->check(cli::finite_positive());
@@ -272,45 +271,39 @@ int main(int argc, char** argv) {
                  "fatigue law the parameters are for: strain_range (default) | energy (000 Sec. 4, "
                  "same A1, m1, A2, m2)")
       ->check(CLI::IsMember({"strain_range", "energy"}));
-  double phi0 = 0.0;
-  app.add_option("--phi0", phi0,
+  app.add_option("--phi0", o.phi0,
                  "phase-switch damage (default: the config's, the split damage at the horizon "
                  "ratio, 0.398 at 3.015)")
       ->check(cli::finite_in(0.01, 0.99));
   // Coupon and load.
   app.add_option("--width", s.coupon.width, "CT coupon width W (m), default 0.050 as B1; a0 = 0.3W")
       ->check(cli::finite_in(0.005, 1.0));
-  double thickness = 0.0;
-  app.add_option("--thickness", thickness, "CT coupon thickness B (m), default 0.2W (B1: 10 mm)")
+  app.add_option("--thickness", o.thickness, "CT coupon thickness B (m), default 0.2W (B1: 10 mm)")
       ->check(cli::finite_in(1e-4, 1.0));
-  double p_max = 0.0;
-  app.add_option("--p-max", p_max,
+  app.add_option("--p-max", o.p_max,
                  "calibration P_max (N); default: K_max at a0 at B1's fraction of K_c (0.206), "
                  "i.e. 4 kN * (K_c/48.7 MPa*sqrt(m)) * (B/10 mm) * sqrt(W/50 mm)")
       ->check(cli::finite_positive());
   app.add_option("--r", s.r, "calibration load ratio R = P_min/P_max (default 0.1)")
       ->check(cli::finite_in(0.0, 0.9));
   // Phase I.
-  std::vector<std::string> sn_points;
-  app.add_option("--sn-curve", sn_points,
+  app.add_option("--sn-curve", o.sn_points,
                  "strain-life point EPS:N (cyclic strain range, cycles to failure), repeated or "
                  "comma-separated, >= 2: A1, m1 by the least squares of 000 Eq. (23)")
       ->delimiter(',');
-  double m1 = 0.0, a1 = 0.0, intercept = 0.0;
-  auto* m1_opt = app.add_option("--m1", m1, "phase I exponent m1 (with --a1 or --sn-intercept)")
-                     ->check(cli::finite_positive());
-  auto* a1_opt = app.add_option("--a1", a1, "phase I coefficient A1 (with --m1)")
-                     ->check(cli::finite_positive());
-  auto* intercept_opt =
-      app.add_option("--sn-intercept", intercept,
+  o.m1_opt = app.add_option("--m1", o.m1, "phase I exponent m1 (with --a1 or --sn-intercept)")
+                 ->check(cli::finite_positive());
+  o.a1_opt = app.add_option("--a1", o.a1, "phase I coefficient A1 (with --m1)")
+                 ->check(cli::finite_positive());
+  o.intercept_opt =
+      app.add_option("--sn-intercept", o.intercept,
                      "000 Eq. (48b): the fitted log10 intercept -log10(A1)/m1 (with --m1)")
           ->check(cli::finite_in(-100, 100));
-  auto* limit_opt = app.add_option("--fatigue-limit", s.law.eps_inf,
-                                   "phase I fatigue limit eps_inf (000 Eq. 17, 23b; default 0)")
-                        ->check(cli::finite_in(0.0, 0.5));
+  o.limit_opt = app.add_option("--fatigue-limit", s.law.eps_inf,
+                               "phase I fatigue limit eps_inf (000 Eq. 17, 23b; default 0)")
+                    ->check(cli::finite_in(0.0, 0.5));
   // Calibration.
-  double a2_trial = 0.0;
-  app.add_option("--a2-trial", a2_trial,
+  app.add_option("--a2-trial", o.a2_trial,
                  "first A2 (default: B1's 1301 scaled by C, E, M and the horizon)")
       ->check(cli::finite_positive());
   app.add_option("--tolerance", s.tolerance,
@@ -321,23 +314,34 @@ int main(int argc, char** argv) {
                  "prediction checks at these multiples of P_max (default 1.25,1.5)")
       ->delimiter(',')
       ->check(cli::finite_in(0.2, 5.0));
-  bool no_check = false;
-  app.add_flag("--no-check", no_check, "skip the prediction checks");
-  bool dry_run = false;
-  app.add_flag("--dry-run", dry_run,
+  app.add_flag("--no-check", o.no_check, "skip the prediction checks");
+  app.add_flag("--dry-run", o.dry_run,
                "check the inputs, print what would be run (A1, m1, load, Paris life, first A2) "
                "and stop before the PD runs");
-  bool json = false;
-  app.add_flag("--json", json, "print one JSON line (inputs, runs, results, the TOML) instead");
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? kExitOk : kExitUsage;
-  }
-  auto usage = [](const std::string& what) {
-    std::fprintf(stderr, "peritwin-calibrate: %s\n", what.c_str());
-    return kExitUsage;
-  };
+  app.add_flag("--json", o.json, "print one JSON line (inputs, runs, results, the TOML) instead");
+}
+
+int usage(const std::string& what) {
+  std::fprintf(stderr, "peritwin-calibrate: %s\n", what.c_str());
+  return kExitUsage;
+}
+
+/// What prepare() found: the crack length at K_max = K_c and the Paris life to it.
+struct Plan {
+  double a_end = 0.0, n_paris = 0.0;
+};
+
+/// The setup of the calibration from the options (model, coupon, Paris law, phase I, load),
+/// checked; an exit code when the input is bad.
+std::optional<int> prepare(Options& o, Plan& plan) {
+  Inputs& in = o.in;
+  CalibrationSetup& s = in.setup;
+  Material& mat = s.coupon.material;
+  const double paris_c = o.paris_c, phi0 = o.phi0, thickness = o.thickness, p_max = o.p_max;
+  const double m1 = o.m1, a1 = o.a1, intercept = o.intercept, a2_trial = o.a2_trial;
+  const std::vector<std::string>& sn_points = o.sn_points;
+  const CLI::Option *m1_opt = o.m1_opt, *a1_opt = o.a1_opt, *intercept_opt = o.intercept_opt,
+                    *limit_opt = o.limit_opt;
 
   // Model options (the config's rules: state-based takes the constant kernel only).
   ModelOptions& options = s.model.options;
@@ -432,24 +436,41 @@ int main(int argc, char** argv) {
                n_paris, s.p_max, s.r, paris_c, in.paris_units.c_str(), s.paris.c));
   }
   s.record_every = std::max<std::int64_t>(250, static_cast<std::int64_t>(n_paris / 200));
+  plan.a_end = a_end;
+  plan.n_paris = n_paris;
+  return std::nullopt;
+}
 
-  if (dry_run) {
-    CalibrationResult none;
-    none.a2 = s.law.A2;
-    tools::JsonLine line = result_json(in, none, {}, 0.0, "");
-    line["a2"] = nullptr;  // not calibrated
-    line["dry_run"] = true;
-    line["first_a2"] = tools::significant(s.law.A2, 7);
-    line["paris_life"] = tools::whole(n_paris);
-    line["critical_crack_m"] = tools::fixed(a_end, 6);
-    line["record_every"] = s.record_every;
-    if (json) {
-      tools::print_line(line);
-    } else {
-      std::printf("%s\n", line.dump(2).c_str());
-    }
-    return kExitOk;
+/// --dry-run: what would be run, as JSON.
+int print_dry_run(const Options& o, const Plan& plan) {
+  const Inputs& in = o.in;
+  const CalibrationSetup& s = in.setup;
+  const double n_paris = plan.n_paris, a_end = plan.a_end;
+  const bool json = o.json;
+  CalibrationResult none;
+  none.a2 = s.law.A2;
+  tools::JsonLine line = result_json(in, none, {}, 0.0, "");
+  line["a2"] = nullptr;  // not calibrated
+  line["dry_run"] = true;
+  line["first_a2"] = tools::significant(s.law.A2, 7);
+  line["paris_life"] = tools::whole(n_paris);
+  line["critical_crack_m"] = tools::fixed(a_end, 6);
+  line["record_every"] = s.record_every;
+  if (json) {
+    tools::print_line(line);
+  } else {
+    std::printf("%s\n", line.dump(2).c_str());
   }
+  return kExitOk;
+}
+
+/// The PD runs of the calibration and the checks; the TOML snippet (or the JSON line).
+int calibrate(Options& o, const Plan& plan) {
+  Inputs& in = o.in;
+  const CalibrationSetup& s = in.setup;
+  const PhaseOne& one = in.phase_one;
+  const double n_paris = plan.n_paris;
+  const bool json = o.json, no_check = o.no_check;
   const auto t0 = std::chrono::steady_clock::now();
   std::fprintf(stderr,
                "peritwin-calibrate: CT W = %g mm, B = %g mm, dx = %g mm (about %.0f nodes), "
@@ -497,4 +518,26 @@ int main(int argc, char** argv) {
     std::printf("# calibration: %zu PD runs, %.1f s in all\n", cal.runs.size(), wall_s);
   }
   return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "peritwin-calibrate: the strain-range fatigue law's parameters (000 Eq. 14-20) for your "
+      "material, grid and PD model, as a [detail.fatigue] table to paste into a detail config.\n"
+      "A2 (phase II, depends on dx and the horizon) is calibrated by 000 App. A: PD runs of an "
+      "ASTM E647 compact-tension coupon (B1's, scaled to --width, with your material) at the "
+      "calibration load, A2 rescaled until the PD life to K_max = K_c equals the life the Paris "
+      "law gives (integral form, docs/validation.md). m2 = Paris M (000 Eq. 25). A1, m1 (phase I) "
+      "come from strain-life data (000 Eq. 23) if you give any, else B1's Al 6061-T6 values (000 "
+      "Eq. 48). Then the PD and Paris lives at other loads as a check.\n"
+      "Units: SI (Pa, m, N) except the Paris constant C, whose units --paris-units states.\n"
+      "Exit codes: 0 calibrated, 2 bad input, 3 calibration failed."};
+  Options o;
+  add_options(app, o);
+  if (const auto rc = core::parse_options(app, argc, argv)) return *rc;
+  Plan plan;
+  if (const auto rc = prepare(o, plan)) return *rc;
+  return o.dry_run ? print_dry_run(o, plan) : calibrate(o, plan);
 }
