@@ -58,7 +58,11 @@
 #include "solver/core/fnv1a.h"
 #include "solver/core/load_block.h"
 #include "solver/mesh/discretization.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/energy.h"
+#include "solver/fatigue/laws/kinetic.h"
+#include "solver/fatigue/laws/remaining_life.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "solver/model/pd_model.h"
 #include "solver/static/static_solver.h"
 

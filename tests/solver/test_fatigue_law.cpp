@@ -1,4 +1,4 @@
-// Tests of solver/model/fatigue_law: every expected number is either a closed form from the papers,
+// Tests of solver/fatigue/laws: every expected number is either a closed form from the papers,
 // an independent numerical integration, or (for the remaining-life arithmetic) the literal
 // per-cycle loop `lambda -= d` that the fast functions must reproduce bit for bit.
 #include <gtest/gtest.h>
@@ -13,7 +13,11 @@
 #include <utility>
 #include <vector>
 
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/energy.h"
+#include "solver/fatigue/laws/kinetic.h"
+#include "solver/fatigue/laws/remaining_life.h"
+#include "solver/fatigue/laws/strain_range.h"
 
 namespace peritwin::fatigue {
 namespace {
