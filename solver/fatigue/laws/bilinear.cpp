@@ -6,6 +6,8 @@
 #include <numbers>
 #include <string>
 
+#include "solver/core/param_reader.h"
+#include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
 namespace peritwin::fatigue {
@@ -122,5 +124,24 @@ double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const Bi
   return kInf;
 }
 
+// 003 Eq. (27), (43)-(44): the bond's parameters; 003 Sec. 5.1: the increments.
+void read_bilinear(ParamReader& r, FatigueSettings& f) {
+  const auto set = [&r](double& field, std::string_view key) {
+    if (const auto v = r.required(key, Bound::positive)) field = *v;
+  };
+  set(f.bilinear.s0, "s0");
+  set(f.bilinear.sc, "sc");
+  set(f.bilinear.A, "A");
+  f.bilinear.m = r.optional("m", f.bilinear.m, Bound::positive);
+  if (f.bilinear.s0 > 0 && r.has("sc")) {
+    r.check("sc", f.bilinear.sc > f.bilinear.s0, "must be > s0");
+  }
+  f.cycle_increment = r.integer("cycle_increment", f.cycle_increment);
+  r.check("cycle_increment", f.cycle_increment >= 1, "must be >= 1");
+  f.softening_tolerance = r.optional("softening_tolerance", f.softening_tolerance, Bound::positive);
+  f.softening_max_iterations =
+      static_cast<int>(r.integer("softening_max_iterations", f.softening_max_iterations));
+  r.check("softening_max_iterations", f.softening_max_iterations >= 1, "must be >= 1");
+}
 
 }  // namespace peritwin::fatigue

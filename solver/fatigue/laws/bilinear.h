@@ -4,6 +4,11 @@
 
 #include "solver/core/expected.h"
 
+namespace peritwin {
+class ParamReader;
+struct FatigueSettings;
+}  // namespace peritwin
+
 namespace peritwin::fatigue {
 
 // ============================ law 3: bilinear bond with damage (003) =============================
@@ -65,5 +70,9 @@ double third_law_bar_cycles_to_failure(double s_elastic, const BilinearParams& p
 /// third_law_bar_cycles_to_failure as O(ΔN²).
 double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const BilinearParams& p);
 
+/// Config reader of the law bilinear: s0, sc > s0 (003 Eq. 43-44) and A (003 Eq. 27) required,
+/// m > 0 (003 Eq. 27), and the increment settings cycle_increment >= 1 (ΔN, 003 Sec. 5.1),
+/// softening_tolerance > 0, softening_max_iterations >= 1 (FatigueSettings).
+void read_bilinear(ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue

@@ -6,6 +6,8 @@
 #include <limits>
 #include <string>
 
+#include "solver/core/param_reader.h"
+#include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
 namespace peritwin::fatigue {
@@ -98,5 +100,18 @@ double kt_n0_for_unit_life(double lambda) {
   return 0.5 * (lo + hi);
 }
 
+// 004 Eq. (12)-(15): the activation parameters, the shape λ, n0, and the test conditions.
+void read_kinetic(ParamReader& r, FatigueSettings& f) {
+  const auto set = [&r](double& field, std::string_view key) {
+    if (const auto v = r.required(key, Bound::positive)) field = *v;
+  };
+  set(f.kinetic.U, "U");
+  set(f.kinetic.gamma, "gamma");
+  f.kinetic.lambda = r.optional("lambda", f.kinetic.lambda, Bound::positive);
+  f.kinetic.n0 = r.number("n0", f.kinetic.n0);
+  r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + format_number(f.kinetic.n0) + ")");
+  f.kinetic.temperature = r.optional("temperature", f.kinetic.temperature, Bound::positive);
+  f.kinetic.frequency = r.optional("frequency", f.kinetic.frequency, Bound::positive);
+}
 
 }  // namespace peritwin::fatigue

@@ -4,6 +4,11 @@
 
 #include "solver/core/expected.h"
 
+namespace peritwin {
+class ParamReader;
+struct FatigueSettings;
+}  // namespace peritwin
+
 namespace peritwin::fatigue {
 
 inline constexpr double kBoltzmann = 1.380649e-23;  ///< k (J/K), exact SI 2019
@@ -52,5 +57,8 @@ double kt_remaining_life(double n, double lambda, double n0);
 /// Inverse of kt_remaining_life: damage n for a remaining life r (r <= 0 gives n >= 1).
 double kt_damage_from_remaining_life(double remaining, double lambda, double n0);
 
+/// Config reader of the law kinetic: U, gamma > 0 required (004 Eq. 13-14), lambda > 0 and n0 > 1
+/// (004 Eq. 12), temperature, frequency > 0 (004 Eq. 14-15).
+void read_kinetic(ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue

@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <string>
 
+#include "solver/core/param_reader.h"
+#include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
 namespace peritwin::fatigue {
@@ -130,5 +132,18 @@ double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th
   return mean_tip_strain_range * delta_k_th / delta_k;  // 002 Eq. (13)
 }
 
+// 000 Eq. (14), (17)-(19), 002 Eq. (12): the parameters; 000 Eq. (15): compressed bonds.
+void read_strain_range(ParamReader& r, FatigueSettings& f) {
+  const auto set = [&r](double& field, std::string_view key) {
+    if (const auto v = r.required(key, Bound::positive)) field = *v;
+  };
+  set(f.strain.A1, "A1");
+  set(f.strain.m1, "m1");
+  set(f.strain.A2, "A2");
+  set(f.strain.m2, "m2");
+  f.strain.eps_inf = r.optional("eps_inf", 0.0, Bound::non_negative);
+  f.strain.eps_inf_prop = r.optional("eps_inf_prop", 0.0, Bound::non_negative);
+  f.compressed_bonds_fatigue = r.boolean("compressed_bonds_fatigue", f.compressed_bonds_fatigue);
+}
 
 }  // namespace peritwin::fatigue

@@ -8,6 +8,11 @@
 #include "solver/core/expected.h"
 #include "solver/fatigue/laws/remaining_life.h"
 
+namespace peritwin {
+class ParamReader;
+struct FatigueSettings;
+}  // namespace peritwin
+
 namespace peritwin::fatigue {
 
 // ============================ law 1: cyclic bond strain range (000 Sec. 3, 002 Sec. 4) ===========
@@ -79,5 +84,9 @@ double a2_scaled(double a2_at_delta1, double delta1, double delta2, double m2);
 /// 002 Eq. (13): ε̃∞ = ε̄ ΔK_th/ΔK, ε̄ the mean cyclic strain of the bonds at the crack tip.
 double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th, double delta_k);
 
+/// Config reader of the laws strain_range and energy: A1, m1, A2, m2 > 0 (required; 000 Eq. 14,
+/// 17-19, 44-46), eps_inf >= 0 (000 Eq. 17), eps_inf_prop >= 0 (002 Eq. 12), and
+/// compressed_bonds_fatigue (000 Eq. 15, FatigueSettings::compressed_bonds_fatigue).
+void read_strain_range(ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue
