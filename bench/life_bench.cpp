@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "core/proc_files.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "tools/cli_checks.h"
 #include "tools/json_line.h"
 #include "twin/config/config.h"

@@ -101,12 +101,4 @@ double fitted_paris_constant(const CompactTensionSpec& spec, const CrackHistory&
   return count > 0 ? std::exp(sum / count) : std::nan("");
 }
 
-double integral_paris_constant(const CompactTensionSpec& spec, const CrackHistory& history,
-                               const ParisLaw& reference, double p_max, double r, double a_end) {
-  const double pd = cycles_at_length(history, a_end);
-  if (!(pd > 0)) return std::nan("");
-  // Paris life ∝ 1/C at fixed M.
-  return reference.c * paris_life(spec, reference, p_max, r, a_end) / pd;
-}
-
 }  // namespace peritwin::validation

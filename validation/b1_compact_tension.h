@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "solver/fatigue/fatigue_engine.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "validation/specimens.h"
 
 namespace peritwin::validation {
@@ -69,12 +69,5 @@ double cycles_at_length(const CrackHistory& history, double a);
 /// A1-A3).
 double fitted_paris_constant(const CompactTensionSpec& spec, const CrackHistory& history,
                              double p_max, double r, double m, double a_from, double a_to);
-
-/// Paris constant C (M fixed) whose integration from a0 to a_end takes as many cycles as the PD
-/// history does: the integral form of 000 App. A Eq. (A1)-(A3). It counts the cycles the discrete
-/// crack needs to build its process zone at the sharp pre-crack, which the rate fit above ignores
-/// (at Δx = 1 mm those are about 30 % of the life at 4 kN).
-double integral_paris_constant(const CompactTensionSpec& spec, const CrackHistory& history,
-                               const ParisLaw& reference, double p_max, double r, double a_end);
 
 }  // namespace peritwin::validation

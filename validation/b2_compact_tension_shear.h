@@ -5,7 +5,7 @@
 #include <string>
 
 #include "solver/fatigue/fatigue_engine.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "validation/specimens.h"
 
 namespace peritwin::validation {

@@ -10,7 +10,11 @@
 #include "replay/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/mesh/discretization.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/energy.h"
+#include "solver/fatigue/laws/kinetic.h"
+#include "solver/fatigue/laws/remaining_life.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "solver/model/pd_model.h"
 #include "tools/json_line.h"
 

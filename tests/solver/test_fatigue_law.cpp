@@ -1,4 +1,4 @@
-// Tests of solver/model/fatigue_law: every expected number is either a closed form from the papers,
+// Tests of solver/fatigue/laws: every expected number is either a closed form from the papers,
 // an independent numerical integration, or (for the remaining-life arithmetic) the literal
 // per-cycle loop `lambda -= d` that the fast functions must reproduce bit for bit.
 #include <gtest/gtest.h>
@@ -7,13 +7,23 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
-#include "solver/model/fatigue_law.h"
+#include "solver/core/param_reader.h"
+#include "solver/fatigue/fatigue_settings.h"
+#include "solver/fatigue/law_registry.h"
+#include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/energy.h"
+#include "solver/fatigue/laws/kinetic.h"
+#include "solver/fatigue/laws/remaining_life.h"
+#include "solver/fatigue/laws/strain_range.h"
 
 namespace peritwin::fatigue {
 namespace {
@@ -579,6 +589,68 @@ TEST(KineticLaw, Validation) {
   EXPECT_EQ(message_of(validate(p)), "");
   p.n0 = 1.0;
   EXPECT_NE(message_of(validate(p)).find("n0"), std::string::npos);
+}
+
+// ---- config readers through ParamReader (solver/core/param_reader.h), without toml++
+// -------------
+
+/// A ParamReader over a map of numbers that collects its errors as Error{key, reason}.
+class MapReader final : public ParamReader {
+ public:
+  explicit MapReader(std::map<std::string, double> values) : values_(std::move(values)) {}
+  [[nodiscard]] bool has(std::string_view key) const override {
+    return values_.contains(std::string(key));
+  }
+  std::optional<double> number(std::string_view key) override {
+    if (has(key)) return values_.at(std::string(key));
+    errors.push_back({std::string(key), "missing"});
+    return std::nullopt;
+  }
+  double number(std::string_view key, double fallback) override {
+    return has(key) ? values_.at(std::string(key)) : fallback;
+  }
+  std::int64_t integer(std::string_view key, std::int64_t fallback) override {
+    return has(key) ? static_cast<std::int64_t>(values_.at(std::string(key))) : fallback;
+  }
+  bool boolean(std::string_view key, bool fallback) override {
+    return has(key) ? values_.at(std::string(key)) != 0.0 : fallback;
+  }
+  void report(Error error) override { errors.push_back(std::move(error)); }
+  std::vector<Error> errors;
+
+ private:
+  std::map<std::string, double> values_;
+};
+
+TEST(LawReaders, ReadEveryRegisteredLawThroughTheAbstractReader) {
+  // Every law of the registry reads its keys; the energy law shares the strain law's reader.
+  ASSERT_EQ(fatigue_laws().size(), 4U);
+  EXPECT_EQ(law_name(FatigueLaw::kinetic), "kinetic");
+  EXPECT_EQ(law_entry(FatigueLaw::energy).read, law_entry(FatigueLaw::strain_range).read);
+  EXPECT_FALSE(law_entry(FatigueLaw::bilinear).static_failure);
+
+  FatigueSettings f;
+  MapReader strain({{"A1", 2.0}, {"m1", 3.0}, {"A2", 4.0}, {"m2", 5.0}, {"eps_inf", 1e-3}});
+  law_entry(FatigueLaw::strain_range).read(strain, f);
+  EXPECT_TRUE(strain.errors.empty());
+  EXPECT_EQ(f.strain.A1, 2.0);
+  EXPECT_EQ(f.strain.m2, 5.0);
+  EXPECT_EQ(f.strain.eps_inf, 1e-3);
+  EXPECT_EQ(f.strain.eps_inf_prop, 0.0);
+
+  // Bounds and missing keys are reported by key, in reading order, and reading goes on.
+  MapReader kinetic({{"U", -1.0}, {"n0", 0.5}});
+  law_entry(FatigueLaw::kinetic).read(kinetic, f);
+  ASSERT_EQ(kinetic.errors.size(), 3U);
+  EXPECT_EQ(kinetic.errors[0].message(), "U: must be > 0 (got -1)");
+  EXPECT_EQ(kinetic.errors[1].message(), "gamma: missing");
+  EXPECT_EQ(kinetic.errors[2].message(), "n0: must be > 1 (got 0.5)");
+
+  MapReader bilinear({{"s0", 2e-3}, {"sc", 1e-3}, {"A", 1.0}, {"cycle_increment", 0.0}});
+  law_entry(FatigueLaw::bilinear).read(bilinear, f);
+  ASSERT_EQ(bilinear.errors.size(), 2U);
+  EXPECT_EQ(bilinear.errors[0].message(), "sc: must be > s0");
+  EXPECT_EQ(bilinear.errors[1].message(), "cycle_increment: must be >= 1");
 }
 
 }  // namespace

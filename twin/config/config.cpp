@@ -27,12 +27,6 @@ namespace peritwin::twin {
 
 namespace config_internal {
 
-std::string format_number(double value) {
-  std::array<char, 64> buffer{};
-  const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
-  return ec == std::errc{} ? std::string(buffer.data(), end) : std::string("?");
-}
-
 std::string format_count(double value) {
   if (!std::isfinite(value)) return "unbounded";
   if (value < 1e6) return std::to_string(static_cast<long long>(std::llround(value)));
@@ -381,7 +375,7 @@ ConfigError no_nodes(const SourceRef& where, const NodeSelector& target, double 
   const char* what = target.kind == NodeSelector::Kind::region ? "region" : "point";
   return {where.file, where.line, where.column, where.path,
           std::string("the ") + what +
-              " selects no node at dx = " + config_internal::format_number(dx) + " m"};
+              " selects no node at dx = " + format_number(dx) + " m"};
 }
 }  // namespace
 

@@ -134,7 +134,9 @@
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/mesh/discretization.h"
 #include "solver/mesh/geometry.h"
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/kinetic.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "solver/model/pd_model.h"
 #include "solver/static/static_solver.h"
 

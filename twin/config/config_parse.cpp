@@ -10,23 +10,13 @@
 
 #include "messages/batch.h"
 #include "messages/channels.h"
+#include "solver/fatigue/law_registry.h"
 #include "twin/config/config_toml.h"
 #include "twin/config/resources.h"
 
 namespace peritwin::twin::config_internal {
 
 namespace {
-
-enum class Bound { any, positive, non_negative };
-
-bool satisfies(double v, Bound bound) {
-  return bound == Bound::any || (bound == Bound::positive ? v > 0 : v >= 0);
-}
-
-std::string bound_reason(double v, Bound bound) {
-  return std::string(bound == Bound::positive ? "must be > 0" : "must be >= 0") + " (got " +
-         format_number(v) + ")";
-}
 
 /// A required number within `bound`.
 std::optional<double> req(TableReader& r, std::string_view key, Bound bound) {
@@ -340,12 +330,9 @@ void read_material(Context& ctx, const toml::table& t, const std::string& path, 
 void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, double horizon_ratio,
                   FatigueSettings& f) {
   TableReader r(ctx, t, path);
-  const auto law = r.choice<FatigueLaw>("law",
-                                        {{"strain_range", FatigueLaw::strain_range},
-                                         {"energy", FatigueLaw::energy},
-                                         {"bilinear", FatigueLaw::bilinear},
-                                         {"kinetic", FatigueLaw::kinetic}},
-                                        std::nullopt);
+  std::vector<std::pair<std::string_view, FatigueLaw>> laws;
+  for (const fatigue::LawEntry& e : fatigue::fatigue_laws()) laws.emplace_back(e.name, e.law);
+  const auto law = r.choice<FatigueLaw>("law", laws, std::nullopt);
   // Default φ0: the damage along a straight split at this horizon (000 Sec. 4.4's 0.398 at
   // δ = 3.015Δx). It discretizes a (2·ceil(ratio) + 4)² square with that horizon, so it is only
   // computed when phi0 is not given and the ratio is within its bounds (a bad horizon_ratio has
@@ -359,54 +346,15 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, d
           "must lie in (0, 1) (got " + format_number(f.phase_switch_damage) + ")");
   if (!law) return;  // the allowed keys depend on the law: no unknown-key check
   f.law = *law;
-  const auto set = [&r](double& field, std::string_view key) {
-    if (const auto v = req(r, key, Bound::positive)) field = *v;
-  };
-  if (*law != FatigueLaw::bilinear) {
-    f.static_failure =
-        r.choice<StaticFailure>("static_failure",
-                                {{"critical_stretch", StaticFailure::critical_stretch},
-                                 {"critical_bond_energy", StaticFailure::critical_bond_energy}},
-                                f.static_failure)
-            .value_or(f.static_failure);
+  const fatigue::LawEntry& entry = fatigue::law_entry(*law);
+  if (entry.static_failure) {
+    std::vector<std::pair<std::string_view, StaticFailure>> criteria;
+    for (const auto& c : fatigue::static_failures()) criteria.emplace_back(c.name, c.criterion);
+    f.static_failure = r.choice<StaticFailure>("static_failure", criteria, f.static_failure)
+                           .value_or(f.static_failure);
   }
-  switch (*law) {
-    case FatigueLaw::strain_range:
-    case FatigueLaw::energy:
-      set(f.strain.A1, "A1");
-      set(f.strain.m1, "m1");
-      set(f.strain.A2, "A2");
-      set(f.strain.m2, "m2");
-      f.strain.eps_inf = opt(r, "eps_inf", 0.0, Bound::non_negative);
-      f.strain.eps_inf_prop = opt(r, "eps_inf_prop", 0.0, Bound::non_negative);
-      f.compressed_bonds_fatigue =
-          r.boolean("compressed_bonds_fatigue", f.compressed_bonds_fatigue);
-      break;
-    case FatigueLaw::bilinear:
-      set(f.bilinear.s0, "s0");
-      set(f.bilinear.sc, "sc");
-      set(f.bilinear.A, "A");
-      f.bilinear.m = opt(r, "m", f.bilinear.m, Bound::positive);
-      if (f.bilinear.s0 > 0 && r.has("sc")) {
-        r.check("sc", f.bilinear.sc > f.bilinear.s0, "must be > s0");
-      }
-      f.cycle_increment = r.integer("cycle_increment", f.cycle_increment);
-      r.check("cycle_increment", f.cycle_increment >= 1, "must be >= 1");
-      f.softening_tolerance = opt(r, "softening_tolerance", f.softening_tolerance, Bound::positive);
-      f.softening_max_iterations =
-          static_cast<int>(r.integer("softening_max_iterations", f.softening_max_iterations));
-      r.check("softening_max_iterations", f.softening_max_iterations >= 1, "must be >= 1");
-      break;
-    case FatigueLaw::kinetic:
-      set(f.kinetic.U, "U");
-      set(f.kinetic.gamma, "gamma");
-      f.kinetic.lambda = opt(r, "lambda", f.kinetic.lambda, Bound::positive);
-      f.kinetic.n0 = r.number("n0", f.kinetic.n0);
-      r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + format_number(f.kinetic.n0) + ")");
-      f.kinetic.temperature = opt(r, "temperature", f.kinetic.temperature, Bound::positive);
-      f.kinetic.frequency = opt(r, "frequency", f.kinetic.frequency, Bound::positive);
-      break;
-  }
+  TomlParamReader params(r);
+  entry.read(params, f);
   r.finish();
 }
 

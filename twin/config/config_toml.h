@@ -9,17 +9,17 @@
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include "solver/core/param_reader.h"
 #include "twin/config/config.h"
 
 namespace peritwin::twin::config_internal {
 
-/// Shortest round-trip decimal form of a double ("0.001", "6.8e+10").
-std::string format_number(double value);
 /// A count for people: exact below 10^6 ("49902"), else 3 digits ("1.41e+11").
 std::string format_count(double value);
 
@@ -70,6 +70,14 @@ class TableReader {
   std::optional<E> choice(std::string_view key,
                           std::initializer_list<std::pair<std::string_view, E>> choices,
                           std::optional<E> fallback) {
+    return choice(key,
+                  std::span<const std::pair<std::string_view, E>>(choices.begin(), choices.size()),
+                  fallback);
+  }
+  template <typename E>
+  std::optional<E> choice(std::string_view key,
+                          std::span<const std::pair<std::string_view, E>> choices,
+                          std::optional<E> fallback) {
     if (fallback && !has(key)) {
       node(key, false);  // marks the key known
       return fallback;
@@ -99,6 +107,24 @@ class TableReader {
   const toml::table& table_;
   std::string path_;
   std::vector<std::string> known_;
+};
+
+/// The ParamReader of a TableReader (solver/core/param_reader.h): what a fatigue law's reader
+/// (solver/fatigue/laws/) reports lands in the context with file, line and key path.
+class TomlParamReader final : public ParamReader {
+ public:
+  explicit TomlParamReader(TableReader& r) : r_(r) {}
+  [[nodiscard]] bool has(std::string_view key) const override { return r_.has(key); }
+  std::optional<double> number(std::string_view key) override { return r_.number(key); }
+  double number(std::string_view key, double fallback) override { return r_.number(key, fallback); }
+  std::int64_t integer(std::string_view key, std::int64_t fallback) override {
+    return r_.integer(key, fallback);
+  }
+  bool boolean(std::string_view key, bool fallback) override { return r_.boolean(key, fallback); }
+  void report(Error error) override { r_.invalid(error.field, std::move(error.reason)); }
+
+ private:
+  TableReader& r_;
 };
 
 /// Human name of a TOML node type ("string", "integer", "table", ...).

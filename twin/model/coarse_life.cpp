@@ -7,7 +7,7 @@
 #include <limits>
 #include <utility>
 
-#include "solver/model/fatigue_law.h"
+#include "solver/fatigue/laws/strain_range.h"
 #include "solver/model/pd_model.h"
 
 namespace peritwin::twin {

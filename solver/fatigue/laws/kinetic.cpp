@@ -1,0 +1,117 @@
+// Law 4: kinetic theory of fracture (004); contracts in kinetic.h.
+#include "solver/fatigue/laws/kinetic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "solver/core/param_reader.h"
+#include "solver/fatigue/fatigue_settings.h"
+#include "solver/fatigue/laws/law_math.h"
+
+namespace peritwin::fatigue {
+
+using detail::kInf;
+using detail::kNaN;
+using detail::non_negative;
+using detail::positive;
+using detail::pow_pos;
+using detail::require;
+
+// ============================ law 4: kinetic theory of fracture =================================
+
+Status validate(const KineticParams& p) {
+  std::string msg;
+  require(msg, positive(p.U), "U must be finite and > 0 (004 Eq. 14)");
+  require(msg, positive(p.gamma), "gamma must be finite and > 0 (004 Eq. 14)");
+  require(msg, positive(p.lambda), "lambda must be finite and > 0 (004 Eq. 12)");
+  require(msg, std::isfinite(p.n0) && p.n0 > 1.0, "n0 must be finite and > 1 (004 Eq. 12)");
+  require(msg, positive(p.temperature), "temperature must be finite and > 0 K (004 Eq. 14)");
+  require(msg, positive(p.frequency), "frequency must be finite and > 0 Hz (004 Eq. 15)");
+  return msg.empty() ? Status{} : Status{failure(msg)};
+}
+
+double kt_thermal_energy(double temperature) { return kBoltzmann * temperature; }
+
+double kt_breakage_rate(double sigma, double U, double gamma, double thermal_energy) {
+  return thermal_energy / kPlanck * std::exp(-(U - gamma * sigma) / thermal_energy);  // 004 (14)
+}
+
+double kt_cycle_dose(double sigma_max, double load_ratio, double frequency, double U, double gamma,
+                     double thermal_energy) {
+  // ∫ K_b dt over σ ramping linearly from Rσ_max to σ_max in 1/f (004 Eq. 15 per cycle):
+  // (θ/(h f)) e^(−U/θ) (e^x1 − e^x2)/(x1 − x2) = (θ/(h f)) e^(x_hi − U/θ) (1 − e^(−w))/w.
+  const double x1 = gamma * sigma_max / thermal_energy;
+  const double x2 = gamma * load_ratio * sigma_max / thermal_energy;
+  const double hi = std::max(x1, x2);
+  const double w = hi - std::min(x1, x2);
+  const double mean_factor = w > 0.0 ? -std::expm1(-w) / w : 1.0;
+  return thermal_energy / (kPlanck * frequency) * std::exp(hi - U / thermal_energy) * mean_factor;
+}
+
+double kt_damage_after_cycles(double n_initial, double cycles, double dose_per_cycle, double lambda,
+                              double n0) {
+  const double nd = cycles * dose_per_cycle;
+  if (lambda == 1.0) return n0 - (n0 - n_initial) * std::exp(-nd);  // λ → 1 limit of Eq. (15)
+  const double one_minus = 1.0 - lambda;
+  const double base = std::pow(n0 - n_initial, one_minus) - one_minus * nd;  // 004 Eq. (15)
+  if (!(base > 0.0)) return n0;  // λ < 1: n reaches n0 in finite N
+  return n0 - std::pow(base, 1.0 / one_minus);
+}
+
+double kt_damage_increment(double n, double dose_per_cycle, double lambda, double n0) {
+  return kt_damage_after_cycles(n, 1.0, dose_per_cycle, lambda, n0) - n;
+}
+
+double kt_consumed_life(double n, double lambda, double n0) {
+  if (lambda == 1.0) return std::log(n0 / (n0 - n));
+  return (std::pow(n0 - n, 1.0 - lambda) - std::pow(n0, 1.0 - lambda)) / (lambda - 1.0);
+}
+
+double kt_remaining_life(double n, double lambda, double n0) {
+  // z(1) − z(n) written without the common n0 term.
+  if (lambda == 1.0) return std::log((n0 - n) / (n0 - 1.0));
+  return (std::pow(n0 - 1.0, 1.0 - lambda) - std::pow(n0 - n, 1.0 - lambda)) / (lambda - 1.0);
+}
+
+double kt_damage_from_remaining_life(double remaining, double lambda, double n0) {
+  if (lambda == 1.0) return n0 - (n0 - 1.0) * std::exp(remaining);
+  const double one_minus = 1.0 - lambda;
+  const double base = std::pow(n0 - 1.0, one_minus) + one_minus * remaining;
+  if (!(base > 0.0)) return n0;
+  return n0 - std::pow(base, 1.0 / one_minus);
+}
+
+double kt_n0_for_unit_life(double lambda) {
+  if (!(lambda > 0.0) || !std::isfinite(lambda)) return kNaN;
+  // z_{n0}(1) decreases from +inf (λ >= 1) or 1/(1 − λ) > 1 (λ < 1) at n0 = 1+ to 0 as n0 → ∞.
+  const auto excess = [lambda](double n0) { return kt_consumed_life(1.0, lambda, n0) - 1.0; };
+  double lo = 1.0;
+  double hi = 2.0;
+  while (excess(hi) > 0.0) {
+    lo = hi;
+    hi *= 2.0;
+  }
+  for (int i = 0; i < 200 && hi - lo > 4.0 * std::numeric_limits<double>::epsilon() * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (excess(mid) > 0.0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// 004 Eq. (12)-(15): the activation parameters, the shape λ, n0, and the test conditions.
+void read_kinetic(ParamReader& r, FatigueSettings& f) {
+  const auto set = [&r](double& field, std::string_view key) {
+    if (const auto v = r.required(key, Bound::positive)) field = *v;
+  };
+  set(f.kinetic.U, "U");
+  set(f.kinetic.gamma, "gamma");
+  f.kinetic.lambda = r.optional("lambda", f.kinetic.lambda, Bound::positive);
+  f.kinetic.n0 = r.number("n0", f.kinetic.n0);
+  r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + format_number(f.kinetic.n0) + ")");
+  f.kinetic.temperature = r.optional("temperature", f.kinetic.temperature, Bound::positive);
+  f.kinetic.frequency = r.optional("frequency", f.kinetic.frequency, Bound::positive);
+}
+
+}  // namespace peritwin::fatigue
