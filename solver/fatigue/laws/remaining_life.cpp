@@ -5,7 +5,6 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 
 namespace peritwin::fatigue {
 
@@ -13,8 +12,6 @@ namespace {
 
 constexpr std::int64_t kTwo52 = std::int64_t{1} << 52;
 constexpr std::int64_t kTwo53 = std::int64_t{1} << 53;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // ---------------------------------------------------------------------------------------------
 // Exact emulation of repeated IEEE subtraction. A positive finite double x lies in a binade whose
