@@ -72,24 +72,24 @@
 #include <vector>
 
 #include "bench/child_process.h"
-#include "bench/percentile.h"
+#include "core/json_line.h"
+#include "core/loopback_port.h"
+#include "core/percentile.h"
 #include "core/proc_files.h"
 #include "core/program.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
-#include "tests/support/loopback_port.h"
-#include "tools/json_line.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace peritwin;
 using peritwin::bench::Clock;
-using peritwin::bench::percentile;
 using peritwin::bench::since;
 using peritwin::bench::spawn;
 using peritwin::bench::stop_child;
+using peritwin::core::percentile;
 using peritwin::core::proc_cpu_s;
 using peritwin::core::proc_status_kb;
 using peritwin::core::read_text;
@@ -495,9 +495,9 @@ struct Window {
 constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
 
 /// The JSON line of the run.
-tools::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& m) {
+core::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& m) {
   const std::vector<double>& latencies = m.latencies;
-  const double p99 = percentile(latencies, 0.99);
+  const double p99 = core::percentile(latencies, 0.99);
   auto over_goal = [&](const std::vector<double>& v) {
     return v.empty() ? std::nan("")
                      : static_cast<double>(std::count_if(
@@ -509,58 +509,58 @@ tools::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& 
   const double peak_mb = static_cast<double>(m.rss_peak) / 1024.0;
   const auto missing = m.published - static_cast<std::int64_t>(latencies.size());
   const auto total_warmup = static_cast<double>(o.warmup) * o.details;
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "dashboard";
   line["details"] = o.details;
   line["states_per_s_per_detail"] = o.rate;
-  line["states_per_s"] = tools::fixed(static_cast<double>(m.published) / m.seconds, 1);
-  line["duration_s"] = tools::fixed(m.seconds, 2);
+  line["states_per_s"] = core::fixed(static_cast<double>(m.published) / m.seconds, 1);
+  line["duration_s"] = core::fixed(m.seconds, 2);
   line["warmup_states_per_detail"] = o.warmup;
-  line["warmup_s"] = tools::fixed(w.seconds, 1);
+  line["warmup_s"] = core::fixed(w.seconds, 1);
   line["warmup_cpu_us_per_state"] =
-      total_warmup > 0 ? tools::JsonLine(tools::fixed(1e6 * w.cpu_s / total_warmup, 1))
-                       : tools::JsonLine(nullptr);
+      total_warmup > 0 ? core::JsonLine(core::fixed(1e6 * w.cpu_s / total_warmup, 1))
+                       : core::JsonLine(nullptr);
   line["history_points_min"] = w.history_min;
   line["history_points_max"] = w.history_max;
   line["history_get_ms"] = {
-      {"mean", tools::fixed(std::accumulate(w.history_ms.begin(), w.history_ms.end(), 0.0) /
-                                static_cast<double>(w.history_ms.size()),
-                            2)},
-      {"max", tools::fixed(*std::max_element(w.history_ms.begin(), w.history_ms.end()), 2)}};
+      {"mean", core::fixed(std::accumulate(w.history_ms.begin(), w.history_ms.end(), 0.0) /
+                               static_cast<double>(w.history_ms.size()),
+                           2)},
+      {"max", core::fixed(*std::max_element(w.history_ms.begin(), w.history_ms.end()), 2)}};
   line["published"] = m.published;
   line["events"] = static_cast<std::int64_t>(latencies.size());
-  line["missing_events"] = o.sse_clients > 0 ? tools::JsonLine(missing) : tools::JsonLine(nullptr);
+  line["missing_events"] = o.sse_clients > 0 ? core::JsonLine(missing) : core::JsonLine(nullptr);
   line["cycle_mismatches"] = m.cycle_mismatches;
   line["sse_clients"] = o.sse_clients;
   line["status_events"] = m.status_events;
-  tools::JsonLine lat;
-  lat["p50"] = tools::fixed(percentile(latencies, 0.50), 2);
-  lat["p90"] = tools::fixed(percentile(latencies, 0.90), 2);
-  lat["p99"] = tools::fixed(p99, 2);
-  lat["max"] = tools::fixed(
+  core::JsonLine lat;
+  lat["p50"] = core::fixed(core::percentile(latencies, 0.50), 2);
+  lat["p90"] = core::fixed(core::percentile(latencies, 0.90), 2);
+  lat["p99"] = core::fixed(p99, 2);
+  lat["max"] = core::fixed(
       latencies.empty() ? std::nan("") : *std::max_element(latencies.begin(), latencies.end()), 2);
-  lat["over_goal_fraction"] = tools::fixed(over_goal(latencies), 4);
+  lat["over_goal_fraction"] = core::fixed(over_goal(latencies), 4);
   line["latency_ms"] = lat;
   if (o.reference) {
     line["lcm_reference_latency_ms"] = {
         {"events", static_cast<std::int64_t>(m.lcm_latencies.size())},
-        {"p50", tools::fixed(percentile(m.lcm_latencies, 0.50), 2)},
-        {"p99", tools::fixed(percentile(m.lcm_latencies, 0.99), 2)},
-        {"max", tools::fixed(percentile(m.lcm_latencies, 1.0), 2)},
-        {"over_goal_fraction", tools::fixed(over_goal(m.lcm_latencies), 4)}};
+        {"p50", core::fixed(core::percentile(m.lcm_latencies, 0.50), 2)},
+        {"p99", core::fixed(core::percentile(m.lcm_latencies, 0.99), 2)},
+        {"max", core::fixed(core::percentile(m.lcm_latencies, 1.0), 2)},
+        {"over_goal_fraction", core::fixed(over_goal(m.lcm_latencies), 4)}};
   }
-  line["cpu_fraction_of_core"] = tools::fixed(cpu_fraction, 3);
+  line["cpu_fraction_of_core"] = core::fixed(cpu_fraction, 3);
   line["cpu_us_per_state"] =
       m.published > 0
-          ? tools::JsonLine(tools::fixed(1e6 * m.cpu_s / static_cast<double>(m.published), 1))
-          : tools::JsonLine(nullptr);
-  line["rss_after_warmup_mb"] = tools::fixed(static_cast<double>(w.rss_kb) / 1024.0, 1);
-  line["rss_mb"] = tools::fixed(rss_mb, 1);
-  line["rss_peak_mb"] = tools::fixed(peak_mb, 1);
+          ? core::JsonLine(core::fixed(1e6 * m.cpu_s / static_cast<double>(m.published), 1))
+          : core::JsonLine(nullptr);
+  line["rss_after_warmup_mb"] = core::fixed(static_cast<double>(w.rss_kb) / 1024.0, 1);
+  line["rss_mb"] = core::fixed(rss_mb, 1);
+  line["rss_peak_mb"] = core::fixed(peak_mb, 1);
   line["goals"] = {
       {"p99_ms", kGoalP99Ms}, {"cpu_fraction_of_core", kGoalCpu}, {"rss_mb", kGoalRssMb}};
-  line["pass"] = {{"p99", o.sse_clients > 0 ? tools::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
-                                            : tools::JsonLine(nullptr)},
+  line["pass"] = {{"p99", o.sse_clients > 0 ? core::JsonLine(missing == 0 && p99 <= kGoalP99Ms)
+                                            : core::JsonLine(nullptr)},
                   {"cpu", cpu_fraction <= kGoalCpu},
                   {"rss", peak_mb <= kGoalRssMb}};
   line["load_average_1min"] = m.load_average;
@@ -618,11 +618,11 @@ class Run {
 
 std::optional<int> Run::start() {
   if (o_.lcm_url.empty()) {
-    const int port = twin::free_loopback_port();
+    const int port = core::free_loopback_port();
     hub_ = spawn(
         {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
         "/dev/null", (work_ / "hub.log").string());
-    if (hub_ < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+    if (hub_ < 0 || !core::wait_for_loopback_port(port, 60.0)) {
       return fail("the LCM hub did not come up on port " + std::to_string(port));
     }
     o_.lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
@@ -634,7 +634,7 @@ std::optional<int> Run::start() {
   if (dashboard_ < 0) return fail("cannot start " + o_.dashboard_bin);
   for (const auto t0 = Clock::now(); since(t0) < 60.0 && dashboard_alive();) {
     std::smatch m;
-    const std::string out = read_text(out_file);
+    const std::string out = core::read_text(out_file);
     if (std::regex_search(out, m, std::regex("http://127\\.0\\.0\\.1:([0-9]+)/")) &&
         read_text(log_file).find("subscribed to") != std::string::npos) {
       http_port_ = std::stoi(m[1]);
@@ -661,7 +661,7 @@ std::optional<int> Run::warm_up(Warmup& w) {
   const int details = o_.details;
   const std::int64_t warmup = o_.warmup;
   for (int i = 0; i < details; ++i) publish_status(i, 0);
-  const double cpu_before_warmup = proc_cpu_s(dashboard_);
+  const double cpu_before_warmup = core::proc_cpu_s(dashboard_);
   const auto warmup_t0 = Clock::now();
   for (std::int64_t seq = 1; seq <= warmup; ++seq) {
     for (int i = 0; i < details; ++i) {
@@ -694,7 +694,7 @@ std::optional<int> Run::warm_up(Warmup& w) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   w.seconds = since(warmup_t0);
-  w.cpu_s = proc_cpu_s(dashboard_) - cpu_before_warmup;
+  w.cpu_s = core::proc_cpu_s(dashboard_) - cpu_before_warmup;
   if (!counted) return fail("the dashboard did not count every warm-up state within 600 s");
   for (int i = 0; i < details; ++i) {
     const auto h0 = Clock::now();
@@ -706,7 +706,7 @@ std::optional<int> Run::warm_up(Warmup& w) {
     w.history_min = w.history_min < 0 ? n : std::min(w.history_min, n);
     w.history_max = std::max(w.history_max, n);
   }
-  w.rss_kb = proc_status_kb("VmRSS", std::to_string(dashboard_));
+  w.rss_kb = core::proc_status_kb("VmRSS", std::to_string(dashboard_));
   return std::nullopt;
 }
 
@@ -735,7 +735,7 @@ std::optional<int> Run::measure(Window& m) {
   const double state_period_s = 1.0 / (o_.rate * static_cast<double>(details));
   const double status_period_s = 1.0 / static_cast<double>(details);
   const std::int64_t total_states = per_detail * details;
-  const double cpu0 = proc_cpu_s(dashboard_);
+  const double cpu0 = core::proc_cpu_s(dashboard_);
   const auto t0 = Clock::now();
   std::int64_t k_state = 0, k_status = 0;
   auto due = [&](std::int64_t k, double period) {
@@ -765,10 +765,10 @@ std::optional<int> Run::measure(Window& m) {
   }
   m.seconds = since(t0);
   m.published = k_state;
-  m.cpu_s = proc_cpu_s(dashboard_) - cpu0;
-  m.rss_end = proc_status_kb("VmRSS", std::to_string(dashboard_));
-  m.rss_peak = proc_status_kb("VmHWM", std::to_string(dashboard_));
-  m.load_average = std::atof(read_text("/proc/loadavg").c_str());  // 1 min
+  m.cpu_s = core::proc_cpu_s(dashboard_) - cpu0;
+  m.rss_end = core::proc_status_kb("VmRSS", std::to_string(dashboard_));
+  m.rss_peak = core::proc_status_kb("VmHWM", std::to_string(dashboard_));
+  m.load_average = std::atof(core::read_text("/proc/loadavg").c_str());  // 1 min
   // The last events.
   for (const auto t1 = Clock::now();
        o_.sse_clients > 0 && since(t1) < 2.0 &&
@@ -795,7 +795,7 @@ int run(Options o) {
   if (auto rc = r.warm_up(w)) return *rc;
   Window m;
   if (auto rc = r.measure(m)) return *rc;
-  tools::print_line(dashboard_line(o, w, m));
+  core::print_line(dashboard_line(o, w, m));
   r.cleanup();
   return 0;
 }

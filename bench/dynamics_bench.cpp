@@ -6,8 +6,8 @@
 #include <cmath>
 #include <thread>
 
+#include "core/json_line.h"
 #include "solver/dynamics/explicit_dynamics.h"
-#include "tools/json_line.h"
 
 namespace peritwin::bench {
 
@@ -24,11 +24,11 @@ double cpu_seconds() {
 int run_dynamics(double nodes, int threads, int steps) {
   const double dx = 1e-3;
   const double side = std::round(std::sqrt(nodes)) * dx;
-  DetailGeometry g;
+  mesh::DetailGeometry g;
   g.thickness = 1.0;
-  g.outline.push_back(Region(Rectangle{0.0, 0.0, side, side}));
+  g.outline.push_back(mesh::Region(mesh::Rectangle{0.0, 0.0, side, side}));
   const auto build_start = std::chrono::steady_clock::now();
-  const Discretization disc = discretize(g, dx, 3.0 * dx);
+  const mesh::Discretization disc = discretize(g, dx, 3.0 * dx);
   dynamics::DynamicsSetup setup;
   setup.kernel = {dynamics::KernelChoice::Shape::gaussian, 2.0};
   setup.youngs_modulus = 210e9;
@@ -41,7 +41,7 @@ int run_dynamics(double nodes, int threads, int steps) {
     return 3;
   }
   auto& dyn = *made.value();
-  for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+  for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
     if (disc.position[static_cast<std::size_t>(k)].y > side - dx) {
       dyn.add_body_force(k, 0.0, 1e6 / dx);
     }
@@ -58,7 +58,7 @@ int run_dynamics(double nodes, int threads, int steps) {
   const double wall =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double evaluations = static_cast<double>(dyn.entries()) * steps;
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "dynamics";
   line["nodes"] = disc.num_nodes();
   line["bonds"] = disc.num_bonds();
@@ -68,20 +68,20 @@ int run_dynamics(double nodes, int threads, int steps) {
   line["threads"] = threads;
   line["hardware_threads"] = std::thread::hardware_concurrency();
   line["steps"] = steps;
-  line["wall_s"] = tools::significant(wall, 4);
-  line["bond_evaluations_per_s"] = tools::significant(evaluations / wall, 4);
+  line["wall_s"] = core::significant(wall, 4);
+  line["bond_evaluations_per_s"] = core::significant(evaluations / wall, 4);
   line["bond_pairs_per_s"] =
-      tools::significant(disc.num_bonds() * static_cast<double>(steps) / wall, 4);
+      core::significant(disc.num_bonds() * static_cast<double>(steps) / wall, 4);
   line["ns_per_node_step"] =
-      tools::significant(1e9 * wall / (disc.num_nodes() * static_cast<double>(steps)), 4);
+      core::significant(1e9 * wall / (disc.num_nodes() * static_cast<double>(steps)), 4);
   // Per CPU second (all threads): what one core does, less sensitive to other load on the machine
   // than the wall-clock rate.
-  line["cpu_s"] = tools::significant(cpu, 4);
-  line["bond_evaluations_per_cpu_s"] = tools::significant(evaluations / cpu, 4);
-  line["build_s"] = tools::significant(build_s, 3);
+  line["cpu_s"] = core::significant(cpu, 4);
+  line["bond_evaluations_per_cpu_s"] = core::significant(evaluations / cpu, 4);
+  line["build_s"] = core::significant(build_s, 3);
   line["goal"] = "bond_evaluations_per_s >= 1e8";
   line["met"] = evaluations / wall >= 1e8;
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }
 

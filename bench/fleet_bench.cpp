@@ -43,21 +43,21 @@
 #include <thread>
 
 #include "bench/child_process.h"
-#include "bench/percentile.h"
+#include "core/json_line.h"
+#include "core/loopback_port.h"
+#include "core/percentile.h"
 #include "core/proc_files.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
-#include "tests/support/loopback_port.h"
-#include "tools/json_line.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace peritwin;
 using bench::Clock;
-using bench::percentile;
 using bench::since;
+using peritwin::core::percentile;
 
 constexpr const char* kSource = "fleet";
 
@@ -370,11 +370,11 @@ int main(int argc, char** argv) {
     std::cerr << "peritwin-bench-fleet: " << e.what() << "\n";
     return 3;
   }
-  const int port = twin::free_loopback_port();
+  const int port = core::free_loopback_port();
   const pid_t hub = bench::spawn(
       {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
       "/dev/null", (work / "hub.log").string());
-  if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+  if (hub < 0 || !core::wait_for_loopback_port(port, 60.0)) {
     std::cerr << "peritwin-bench-fleet: the LCM hub did not come up on port " << port << "\n";
     return 3;
   }
@@ -394,45 +394,45 @@ int main(int argc, char** argv) {
   }
   fs::remove_all(work);
 
-  const double p99 = percentile(pool.quiet_ms, 0.99);
-  tools::JsonLine line;
+  const double p99 = core::percentile(pool.quiet_ms, 0.99);
+  core::JsonLine line;
   line["bench"] = "fleet";
   line["details"] = o.details;
   line["release_idle_factors"] = o.release_idle_factors;
   line["quiet_phases"] = o.aligned_phases ? "aligned" : "spread";
   line["nodes_per_detail"] = o.nodes_per_detail;
-  line["dx_m"] = tools::fixed(dx, 6);
-  line["startup_s"] = tools::fixed(pool.startup_s, 2);
-  line["startup_s_per_detail"] = tools::fixed(pool.startup_s / o.details, 3);
-  line["rss_mb"] = tools::fixed(pool.rss_mb, 1);
-  line["rss_peak_mb"] = tools::fixed(pool.rss_peak_mb, 1);
-  line["rss_mb_per_detail"] = tools::fixed(pool.rss_mb / o.details, 2);
-  line["cycles_per_s"] = tools::fixed(pool.cycles_per_s, 0);
+  line["dx_m"] = core::fixed(dx, 6);
+  line["startup_s"] = core::fixed(pool.startup_s, 2);
+  line["startup_s_per_detail"] = core::fixed(pool.startup_s / o.details, 3);
+  line["rss_mb"] = core::fixed(pool.rss_mb, 1);
+  line["rss_peak_mb"] = core::fixed(pool.rss_peak_mb, 1);
+  line["rss_mb_per_detail"] = core::fixed(pool.rss_mb / o.details, 2);
+  line["cycles_per_s"] = core::fixed(pool.cycles_per_s, 0);
   line["quiet_batches"] = pool.quiet_ms.size();
-  line["quiet_p50_ms"] = tools::fixed(percentile(pool.quiet_ms, 0.5), 2);
+  line["quiet_p50_ms"] = core::fixed(core::percentile(pool.quiet_ms, 0.5), 2);
   // The part until the daemon made the STATE (wall clock, its utime): receipt, the wait for a
   // worker and the batch; the rest of quiet_p*_ms is the STATE's way back over the bus.
-  line["quiet_p50_ms_to_state"] = tools::fixed(percentile(pool.quiet_to_state_ms, 0.5), 2);
-  line["quiet_p99_ms_to_state"] = tools::fixed(percentile(pool.quiet_to_state_ms, 0.99), 2);
-  line["quiet_p99_ms"] = tools::fixed(p99, 2);
+  line["quiet_p50_ms_to_state"] = core::fixed(core::percentile(pool.quiet_to_state_ms, 0.5), 2);
+  line["quiet_p99_ms_to_state"] = core::fixed(core::percentile(pool.quiet_to_state_ms, 0.99), 2);
+  line["quiet_p99_ms"] = core::fixed(p99, 2);
   line["loud_batches"] = pool.loud_batches;
   line["loud_broken_bonds"] = pool.loud_broken;
   line["loud_cycles_before_window"] = pool.loud_cycles_before;
   // Loud batches whose STATE shows more broken bonds than the one before (each a re-solve).
   line["loud_breaking_batches"] = pool.loud_breaking;
-  line["window_s"] = tools::fixed(pool.window_s, 1);
+  line["window_s"] = core::fixed(pool.window_s, 1);
   line["loud_end_of_life"] = pool.loud_ended;
   line["worker_threads"] = o.worker_threads;  // 0: the daemon's default (the cores, at least 2)
   if (o.one_thread) {
-    const double p99_one = percentile(single.quiet_ms, 0.99);
-    line["startup_s_one_thread"] = tools::fixed(single.startup_s, 2);
+    const double p99_one = core::percentile(single.quiet_ms, 0.99);
+    line["startup_s_one_thread"] = core::fixed(single.startup_s, 2);
     line["quiet_batches_one_thread"] = single.quiet_ms.size();
-    line["quiet_p50_ms_one_thread"] = tools::fixed(percentile(single.quiet_ms, 0.5), 2);
-    line["quiet_p99_ms_one_thread"] = tools::fixed(p99_one, 2);
-    line["quiet_p99_one_thread_over_pool"] = tools::fixed(p99_one / p99, 2);
+    line["quiet_p50_ms_one_thread"] = core::fixed(core::percentile(single.quiet_ms, 0.5), 2);
+    line["quiet_p99_ms_one_thread"] = core::fixed(p99_one, 2);
+    line["quiet_p99_one_thread_over_pool"] = core::fixed(p99_one / p99, 2);
     line["loud_batches_one_thread"] = single.loud_batches;
     line["loud_breaking_batches_one_thread"] = single.loud_breaking;
-    line["rss_mb_one_thread"] = tools::fixed(single.rss_mb, 1);
+    line["rss_mb_one_thread"] = core::fixed(single.rss_mb, 1);
   }
   line["goals"] = {{"rss_mb_at_32x4000", 1536},
                    {"quiet_p99_ms", 20},
@@ -440,6 +440,6 @@ int main(int argc, char** argv) {
                    {"quiet_p99_ok", p99 <= 20.0},
                    {"startup_ok", pool.startup_s / o.details <= 0.5}};
   line["transport"] = "tcpq";
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }

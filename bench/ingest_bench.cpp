@@ -1,7 +1,7 @@
 // peritwin-bench-ingest: how fast the daemon absorbs load cycles over LCM when no bond breaks.
 //
 // Starts LCM's Java TCP hub on a free loopback port (unless --lcm-url is given), runs the daemon
-// service (twin/service/daemon.h) on its own thread and LCM connection, and feeds it with the
+// service (service/daemon.h) on its own thread and LCM connection, and feeds it with the
 // replay client (replay/replay_tool.h, lockstep off) histories of single-cycle blocks at loads far
 // too low to break a bond (P_max cycling over 200..350 N, R = 0.1), batched as peritwin-replay
 // batches them (1024 blocks or 1000 cycles per batch), after a one-batch lockstep warm-up:
@@ -33,11 +33,11 @@
 #include <iostream>
 #include <thread>
 
+#include "core/json_line.h"
+#include "core/loopback_port.h"
 #include "core/program.h"
 #include "replay/replay_tool.h"
-#include "tests/support/loopback_port.h"
-#include "tools/json_line.h"
-#include "twin/service/daemon.h"
+#include "service/daemon.h"
 
 extern char** environ;
 
@@ -61,7 +61,7 @@ struct Options {
   std::int64_t latency_cycles = 100'000;
   std::size_t latency_window = 2;
   bool no_results = false;
-  replay::BatchingOptions batching;
+  loads::BatchingOptions batching;
 };
 
 void add_options(CLI::App& app, Options& o) {
@@ -88,7 +88,7 @@ void add_options(CLI::App& app, Options& o) {
 /// does not come up.
 pid_t start_hub(std::string& lcm_url) {
   pid_t hub = -1;
-  const int port = twin::free_loopback_port();
+  const int port = core::free_loopback_port();
   const std::string port_text = std::to_string(port);
   const char* args[] = {
       "java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", port_text.c_str(), nullptr};
@@ -101,7 +101,7 @@ pid_t start_hub(std::string& lcm_url) {
     return -1;
   }
   posix_spawn_file_actions_destroy(&actions);
-  if (!twin::wait_for_loopback_port(port, 30.0)) {
+  if (!core::wait_for_loopback_port(port, 30.0)) {
     std::cerr << "peritwin-bench-ingest: the LCM hub did not come up on port " << port << '\n';
     kill(hub, SIGTERM);
     waitpid(hub, nullptr, 0);
@@ -121,11 +121,11 @@ struct Phases {
 /// The warm-up batch, the latency phase and the throughput phase, over their own LCM.
 Phases run_phases(const Options& o, const std::string& detail_id) {
   auto history = [&](std::int64_t n, const char* source) {
-    std::vector<LoadBlock> blocks;
+    std::vector<core::LoadBlock> blocks;
     for (std::int64_t i = 0; i < n; ++i) {
       blocks.push_back({200.0 + 50.0 * static_cast<double>(i % 4), 0.1, 0.0, 1});
     }
-    return replay::make_twin_batches(blocks, detail_id, source, o.batching);
+    return loads::make_twin_batches(blocks, detail_id, source, o.batching);
   };
   auto latency_batches = history(o.latency_cycles, "bench-latency");
   auto batches = history(o.cycles, "bench");
@@ -135,23 +135,23 @@ Phases run_phases(const Options& o, const std::string& detail_id) {
   lcm::LCM lcm(o.lcm_url);
   // Warm-up: one batch of another source in lockstep, so that both LCM clients are known to
   // the hub (a fresh subscription is registered asynchronously) before the clock starts.
-  replay::ReplayOptions warm_options;
+  loads::ReplayOptions warm_options;
   warm_options.lockstep = true;
   warm_options.resend_after_s = 0.5;
   replay::LcmReplayer warm_up(
-      lcm, replay::make_twin_batches({{200.0, 0.1, 0.0, 1}}, detail_id, "warm-up", o.batching),
+      lcm, loads::make_twin_batches({{200.0, 0.1, 0.0, 1}}, detail_id, "warm-up", o.batching),
       warm_options);
   if (!warm_up.run({}, {}).ok) {
     std::cerr << "peritwin-bench-ingest: no answer from the daemon\n";
   }
   // Latency phase: a producer that keeps `latency_window` batches in flight, so that the
   // latency is the daemon's and not a queue the benchmark builds on purpose.
-  replay::ReplayOptions latency_options;
+  loads::ReplayOptions latency_options;
   latency_options.window = o.latency_window;
   replay::LcmReplayer latency_replayer(lcm, std::move(latency_batches), latency_options);
   out.latency_result = latency_replayer.run({}, {});
   // Throughput phase: `window` batches in flight; the daemon is saturated.
-  replay::ReplayOptions options;
+  loads::ReplayOptions options;
   options.window = o.window;
   replay::LcmReplayer replayer(lcm, std::move(batches), options);
   const auto t0 = std::chrono::steady_clock::now();
@@ -162,22 +162,22 @@ Phases run_phases(const Options& o, const std::string& detail_id) {
 
 /// The JSON line: `latencies` in order of application (the warm-up batch, the latency phase,
 /// the throughput phase).
-tools::JsonLine ingest_line(const Options& o, const Phases& p, const std::vector<double>& latencies,
-                            std::int64_t broken) {
+core::JsonLine ingest_line(const Options& o, const Phases& p, const std::vector<double>& latencies,
+                           std::int64_t broken) {
   const auto first = std::min<std::size_t>(1, latencies.size());
   const auto split = std::min(latencies.size(), first + p.num_latency_batches);
   const std::vector<double> paced(latencies.begin() + static_cast<std::ptrdiff_t>(first),
                                   latencies.begin() + static_cast<std::ptrdiff_t>(split));
   const std::vector<double> saturated(latencies.begin() + static_cast<std::ptrdiff_t>(split),
                                       latencies.end());
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "ingest";
-  line["cycles_per_s"] = tools::fixed(static_cast<double>(o.cycles) / p.seconds, 1);
-  line["p50_ms"] = tools::fixed(1e3 * percentile(paced, 0.50), 3);
-  line["p99_ms"] = tools::fixed(1e3 * percentile(paced, 0.99), 3);
+  line["cycles_per_s"] = core::fixed(static_cast<double>(o.cycles) / p.seconds, 1);
+  line["p50_ms"] = core::fixed(1e3 * percentile(paced, 0.50), 3);
+  line["p99_ms"] = core::fixed(1e3 * percentile(paced, 0.99), 3);
   line["latency_window"] = o.latency_window;
-  line["saturated_p50_ms"] = tools::fixed(1e3 * percentile(saturated, 0.50), 3);
-  line["saturated_p99_ms"] = tools::fixed(1e3 * percentile(saturated, 0.99), 3);
+  line["saturated_p50_ms"] = core::fixed(1e3 * percentile(saturated, 0.50), 3);
+  line["saturated_p99_ms"] = core::fixed(1e3 * percentile(saturated, 0.99), 3);
   line["window"] = o.window;
   line["batches"] = p.num_batches;
   line["cycles"] = static_cast<long long>(o.cycles);
@@ -193,14 +193,14 @@ tools::JsonLine ingest_line(const Options& o, const Phases& p, const std::vector
 /// The benchmark; the exit code.
 int run(Options o) {
   spdlog::set_level(spdlog::level::warn);
-  auto loaded = twin::load_config(o.config_file);
+  auto loaded = config::load_config(o.config_file);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return 2;
   }
-  twin::TwinConfig config = *loaded.config;
+  config::TwinConfig config = *loaded.config;
   config.details.resize(1);
-  twin::DetailConfig& detail = config.details[0];
+  config::DetailConfig& detail = config.details[0];
   detail.life.every_batches = 0;
   detail.checkpoint = {0, 0.0};
   detail.output.field_every_batches = 0;
@@ -224,13 +224,14 @@ int run(Options o) {
   std::int64_t broken = -1;
   std::thread daemon_thread([&] {
     lcm::LCM lcm(o.lcm_url);
-    twin::DaemonOptions options;
+    service::DaemonOptions options;
     options.state_dir = work / "state";
     options.checkpoints = false;
     options.results = !o.no_results;
     options.record_latency = true;
-    twin::Daemon daemon(lcm, config, options);
-    const Status started = lcm.good() ? daemon.start() : Status{failure("LCM is not good")};
+    service::Daemon daemon(lcm, config, options);
+    const core::Status started =
+        lcm.good() ? daemon.start() : core::Status{core::failure("LCM is not good")};
     if (!started) {
       std::cerr << "peritwin-bench-ingest: daemon: " << started.error().message() << "\n";
       failed = true;
@@ -258,7 +259,7 @@ int run(Options o) {
               << phases.result.error << "\n";
     return 3;
   }
-  tools::print_line(ingest_line(o, phases, latencies, broken));
+  core::print_line(ingest_line(o, phases, latencies, broken));
   return broken == 0 ? 0 : 1;
 }
 

@@ -11,7 +11,7 @@
 //   fork    — each simulation continues from a copy of the live engine (FatigueEngine::fork);
 //   rebuild — each simulation builds a fresh engine and imports the state (the path before
 //             FatigueEngine::fork: first factorization, rebuild, replay of the re-solves);
-//   coarse  — the estimate on a coarser grid of spacing --coarse-dx (twin/model/coarse_life.h:
+//   coarse  — the estimate on a coarser grid of spacing --coarse-dx (twin/coarse_life.h:
 //             the crack mapped, A2 calibrated to the fine model's recent growth), with
 //             coarse_over_fine the ratio of its central life to the fine one's.
 // With both, `identical` says whether the two gave the same three lives bit for bit.
@@ -34,14 +34,14 @@
 #include <string>
 #include <vector>
 
+#include "config/config.h"
+#include "core/cli_checks.h"
+#include "core/json_line.h"
 #include "core/proc_files.h"
 #include "solver/fatigue/laws/strain_range.h"
-#include "tools/cli_checks.h"
-#include "tools/json_line.h"
-#include "twin/config/config.h"
-#include "twin/model/coarse_life.h"
-#include "twin/model/detail_model.h"
-#include "twin/model/life.h"
+#include "twin/coarse_life.h"
+#include "twin/detail_model.h"
+#include "twin/life.h"
 
 namespace {
 
@@ -66,62 +66,63 @@ struct Options {
   double coarse_dx = 0.0;
 };
 
-tools::JsonLine run_coarse(const DetailModel& model, const EngineState& state,
-                           const std::vector<LoadBlock>& spectrum, double dx, bool sequential,
-                           LifeEstimate& estimate) {
+core::JsonLine run_coarse(const DetailModel& model, const fatigue::EngineState& state,
+                          const std::vector<core::LoadBlock>& spectrum, double dx, bool sequential,
+                          LifeEstimate& estimate) {
   reset_peak_rss();
   CoarseLifeReport rep;
   estimate = estimate_life_coarse(model, dx, state, spectrum, !sequential, nullptr, &rep);
-  tools::JsonLine out;
+  core::JsonLine out;
   out["dx_m"] = dx;
-  out["wall_s"] = tools::fixed(estimate.wall_s, 2);
-  out["rss_peak_mb"] = tools::fixed(core::proc_status_mb("VmHWM"), 1);
-  out["central"] = tools::whole(estimate.central);
-  out["low"] = tools::whole(estimate.low);
-  out["high"] = tools::whole(estimate.high);
+  out["wall_s"] = core::fixed(estimate.wall_s, 2);
+  out["rss_peak_mb"] = core::fixed(core::proc_status_mb("VmHWM"), 1);
+  out["central"] = core::whole(estimate.central);
+  out["low"] = core::whole(estimate.low);
+  out["high"] = core::whole(estimate.high);
   out["nodes"] = rep.coarse_nodes;
   out["bonds"] = static_cast<long long>(rep.coarse_bonds);
   out["mapped_bonds"] = static_cast<long long>(rep.mapped_bonds);
-  out["fine_length_m"] = tools::significant(rep.fine_length, 4);
-  out["start_length_m"] = tools::significant(rep.coarse_start_length, 4);
-  out["critical_length_m"] = tools::significant(rep.coarse_critical_length, 4);
-  out["window_growth_m"] = tools::significant(rep.window_growth, 4);
-  out["fine_window_cycles"] = tools::whole(rep.fine_window_cycles);
-  out["coarse_window_cycles"] = tools::whole(rep.coarse_window_cycles);
-  out["a2_factor"] = tools::significant(rep.a2_factor, 4);
+  out["fine_length_m"] = core::significant(rep.fine_length, 4);
+  out["start_length_m"] = core::significant(rep.coarse_start_length, 4);
+  out["critical_length_m"] = core::significant(rep.coarse_critical_length, 4);
+  out["window_growth_m"] = core::significant(rep.window_growth, 4);
+  out["fine_window_cycles"] = core::whole(rep.fine_window_cycles);
+  out["coarse_window_cycles"] = core::whole(rep.coarse_window_cycles);
+  out["a2_factor"] = core::significant(rep.a2_factor, 4);
   out["calibration_runs"] = rep.calibration_runs;
   out["calibrated"] = rep.calibrated;
-  out["build_s"] = tools::fixed(rep.build_s, 3);
-  out["map_s"] = tools::fixed(rep.map_s, 3);
-  out["calibrate_s"] = tools::fixed(rep.calibrate_s, 3);
-  out["simulate_s"] = tools::fixed(rep.simulate_s, 3);
+  out["build_s"] = core::fixed(rep.build_s, 3);
+  out["map_s"] = core::fixed(rep.map_s, 3);
+  out["calibrate_s"] = core::fixed(rep.calibrate_s, 3);
+  out["simulate_s"] = core::fixed(rep.simulate_s, 3);
   return out;
 }
 
-tools::JsonLine run_mode(const DetailModel& model, const FatigueEngine& live,
-                         const EngineState& state, const std::vector<LoadBlock>& spectrum,
-                         bool fork, bool sequential, LifeEstimate& estimate) {
+core::JsonLine run_mode(const DetailModel& model, const fatigue::FatigueEngine& live,
+                        const fatigue::EngineState& state,
+                        const std::vector<core::LoadBlock>& spectrum, bool fork, bool sequential,
+                        LifeEstimate& estimate) {
   reset_peak_rss();
   std::vector<SimulationStats> stats;
   estimate =
       estimate_life(model, state, spectrum, !sequential, nullptr, fork ? &live : nullptr, &stats);
-  tools::JsonLine out;
-  out["wall_s"] = tools::fixed(estimate.wall_s, 2);
-  out["rss_peak_mb"] = tools::fixed(core::proc_status_mb("VmHWM"), 1);
-  out["central"] = tools::whole(estimate.central);
-  out["low"] = tools::whole(estimate.low);
-  out["high"] = tools::whole(estimate.high);
+  core::JsonLine out;
+  out["wall_s"] = core::fixed(estimate.wall_s, 2);
+  out["rss_peak_mb"] = core::fixed(core::proc_status_mb("VmHWM"), 1);
+  out["central"] = core::whole(estimate.central);
+  out["low"] = core::whole(estimate.low);
+  out["high"] = core::whole(estimate.high);
   const double s = model.config().life.a2_relative_scatter;
   const double factors[3] = {1.0, 1 + s, 1 - s};
-  out["simulations"] = tools::JsonLine::array();
+  out["simulations"] = core::JsonLine::array();
   for (std::size_t i = 0; i < stats.size(); ++i) {
-    tools::JsonLine sim;
+    core::JsonLine sim;
     sim["a2_factor"] = factors[i];
-    sim["build_s"] = tools::fixed(stats[i].build_s, 3);
-    sim["import_s"] = tools::fixed(stats[i].import_s, 3);
-    sim["fork_s"] = tools::fixed(stats[i].fork_s, 3);
-    sim["stepping_s"] = tools::fixed(stats[i].stepping_s, 3);
-    sim["wall_s"] = tools::fixed(stats[i].wall_s, 3);
+    sim["build_s"] = core::fixed(stats[i].build_s, 3);
+    sim["import_s"] = core::fixed(stats[i].import_s, 3);
+    sim["fork_s"] = core::fixed(stats[i].fork_s, 3);
+    sim["stepping_s"] = core::fixed(stats[i].stepping_s, 3);
+    sim["wall_s"] = core::fixed(stats[i].wall_s, 3);
     sim["breaks"] = static_cast<long long>(stats[i].breaks);
     sim["updates"] = stats[i].updates;
     out["simulations"].push_back(sim);
@@ -130,14 +131,15 @@ tools::JsonLine run_mode(const DetailModel& model, const FatigueEngine& live,
 }
 
 int run(const Options& o) {
-  ConfigLimits limits;
+  config::ConfigLimits limits;
   limits.max_memory_bytes = UINT64_MAX;
-  auto loaded = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml", limits);
+  auto loaded =
+      config::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml", limits);
   if (!loaded.ok()) {
     std::fprintf(stderr, "peritwin-bench life: %s\n", loaded.error_text().c_str());
     return 3;
   }
-  DetailConfig config = loaded.config->details.at(0);
+  config::DetailConfig config = loaded.config->details.at(0);
   // B1 is 62.5 mm x 60 mm: nodes ~ 3750 mm^2 / dx^2 (as the fleet bench).
   const double dx = std::sqrt(0.0625 * 0.060 / o.nodes);
   const double dx0 = config.dx;
@@ -154,7 +156,7 @@ int run(const Options& o) {
   }
   const DetailModel& model = **built;
   const double build_s = seconds_since(t0);
-  const std::vector<LoadBlock> spectrum = config.life.reference_spectrum;
+  const std::vector<core::LoadBlock> spectrum = config.life.reference_spectrum;
 
   // The live engine, run at the reference load until the crack has grown start_growth.
   t0 = std::chrono::steady_clock::now();
@@ -163,44 +165,44 @@ int run(const Options& o) {
     std::fprintf(stderr, "peritwin-bench life: %s\n", live->failure_reason().c_str());
     return 3;
   }
-  const auto length = [&](const FatigueEngine& e) {
+  const auto length = [&](const fatigue::FatigueEngine& e) {
     return criterion_crack_length(model, e.node_damage(), e.solver().intact());
   };
-  const FatigueEngine::StopCheck grown = [&](const FatigueEngine& e) {
+  const fatigue::FatigueEngine::StopCheck grown = [&](const fatigue::FatigueEngine& e) {
     return length(e) >= o.start_growth || end_of_life(model, e) != Failure::none;
   };
   while (length(*live) < o.start_growth) {
-    if (live->apply(spectrum.front(), grown) == EngineStatus::final_failure) {
+    if (live->apply(spectrum.front(), grown) == fatigue::EngineStatus::final_failure) {
       std::fprintf(stderr, "peritwin-bench life: final failure before the start growth\n");
       return 3;
     }
   }
   const double live_s = seconds_since(t0);
   const double live_peak_mb = core::proc_status_mb("VmHWM");  // build and live run
-  const EngineState state = live->export_state();
+  const fatigue::EngineState state = live->export_state();
 
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "life";
   line["nodes"] = model.disc().num_nodes();
   line["bonds"] = model.disc().num_bonds();
-  line["dx_m"] = tools::significant(dx, 4);
-  line["a2"] = tools::significant(strain.A2, 6);
+  line["dx_m"] = core::significant(dx, 4);
+  line["a2"] = core::significant(strain.A2, 6);
   line["critical_length_m"] = o.critical_length;
-  line["model_build_s"] = tools::fixed(build_s, 2);
-  tools::JsonLine start;
+  line["model_build_s"] = core::fixed(build_s, 2);
+  core::JsonLine start;
   start["cycles"] = static_cast<long long>(state.total_cycles);
   start["broken_bonds"] = static_cast<long long>(live->broken_bonds() - model.precut_bonds());
-  start["crack_length_m"] = tools::significant(length(*live), 4);
+  start["crack_length_m"] = core::significant(length(*live), 4);
   start["resolves"] = static_cast<long long>(state.resolve_groups.size());
   start["rebuilds"] = live->rebuilds();
-  start["live_s"] = tools::fixed(live_s, 2);
-  start["rss_peak_mb"] = tools::fixed(live_peak_mb, 1);
-  start["factor_nnz"] = tools::whole(live->solver().factor().factor_nonzeros());
+  start["live_s"] = core::fixed(live_s, 2);
+  start["rss_peak_mb"] = core::fixed(live_peak_mb, 1);
+  start["factor_nnz"] = core::whole(live->solver().factor().factor_nonzeros());
   line["start"] = start;
   // What the daemon's worker path adds on the ingest thread: one fork for the job's snapshot.
   t0 = std::chrono::steady_clock::now();
   { const auto snapshot = live->fork(model.engine_settings()); }
-  line["snapshot_fork_s"] = tools::fixed(seconds_since(t0), 3);
+  line["snapshot_fork_s"] = core::fixed(seconds_since(t0), 3);
   line["sequential"] = o.sequential;
 
   LifeEstimate by_fork, by_rebuild;
@@ -216,7 +218,7 @@ int run(const Options& o) {
     line["coarse"] = run_coarse(model, state, spectrum, o.coarse_dx, o.sequential, by_coarse);
     const LifeEstimate& fine = fork ? by_fork : by_rebuild;
     if (fork || rebuild) {
-      line["coarse_over_fine"] = tools::fixed(by_coarse.central / fine.central, 4);
+      line["coarse_over_fine"] = core::fixed(by_coarse.central / fine.central, 4);
     }
   }
   if (fork && rebuild) {
@@ -227,8 +229,8 @@ int run(const Options& o) {
   for (const char* mode : {"fork", "rebuild", "coarse"}) {
     if (line.contains(mode)) peak = std::max(peak, line[mode]["rss_peak_mb"].get<double>());
   }
-  line["peak_rss_mb"] = tools::fixed(peak, 1);
-  tools::print_line(line);
+  line["peak_rss_mb"] = core::fixed(peak, 1);
+  core::print_line(line);
   return 0;
 }
 
@@ -238,13 +240,13 @@ int main(int argc, char** argv) {
   CLI::App app{"peritwin-bench life: the wall time of one remaining-life estimate"};
   Options o;
   app.add_option("--nodes", o.nodes, "approximate number of nodes (B1 example)")
-      ->check(peritwin::cli::finite_in(500.0, 1e7));
+      ->check(peritwin::core::finite_in(500.0, 1e7));
   app.add_option("--start-growth", o.start_growth,
                  "crack growth (m) of the live state the estimate starts from (default 0.002)")
-      ->check(peritwin::cli::finite_in(0.0, 0.03));
+      ->check(peritwin::core::finite_in(0.0, 0.03));
   app.add_option("--critical-length", o.critical_length,
                  "the life criterion's crack length (m, default 0.008)")
-      ->check(peritwin::cli::finite_in(0.0005, 0.03));
+      ->check(peritwin::core::finite_in(0.0005, 0.03));
   app.add_option("--modes", o.modes,
                  "comma-separated: fork, rebuild, coarse (needs --coarse-dx); default fork,rebuild")
       ->check([](const std::string& v) {
@@ -259,7 +261,7 @@ int main(int argc, char** argv) {
       });
   app.add_option("--coarse-dx", o.coarse_dx,
                  "grid spacing (m) of the coarse estimate model ([detail.life] dx) for mode coarse")
-      ->check(peritwin::cli::finite_in(0.0, 0.01));
+      ->check(peritwin::core::finite_in(0.0, 0.01));
   app.add_flag("--sequential", o.sequential,
                "the three simulations one after another (default: concurrently)");
   CLI11_PARSE(app, argc, argv);

@@ -28,13 +28,13 @@
 #include <vector>
 
 #include "bench/dynamics_bench.h"
+#include "core/cli_checks.h"
+#include "core/json_line.h"
 #include "core/proc_files.h"
-#include "replay/cycle_blocks.h"
-#include "replay/rainflow.h"
+#include "loads/cycle_blocks.h"
+#include "loads/rainflow.h"
 #include "solver/fatigue/fatigue_engine.h"
-#include "solver/static/static_solver.h"
-#include "tools/cli_checks.h"
-#include "tools/json_line.h"
+#include "solver/statics/static_solver.h"
 #include "validation/specimens.h"
 
 namespace {
@@ -52,11 +52,11 @@ class PhasePeaks {
  public:
   PhasePeaks() { reset(); }
   /// Records the phase's peak and current RSS under "<name>" in `line`, then resets the peak.
-  void mark(peritwin::tools::JsonLine& line, const std::string& name) {
+  void mark(peritwin::core::JsonLine& line, const std::string& name) {
     const double peak = peritwin::core::proc_status_mb("VmHWM");
-    line["rss_peak_" + name + "_mb"] = peritwin::tools::fixed(peak, 1);
+    line["rss_peak_" + name + "_mb"] = peritwin::core::fixed(peak, 1);
     line["rss_after_" + name + "_mb"] =
-        peritwin::tools::fixed(peritwin::core::proc_status_mb("VmRSS"), 1);
+        peritwin::core::fixed(peritwin::core::proc_status_mb("VmRSS"), 1);
     note(name, peak);
     reset();
   }
@@ -99,13 +99,14 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 /// with its default settings (its own ordering choice: AMD, METIS when AMD fills much),
 /// factorize, solve the three basis cases with cholmod_solve. Same supports and loads.
 struct BaselineRun {
-  peritwin::SolveTimings t;
+  peritwin::statics::SolveTimings t;
   double factor_nnz = 0.0;
   std::vector<double> u;  ///< constant basis, full DOFs
   bool ok = false;
 };
 
-BaselineRun run_baseline(const peritwin::Specimen& specimen, const peritwin::StaticSolver& solver) {
+BaselineRun run_baseline(const peritwin::statics::Specimen& specimen,
+                         const peritwin::statics::StaticSolver& solver) {
   using namespace peritwin;
   BaselineRun run;
   const auto& disc = specimen.disc;
@@ -114,7 +115,7 @@ BaselineRun run_baseline(const peritwin::Specimen& specimen, const peritwin::Sta
   auto t0 = std::chrono::steady_clock::now();
   std::vector<Eigen::Triplet<double, int>> entries;
   entries.reserve(10 * static_cast<std::size_t>(disc.num_bonds()));
-  for (BondIndex b = 0; b < disc.num_bonds(); ++b) {
+  for (mesh::BondIndex b = 0; b < disc.num_bonds(); ++b) {
     const auto bi = static_cast<std::size_t>(b);
     if (disc.bond_precut[bi]) continue;
     const auto i = 2 * static_cast<std::size_t>(disc.bond_i[bi]);
@@ -130,12 +131,12 @@ BaselineRun run_baseline(const peritwin::Specimen& specimen, const peritwin::Sta
       }
     }
   }
-  SparseMatrix upper(n, n);
+  linalg::SparseMatrix upper(n, n);
   upper.setFromTriplets(entries.begin(), entries.end());
   upper.makeCompressed();
   entries = {};
   run.t.assemble_s = seconds_since(t0);
-  SparseCholesky cholesky;
+  linalg::SparseCholesky cholesky;
   t0 = std::chrono::steady_clock::now();
   if (!cholesky.analyze(upper).ok()) return run;
   run.t.analyze_s = seconds_since(t0);
@@ -146,7 +147,7 @@ BaselineRun run_baseline(const peritwin::Specimen& specimen, const peritwin::Sta
   t0 = std::chrono::steady_clock::now();
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 3);
   for (int basis = 0; basis < 3; ++basis) {
-    const auto force = solver.basis_force(static_cast<Basis>(basis));
+    const auto force = solver.basis_force(static_cast<statics::Basis>(basis));
     for (std::size_t dof = 0; dof < force.size(); ++dof) {
       if (free[dof] >= 0) rhs(free[dof], basis) = force[dof];
     }
@@ -165,17 +166,17 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
                const std::string& ordering) {
   using namespace peritwin;
   using namespace peritwin::validation;
-  ModelOptions options;
-  options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
-  if (baseline && options.kind != ModelKind::bond_based) {
+  model::ModelOptions options;
+  options.kind = model_name == "bb" ? model::ModelKind::bond_based : model::ModelKind::state_based;
+  if (baseline && options.kind != model::ModelKind::bond_based) {
     std::fprintf(stderr, "peritwin-bench: --baseline is the bond-based plain path (--model bb)\n");
     return 2;
   }
   const CompactTensionSpec spec;
-  tools::JsonLine line;
+  core::JsonLine line;
   PhasePeaks peaks;
   const auto t0 = std::chrono::steady_clock::now();
-  const Specimen specimen =
+  const statics::Specimen specimen =
       make_compact_tension(spec, options, compact_tension_spacing(spec, target_nodes));
   const double build_s = seconds_since(t0);
   peaks.mark(line, "build");
@@ -190,44 +191,46 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
   BaselineRun first;
   if (baseline) {
     // The baseline needs the free DOFs and loads only: a solver that is never solved.
-    const StaticSolver plain(specimen.disc, specimen.model, specimen.supports, specimen.loads);
+    const statics::StaticSolver plain(specimen.disc, specimen.model, specimen.supports,
+                                      specimen.loads);
     first = run_baseline(specimen, plain);
     first.u = {};
     peaks.mark(line, "baseline_first");
   }
   {
-    StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
-    solver.set_ordering(ordering == "nesdis"  ? Ordering::nesdis
-                        : ordering == "metis" ? Ordering::metis
-                        : ordering == "amd"   ? Ordering::amd
-                                              : Ordering::metis_or_amd);
-    const Status report = solver.solve();
+    statics::StaticSolver solver(specimen.disc, specimen.model, specimen.supports, specimen.loads);
+    solver.set_ordering(ordering == "nesdis"  ? linalg::Ordering::nesdis
+                        : ordering == "metis" ? linalg::Ordering::metis
+                        : ordering == "amd"   ? linalg::Ordering::amd
+                                              : linalg::Ordering::metis_or_amd);
+    const core::Status report = solver.solve();
     if (!report.ok()) {
-      std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n", message_of(report).c_str());
+      std::fprintf(stderr, "peritwin-bench: static solve failed: %s\n",
+                   core::message_of(report).c_str());
       return 1;
     }
     const auto& t = solver.timings();
     project_s = t.assemble_s + t.analyze_s + t.factor_s + t.solve_s;
-    project_opening = opening(solver.basis_displacement(basis_constant));
+    project_opening = opening(solver.basis_displacement(statics::basis_constant));
     line["bench"] = "static";
     line["model"] = model_name;
     line["ordering"] = ordering;
     line["nodes"] = specimen.disc.num_nodes();
     line["bonds"] = specimen.disc.num_bonds();
-    line["dx_m"] = tools::significant(specimen.disc.dx, 6);
-    line["build_s"] = tools::fixed(build_s, 3);
-    line["assemble_s"] = tools::fixed(t.assemble_s, 3);
-    line["analyze_s"] = tools::fixed(t.analyze_s, 3);
-    line["factor_s"] = tools::fixed(t.factor_s, 3);
-    line["solve_s"] = tools::fixed(t.solve_s, 3);
-    line["total_s"] = tools::fixed(build_s + project_s, 3);
-    line["factor_nnz"] = tools::whole(solver.factor().factor_nonzeros());
-    line["load_line_opening_m_per_kN"] = tools::significant(project_opening, 7);
+    line["dx_m"] = core::significant(specimen.disc.dx, 6);
+    line["build_s"] = core::fixed(build_s, 3);
+    line["assemble_s"] = core::fixed(t.assemble_s, 3);
+    line["analyze_s"] = core::fixed(t.analyze_s, 3);
+    line["factor_s"] = core::fixed(t.factor_s, 3);
+    line["solve_s"] = core::fixed(t.solve_s, 3);
+    line["total_s"] = core::fixed(build_s + project_s, 3);
+    line["factor_nnz"] = core::whole(solver.factor().factor_nonzeros());
+    line["load_line_opening_m_per_kN"] = core::significant(project_opening, 7);
     peaks.mark(line, "solve");
     {  // the products-and-triplets assembly the scatter replaced (its oracle), in this run
       const auto ta = std::chrono::steady_clock::now();
-      const SparseMatrix by_products = solver.stiffness_upper_by_products();
-      line["assemble_by_products_s"] = tools::fixed(seconds_since(ta), 3);
+      const linalg::SparseMatrix by_products = solver.stiffness_upper_by_products();
+      line["assemble_by_products_s"] = core::fixed(seconds_since(ta), 3);
       line["assemblies_equal"] =
           by_products.nonZeros() == solver.stiffness_upper().nonZeros() &&
           std::equal(by_products.valuePtr(), by_products.valuePtr() + by_products.nonZeros(),
@@ -245,9 +248,9 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
         plain.t.analyze_s = 0.5 * (first.t.analyze_s + after.t.analyze_s);
         plain.t.factor_s = 0.5 * (first.t.factor_s + after.t.factor_s);
         plain.t.solve_s = 0.5 * (first.t.solve_s + after.t.solve_s);
-        line["baseline_first_total_s"] = tools::fixed(
+        line["baseline_first_total_s"] = core::fixed(
             first.t.assemble_s + first.t.analyze_s + first.t.factor_s + first.t.solve_s, 3);
-        line["baseline_second_total_s"] = tools::fixed(
+        line["baseline_second_total_s"] = core::fixed(
             after.t.assemble_s + after.t.analyze_s + after.t.factor_s + after.t.solve_s, 3);
       }
       if (!plain.ok || !first.ok) {
@@ -257,23 +260,23 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
       const double plain_s =
           plain.t.assemble_s + plain.t.analyze_s + plain.t.factor_s + plain.t.solve_s;
       const double plain_opening = opening(plain.u);
-      line["baseline_assemble_s"] = tools::fixed(plain.t.assemble_s, 3);
-      line["baseline_analyze_s"] = tools::fixed(plain.t.analyze_s, 3);
-      line["baseline_factor_s"] = tools::fixed(plain.t.factor_s, 3);
-      line["baseline_solve_s"] = tools::fixed(plain.t.solve_s, 3);
-      line["baseline_total_s"] = tools::fixed(plain_s, 3);
-      line["baseline_factor_nnz"] = tools::whole(plain.factor_nnz);
-      line["baseline_load_line_opening_m_per_kN"] = tools::significant(plain_opening, 7);
-      line["opening_relative_difference"] = tools::significant(
-          std::abs(project_opening - plain_opening) / std::abs(plain_opening), 2);
+      line["baseline_assemble_s"] = core::fixed(plain.t.assemble_s, 3);
+      line["baseline_analyze_s"] = core::fixed(plain.t.analyze_s, 3);
+      line["baseline_factor_s"] = core::fixed(plain.t.factor_s, 3);
+      line["baseline_solve_s"] = core::fixed(plain.t.solve_s, 3);
+      line["baseline_total_s"] = core::fixed(plain_s, 3);
+      line["baseline_factor_nnz"] = core::whole(plain.factor_nnz);
+      line["baseline_load_line_opening_m_per_kN"] = core::significant(plain_opening, 7);
+      line["opening_relative_difference"] =
+          core::significant(std::abs(project_opening - plain_opening) / std::abs(plain_opening), 2);
       // assemble + analyze + factor + solve of both (the discretization is shared and not counted)
-      line["solve_over_baseline"] = tools::fixed(plain_s > 0.0 ? project_s / plain_s : 0.0, 3);
+      line["solve_over_baseline"] = core::fixed(plain_s > 0.0 ? project_s / plain_s : 0.0, 3);
       peaks.mark(line, "baseline");
     }
   }
   line["peak_rss_reset_ok"] = peaks.reset_ok();
-  line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
-  tools::print_line(line);
+  line["peak_rss_mb"] = core::fixed(peaks.peak_mb(), 1);
+  core::print_line(line);
   return 0;
 }
 
@@ -286,16 +289,16 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   // and without a periodic rebuild, the refactorizations.
   using namespace peritwin;
   using namespace peritwin::validation;
-  ModelOptions options;
-  options.kind = model_name == "bb" ? ModelKind::bond_based : ModelKind::state_based;
+  model::ModelOptions options;
+  options.kind = model_name == "bb" ? model::ModelKind::bond_based : model::ModelKind::state_based;
   const CompactTensionSpec spec;
   const double dx = compact_tension_spacing(spec, target_nodes);
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "fatigue";
   PhasePeaks peaks;
-  const Specimen s = make_compact_tension(spec, options, dx);
+  const statics::Specimen s = make_compact_tension(spec, options, dx);
   peaks.mark(line, "build");
-  FatigueSettings settings;
+  fatigue::FatigueSettings settings;
   settings.strain = fatigue::al6061_t6_strain_params();
   // A2 calibrated at Δx = 1 mm, scaled to this horizon by 000 Eq. (29).
   settings.strain.A2 = fatigue::a2_scaled(a2_at_1mm, 3.015e-3, 3.015 * dx, settings.strain.m2);
@@ -308,7 +311,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   int solves = 0, rebuilds = 0, updates = 0;
   bool failed = false;
   {
-    FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+    fatigue::FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
     if (!engine.initialize()) {
       std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
       return 1;
@@ -319,7 +322,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
     bool first_update = true;
     for (;;) {
       const int rebuilds_before = engine.rebuilds();
-      const bool more = engine.apply({4000.0, 0.1, 0.0, 1000}) == EngineStatus::ok &&
+      const bool more = engine.apply({4000.0, 0.1, 0.0, 1000}) == fatigue::EngineStatus::ok &&
                         engine.total_cycles() < max_cycles;
       if (first_update && engine.updates() > 0) {  // this block converted the factor
         simplicial_nnz = engine.solver().factor().factor_nonzeros();
@@ -347,18 +350,18 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
     updates = engine.updates();
     failed = engine.failed();
   }  // the engine's factor goes before the refactorizing solver is built
-  line["rss_peak_later_updates_mb"] = tools::fixed(peak_updates, 1);
-  line["rss_peak_rebuild_blocks_mb"] = tools::fixed(peak_rebuilds, 1);
+  line["rss_peak_later_updates_mb"] = core::fixed(peak_updates, 1);
+  line["rss_peak_rebuild_blocks_mb"] = core::fixed(peak_rebuilds, 1);
   peaks.note("later_updates", peak_updates);
   peaks.note("rebuild_blocks", peak_rebuilds);
   peaks.mark(line, "engine_freed");
   // Refactorizing path on the same model: assemble + numeric factorization + solve.
-  StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
+  statics::StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
   if (!refactor.solve().ok()) return 1;
   const auto t1 = std::chrono::steady_clock::now();
   const int repeats = 3;
   for (int i = 0; i < repeats; ++i) {
-    const BondIndex b = 0;
+    const mesh::BondIndex b = 0;
     if (!refactor.break_bonds(std::span(&b, 1)).ok()) return 1;
   }
   const double per_refactor =
@@ -370,27 +373,27 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   line["broken_bonds"] = static_cast<long long>(broken);
   line["solves"] = solves;
   line["updates"] = updates;
-  line["wall_s"] = tools::fixed(wall, 2);
-  line["update_total_s"] = tools::fixed(update_total, 2);
-  line["basis_solve_total_s"] = tools::fixed(basis_total, 2);
-  line["update_s_mean"] = tools::fixed(per_update, 5);
-  line["refactor_s_mean"] = tools::fixed(per_refactor, 4);
+  line["wall_s"] = core::fixed(wall, 2);
+  line["update_total_s"] = core::fixed(update_total, 2);
+  line["basis_solve_total_s"] = core::fixed(basis_total, 2);
+  line["update_s_mean"] = core::fixed(per_update, 5);
+  line["refactor_s_mean"] = core::fixed(per_refactor, 4);
   line["incremental_over_refactor"] =
-      tools::fixed(per_update > 0 ? per_refactor / per_update : 0.0, 1);
+      core::fixed(per_update > 0 ? per_refactor / per_update : 0.0, 1);
   line["rebuilds"] = rebuilds;
-  line["rebuild_total_s"] = tools::fixed(rebuild_total, 2);
+  line["rebuild_total_s"] = core::fixed(rebuild_total, 2);
   line["final_failure"] = failed;
-  line["factor_nnz_supernodal"] = tools::whole(supernodal_nnz);
-  line["factor_nnz_simplicial"] = tools::whole(simplicial_nnz);  // the LDLᵀ factor's entries
+  line["factor_nnz_supernodal"] = core::whole(supernodal_nnz);
+  line["factor_nnz_simplicial"] = core::whole(simplicial_nnz);  // the LDLᵀ factor's entries
   // The factor's bytes: the supernodal LLᵀ's values (8 B per entry, briefly, at each
   // factorization) and the LDLᵀ factor kept between updates (values, rows, pointers).
   line["factor_mb_supernodal_values"] =
-      tools::fixed(supernodal_nnz * sizeof(double) / (1024.0 * 1024.0), 1);
-  line["factor_mb_ldlt"] = tools::fixed(ldlt_bytes / (1024.0 * 1024.0), 1);
+      core::fixed(supernodal_nnz * sizeof(double) / (1024.0 * 1024.0), 1);
+  line["factor_mb_ldlt"] = core::fixed(ldlt_bytes / (1024.0 * 1024.0), 1);
   line["peak_rss_reset_ok"] = peaks.reset_ok();
-  line["peak_rss_mb"] = tools::fixed(peaks.peak_mb(), 1);
+  line["peak_rss_mb"] = core::fixed(peaks.peak_mb(), 1);
   line["peak_rss_phase"] = peaks.peak_phase();
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }
 
@@ -400,19 +403,20 @@ struct BilinearRun {
   std::int64_t increments = 0;  ///< integrated
   int secant_iterations = 0;    ///< re-solves in increments
   int refactorizations = 0;     ///< numeric factorizations after the first solve
-  peritwin::StaticSolver::PcgStats pcg;
+  peritwin::statics::StaticSolver::PcgStats pcg;
   std::int64_t broken = 0;
   std::int64_t unconverged = 0;
   double max_damage = 0.0;
   bool failed = false;
 };
 
-BilinearRun run_bilinear_engine(const peritwin::Specimen& s, peritwin::FatigueSettings settings,
-                                double load, std::int64_t increments, std::int64_t k) {
+BilinearRun run_bilinear_engine(const peritwin::statics::Specimen& s,
+                                peritwin::fatigue::FatigueSettings settings, double load,
+                                std::int64_t increments, std::int64_t k) {
   using namespace peritwin;
   using namespace peritwin::validation;
   BilinearRun run;
-  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  fatigue::FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   if (!engine.initialize()) {
     std::fprintf(stderr, "peritwin-bench: %s\n", engine.failure_reason().c_str());
     std::exit(1);
@@ -425,7 +429,7 @@ BilinearRun run_bilinear_engine(const peritwin::Specimen& s, peritwin::FatigueSe
     if (i + 1 == k) {
       run.first_k_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
-    if (status != EngineStatus::ok) break;
+    if (status != fatigue::EngineStatus::ok) break;
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (run.first_k_s == 0.0) run.first_k_s = run.wall_s;
@@ -449,15 +453,15 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   // (or to final failure), the refactorizing oracle the first `oracle_increments` of them.
   using namespace peritwin;
   using namespace peritwin::validation;
-  ModelOptions options;
-  options.kind = ModelKind::bond_based;
+  model::ModelOptions options;
+  options.kind = model::ModelKind::bond_based;
   const CompactTensionSpec spec;
-  const Specimen s =
+  const statics::Specimen s =
       make_compact_tension(spec, options, compact_tension_spacing(spec, target_nodes));
   const double load = 4000.0;
   double smax = 0.0;
   {
-    StaticSolver probe(s.disc, s.model, s.supports, s.loads);
+    statics::StaticSolver probe(s.disc, s.model, s.supports, s.loads);
     if (!probe.solve().ok()) return 1;
     std::vector<double> stretch;
     probe.stretch(load, 0.0, stretch);
@@ -465,8 +469,8 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
       if (probe.intact()[b]) smax = std::max(smax, stretch[b]);
     }
   }
-  FatigueSettings settings;
-  settings.law = FatigueLaw::bilinear;
+  fatigue::FatigueSettings settings;
+  settings.law = fatigue::FatigueLaw::bilinear;
   settings.bilinear.s0 = 1.3 * smax;
   settings.bilinear.sc = 3.0 * settings.bilinear.s0;
   settings.bilinear.m = 4.0;
@@ -478,7 +482,7 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   const BilinearRun fast = run_bilinear_engine(s, settings, load, increments, k);
   settings.bilinear_refactor_every_iteration = true;
   const BilinearRun oracle = run_bilinear_engine(s, settings, load, k, k);
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "bilinear";
   line["nodes"] = s.disc.num_nodes();
   line["bonds"] = s.disc.num_bonds();
@@ -488,22 +492,22 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
   line["pcg_iterations"] = static_cast<long long>(fast.pcg.iterations);
   line["pcg_max_iterations"] = fast.pcg.max_iterations;
   line["pcg_fallbacks"] = static_cast<long long>(fast.pcg.fallbacks);
-  line["pcg_s"] = tools::fixed(fast.pcg.seconds, 2);
-  line["wall_s"] = tools::fixed(fast.wall_s, 2);
+  line["pcg_s"] = core::fixed(fast.pcg.seconds, 2);
+  line["wall_s"] = core::fixed(fast.wall_s, 2);
   line["broken_bonds"] = static_cast<long long>(fast.broken);
   line["unconverged_increments"] = static_cast<long long>(fast.unconverged);
-  line["max_damage"] = tools::fixed(fast.max_damage, 4);
+  line["max_damage"] = core::fixed(fast.max_damage, 4);
   line["final_failure"] = fast.failed;
   line["reference_step"] = step;
-  line["tolerance"] = tools::significant(tolerance, 1);
+  line["tolerance"] = core::significant(tolerance, 1);
   line["oracle_increments"] = static_cast<long long>(k);
   line["oracle_secant_iterations"] = oracle.secant_iterations;
-  line["oracle_wall_s"] = tools::fixed(oracle.wall_s, 2);
-  line["fast_first_s"] = tools::fixed(fast.first_k_s, 2);
+  line["oracle_wall_s"] = core::fixed(oracle.wall_s, 2);
+  line["fast_first_s"] = core::fixed(fast.first_k_s, 2);
   line["fast_over_oracle"] =
-      tools::fixed(fast.first_k_s > 0 ? oracle.wall_s / fast.first_k_s : 0.0, 1);
-  line["peak_rss_mb"] = tools::fixed(peak_rss_mb(), 1);
-  tools::print_line(line);
+      core::fixed(fast.first_k_s > 0 ? oracle.wall_s / fast.first_k_s : 0.0, 1);
+  line["peak_rss_mb"] = core::fixed(peak_rss_mb(), 1);
+  core::print_line(line);
   return 0;
 }
 
@@ -515,16 +519,16 @@ int run_bilinear(double target_nodes, std::int64_t increments, std::int64_t orac
 // outside the timed region; only push(), add() and the vectors they append to (cleared per
 // chunk, as a stream's batches would be) are timed.
 int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
-  using namespace peritwin::replay;
+  namespace loads = peritwin::loads;
   constexpr std::size_t kChunk = std::size_t{1} << 20;
   std::mt19937_64 rng(20261203);
   std::normal_distribution<double> step(0.0, 20.0);
   std::normal_distribution<double> white(0.0, 100.0);
   std::vector<double> load(kChunk), alpha(kChunk);
-  std::vector<CountedCycle> cycles;
-  std::vector<peritwin::LoadBlock> blocks;
-  RainflowCounter counter(gate);
-  CycleBlocks converter({0.05, true});
+  std::vector<loads::CountedCycle> cycles;
+  std::vector<peritwin::core::LoadBlock> blocks;
+  loads::RainflowCounter counter(gate);
+  loads::CycleBlocks converter({0.05, true});
   double walk = 0.0, seconds = 0.0;
   std::int64_t done = 0, n_blocks = 0;
   const double two_pi = 2.0 * std::acos(-1.0);
@@ -543,7 +547,7 @@ int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < n; ++i) counter.push(load[i], alpha[i], cycles);
-    for (const CountedCycle& c : cycles) converter.add(c, blocks);
+    for (const loads::CountedCycle& c : cycles) converter.add(c, blocks);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     n_blocks += static_cast<std::int64_t>(blocks.size());
     cycles.clear();
@@ -551,27 +555,27 @@ int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
     done += static_cast<std::int64_t>(n);
   }
   const auto t0 = std::chrono::steady_clock::now();
-  counter.finish(ResidueRule::half, cycles);
-  for (const CountedCycle& c : cycles) converter.add(c, blocks);
+  counter.finish(loads::ResidueRule::half, cycles);
+  for (const loads::CountedCycle& c : cycles) converter.add(c, blocks);
   seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   n_blocks += static_cast<std::int64_t>(blocks.size());
   const auto& stats = counter.stats();
   const double rate = seconds > 0.0 ? static_cast<double>(samples) / seconds : 0.0;
   constexpr double kGoal = 5e7;  // samples/s on one core (the goal)
-  peritwin::tools::JsonLine line;
+  peritwin::core::JsonLine line;
   line["bench"] = "stream-rainflow";
   line["samples"] = static_cast<long long>(samples);
   line["signal"] = noise ? "white-noise" : "sine-walk";
   line["gate_N"] = gate;
-  line["seconds"] = peritwin::tools::fixed(seconds, 3);
-  line["samples_per_s"] = peritwin::tools::significant(rate, 4);
+  line["seconds"] = peritwin::core::fixed(seconds, 3);
+  line["samples_per_s"] = peritwin::core::significant(rate, 4);
   line["reversals"] = static_cast<long long>(stats.reversals);
   line["cycles"] = static_cast<long long>(stats.full_cycles + stats.half_cycles);
   line["half_cycles"] = static_cast<long long>(stats.half_cycles);
   line["blocks"] = static_cast<long long>(n_blocks);
   line["goal_samples_per_s"] = kGoal;
-  line["ratio_to_goal"] = peritwin::tools::fixed(rate / kGoal, 2);
-  peritwin::tools::print_line(line);
+  line["ratio_to_goal"] = peritwin::core::fixed(rate / kGoal, 2);
+  peritwin::core::print_line(line);
   return 0;
 }
 
@@ -602,7 +606,7 @@ int main(int argc, char** argv) {
   stat->add_option("--model", model, "bb (bond-based) or osb (ordinary state-based)")
       ->check(CLI::IsMember({"bb", "osb"}));
   stat->add_option("--nodes", nodes, "approximate number of nodes")
-      ->check(peritwin::cli::finite_in(100.0, 1e7));
+      ->check(peritwin::core::finite_in(100.0, 1e7));
   bool static_baseline = false;
   stat->add_flag("--baseline", static_baseline,
                  "also the plain path (triplets, CHOLMOD defaults) in the same run (--model bb)");
@@ -616,7 +620,7 @@ int main(int argc, char** argv) {
   double fatigue_nodes = 15000;
   double a2 = 1301;
   fat->add_option("--nodes", fatigue_nodes, "approximate number of nodes")
-      ->check(peritwin::cli::finite_in(100.0, 1e7));
+      ->check(peritwin::core::finite_in(100.0, 1e7));
   std::string fatigue_model = "osb";
   fat->add_option("--model", fatigue_model, "bb or osb")->check(CLI::IsMember({"bb", "osb"}));
   std::int64_t fatigue_max_cycles = 10'000'000;
@@ -624,27 +628,27 @@ int main(int argc, char** argv) {
                   "stop after this many cycles (default 1e7: final failure comes first)")
       ->check(CLI::Range(std::int64_t{1000}, std::int64_t{10'000'000}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
   auto* bil =
       app.add_subcommand("bilinear", "B1 bond-based with 003's bilinear law, fast vs oracle");
   double bilinear_nodes = 15000;
   std::int64_t bilinear_increments = 200;
   std::int64_t oracle_increments = 20;
   double bilinear_life = 20000;
-  int reference_step = peritwin::FatigueSettings{}.bilinear_reference_step;
-  double solve_tolerance = peritwin::FatigueSettings{}.bilinear_solve_tolerance;
+  int reference_step = peritwin::fatigue::FatigueSettings{}.bilinear_reference_step;
+  double solve_tolerance = peritwin::fatigue::FatigueSettings{}.bilinear_solve_tolerance;
   bil->add_option("--nodes", bilinear_nodes, "approximate number of nodes")
-      ->check(peritwin::cli::finite_in(100.0, 1e7));
+      ->check(peritwin::core::finite_in(100.0, 1e7));
   bil->add_option("--increments", bilinear_increments, "increments of 500 cycles (fast path)")
       ->check(CLI::Range(1, 1000000));
   bil->add_option("--oracle-increments", oracle_increments, "increments of the oracle run")
       ->check(CLI::Range(1, 1000000));
   bil->add_option("--life", bilinear_life, "cycles of the most stretched bond at constant stretch")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
   bil->add_option("--step", reference_step, "reference factors are powers of 2^step")
       ->check(CLI::Range(1, 64));
   bil->add_option("--tolerance", solve_tolerance, "PCG tolerance (energy norm, relative)")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
   auto* stream =
       app.add_subcommand("stream-rainflow", "samples -> gate -> rainflow -> blocks, one core");
   std::int64_t stream_samples = 100'000'000;
@@ -652,7 +656,7 @@ int main(int argc, char** argv) {
   stream->add_option("--samples", stream_samples, "synthetic samples (default 1e8)")
       ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40));
   stream->add_option("--gate", stream_gate, "hysteresis gate (N, default 10)")
-      ->check(peritwin::cli::finite_in(0.0, 1e9));
+      ->check(peritwin::core::finite_in(0.0, 1e9));
   bool stream_noise = false;
   stream->add_flag("--noise", stream_noise,
                    "white noise instead of sine + random walk (a reversal almost every sample)");
@@ -662,7 +666,7 @@ int main(int argc, char** argv) {
   int dynamics_threads = 2;
   int dynamics_steps = 1000;
   dyn->add_option("--nodes", dynamics_nodes, "approximate number of nodes")
-      ->check(peritwin::cli::finite_in(100.0, 1e8));
+      ->check(peritwin::core::finite_in(100.0, 1e8));
   dyn->add_option("--threads", dynamics_threads, "bond-force threads")->check(CLI::Range(1, 256));
   dyn->add_option("--steps", dynamics_steps, "timed steps")->check(CLI::Range(1, 100000000));
   CLI11_PARSE(app, argc, argv);

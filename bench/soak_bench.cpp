@@ -46,14 +46,14 @@
 #include <thread>
 
 #include "bench/child_process.h"
+#include "config/config.h"
+#include "core/json_line.h"
+#include "core/loopback_port.h"
 #include "core/proc_files.h"
 #include "core/program.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
-#include "tests/support/loopback_port.h"
-#include "tools/json_line.h"
-#include "twin/config/config.h"
 
 namespace {
 
@@ -200,7 +200,7 @@ void add_options(CLI::App& app, Options& o) {
 
 /// The daemon's RSS over the run: the samples and the numbers of the JSON line.
 struct Measurement {
-  tools::JsonLine samples = tools::JsonLine::array();
+  core::JsonLine samples = core::JsonLine::array();
   std::int64_t rss_first = -1, rss_start = -1, rss_end = -1, rss_peak = -1, applied = 0;
   std::vector<std::int64_t> tenth_max;
   double seconds = 0.0;
@@ -212,7 +212,7 @@ Measurement measure(Options& o, Producer& producer, pid_t daemon,
                     const std::function<bool()>& daemon_alive) {
   Measurement m;
   auto sample = [&] {
-    const std::int64_t rss = proc_status_kb("VmRSS", std::to_string(daemon));
+    const std::int64_t rss = core::proc_status_kb("VmRSS", std::to_string(daemon));
     m.samples.push_back({{"batches", producer.applied()}, {"rss_kb", rss}});
     return rss;
   };
@@ -233,7 +233,7 @@ Measurement measure(Options& o, Producer& producer, pid_t daemon,
     m.ok = producer.run_to(target, 120.0, [&] {
       if (since(last_poll) >= 1.0) {
         last_poll = Clock::now();
-        note(proc_status_kb("VmRSS", std::to_string(daemon)));
+        note(core::proc_status_kb("VmRSS", std::to_string(daemon)));
       }
       return since(t0) < o.max_seconds && daemon_alive();
     });
@@ -244,8 +244,8 @@ Measurement measure(Options& o, Producer& producer, pid_t daemon,
   m.seconds = since(t0);
   m.applied = producer.applied();
   m.alive = daemon_alive();
-  m.rss_end = m.alive ? proc_status_kb("VmRSS", std::to_string(daemon)) : -1;
-  m.rss_peak = m.alive ? proc_status_kb("VmHWM", std::to_string(daemon)) : -1;
+  m.rss_end = m.alive ? core::proc_status_kb("VmRSS", std::to_string(daemon)) : -1;
+  m.rss_peak = m.alive ? core::proc_status_kb("VmHWM", std::to_string(daemon)) : -1;
   if (m.alive && m.samples.back()["batches"] != m.applied) {
     m.samples.push_back({{"batches", m.applied}, {"rss_kb", m.rss_end}});
   }
@@ -253,18 +253,18 @@ Measurement measure(Options& o, Producer& producer, pid_t daemon,
 }
 
 /// The JSON line of the run.
-tools::JsonLine soak_line(const Options& o, const Measurement& m, const Producer& producer,
-                          int daemon_exit) {
+core::JsonLine soak_line(const Options& o, const Measurement& m, const Producer& producer,
+                         int daemon_exit) {
   const std::vector<std::int64_t>& tenth_max = m.tenth_max;
   const double measured = static_cast<double>(std::max<std::int64_t>(0, m.applied - o.warm_up));
   const double growth_kb = static_cast<double>(m.rss_end - m.rss_start);
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "soak";
   line["batches"] = m.applied;
   line["warm_up_batches"] = o.warm_up;
   line["complete"] = m.applied >= o.batches;
-  line["seconds"] = tools::fixed(m.seconds, 1);
-  line["batches_per_s"] = tools::fixed(measured / std::max(m.seconds, 1e-9), 1);
+  line["seconds"] = core::fixed(m.seconds, 1);
+  line["batches_per_s"] = core::fixed(measured / std::max(m.seconds, 1e-9), 1);
   line["rss_first_batch_kb"] = m.rss_first;
   line["rss_start_kb"] = m.rss_start;
   line["rss_end_kb"] = m.rss_end;
@@ -272,17 +272,17 @@ tools::JsonLine soak_line(const Options& o, const Measurement& m, const Producer
   const bool measured_rss = m.rss_start > 0 && m.rss_end > 0 && measured > 0;
   line["growth_percent"] =
       measured_rss
-          ? tools::JsonLine(tools::fixed(100.0 * growth_kb / static_cast<double>(m.rss_start), 2))
-          : tools::JsonLine(nullptr);
+          ? core::JsonLine(core::fixed(100.0 * growth_kb / static_cast<double>(m.rss_start), 2))
+          : core::JsonLine(nullptr);
   line["growth_kb_per_million_batches"] =
-      measured_rss ? tools::JsonLine(tools::fixed(1e6 * growth_kb / measured, 1))
-                   : tools::JsonLine(nullptr);
+      measured_rss ? core::JsonLine(core::fixed(1e6 * growth_kb / measured, 1))
+                   : core::JsonLine(nullptr);
   line["rss_max_per_tenth_kb"] = tenth_max;
   // The highest RSS of the second half of the tenths against the first half's.
   const auto half = static_cast<std::ptrdiff_t>(tenth_max.size() / 2);
   line["envelope_growth_percent"] =
       half >= 1 && tenth_max.front() > 0
-          ? tools::JsonLine(tools::fixed(
+          ? core::JsonLine(core::fixed(
                 100.0 *
                     static_cast<double>(
                         *std::max_element(tenth_max.begin() + half, tenth_max.end()) -
@@ -290,7 +290,7 @@ tools::JsonLine soak_line(const Options& o, const Measurement& m, const Producer
                     static_cast<double>(
                         *std::max_element(tenth_max.begin(), tenth_max.begin() + half)),
                 2))
-          : tools::JsonLine(nullptr);
+          : core::JsonLine(nullptr);
   line["samples"] = m.samples;
   line["broken_bonds"] = producer.broken_bonds();
   line["resends"] = producer.resends();
@@ -312,7 +312,7 @@ std::string prepare_config(Options& o, const fs::path& work) {
     o.config_file = (work / "soak.toml").string();
     std::ofstream(o.config_file) << text;
   }
-  const auto loaded = twin::load_config(o.config_file);
+  const auto loaded = config::load_config(o.config_file);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return {};
@@ -339,11 +339,11 @@ int run(Options o) {
     if (!o.keep) fs::remove_all(work);
   };
   if (o.lcm_url.empty()) {
-    const int port = twin::free_loopback_port();
+    const int port = core::free_loopback_port();
     hub = spawn(
         {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
         "/dev/null", (work / "hub.log").string());
-    if (hub < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+    if (hub < 0 || !core::wait_for_loopback_port(port, 60.0)) {
       std::cerr << "peritwin-bench-soak: the LCM hub did not come up on port " << port << "\n";
       cleanup();
       return 3;
@@ -385,7 +385,7 @@ int run(Options o) {
               << (!m.alive ? "the daemon died (see " + daemon_log + ")" : producer.error()) << "\n";
     o.keep = true;
   }
-  tools::print_line(soak_line(o, m, producer, daemon_exit));
+  core::print_line(soak_line(o, m, producer, daemon_exit));
   const std::int64_t broken = producer.broken_bonds();
   cleanup();
   if (!m.ok || !m.alive || daemon_exit != 0) return 3;

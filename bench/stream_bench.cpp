@@ -32,23 +32,23 @@
 #include <thread>
 
 #include "bench/child_process.h"
-#include "bench/percentile.h"
+#include "config/config.h"
+#include "core/json_line.h"
+#include "core/loopback_port.h"
+#include "core/percentile.h"
 #include "core/program.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
 #include "stream/stream_tool.h"
-#include "tests/support/loopback_port.h"
-#include "tools/json_line.h"
-#include "twin/config/config.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace peritwin;
 using bench::Clock;
-using bench::percentile;
 using bench::since;
+using peritwin::core::percentile;
 
 constexpr const char* kSource = "stream";
 
@@ -122,7 +122,7 @@ std::uint64_t counted_samples(const fs::path& out_file) {
 /// One run: the hub, the daemon and peritwin-stream as child processes, the STATE watched.
 class Run {
  public:
-  Run(const Options& o, const twin::DetailConfig& detail)
+  Run(const Options& o, const config::DetailConfig& detail)
       : o_(o),
         detail_(detail),
         work_(fs::temp_directory_path() / ("peritwin_bench_stream_" + std::to_string(::getpid()))) {
@@ -154,7 +154,7 @@ class Run {
 
  private:
   const Options& o_;
-  const twin::DetailConfig& detail_;
+  const config::DetailConfig& detail_;
   fs::path work_;
   pid_t hub_ = -1, daemon_ = -1, stream_ = -1;
   int pipe_fd_[2] = {-1, -1};
@@ -164,11 +164,11 @@ class Run {
 
 bool Run::start() {
   const fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
-  const int port = twin::free_loopback_port();
+  const int port = core::free_loopback_port();
   hub_ = bench::spawn(
       {"java", "-cp", "/usr/share/java/lcm.jar", "lcm.lcm.TCPService", std::to_string(port)},
       "/dev/null", (work_ / "hub.log").string());
-  if (hub_ < 0 || !twin::wait_for_loopback_port(port, 60.0)) {
+  if (hub_ < 0 || !core::wait_for_loopback_port(port, 60.0)) {
     std::cerr << "peritwin-bench-stream: the LCM hub did not come up on port " << port << "\n";
     return false;
   }
@@ -205,11 +205,11 @@ bool Run::start() {
 
 bool Run::feed(Feed& f) {
   // The shadow pipeline: which sample closes which batch (the stream's own options).
-  replay::BatchingOptions batching;
+  loads::BatchingOptions batching;
   batching.max_seconds = 0.1;
   batching.merge_identical = true;
   stream::Pipeline shadow(detail_, kSource, batching, 1);
-  std::vector<twin::Batch> closed;
+  std::vector<messages::Batch> closed;
   const auto total = static_cast<std::int64_t>((o_.warm_up_s + o_.seconds) * o_.rate);
   const auto t0 = Clock::now();
   std::string chunk;
@@ -268,7 +268,7 @@ int Run::finish(const Feed& f) {
         std::chrono::duration<double, std::milli>(watch_->applied_at[k] - f.closed_at[k]).count());
   }
   const std::uint64_t counted = counted_samples(work_ / "stream.out");
-  tools::JsonLine line;
+  core::JsonLine line;
   line["bench"] = "stream";
   line["rate_hz"] = o_.rate;
   line["batch_seconds"] = 0.1;
@@ -278,17 +278,17 @@ int Run::finish(const Feed& f) {
   line["dropped"] = f.written - static_cast<std::int64_t>(counted);
   line["batches"] = last_batch;
   line["batches_measured"] = latency_ms.size();
-  const double p99 = percentile(latency_ms, 0.99);
-  line["latency_ms"] = {{"p50", tools::fixed(percentile(latency_ms, 0.5), 2)},
-                        {"p90", tools::fixed(percentile(latency_ms, 0.9), 2)},
-                        {"p99", tools::fixed(p99, 2)},
-                        {"max", tools::fixed(percentile(latency_ms, 1.0), 2)}};
+  const double p99 = core::percentile(latency_ms, 0.99);
+  line["latency_ms"] = {{"p50", core::fixed(core::percentile(latency_ms, 0.5), 2)},
+                        {"p90", core::fixed(core::percentile(latency_ms, 0.9), 2)},
+                        {"p99", core::fixed(p99, 2)},
+                        {"max", core::fixed(core::percentile(latency_ms, 1.0), 2)}};
   line["goal_p99_ms"] = 50;
-  line["ratio_p99_to_goal"] = tools::fixed(p99 / 50.0, 3);
+  line["ratio_p99_to_goal"] = core::fixed(p99 / 50.0, 3);
   line["broken_bonds"] = watch_->broken_bonds;
   line["stream_exit"] = stream_exit;
   line["transport"] = "tcpq";
-  tools::print_line(line);
+  core::print_line(line);
   const bool complete =
       static_cast<std::int64_t>(watch_->applied_at.size()) > last_batch && stream_exit == 0;
   if (!complete) {
@@ -300,7 +300,7 @@ int Run::finish(const Feed& f) {
 
 /// The benchmark; the exit code.
 int run(const Options& o) {
-  const auto loaded = twin::load_config(o.config_file);
+  const auto loaded = config::load_config(o.config_file);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text() << "\n";
     return 2;

@@ -2,7 +2,7 @@
 // loops ask stop_requested() and stop cleanly.
 //
 // The handler is installed with sigaction(), never signal(): the executables that call METIS
-// (peritwin, peritwin-replay, peritwin-stream) link twin/service/signal_guard.cpp, whose
+// (peritwin, peritwin-replay, peritwin-stream) link core/signal_guard.cpp, whose
 // __sysv_signal refuses every change of SIGTERM (GKlib traps SIGTERM with signal() during each
 // METIS call); sigaction() is not interposed, so the handler installed here stays in place.
 #pragma once

@@ -4,7 +4,7 @@
 #include <system_error>
 
 #include "messages/channels.h"
-#include "twin/io/results_writer.h"
+#include "outputs/results_writer.h"
 
 namespace peritwin::dashboard {
 
@@ -30,7 +30,7 @@ std::vector<ResultsFile> find_results_files(const std::filesystem::path& dir) {
 
 std::vector<HistoryPoint> read_history_points(const std::filesystem::path& h5_path) {
   std::vector<HistoryPoint> out;
-  for (const auto& row : twin::read_time_series(h5_path)) {
+  for (const auto& row : outputs::read_time_series(h5_path)) {
     out.push_back({row.state_seq, row.total_cycles, row.crack_length_m, row.remaining_cycles,
                    row.remaining_low, row.remaining_high});
   }

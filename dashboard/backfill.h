@@ -1,5 +1,5 @@
 // peritwin-dashboard --results DIR: each detail's history from before the dashboard started, read
-// from the daemon's results files (twin/io/results_writer.h, /timeseries: one row per state) so a
+// from the daemon's results files (outputs/results_writer.h, /timeseries: one row per state) so a
 // dashboard started late shows the whole curve.
 #pragma once
 

@@ -29,7 +29,7 @@
 #include "dashboard/store.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
-#include "twin/service/hub_connection.h"
+#include "messages/hub_connection.h"
 
 #ifndef PERITWIN_CHARTJS
 #define PERITWIN_CHARTJS "/usr/share/javascript/chart.js/chart.min.js"
@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
   if (!address) {
     std::fprintf(stderr, "--listen: expected HOST:PORT (e.g. 127.0.0.1:8080), got \"%s\"\n",
                  listen.c_str());
-    return kExitUsage;
+    return peritwin::core::kExitUsage;
   }
 
   peritwin::core::set_up_logging("peritwin-dashboard", log_level);
@@ -130,7 +130,7 @@ int main(int argc, char** argv) {
   }
   if (port <= 0) {
     spdlog::critical("cannot listen on {}: address in use or not available here", listen);
-    return kExitRuntime;
+    return peritwin::core::kExitRuntime;
   }
   if (!is_loopback(address->host)) {
     spdlog::warn(
@@ -163,21 +163,23 @@ int main(int argc, char** argv) {
     }
   }
 
-  int rc = kExitOk;
+  int rc = peritwin::core::kExitOk;
   try {
-    peritwin::twin::HubConnection hub(lcm_url, peritwin::core::keep_running);
+    peritwin::messages::HubConnection hub(lcm_url, peritwin::core::keep_running);
     const std::unique_ptr<lcm::LCM> connection = hub.open();
     if (!connection) {
       if (!hub.error().empty()) {
         spdlog::critical("{}", hub.error());
-        rc = kExitRuntime;
+        rc = peritwin::core::kExitRuntime;
       }
     } else {
       lcm::LCM& lcm = *connection;
       Feed feed(store);
       using peritwin::messages::Kind;
-      for (const Kind kind :
-           {Kind::kState, Kind::kStatus, Kind::kReject, Kind::kField, Kind::kMesh}) {
+      for (const peritwin::messages::Kind kind :
+           {peritwin::messages::Kind::kState, peritwin::messages::Kind::kStatus,
+            peritwin::messages::Kind::kReject, peritwin::messages::Kind::kField,
+            peritwin::messages::Kind::kMesh}) {
         lcm.subscribe(peritwin::messages::channel_regex(kind), &Feed::on_message, &feed);
       }
       spdlog::info("subscribed to STATE, STATUS, REJECT, FIELD and MESH of every detail");
@@ -196,7 +198,8 @@ int main(int argc, char** argv) {
           for (const auto& id : store.take_mesh_requests(now)) {
             const auto request = peritwin::messages::mesh_request_message(
                 id, "peritwin-dashboard", peritwin::messages::now_utime());
-            lcm.publish(peritwin::messages::channel(id, Kind::kMeshRequest), &request);
+            lcm.publish(peritwin::messages::channel(id, peritwin::messages::Kind::kMeshRequest),
+                        &request);
             spdlog::debug("[{}] mesh requested", id);
           }
         }
@@ -204,7 +207,7 @@ int main(int argc, char** argv) {
     }
   } catch (const std::exception& e) {
     spdlog::critical("runtime failure: {}", e.what());
-    rc = kExitRuntime;
+    rc = peritwin::core::kExitRuntime;
   }
   if (const int s = peritwin::core::stop_signal(); s != 0)
     spdlog::info("signal {} received: stopping", s);

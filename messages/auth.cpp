@@ -13,7 +13,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "solver/core/toml_text.h"
+#include "core/toml_text.h"
 
 namespace peritwin::messages {
 
@@ -108,11 +108,11 @@ void sign_message(Message& m, const AuthKey& key) {
   m.tag_length = static_cast<std::int32_t>(kAuthTagBytes);
 }
 
-Error unsigned_error() { return {"auth_tag", "unsigned"}; }
-Error wrong_tag_error() { return {"auth_tag", "wrong tag"}; }
+core::Error unsigned_error() { return {"auth_tag", "unsigned"}; }
+core::Error wrong_tag_error() { return {"auth_tag", "wrong tag"}; }
 
 template <typename Message>
-Status verify_message(const Message& m, const AuthKey& key) {
+core::Status verify_message(const Message& m, const AuthKey& key) {
   if (m.tag_length == 0) return unsigned_error();
   if (m.tag_length != static_cast<std::int32_t>(kAuthTagBytes) ||
       m.auth_tag.size() != kAuthTagBytes) {
@@ -132,7 +132,7 @@ bool is_valid_key_id(std::string_view id) {
   return std::all_of(id.begin(), id.end(), [](char c) { return c >= 0x21 && c <= 0x7e; });
 }
 
-Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_name) {
+core::Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_name) {
   struct Problem {
     std::uint32_t line;
     std::string text;
@@ -140,9 +140,9 @@ Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_
   std::vector<Problem> problems;
   KeyRing ring;
   if (const auto bad = core::find_unsafe_toml_character(text)) {
-    return Error{core::one_line(file_name) + ":" + std::to_string(bad->line),
-                 "TOML syntax error: non-ASCII character " + bad->where + " (column " +
-                     std::to_string(bad->column) + ")"};
+    return core::Error{core::one_line(file_name) + ":" + std::to_string(bad->line),
+                       "TOML syntax error: non-ASCII character " + bad->where + " (column " +
+                           std::to_string(bad->column) + ")"};
   }
   try {
     const toml::table root = toml::parse(text, file_name);
@@ -237,44 +237,46 @@ Expected<KeyRing> KeyRing::parse(std::string_view text, const std::string& file_
     }
     // One line whatever the file name or toml++'s echo of the text holds (found by
     // fuzz_key_file: "expected 'true', saw 't<newline>'").
-    return Error{core::one_line(file_name) + ":" + std::to_string(problems.front().line),
-                 core::one_line(reason)};
+    return core::Error{core::one_line(file_name) + ":" + std::to_string(problems.front().line),
+                       core::one_line(reason)};
   }
   std::sort(ring.keys_.begin(), ring.keys_.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   return ring;
 }
 
-Expected<KeyRing> KeyRing::load(const std::filesystem::path& file) {
+core::Expected<KeyRing> KeyRing::load(const std::filesystem::path& file) {
   const std::string name = file.string();
   // O_NONBLOCK: a FIFO planted at the path must not block the open (it is refused below).
   const int fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
-  if (fd < 0) return Error{name, "cannot open the key file: " + errno_text(errno)};
+  if (fd < 0) return core::Error{name, "cannot open the key file: " + errno_text(errno)};
   struct Closer {
     int fd;
     ~Closer() { ::close(fd); }
   } closer{fd};
   struct stat st {};
-  if (::fstat(fd, &st) != 0) return Error{name, "cannot stat the key file: " + errno_text(errno)};
-  if (!S_ISREG(st.st_mode)) return Error{name, "the key file is not a regular file"};
+  if (::fstat(fd, &st) != 0)
+    return core::Error{name, "cannot stat the key file: " + errno_text(errno)};
+  if (!S_ISREG(st.st_mode)) return core::Error{name, "the key file is not a regular file"};
   if ((st.st_mode & 077) != 0) {
-    return Error{name, "mode " + octal_mode(st.st_mode) +
+    return core::Error{name,
+                       "mode " + octal_mode(st.st_mode) +
                            " grants access to group or others; a key file must be 0600 or 0400 "
                            "(chmod 600 " +
                            name + ")"};
   }
   if (static_cast<std::uintmax_t>(st.st_size) > kMaxKeyFileBytes) {
-    return Error{name, std::to_string(st.st_size) + " bytes is too large for a key file"};
+    return core::Error{name, std::to_string(st.st_size) + " bytes is too large for a key file"};
   }
   std::string text;
   char chunk[4096];
   while (true) {
     const ssize_t n = ::read(fd, chunk, sizeof chunk);
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return Error{name, "cannot read the key file: " + errno_text(errno)};
+    if (n < 0) return core::Error{name, "cannot read the key file: " + errno_text(errno)};
     if (n == 0) break;
     text.append(chunk, static_cast<std::size_t>(n));
-    if (text.size() > kMaxKeyFileBytes) return Error{name, "too large for a key file"};
+    if (text.size() > kMaxKeyFileBytes) return core::Error{name, "too large for a key file"};
   }
   sodium_memzero(chunk, sizeof chunk);
   auto ring = parse(text, name);
@@ -296,19 +298,19 @@ std::vector<std::string> KeyRing::ids() const {
   return out;
 }
 
-Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids) {
+core::Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids) {
   ensure_sodium();
   const std::string name = file.string();
-  if (ids.empty()) return Error{name, "no key ids to write"};
+  if (ids.empty()) return core::Error{name, "no key ids to write"};
   for (std::size_t i = 0; i < ids.size(); ++i) {
     if (!is_valid_key_id(ids[i])) {
-      return Error{name, "key id \"" + ids[i] + "\" must be 1 to " +
-                             std::to_string(kMaxSourceIdLength) +
-                             " printable ASCII characters without blanks"};
+      return core::Error{name, "key id \"" + ids[i] + "\" must be 1 to " +
+                                   std::to_string(kMaxSourceIdLength) +
+                                   " printable ASCII characters without blanks"};
     }
     if (std::find(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(i), ids[i]) !=
         ids.begin() + static_cast<std::ptrdiff_t>(i)) {
-      return Error{name, "key id \"" + ids[i] + "\" given twice"};
+      return core::Error{name, "key id \"" + ids[i] + "\" given twice"};
     }
   }
   std::string text =
@@ -328,8 +330,8 @@ Status write_key_file(const std::filesystem::path& file, std::span<const std::st
   if (fd < 0) {
     const int err = errno;
     sodium_memzero(text.data(), text.size());
-    return Error{name, err == EEXIST ? std::string("exists; not overwriting a key file")
-                                     : "cannot create the key file: " + errno_text(err)};
+    return core::Error{name, err == EEXIST ? std::string("exists; not overwriting a key file")
+                                           : "cannot create the key file: " + errno_text(err)};
   }
   std::string problem;
   if (::fchmod(fd, 0600) != 0) problem = "cannot chmod 600: " + errno_text(errno);
@@ -348,7 +350,7 @@ Status write_key_file(const std::filesystem::path& file, std::span<const std::st
   sodium_memzero(text.data(), text.size());
   if (!problem.empty()) {
     ::unlink(name.c_str());
-    return Error{name, problem};
+    return core::Error{name, problem};
   }
   return {};
 }
@@ -385,27 +387,27 @@ void sign(peritwin_msgs::damage_state_t& m, const AuthKey& key) { sign_message(m
 void sign(peritwin_msgs::reject_t& m, const AuthKey& key) { sign_message(m, key); }
 void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key) { sign_message(m, key); }
 
-Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key) {
+core::Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
-Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key) {
+core::Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
-Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key) {
+core::Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
-Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key) {
+core::Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key) {
   return verify_message(m, key);
 }
 
-Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t fingerprint,
-                      const char* type_name, const AuthKey& key) {
+core::Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t fingerprint,
+                            const char* type_name, const AuthKey& key) {
   if (size < 8 + 4) {
-    return Error{"message", std::to_string(size) + " bytes cannot be a " + type_name};
+    return core::Error{"message", std::to_string(size) + " bytes cannot be a " + type_name};
   }
   if (static_cast<std::int64_t>(read_be(data, 8)) != fingerprint) {
-    return Error{"message", std::string("wrong fingerprint: not a ") + type_name +
-                                " of this message set version"};
+    return core::Error{"message", std::string("wrong fingerprint: not a ") + type_name +
+                                      " of this message set version"};
   }
   // A signed message ends with tag_length = kAuthTagBytes and the tag. The tag is checked before
   // the "unsigned" trailer: a tag may end in four zero bytes. A payload that reads both ways (a

@@ -5,7 +5,7 @@
 // messages/README.md, "Authentication", says who holds which key and what this does not protect.
 //
 // Library target peritwin_auth (links libsodium and toml++ privately; link it next to
-// peritwin_codec where messages are signed or checked).
+// peritwin_messages where messages are signed or checked).
 #pragma once
 
 #include <array>
@@ -22,8 +22,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/expected.h"
 #include "messages/batch.h"
-#include "solver/core/expected.h"
 
 namespace peritwin::messages {
 
@@ -50,9 +50,9 @@ class KeyRing {
   /// A bad hex string, a wrong length, a duplicate or invalid id, an empty or missing [keys], or
   /// any other top-level key or table is an error "file:line: ..." naming the key id, never
   /// the key material.
-  static Expected<KeyRing> load(const std::filesystem::path& file);
+  static core::Expected<KeyRing> load(const std::filesystem::path& file);
   /// The same rules on the text of a key file (no mode check; `file_name` for the errors).
-  static Expected<KeyRing> parse(std::string_view text, const std::string& file_name);
+  static core::Expected<KeyRing> parse(std::string_view text, const std::string& file_name);
 
   /// nullptr if there is no key `id`.
   [[nodiscard]] const AuthKey* find(std::string_view id) const;
@@ -67,7 +67,7 @@ class KeyRing {
 /// Writes a new key file `file` with one fresh random key (libsodium randombytes_buf) per id, mode
 /// 0600. Refuses to overwrite an existing file (or follow a symlink there), an empty id list, an
 /// invalid or repeated id. The file is complete or absent.
-Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids);
+core::Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids);
 
 /// HMAC-SHA256 (libsodium crypto_auth_hmacsha256) of bytes [data, data + size).
 AuthTag auth_tag(const AuthKey& key, const std::uint8_t* data, std::size_t size);
@@ -90,10 +90,10 @@ void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key);
 
 /// Ok if `m` carries the tag `key` gives it; otherwise the error has field "auth_tag" and reason
 /// exactly "unsigned" (tag_length 0) or "wrong tag" (any other tag, of any length).
-Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key);
-Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key);
-Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key);
-Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key);
+core::Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key);
+core::Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key);
+core::Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key);
+core::Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key);
 
 /// verify() on the encoded bytes of a message of the type with fingerprint `fingerprint`, before
 /// decoding anything: field "message", reason "wrong fingerprint: not a <type_name> of this
@@ -103,10 +103,10 @@ Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key);
 /// decoding could tell: M's wrong tag ends in four zero bytes (called "unsigned" unless it is 32
 /// bytes long), or M is unsigned and its last 36 bytes read as a 32-byte tag (called "wrong tag").
 /// Use the template.
-Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t fingerprint,
-                      const char* type_name, const AuthKey& key);
+core::Status verify_encoded(const std::uint8_t* data, std::size_t size, std::int64_t fingerprint,
+                            const char* type_name, const AuthKey& key);
 template <typename Message>
-Status verify_encoded(const void* data, std::size_t size, const AuthKey& key) {
+core::Status verify_encoded(const void* data, std::size_t size, const AuthKey& key) {
   return verify_encoded(static_cast<const std::uint8_t*>(data), size, Message::getHash(),
                         Message::getTypeName(), key);
 }

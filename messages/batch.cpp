@@ -34,8 +34,8 @@ Outcome check_batch(const Batch& batch, std::string_view detail_id) {
     return invalid("num_blocks", "num_blocks = " + std::to_string(batch.blocks.size()) +
                                      " must be <= " + std::to_string(kMaxBlocksPerBatch));
   }
-  // The one rule for load blocks and their cycle total (solver/core/load_block.h).
-  if (const Status valid = check_load_blocks(batch.blocks); !valid) {
+  // The one rule for load blocks and their cycle total (core/load_block.h).
+  if (const core::Status valid = core::check_load_blocks(batch.blocks); !valid) {
     return invalid(valid.error().field, valid.error().reason);
   }
   return {};

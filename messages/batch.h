@@ -1,6 +1,6 @@
 // A load batch as the twin receives it (the fields of peritwin_msgs::load_batch_t the model uses),
 // what became of it (reject_t's codes), and the checks that need no bookkeeping. The exactly-once
-// rules per (source, seq) are the twin's (twin/model/twin.h).
+// rules per (source, seq) are the twin's (twin/twin.h).
 #pragma once
 
 #include <cstddef>
@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "solver/core/load_block.h"
+#include "core/load_block.h"
 
 namespace peritwin::messages {
 
@@ -18,7 +18,7 @@ struct Batch {
   std::string detail_id;
   std::string source_id;
   std::int64_t seq = 0;
-  std::vector<LoadBlock> blocks;
+  std::vector<core::LoadBlock> blocks;
 };
 
 /// What became of a batch; the values of the rejections are reject_t's CODE_* constants.
@@ -43,7 +43,7 @@ struct Outcome {
 };
 
 // Accepted domain of a batch (reject_t INVALID outside it); each block and the batch's cycle total
-// by check_load_blocks (solver/core/load_block.h: kMinLoadRatio, kMaxBatchCycles).
+// by check_load_blocks (core/load_block.h: kMinLoadRatio, kMaxBatchCycles).
 inline constexpr std::size_t kMaxBlocksPerBatch = 100'000;
 inline constexpr std::size_t kMaxSourceIdLength = 64;
 /// Length of an HMAC-SHA256 tag (load_batch_t.auth_tag and the daemon's messages).

@@ -368,8 +368,8 @@ Outcome check_samples(const Samples& s, std::string_view detail_id) {
     return Outcome{Verdict::invalid, std::move(what), std::move(why)};
   };
   // detail_id, source_id and seq by the batches' rules.
-  const Outcome ids =
-      check_batch({s.detail_id, s.source_id, s.seq, {LoadBlock{1.0, 0.0, 0.0, 1}}}, detail_id);
+  const Outcome ids = check_batch(
+      {s.detail_id, s.source_id, s.seq, {core::LoadBlock{1.0, 0.0, 0.0, 1}}}, detail_id);
   if (!ids.applied()) return ids;
   const auto n = s.p.size();
   if (n < 1 || n > static_cast<std::size_t>(kMaxSamplesPerMessage)) {

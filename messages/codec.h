@@ -1,7 +1,7 @@
 // The LCM message codec (peritwin_msgs, messages/*.lcm): decoding load batches defensively,
 // building batch and reject messages, reading state messages, the JSON lines the replay tool
 // prints, and LCM's receive loop tuned for the TCP hub. No model here: the state and field
-// messages of a twin are built in twin/lcm/messages_io.h. The replay tool's producer side links
+// messages of a twin are built in twin/messages_io.h. The replay tool's producer side links
 // this alone (no HDF5, no libpng).
 #pragma once
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/fnv1a.h"
 #include "messages/channels.h"
-#include "solver/core/fnv1a.h"
 
 namespace peritwin::messages {
 namespace {
@@ -90,7 +90,7 @@ std::string chunk_error(const detail_mesh_t& m) {
 }  // namespace
 
 std::string mesh_hash(const Mesh& mesh) {
-  Fnv1a64 h;
+  core::Fnv1a64 h;
   h.integer(static_cast<std::int64_t>(mesh.x.size()));
   for (const double v : {mesh.dx, mesh.horizon, mesh.x_min, mesh.y_min, mesh.x_max, mesh.y_max}) {
     h.real(v);
@@ -110,7 +110,7 @@ std::string mesh_hash(const Mesh& mesh) {
       h.real(line.y[i]);
     }
   }
-  return hex64(h.get());
+  return core::hex64(h.get());
 }
 
 std::vector<detail_mesh_t> mesh_messages(const Mesh& mesh, std::int64_t utime) {

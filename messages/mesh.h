@@ -3,7 +3,7 @@
 // (every encoded chunk at most detail_mesh_t::MAX_ENCODED_SIZE bytes), checking a chunk received
 // from the bus (layout first, then every rule, with the reason), and reassembling the chunks into
 // the mesh, checked against its hash. No model here: the twin builds its Mesh in
-// twin/lcm/messages_io.h.
+// twin/messages_io.h.
 #pragma once
 
 #include <cstddef>

@@ -41,9 +41,9 @@ std::optional<TcpqHub> tcpq_hub(const std::string& url) {
   return hub;
 }
 
-Status probe_hub(const TcpqHub& hub, double timeout_s) {
+core::Status probe_hub(const TcpqHub& hub, double timeout_s) {
   const int s = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-  if (s < 0) return failure(std::string("cannot create a socket: ") + std::strerror(errno));
+  if (s < 0) return core::failure(std::string("cannot create a socket: ") + std::strerror(errno));
   sockaddr_in sa{};
   sa.sin_family = AF_INET;
   sa.sin_port = htons(hub.port);
@@ -58,7 +58,7 @@ Status probe_hub(const TcpqHub& hub, double timeout_s) {
         close(s);
         char buf[64];
         std::snprintf(buf, sizeof buf, "no answer within %g s", timeout_s);
-        return failure(buf);
+        return core::failure(buf);
       }
       socklen_t len = sizeof err;
       if (ready < 0) {
@@ -69,19 +69,19 @@ Status probe_hub(const TcpqHub& hub, double timeout_s) {
     }
   }
   close(s);
-  if (err != 0) return failure(std::strerror(err));
+  if (err != 0) return core::failure(std::strerror(err));
   return {};
 }
 
 bool transport_up(lcm::LCM& lcm) { return lcm.getFileno() >= 0; }
 
-Status reconnect(lcm::LCM& lcm) {
+core::Status reconnect(lcm::LCM& lcm) {
   if (transport_up(lcm)) return {};
   lcm::Subscription* probe = lcm.subscribeFunction(
       "PERITWIN_RECONNECT_PROBE", +[](const lcm::ReceiveBuffer*, const std::string&, void*) {},
       static_cast<void*>(nullptr));
   if (probe != nullptr) lcm.unsubscribe(probe);
-  if (!transport_up(lcm)) return failure("LCM could not connect");
+  if (!transport_up(lcm)) return core::failure("LCM could not connect");
   return {};
 }
 

@@ -17,7 +17,7 @@
 #include <optional>
 #include <string>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 
 namespace peritwin::messages {
 
@@ -39,7 +39,7 @@ std::optional<TcpqHub> tcpq_hub(const std::string& url);
 /// ("Connection refused", "no answer within 2 s"). A plain connect and close, not through LCM:
 /// nothing is printed and no lcm::LCM changes state (the Java hub drops a client that closes before
 /// its handshake without a word).
-Status probe_hub(const TcpqHub& hub, double timeout_s = 2.0);
+core::Status probe_hub(const TcpqHub& hub, double timeout_s = 2.0);
 
 /// Whether `lcm` has its transport: false while a tcpq instance has no connection to its hub.
 /// Always true for udpm, memq and file URLs.
@@ -50,7 +50,7 @@ bool transport_up(lcm::LCM& lcm);
 /// subscription of the instance, and the probe subscription is dropped again. OK when `lcm` has
 /// its transport afterwards (then at once for other transports); otherwise LCM has printed its
 /// three lines, so probe the hub first (probe_hub).
-Status reconnect(lcm::LCM& lcm);
+core::Status reconnect(lcm::LCM& lcm);
 
 /// `url`, or "(LCM default)" when it is empty.
 std::string shown_url(const std::string& url);

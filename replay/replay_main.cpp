@@ -11,7 +11,7 @@
 // --in-process runs the twin library directly with the same config (deterministic mode, no LCM);
 // with --results DIR it writes the daemon's results files of the detail there (DIR instead of
 // [detail.output] directory: <id>.h5, <id>.xdmf and, with output.png, the two PNGs), by the
-// daemon's own writer (twin/io/detail_outputs.h).
+// daemon's own writer (outputs/detail_outputs.h).
 // --key-file: batches signed with the key of --source, every STATE and REJECT verified with the
 // daemon's key (messages/README.md, "Authentication"); without it anyone on the bus can forge the
 // states it reports. --generate-key-file writes a new key file (mode 0600) and exits.
@@ -20,7 +20,7 @@
 // unless --continue (this history's batches are numbered from applied + 1: it is appended) or
 // --resume (numbered from 1 as before: the applied ones are dropped as duplicates, i.e. an
 // interrupted replay of the same history is finished exactly once).
-// --format series: samples -> rainflow (replay/rainflow.h) -> blocks (replay/cycle_blocks.h) with
+// --format series: samples -> rainflow (loads/rainflow.h) -> blocks (loads/cycle_blocks.h) with
 // --gate (hysteresis, N), --residue (half: ASTM E1049-85, the default; whole: each residue range
 // a whole cycle, conservative; keep: the residue is dropped, not applied), --alpha-bin (rad) and
 // the detail's [detail.fatigue] compressed_bonds_fatigue (fully compressive cycles mirrored or
@@ -37,16 +37,16 @@
 #include <iostream>
 #include <limits>
 
+#include "core/cli_checks.h"
 #include "core/exit_codes.h"
 #include "core/program.h"
 #include "core/stop_signal.h"
+#include "loads/producer_keys.h"
 #include "messages/auth.h"
 #include "messages/transport.h"
-#include "replay/in_process_twin.h"
-#include "replay/producer_keys.h"
+#include "outputs/detail_outputs.h"
 #include "replay/replay_tool.h"
-#include "tools/cli_checks.h"
-#include "twin/io/detail_outputs.h"
+#include "twin/in_process_twin.h"
 
 namespace {
 
@@ -58,16 +58,16 @@ using core::kExitUsage;
 /// The command line.
 struct Options {
   std::string config_file, history, format = "cycles", detail_id, source_id = "replay", lcm_url;
-  replay::ProducerKeyOptions keys;
+  loads::ProducerKeyOptions keys;
   std::string generate_key_file;
   std::vector<std::string> key_ids;
   bool lockstep = false, in_process = false, json = false;
   bool append = false, resume = false;
   std::string residue = "half";
   std::string results_dir;
-  replay::SeriesRules series_rules;
-  replay::BatchingOptions batching;
-  replay::ReplayOptions replay;
+  loads::SeriesRules series_rules;
+  loads::BatchingOptions batching;
+  loads::ReplayOptions replay;
 };
 
 void add_options(CLI::App& app, Options& o) {
@@ -82,10 +82,10 @@ void add_options(CLI::App& app, Options& o) {
       ->check(CLI::IsMember({"half", "whole", "keep"}));
   app.add_option("--gate", o.series_rules.gate,
                  "series: hysteresis gate (N); load ranges up to it are no reversals (default 0)")
-      ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
+      ->check(peritwin::core::finite_in(0.0, std::numeric_limits<double>::max()));
   app.add_option("--alpha-bin", o.series_rules.alpha_bin,
                  "series: round each cycle's load angle to a multiple of this (rad; 0 = none)")
-      ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
+      ->check(peritwin::core::finite_in(0.0, std::numeric_limits<double>::max()));
   app.add_option("--detail", o.detail_id, "detail id (default: the config's first detail)");
   app.add_option("--source", o.source_id, "source id of the batches (default replay)");
   app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL, then LCM's)");
@@ -97,7 +97,7 @@ void add_options(CLI::App& app, Options& o) {
                  "with --in-process: write the daemon's results files (HDF5 + XDMF, PNGs with "
                  "[detail.output] png) to this directory")
       ->needs(in_process_opt);
-  replay::add_key_options(app, o.keys);
+  loads::add_key_options(app, o.keys);
   auto* generate_opt =
       app.add_option("--generate-key-file", o.generate_key_file,
                      "write a new key file (random keys, mode 0600, never overwrites) and exit");
@@ -123,59 +123,60 @@ void add_options(CLI::App& app, Options& o) {
       ->excludes(continue_opt);
   app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress before failing (default 120)")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
 }
 
 /// --generate-key-file: writes the key file and says so.
 int generate_key_file(Options o) {
   if (o.key_ids.empty()) o.key_ids = {o.source_id, o.keys.daemon_key_id};
-  if (const Status written = messages::write_key_file(o.generate_key_file, o.key_ids); !written) {
+  if (const core::Status written = messages::write_key_file(o.generate_key_file, o.key_ids);
+      !written) {
     std::cerr << "peritwin-replay: " << written.error().message() << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   std::cerr << "peritwin-replay: wrote " << o.generate_key_file << " (mode 0600), keys:";
   for (const auto& id : o.key_ids) std::cerr << " " << id;
   std::cerr << "\n";
-  return kExitOk;
+  return core::kExitOk;
 }
 
 /// The blocks of --history, checked by the daemon's rule; an exit code when they cannot be read
 /// or are invalid.
-std::optional<int> read_history(Options& o, const twin::DetailConfig& detail,
+std::optional<int> read_history(Options& o, const config::DetailConfig& detail,
                                 replay::HistoryBlocks& out) {
   const auto fmt = o.format == "series"     ? replay::InputFormat::series
                    : o.format == "spectrum" ? replay::InputFormat::spectrum
                    : o.format == "lcm-log"  ? replay::InputFormat::lcm_log
                                             : replay::InputFormat::cycles;
-  o.series_rules.residue = o.residue == "whole"  ? replay::ResidueRule::whole
-                           : o.residue == "keep" ? replay::ResidueRule::keep
-                                                 : replay::ResidueRule::half;
+  o.series_rules.residue = o.residue == "whole"  ? loads::ResidueRule::whole
+                           : o.residue == "keep" ? loads::ResidueRule::keep
+                                                 : loads::ResidueRule::half;
   o.series_rules.compressed_bonds_fatigue = detail.fatigue.compressed_bonds_fatigue;
   auto read = replay::read_history(o.history, fmt, detail.id, o.series_rules);
   if (!read) {
     std::cerr << "peritwin-replay: " << read.error().message() << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   out = std::move(*read);
-  if (const Status valid = replay::check_blocks(out.blocks); !valid) {
+  if (const core::Status valid = replay::check_blocks(out.blocks); !valid) {
     std::cerr << "peritwin-replay: " << o.history << ": history " << valid.error().message()
               << " (the daemon would reject it)\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   return std::nullopt;
 }
 
 /// The keys, before anything is published: a missing one is a usage error.
-std::optional<int> load_keys(const Options& o, replay::ReplayAuth& auth) {
+std::optional<int> load_keys(const Options& o, loads::ReplayAuth& auth) {
   if (!o.keys.key_file.empty() && o.in_process) {
     std::cerr << "peritwin-replay: --in-process publishes and receives nothing: --key-file "
                  "ignored\n";
     return std::nullopt;
   }
-  auto loaded_keys = replay::load_producer_keys(o.keys, o.source_id);
+  auto loaded_keys = loads::load_producer_keys(o.keys, o.source_id);
   if (!loaded_keys) {
     std::cerr << "peritwin-replay: " << loaded_keys.error().message() << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   auth = std::move(*loaded_keys);
   if (o.keys.sign_only) {
@@ -186,7 +187,7 @@ std::optional<int> load_keys(const Options& o, replay::ReplayAuth& auth) {
 }
 
 /// The history's numbers on stderr before the run.
-void report_history(const Options& o, const twin::DetailConfig& detail,
+void report_history(const Options& o, const config::DetailConfig& detail,
                     const replay::HistoryBlocks& history, std::size_t batches) {
   std::int64_t cycles = 0;
   for (const auto& b : history.blocks) cycles += b.count;
@@ -203,50 +204,50 @@ void report_history(const Options& o, const twin::DetailConfig& detail,
 }
 
 /// --in-process: the batches applied here, with --results the daemon's results files written.
-int replay_in_process(const Options& o, const twin::DetailConfig& detail,
-                      const std::vector<twin::Batch>& batches, replay::StatePrinter& printer,
+int replay_in_process(const Options& o, const config::DetailConfig& detail,
+                      const std::vector<messages::Batch>& batches, replay::StatePrinter& printer,
                       std::optional<peritwin_msgs::damage_state_t>& final_state) {
-  twin::DetailConfig run_detail = detail;
-  std::unique_ptr<twin::DetailOutputs> outputs;
-  replay::TwinObserver on_twin;
+  config::DetailConfig run_detail = detail;
+  std::unique_ptr<outputs::DetailOutputs> outputs;
+  twin::TwinObserver on_twin;
   if (!o.results_dir.empty()) {
     run_detail.output.directory = o.results_dir;
     on_twin = [&outputs](const twin::Twin& t, bool last) {
       if (!outputs) {
-        outputs = std::make_unique<twin::DetailOutputs>(t);
+        outputs = std::make_unique<outputs::DetailOutputs>(t);
       } else if (!last) {
         outputs->record(t);
       }
       if (last) outputs->finish(t);
     };
   }
-  const auto r = replay::run_in_process(run_detail, batches, printer.callback(), on_twin);
+  const auto r = twin::run_in_process(run_detail, batches, printer.callback(), on_twin);
   if (!r.error.empty()) {
     std::cerr << "peritwin-replay: " << r.error << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   final_state = r.final_state;
-  return kExitOk;
+  return core::kExitOk;
 }
 
 /// Over LCM: what the daemon has applied of --source decides the numbering (--continue,
 /// --resume), then the batches are published; the final state, or an exit code.
-int replay_over_lcm(const Options& o, const twin::DetailConfig& detail,
-                    const replay::HistoryBlocks& history, std::vector<twin::Batch> batches,
-                    replay::ReplayAuth auth, replay::StatePrinter& printer,
+int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
+                    const replay::HistoryBlocks& history, std::vector<messages::Batch> batches,
+                    loads::ReplayAuth auth, replay::StatePrinter& printer,
                     std::optional<peritwin_msgs::damage_state_t>& final_state) {
   const std::string lcm_url = core::lcm_url_or_default(o.lcm_url);
   // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
   const auto hub = messages::tcpq_hub(lcm_url);
-  if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+  if (const core::Status up = hub ? messages::probe_hub(*hub) : core::Status{}; !up) {
     std::cerr << "peritwin-replay: LCM hub " << lcm_url << " unreachable: " << up.error().message()
               << "\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   lcm::LCM lcm(lcm_url);
   if (!lcm.good() || !messages::transport_up(lcm)) {
     std::cerr << "peritwin-replay: cannot open LCM at \"" << messages::shown_url(lcm_url) << "\"\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   core::install_stop_handler();
   replay::ReplayResult r;
@@ -254,14 +255,14 @@ int replay_over_lcm(const Options& o, const twin::DetailConfig& detail,
   {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
     std::int64_t applied = 0;
     {
-      replay::BatchSender probe(lcm, detail.id, o.source_id, o.replay, auth);
+      loads::BatchSender probe(lcm, detail.id, o.source_id, o.replay, auth);
       probe.on_state(printer.callback());
       const auto learned = probe.probe_applied(core::keep_running);
       if (!learned) {
         std::cerr << "peritwin-replay: "
                   << (messages::transport_up(lcm) ? "" : "LCM hub " + lcm_url + ": ")
                   << learned.error().message() << "\n";
-        return kExitRuntime;
+        return core::kExitRuntime;
       }
       applied = *learned;
     }
@@ -270,11 +271,11 @@ int replay_over_lcm(const Options& o, const twin::DetailConfig& detail,
                 << applied << " applied on detail " << detail.id
                 << "; use --continue to append this history after them, --resume to finish an "
                    "interrupted replay of the same history, or a new --source\n";
-      return kExitUsage;
+      return core::kExitUsage;
     }
     if (applied > 0 && o.append) {
-      batches = replay::make_twin_batches(history.blocks, detail.id, o.source_id, o.batching,
-                                          applied + 1);
+      batches =
+          loads::make_twin_batches(history.blocks, detail.id, o.source_id, o.batching, applied + 1);
       std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
                 << applied + static_cast<std::int64_t>(batches.size()) << "\n";
     } else if (applied > 0) {
@@ -290,36 +291,36 @@ int replay_over_lcm(const Options& o, const twin::DetailConfig& detail,
   if (!r.ok) {
     std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
               << "\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   final_state = r.final_state;
-  return kExitOk;
+  return core::kExitOk;
 }
 
 /// The replay of `o` (after --generate-key-file and the required options); the exit code.
 int run(Options o) {
   // The memory bound (75 % of physical memory) only where the model is built: in-process.
-  const auto loaded = twin::load_config(
+  const auto loaded = config::load_config(
       o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
-    return kExitUsage;
+    return core::kExitUsage;
   }
-  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, o.detail_id);
+  const config::DetailConfig* detail = config::select_detail(*loaded.config, o.detail_id);
   if (detail == nullptr) {
     std::cerr << "peritwin-replay: no detail \"" << o.detail_id << "\" in " << o.config_file
               << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   replay::HistoryBlocks history;
   if (auto rc = read_history(o, *detail, history)) return *rc;
-  if (o.source_id.empty() || o.source_id.size() > twin::kMaxSourceIdLength) {
+  if (o.source_id.empty() || o.source_id.size() > messages::kMaxSourceIdLength) {
     std::cerr << "peritwin-replay: --source must have 1 to 64 characters\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
-  replay::ReplayAuth auth;
+  loads::ReplayAuth auth;
   if (auto rc = load_keys(o, auth)) return *rc;
-  auto batches = replay::make_twin_batches(history.blocks, detail->id, o.source_id, o.batching);
+  auto batches = loads::make_twin_batches(history.blocks, detail->id, o.source_id, o.batching);
   report_history(o, *detail, history, batches.size());
 
   replay::StatePrinter printer(o.json);
@@ -327,15 +328,15 @@ int run(Options o) {
   const int rc = o.in_process ? replay_in_process(o, *detail, batches, printer, final_state)
                               : replay_over_lcm(o, *detail, history, std::move(batches),
                                                 std::move(auth), printer, final_state);
-  if (rc != kExitOk) return rc;
+  if (rc != core::kExitOk) return rc;
   if (o.json && final_state) {
     std::vector<messages::SummaryObject> extra;
     if (history.conversion) {
       extra.push_back({"skipped_cycles", replay::skipped_cycles(*history.conversion)});
     }
-    std::cout << twin::summary_json(*final_state, extra) << std::endl;
+    std::cout << messages::summary_json(*final_state, extra) << std::endl;
   }
-  return kExitOk;
+  return core::kExitOk;
 }
 
 }  // namespace
@@ -350,7 +351,7 @@ int main(int argc, char** argv) {
   if (o.config_file.empty() || o.history.empty()) {
     std::cerr << "peritwin-replay: " << (o.config_file.empty() ? "--config" : "--history")
               << " is required\nRun with --help for more information.\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   return run(std::move(o));
 }

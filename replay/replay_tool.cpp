@@ -9,22 +9,22 @@
 #include <limits>
 #include <set>
 
+#include "loads/lcm_log.h"
 #include "messages/channels.h"
 #include "messages/transport.h"
-#include "replay/lcm_log.h"
 
 namespace peritwin::replay {
 
-Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                                     const std::string& detail_id,
-                                     const SeriesRules& series_rules) {
+core::Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
+                                           const std::string& detail_id,
+                                           const loads::SeriesRules& series_rules) {
   HistoryBlocks out;
   if (format != InputFormat::lcm_log) {
-    const HistoryFormat f = format == InputFormat::series   ? HistoryFormat::series
-                            : format == InputFormat::cycles ? HistoryFormat::cycles
-                                                            : HistoryFormat::spectrum;
-    const auto read = read_blocks(file, f, series_rules);
-    if (!read.ok()) return failure(read.error().message());
+    const loads::HistoryFormat f = format == InputFormat::series   ? loads::HistoryFormat::series
+                                   : format == InputFormat::cycles ? loads::HistoryFormat::cycles
+                                                                   : loads::HistoryFormat::spectrum;
+    const auto read = loads::read_blocks(file, f, series_rules);
+    if (!read.ok()) return core::failure(read.error().message());
     out.blocks = read.value().blocks;
     if (format == InputFormat::series) {
       const auto& s = read.value().stats;
@@ -37,19 +37,19 @@ Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFor
     return out;
   }
   std::ifstream in(file, std::ios::binary);
-  if (!in) return failure(file.string() + ": cannot open file");
+  if (!in) return core::failure(file.string() + ": cannot open file");
   return read_lcm_log(in, file.string(), detail_id);
 }
 
-Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
-                                     const std::string& detail_id) {
+core::Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
+                                           const std::string& detail_id) {
   HistoryBlocks out;
   const std::string channel = messages::channel(detail_id, messages::Kind::kLoad);
   std::set<std::pair<std::string, std::int64_t>> seen;
   std::int64_t skipped = 0;
-  const auto scan = scan_lcm_log(
+  const auto scan = loads::scan_lcm_log(
       in, name, channel, messages::kMaxBatchPayload, [&](std::span<const std::uint8_t> data) {
-        const auto decoded = twin::decode_batch(data.data(), data.size());
+        const auto decoded = messages::decode_batch(data.data(), data.size());
         if (!decoded.batch || decoded.batch->detail_id != detail_id ||
             !seen.insert({decoded.batch->source_id, decoded.batch->seq}).second) {
           ++skipped;
@@ -63,11 +63,11 @@ Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
   skipped += scan.value().oversized;
   out.note = "LCM log: " + std::to_string(scan.value().on_channel) + " events on " + channel +
              ", " + std::to_string(skipped) + " skipped (undecodable, other detail or duplicate)";
-  if (out.blocks.empty()) return failure(name + ": no load blocks on " + channel);
+  if (out.blocks.empty()) return core::failure(name + ": no load blocks on " + channel);
   return out;
 }
 
-std::vector<std::pair<std::string, double>> skipped_cycles(const ConversionStats& stats) {
+std::vector<std::pair<std::string, double>> skipped_cycles(const loads::ConversionStats& stats) {
   return {{"compressive", stats.skipped.compressive},
           {"mirrored_compressive", stats.skipped.mirrored_compressive},
           {"remapped_below_floor", stats.skipped.remapped_below_floor},
@@ -75,7 +75,7 @@ std::vector<std::pair<std::string, double>> skipped_cycles(const ConversionStats
           {"nonfinite_samples", static_cast<double>(stats.nonfinite_samples)}};
 }
 
-std::string describe_skipped(const ConversionStats& stats) {
+std::string describe_skipped(const loads::ConversionStats& stats) {
   std::string out = "skipped cycles:";
   const char* separator = " ";
   for (const auto& [name, value] : skipped_cycles(stats)) {
@@ -87,12 +87,12 @@ std::string describe_skipped(const ConversionStats& stats) {
   return out;
 }
 
-Status check_blocks(std::span<const LoadBlock> blocks) {
-  return check_load_blocks(blocks, std::numeric_limits<std::int64_t>::max());
+core::Status check_blocks(std::span<const core::LoadBlock> blocks) {
+  return core::check_load_blocks(blocks, std::numeric_limits<std::int64_t>::max());
 }
 
-LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options,
-                         ReplayAuth auth)
+LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<messages::Batch> batches,
+                         loads::ReplayOptions options, loads::ReplayAuth auth)
     : sender_(lcm, batches.empty() ? std::string() : batches.front().detail_id,
               batches.empty() ? std::string() : batches.front().source_id, options,
               std::move(auth)) {
@@ -110,11 +110,11 @@ ReplayResult LcmReplayer::run(
   });
   while (true) {
     const auto progress = sender_.pump(20);
-    if (progress == BatchSender::Progress::done) {
+    if (progress == loads::BatchSender::Progress::done) {
       result.ok = true;
       break;
     }
-    if (progress == BatchSender::Progress::failed) {
+    if (progress == loads::BatchSender::Progress::failed) {
       result.error = sender_.error();
       break;
     }
@@ -146,7 +146,7 @@ std::string describe(const peritwin_msgs::damage_state_t& s) {
   }
   std::snprintf(buf, sizeof buf, "state %lld: %lld cycles, %lld broken bonds, crack %.2f mm, ",
                 static_cast<long long>(s.state_seq), static_cast<long long>(s.total_cycles),
-                static_cast<long long>(s.broken_bonds), 1e3 * twin::crack_length(s));
+                static_cast<long long>(s.broken_bonds), 1e3 * messages::crack_length(s));
   return buf + life;
 }
 
@@ -154,7 +154,7 @@ void StatePrinter::print(const peritwin_msgs::damage_state_t& s) {
   if (s.state_seq == last_seq_ && s.remaining_life_seq == last_life_) return;
   last_seq_ = s.state_seq;
   last_life_ = s.remaining_life_seq;
-  std::cout << (json_ ? twin::state_json(s) : describe(s)) << std::endl;
+  std::cout << (json_ ? messages::state_json(s) : describe(s)) << std::endl;
 }
 
 }  // namespace peritwin::replay

@@ -1,13 +1,13 @@
 // The replay tool's engine room: recorded histories -> batches of load blocks -> the twin, either
-// over LCM to a daemon (LcmReplayer) or in-process (run_in_process, replay/in_process_twin.h). See
+// over LCM to a daemon (LcmReplayer) or in-process (run_in_process, twin/in_process_twin.h). See
 // replay/replay_main.cpp.
 //
-// Batching: replay/batcher.h (make_twin_batches). Seq numbers are 1, 2, 3, ... per run by
+// Batching: loads/batcher.h (make_twin_batches). Seq numbers are 1, 2, 3, ... per run by
 // default, so a daemon that already applied some of them drops those as duplicates and a replay is
 // exactly-once across restarts of either side (peritwin-replay --resume); --continue numbers them
 // after what the daemon has applied of the source.
 //
-// Over LCM (LcmReplayer): a thin user of BatchSender (replay/batch_sender.h: lockstep/window,
+// Over LCM (LcmReplayer): a thin user of BatchSender (loads/batch_sender.h: lockstep/window,
 // resend after a daemon restart, authentication) with every batch given up front.
 #pragma once
 
@@ -20,14 +20,14 @@
 #include <string>
 #include <vector>
 
+#include "config/config.h"
+#include "loads/batch_sender.h"
+#include "loads/batcher.h"
+#include "loads/load_history.h"
 #include "messages/auth.h"
-#include "replay/batch_sender.h"
-#include "replay/batcher.h"
-#include "replay/in_process_twin.h"
-#include "replay/load_history.h"
 #include "solver/fatigue/fatigue_engine.h"
-#include "twin/config/config.h"
-#include "twin/lcm/messages_io.h"
+#include "twin/in_process_twin.h"
+#include "twin/messages_io.h"
 
 namespace peritwin::replay {
 
@@ -35,31 +35,31 @@ enum class InputFormat { series, cycles, spectrum, lcm_log };
 
 /// The blocks of a history file. lcm-log: the load_batch_t events on `detail_id`'s LOAD channel
 /// in log order, each (source, seq) once, undecodable events skipped. Errors as "file: reason".
-/// series: converted by `series_rules` (replay/load_history.h), `conversion` holds its stats.
+/// series: converted by `series_rules` (loads/load_history.h), `conversion` holds its stats.
 struct HistoryBlocks {
-  std::vector<LoadBlock> blocks;
-  std::string note;                           ///< e.g. rainflow statistics, for the log
-  std::optional<ConversionStats> conversion;  ///< series only
+  std::vector<core::LoadBlock> blocks;
+  std::string note;                                  ///< e.g. rainflow statistics, for the log
+  std::optional<loads::ConversionStats> conversion;  ///< series only
 };
-Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
-                                     const std::string& detail_id,
-                                     const SeriesRules& series_rules = {});
+core::Expected<HistoryBlocks> read_history(const std::filesystem::path& file, InputFormat format,
+                                           const std::string& detail_id,
+                                           const loads::SeriesRules& series_rules = {});
 
 /// The cycles a series conversion did not apply as counted, and the samples it skipped:
 /// {"compressive", "mirrored_compressive", "remapped_below_floor", "degenerate",
 /// "nonfinite_samples"} in that order (the summary's "skipped_cycles" object).
-std::vector<std::pair<std::string, double>> skipped_cycles(const ConversionStats& stats);
+std::vector<std::pair<std::string, double>> skipped_cycles(const loads::ConversionStats& stats);
 /// The same as one line: "skipped cycles: compressive 0, mirrored_compressive 1.5, ...".
-std::string describe_skipped(const ConversionStats& stats);
+std::string describe_skipped(const loads::ConversionStats& stats);
 /// The lcm-log case on a stream (binary); errors name `name`. Malformed logs are refused with
-/// the event's byte offset (replay/lcm_log.h), events above kMaxBatchPayload skipped unread.
-Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
-                                     const std::string& detail_id);
+/// the event's byte offset (loads/lcm_log.h), events above kMaxBatchPayload skipped unread.
+core::Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& name,
+                                           const std::string& detail_id);
 
 /// Every block of a history by the daemon's own rule (check_load_blocks), the total capped only
 /// by what int64 holds (the per-batch cap is the batches' business); the error names the first
 /// invalid block as "blocks[i].<field>".
-Status check_blocks(std::span<const LoadBlock> blocks);
+core::Status check_blocks(std::span<const core::LoadBlock> blocks);
 
 struct ReplayResult {
   bool ok = false;
@@ -71,8 +71,8 @@ struct ReplayResult {
 
 class LcmReplayer {
  public:
-  LcmReplayer(lcm::LCM& lcm, std::vector<twin::Batch> batches, ReplayOptions options,
-              ReplayAuth auth = {});
+  LcmReplayer(lcm::LCM& lcm, std::vector<messages::Batch> batches, loads::ReplayOptions options,
+              loads::ReplayAuth auth = {});
   LcmReplayer(const LcmReplayer&) = delete;
   LcmReplayer& operator=(const LcmReplayer&) = delete;
 
@@ -83,7 +83,7 @@ class LcmReplayer {
                    const std::function<bool()>& idle = {});
 
  private:
-  BatchSender sender_;
+  loads::BatchSender sender_;
 };
 
 /// "state 12: 12000 cycles, 36 broken bonds, crack 1.00 mm, remaining 48000 cycles [40000,

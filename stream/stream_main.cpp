@@ -21,7 +21,7 @@
 // applies the same cycles as its replay; whole: each residue range a whole cycle; keep: not
 // applied), the last batch, then it waits for the daemon to apply everything (at most
 // --give-up-after s without progress) and exits 0.
-// --key-file: as peritwin-replay (replay/producer_keys.h): batches signed with the key of --source,
+// --key-file: as peritwin-replay (loads/producer_keys.h): batches signed with the key of --source,
 // every STATE and REJECT verified with the daemon's key, and the load_samples_t of --input lcm
 // taken only when signed with the key of their source_id (refused and counted otherwise; not
 // verified with --sign-only, which says so on stderr).
@@ -54,17 +54,17 @@
 #include <map>
 #include <memory>
 
+#include "core/cli_checks.h"
 #include "core/exit_codes.h"
 #include "core/program.h"
 #include "core/stop_signal.h"
+#include "loads/producer_keys.h"
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/transport.h"
-#include "replay/in_process_twin.h"
-#include "replay/producer_keys.h"
 #include "replay/replay_tool.h"
 #include "stream/stream_tool.h"
-#include "tools/cli_checks.h"
+#include "twin/in_process_twin.h"
 
 namespace {
 using namespace peritwin;
@@ -139,11 +139,11 @@ class SamplesInput {
     const auto& s = *d.samples;
     if (ring_) {
       const messages::AuthKey* key = ring_->find(s.source_id);
-      const Status signed_ok =
-          key != nullptr
-              ? messages::verify_encoded<peritwin_msgs::load_samples_t>(
-                    rbuf->data, static_cast<std::size_t>(rbuf->data_size), *key)
-              : Status{failure("no key for source \"" + s.source_id + "\" in the key file")};
+      const core::Status signed_ok =
+          key != nullptr ? messages::verify_encoded<peritwin_msgs::load_samples_t>(
+                               rbuf->data, static_cast<std::size_t>(rbuf->data_size), *key)
+                         : core::Status{core::failure("no key for source \"" + s.source_id +
+                                                      "\" in the key file")};
       if (!signed_ok) {
         if (refused++ < 5) {
           std::cerr << "peritwin-stream: " << channel
@@ -194,9 +194,9 @@ struct Options {
   std::string config_file, detail_id, input, lcm_url, source_id = "stream", state_file;
   std::string residue = "half";
   bool lockstep = false, in_process = false, json = false;
-  replay::BatchingOptions batching;
-  replay::ReplayOptions replay;
-  replay::ProducerKeyOptions keys;
+  loads::BatchingOptions batching;
+  loads::ReplayOptions replay;
+  loads::ProducerKeyOptions keys;
 };
 
 void add_options(CLI::App& app, Options& o) {
@@ -215,7 +215,7 @@ void add_options(CLI::App& app, Options& o) {
       ->check(CLI::PositiveNumber);
   app.add_option("--batch-seconds", o.batching.max_seconds,
                  "close a batch after this much sample time (s; default 0 = off)")
-      ->check(peritwin::cli::finite_in(0.0, std::numeric_limits<double>::max()));
+      ->check(peritwin::core::finite_in(0.0, std::numeric_limits<double>::max()));
   auto* lockstep_opt =
       app.add_flag("--lockstep", o.lockstep, "wait for the daemon to apply each batch");
   app.add_option("--window", o.replay.window, "batches in flight without --lockstep (256)")
@@ -227,10 +227,10 @@ void add_options(CLI::App& app, Options& o) {
       ->check(CLI::IsMember({"half", "whole", "keep"}));
   auto* in_process_opt =
       app.add_flag("--in-process", o.in_process, "run the twin library here (no daemon)");
-  replay::add_key_options(app, o.keys)->excludes(in_process_opt);
+  loads::add_key_options(app, o.keys)->excludes(in_process_opt);
   app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress from the daemon before failing (default 120)")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
 }
 
 /// Where the samples come from (--input).
@@ -254,14 +254,14 @@ std::optional<int> open_input(const std::string& input, Input& in) {
         (in.port = std::atoi(rest.c_str() + colon + 1)) <= 0 || in.port > 65535) {
       std::cerr << "peritwin-stream: --input " << input
                 << ": expected tcp://127.0.0.1:PORT (loopback only)\n";
-      return kExitUsage;
+      return core::kExitUsage;
     }
   } else {
     in.fd = ::open(input.c_str(), O_RDONLY | O_CLOEXEC);
     if (in.fd < 0) {
       std::cerr << "peritwin-stream: " << input << ": cannot open: " << std::strerror(errno)
                 << "\n";
-      return kExitUsage;
+      return core::kExitUsage;
     }
     struct stat st {};
     in.seekable = ::fstat(in.fd, &st) == 0 && S_ISREG(st.st_mode);
@@ -270,33 +270,33 @@ std::optional<int> open_input(const std::string& input, Input& in) {
 }
 
 /// The checks of the options against the config; an exit code when they fail.
-std::optional<int> check_options(const Options& o, const twin::DetailConfig* detail) {
+std::optional<int> check_options(const Options& o, const config::DetailConfig* detail) {
   if (detail == nullptr) {
     std::cerr << "peritwin-stream: no detail \"" << o.detail_id << "\" in " << o.config_file
               << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
-  if (o.source_id.empty() || o.source_id.size() > twin::kMaxSourceIdLength) {
+  if (o.source_id.empty() || o.source_id.size() > messages::kMaxSourceIdLength) {
     std::cerr << "peritwin-stream: --source must have 1 to 64 characters\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   if (o.in_process && !o.state_file.empty()) {
     std::cerr << "peritwin-stream: --state-file needs a daemon (the in-process twin is not "
                  "persisted)\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   return std::nullopt;
 }
 
 /// The pipeline and the batches not acknowledged of an existing --state-file; an exit code when
 /// it is corrupt.
-std::optional<int> restore_state(const Options& o, const twin::DetailConfig& detail, bool seekable,
-                                 std::optional<stream::Pipeline>& pipeline,
-                                 std::vector<twin::Batch>& resend) {
+std::optional<int> restore_state(const Options& o, const config::DetailConfig& detail,
+                                 bool seekable, std::optional<stream::Pipeline>& pipeline,
+                                 std::vector<messages::Batch>& resend) {
   auto restored = stream::load_state(o.state_file, detail, o.source_id, o.batching);
   if (!restored) {
     std::cerr << "peritwin-stream: corrupt state file " << restored.error() << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   pipeline.emplace(std::move(restored->pipeline));
   resend = std::move(restored->unacknowledged);
@@ -320,15 +320,15 @@ std::optional<int> restore_state(const Options& o, const twin::DetailConfig& det
 /// LCM at `url` (a tcpq hub probed first); an exit code when it cannot be opened.
 std::optional<int> open_lcm(const std::string& url, std::unique_ptr<lcm::LCM>& lcm) {
   const auto hub = messages::tcpq_hub(url);
-  if (const Status up = hub ? messages::probe_hub(*hub) : Status{}; !up) {
+  if (const core::Status up = hub ? messages::probe_hub(*hub) : core::Status{}; !up) {
     std::cerr << "peritwin-stream: LCM hub " << url << " unreachable: " << up.error().message()
               << "\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   lcm = std::make_unique<lcm::LCM>(url);
   if (!lcm->good() || !messages::transport_up(*lcm)) {
     std::cerr << "peritwin-stream: cannot open LCM at \"" << messages::shown_url(url) << "\"\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   return std::nullopt;
 }
@@ -343,7 +343,7 @@ std::optional<int> subscribe_samples(const Options& o, lcm::LCM& lcm, const std:
     auto loaded_ring = messages::KeyRing::load(o.keys.key_file);
     if (!loaded_ring) {
       std::cerr << "peritwin-stream: " << loaded_ring.error().message() << "\n";
-      return kExitUsage;
+      return core::kExitUsage;
     }
     ring = std::move(*loaded_ring);
   } else {
@@ -357,7 +357,7 @@ std::optional<int> subscribe_samples(const Options& o, lcm::LCM& lcm, const std:
 /// One run of the stream: set_up(), then loop() to the end of input, then finish().
 class Stream {
  public:
-  Stream(const Options& o, const twin::DetailConfig& detail, Input in)
+  Stream(const Options& o, const config::DetailConfig& detail, Input in)
       : o_(o), detail_(detail), in_(in), printer_(o.json) {}
   Stream(const Stream&) = delete;
   Stream& operator=(const Stream&) = delete;
@@ -367,42 +367,42 @@ class Stream {
   }
 
   /// The state file, LCM, the twin or the daemon, the TCP listener; an exit code when one fails.
-  std::optional<int> set_up(replay::ReplayAuth auth);
+  std::optional<int> set_up(loads::ReplayAuth auth);
   /// Reads the input and delivers the batches until its end, a signal or an error.
   void loop();
   /// The residue and the last batch, then waits for the daemon; the report and the summary.
   int finish();
 
  private:
-  std::optional<int> set_up_sender(replay::ReplayAuth auth, std::vector<twin::Batch> resend);
+  std::optional<int> set_up_sender(loads::ReplayAuth auth, std::vector<messages::Batch> resend);
   bool deliver();
   void take(double t, double p, double alpha);
   void take_line(const std::string& line);
   bool read_input(bool backlog, std::vector<std::string>& lines);
-  void save_state(const std::vector<twin::Batch>& pending) {
-    if (const Status saved = stream::save_state(o_.state_file, *pipeline_, pending); !saved) {
+  void save_state(const std::vector<messages::Batch>& pending) {
+    if (const core::Status saved = stream::save_state(o_.state_file, *pipeline_, pending); !saved) {
       error_ = saved.error().message();
     }
   }
 
   const Options& o_;
-  const twin::DetailConfig& detail_;
+  const config::DetailConfig& detail_;
   Input in_;
   replay::StatePrinter printer_;
   std::optional<stream::Pipeline> pipeline_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<SamplesInput> samples_in_;
-  std::unique_ptr<replay::BatchSender> sender_;
-  std::unique_ptr<replay::InProcessTwin> local_;
+  std::unique_ptr<loads::BatchSender> sender_;
+  std::unique_ptr<twin::InProcessTwin> local_;
   int listen_fd_ = -1, conn_fd_ = -1;
   std::uint64_t skip_lines_ = 0, bad_reported_ = 0;
-  std::vector<twin::Batch> closed_;
+  std::vector<messages::Batch> closed_;
   std::string error_;
   LineInput lines_in_;
 };
 
-std::optional<int> Stream::set_up(replay::ReplayAuth auth) {
-  std::vector<twin::Batch> resend;
+std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
+  std::vector<messages::Batch> resend;
   if (!o_.state_file.empty() && std::filesystem::exists(o_.state_file)) {
     if (auto rc = restore_state(o_, detail_, in_.seekable, pipeline_, resend)) return rc;
   }
@@ -424,10 +424,10 @@ std::optional<int> Stream::set_up(replay::ReplayAuth auth) {
   core::install_stop_handler();
   std::signal(SIGPIPE, SIG_IGN);
   if (o_.in_process) {
-    auto created = replay::InProcessTwin::create(detail_);
+    auto created = twin::InProcessTwin::create(detail_);
     if (!created) {
       std::cerr << "peritwin-stream: " << created.error() << "\n";
-      return kExitUsage;
+      return core::kExitUsage;
     }
     local_ = std::move(*created);
     printer_.print(local_->state());
@@ -440,7 +440,7 @@ std::optional<int> Stream::set_up(replay::ReplayAuth auth) {
     if (listen_fd_ < 0) {
       std::cerr << "peritwin-stream: cannot listen on 127.0.0.1:" << in_.port << ": "
                 << std::strerror(errno) << "\n";
-      return kExitRuntime;
+      return core::kExitRuntime;
     }
     std::cerr << "peritwin-stream: listening on tcp://127.0.0.1:" << in_.port << "\n";
   }
@@ -452,14 +452,15 @@ std::optional<int> Stream::set_up(replay::ReplayAuth auth) {
 
 /// The sender to the daemon: what the daemon has applied of --source decides the first seq (or,
 /// with a state file, which of its batches are sent again).
-std::optional<int> Stream::set_up_sender(replay::ReplayAuth auth, std::vector<twin::Batch> resend) {
-  sender_ = std::make_unique<replay::BatchSender>(*lcm_, detail_.id, o_.source_id, o_.replay,
-                                                  std::move(auth));
+std::optional<int> Stream::set_up_sender(loads::ReplayAuth auth,
+                                         std::vector<messages::Batch> resend) {
+  sender_ = std::make_unique<loads::BatchSender>(*lcm_, detail_.id, o_.source_id, o_.replay,
+                                                 std::move(auth));
   sender_->on_state(printer_.callback());
   const auto learned = sender_->probe_applied(core::keep_running);
   if (!learned) {
     std::cerr << "peritwin-stream: " << learned.error().message() << "\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   const std::int64_t applied = *learned;
   if (!pipeline_) {
@@ -476,13 +477,13 @@ std::optional<int> Stream::set_up_sender(replay::ReplayAuth auth, std::vector<tw
     std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
               << o_.source_id << "', but " << o_.state_file << " holds batches from seq " << held
               << " only (the daemon lost acknowledged batches?)\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   if (applied >= pipeline_->next_seq()) {
     std::cerr << "peritwin-stream: the daemon has applied seq " << applied << " of source '"
               << o_.source_id << "', beyond this state file's next seq " << pipeline_->next_seq()
               << ": another producer uses this source (use another --source)\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   for (auto& b : resend) {
     if (b.seq > applied) sender_->add(std::move(b));
@@ -495,8 +496,8 @@ std::optional<int> Stream::set_up_sender(replay::ReplayAuth auth, std::vector<tw
 bool Stream::deliver() {
   if (closed_.empty()) return true;
   if (!o_.state_file.empty()) {
-    std::vector<twin::Batch> pending =
-        sender_ ? sender_->unacknowledged() : std::vector<twin::Batch>{};
+    std::vector<messages::Batch> pending =
+        sender_ ? sender_->unacknowledged() : std::vector<messages::Batch>{};
     pending.insert(pending.end(), closed_.begin(), closed_.end());
     save_state(pending);
     if (!error_.empty()) return false;
@@ -504,7 +505,8 @@ bool Stream::deliver() {
   for (auto& b : closed_) {
     if (sender_) {
       sender_->add(std::move(b));
-    } else if (!local_->apply(b, error_)) {
+    } else if (const peritwin::core::Status applied = local_->apply(b); !applied) {
+      error_ = applied.error().message();
       return false;
     } else {
       printer_.print(local_->state());
@@ -598,7 +600,7 @@ void Stream::loop() {
       take_line(line);
     }
     if (samples_in_) {
-      if (!sender_ && twin::handle_lcm(*lcm_, 50) < 0 && errno != EINTR) {
+      if (!sender_ && messages::handle_lcm(*lcm_, 50) < 0 && errno != EINTR) {
         error_ = "LCM failed while receiving";
         break;
       }
@@ -614,7 +616,7 @@ void Stream::loop() {
     if (!deliver()) break;
     if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
     lines_idle = lines.empty();
-    if (sender_ && sender_->pump(0) == replay::BatchSender::Progress::failed) {
+    if (sender_ && sender_->pump(0) == loads::BatchSender::Progress::failed) {
       error_ = sender_->error();
       break;
     }
@@ -624,7 +626,7 @@ void Stream::loop() {
 /// The "stream" and "skipped_cycles" objects of the --json summary.
 std::vector<messages::SummaryObject> summary_extra(const stream::Pipeline& pipe) {
   const auto& rf = pipe.rainflow();
-  replay::ConversionStats conversion = pipe.conversion();
+  loads::ConversionStats conversion = pipe.conversion();
   conversion.nonfinite_samples = rf.nonfinite_samples;
   conversion.reversals = rf.reversals;
   return {{"stream",
@@ -640,9 +642,9 @@ std::vector<messages::SummaryObject> summary_extra(const stream::Pipeline& pipe)
 
 int Stream::finish() {
   stream::Pipeline& pipe = *pipeline_;
-  const replay::ResidueRule rule = o_.residue == "whole"  ? replay::ResidueRule::whole
-                                   : o_.residue == "keep" ? replay::ResidueRule::keep
-                                                          : replay::ResidueRule::half;
+  const loads::ResidueRule rule = o_.residue == "whole"  ? loads::ResidueRule::whole
+                                  : o_.residue == "keep" ? loads::ResidueRule::keep
+                                                         : loads::ResidueRule::half;
   if (error_.empty()) {
     pipe.finish(rule, closed_);
     if (deliver() && sender_) {
@@ -650,8 +652,8 @@ int Stream::finish() {
       sender_->finish();
       while (error_.empty()) {
         const auto p = sender_->pump(20);
-        if (p == replay::BatchSender::Progress::done) break;
-        if (p == replay::BatchSender::Progress::failed) error_ = sender_->error();
+        if (p == loads::BatchSender::Progress::done) break;
+        if (p == loads::BatchSender::Progress::failed) error_ = sender_->error();
       }
       if (error_.empty() && !o_.state_file.empty()) save_state(sender_->unacknowledged());
     }
@@ -667,34 +669,34 @@ int Stream::finish() {
             << " batches, lost_samples " << pipe.counts.lost_samples << "\n";
   if (!error_.empty()) {
     std::cerr << "peritwin-stream: " << error_ << "\n";
-    return kExitRuntime;
+    return core::kExitRuntime;
   }
   std::optional<peritwin_msgs::damage_state_t> final_state;
   if (local_) final_state = local_->state();
   if (sender_) final_state = sender_->last_state();
   if (o_.json && final_state) {
-    std::cout << twin::summary_json(*final_state, summary_extra(pipe)) << std::endl;
+    std::cout << messages::summary_json(*final_state, summary_extra(pipe)) << std::endl;
   }
-  return kExitOk;
+  return core::kExitOk;
 }
 
 /// The stream of `o` to its end; the exit code.
 int run(Options o) {
   o.replay.lockstep = o.lockstep;
   o.batching.merge_identical = true;
-  const auto loaded = twin::load_config(
+  const auto loaded = config::load_config(
       o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
-    return kExitUsage;
+    return core::kExitUsage;
   }
-  const twin::DetailConfig* detail = twin::select_detail(*loaded.config, o.detail_id);
+  const config::DetailConfig* detail = config::select_detail(*loaded.config, o.detail_id);
   if (auto rc = check_options(o, detail)) return *rc;
   // The keys, before anything is read or published: a missing one is a usage error.
-  auto auth = replay::load_producer_keys(o.keys, o.source_id);
+  auto auth = loads::load_producer_keys(o.keys, o.source_id);
   if (!auth) {
     std::cerr << "peritwin-stream: " << auth.error().message() << "\n";
-    return kExitUsage;
+    return core::kExitUsage;
   }
   if (o.keys.sign_only) {
     std::cerr << "peritwin-stream: --sign-only: the daemon's STATE and REJECT are not verified\n";

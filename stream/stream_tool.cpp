@@ -12,21 +12,21 @@
 #include <limits>
 #include <sstream>
 
-#include "replay/state_text.h"
-#include "solver/core/fnv1a.h"
+#include "core/fnv1a.h"
+#include "loads/state_text.h"
 
 namespace peritwin::stream {
 
 namespace {
 
-namespace st = replay::state_text;
+namespace st = loads::state_text;
 constexpr std::string_view kTag = "peritwin-stream-state";
 // Version 2 adds "samples_taken": the last seq taken per source of load_samples_t. Version 1
 // files (without it) are read as having taken none.
 constexpr std::uint64_t kVersion = 2;
 
-/// The checksum line's value: FNV-1a 64 (solver/core/fnv1a.h) of every byte before it.
-std::string checksum(std::string_view body) { return hex64(fnv1a64(body)); }
+/// The checksum line's value: FNV-1a 64 (core/fnv1a.h) of every byte before it.
+std::string checksum(std::string_view body) { return core::hex64(core::fnv1a64(body)); }
 
 /// Version 1 files were checksummed by a copy of FNV-1a whose offset basis lost its last digit
 /// (1469598103934665603 for 14695981039346656037); they are still read, with that value.
@@ -34,12 +34,12 @@ std::string version_one_checksum(std::string_view body) {
   std::uint64_t h = 1469598103934665603ULL;
   for (const char c : body) {
     h ^= static_cast<unsigned char>(c);
-    h *= Fnv1a64::kPrime;
+    h *= core::Fnv1a64::kPrime;
   }
-  return hex64(h);
+  return core::hex64(h);
 }
 
-void put_block(std::string& out, const LoadBlock& b) {
+void put_block(std::string& out, const core::LoadBlock& b) {
   out += '\n';
   st::put(out, b.p_max);
   st::put(out, b.r);
@@ -47,7 +47,7 @@ void put_block(std::string& out, const LoadBlock& b) {
   st::put(out, static_cast<std::uint64_t>(b.count));
 }
 
-bool read_block(st::Reader& r, LoadBlock& b) {
+bool read_block(st::Reader& r, core::LoadBlock& b) {
   std::uint64_t count = 0;
   const bool ok = r.number(b.p_max, "p_max") && r.number(b.r, "r") && r.number(b.alpha, "alpha") &&
                   r.count(count, "count");
@@ -84,15 +84,15 @@ bool to_double(std::string_view s, double& v) {
 
 }  // namespace
 
-Pipeline::Pipeline(const twin::DetailConfig& detail, const std::string& source_id,
-                   replay::BatchingOptions batching, std::int64_t first_seq)
+Pipeline::Pipeline(const config::DetailConfig& detail, const std::string& source_id,
+                   loads::BatchingOptions batching, std::int64_t first_seq)
     : scale_(detail.sensor.scale),
       offset_(detail.sensor.offset),
       counter_(detail.sensor.gate),
-      blocks_(replay::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}),
+      blocks_(loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}),
       batcher_(detail.id, source_id, first_seq, batching) {}
 
-void Pipeline::emit(std::vector<twin::Batch>& out) {
+void Pipeline::emit(std::vector<messages::Batch>& out) {
   for (const auto& c : cycles_) blocks_.add(c, new_blocks_);
   cycles_.clear();
   const std::size_t before = out.size();
@@ -104,7 +104,7 @@ void Pipeline::emit(std::vector<twin::Batch>& out) {
   }
 }
 
-void Pipeline::sample(double t, double measured, double alpha, std::vector<twin::Batch>& out) {
+void Pipeline::sample(double t, double measured, double alpha, std::vector<messages::Batch>& out) {
   ++counts.samples;
   last_time = t;
   counter_.push(scale_ * measured + offset_, alpha, cycles_);
@@ -117,7 +117,7 @@ void Pipeline::sample(double t, double measured, double alpha, std::vector<twin:
   }
 }
 
-void Pipeline::finish(replay::ResidueRule rule, std::vector<twin::Batch>& out) {
+void Pipeline::finish(loads::ResidueRule rule, std::vector<messages::Batch>& out) {
   counter_.finish(rule, cycles_);
   emit(out);
   const std::size_t before = out.size();
@@ -185,10 +185,10 @@ bool take_text(std::string_view& rest, std::string_view name, std::string_view& 
 }
 }  // namespace
 
-Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
-                                                  const twin::DetailConfig& detail,
-                                                  const std::string& source_id,
-                                                  replay::BatchingOptions batching) {
+core::Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
+                                                        const config::DetailConfig& detail,
+                                                        const std::string& source_id,
+                                                        loads::BatchingOptions batching) {
   // The token part ends where the counter's text begins.
   const std::size_t counter_at = text.find("\ncounter ");
   if (counter_at == std::string_view::npos) return std::string("no counter state");
@@ -223,9 +223,9 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
   }
   r.word("open_blocks");
   r.count(open, "open_blocks");
-  std::vector<LoadBlock> blocks;
+  std::vector<core::LoadBlock> blocks;
   for (std::uint64_t i = 0; r.ok() && i < open; ++i) {
-    LoadBlock b;
+    core::LoadBlock b;
     read_block(r, b);
     blocks.push_back(b);
   }
@@ -248,7 +248,7 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
     std::uint64_t seq = 0;
     r.count(seq, "seq");
     if (r.ok() && (hex_id.empty() || source.size() * 2 != hex_id.size() ||
-                   source.size() > twin::kMaxSourceIdLength ||
+                   source.size() > messages::kMaxSourceIdLength ||
                    seq > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) ||
                    !p.samples_taken.emplace(source, static_cast<std::int64_t>(seq)).second)) {
       r.fail("samples_taken: bad or repeated source \"" + std::string(hex_id) + "\"");
@@ -262,13 +262,13 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
   if (!take_text(rest, "counter", counter_text) || !take_text(rest, "cycle_blocks", blocks_text)) {
     return std::string("truncated counter or cycle_blocks state");
   }
-  auto counter = replay::RainflowCounter::restore(counter_text);
+  auto counter = loads::RainflowCounter::restore(counter_text);
   if (!counter) return counter.error();
-  auto converter = replay::CycleBlocks::restore(blocks_text);
+  auto converter = loads::CycleBlocks::restore(blocks_text);
   if (!converter) return converter.error();
   if (counter->gate() != detail.sensor.gate ||
       converter->rules() !=
-          replay::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}) {
+          loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}) {
     return std::string(
         "written with another [detail.sensor] gate / alpha_bin or compressed_bonds_fatigue");
   }
@@ -278,8 +278,8 @@ Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
   return p;
 }
 
-Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
-                  const std::vector<twin::Batch>& unacknowledged) {
+core::Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
+                        const std::vector<messages::Batch>& unacknowledged) {
   std::string text = pipeline.save();
   text += "\nunacknowledged";
   st::put(text, static_cast<std::uint64_t>(unacknowledged.size()));
@@ -293,7 +293,7 @@ Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
   text += "checksum " + checksum(text) + "\n";
   const std::filesystem::path tmp = file.string() + ".tmp";
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return failure(tmp.string() + ": cannot write: " + std::strerror(errno));
+  if (fd < 0) return core::failure(tmp.string() + ": cannot write: " + std::strerror(errno));
   std::size_t done = 0;
   while (done < text.size()) {
     const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
@@ -301,15 +301,15 @@ Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
     if (n <= 0) {
       const std::string why = std::strerror(errno);
       ::close(fd);
-      return failure(tmp.string() + ": write failed: " + why);
+      return core::failure(tmp.string() + ": write failed: " + why);
     }
     done += static_cast<std::size_t>(n);
   }
   if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    return failure(tmp.string() + ": fsync failed: " + std::strerror(errno));
+    return core::failure(tmp.string() + ": fsync failed: " + std::strerror(errno));
   }
   if (::rename(tmp.c_str(), file.c_str()) != 0) {
-    return failure(file.string() + ": rename failed: " + std::strerror(errno));
+    return core::failure(file.string() + ": rename failed: " + std::strerror(errno));
   }
   const auto dir = file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
   if (const int d = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); d >= 0) {
@@ -319,10 +319,10 @@ Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
   return {};
 }
 
-Expected<RestoredState, std::string> load_state(const std::filesystem::path& file,
-                                                const twin::DetailConfig& detail,
-                                                const std::string& source_id,
-                                                replay::BatchingOptions batching) {
+core::Expected<RestoredState, std::string> load_state(const std::filesystem::path& file,
+                                                      const config::DetailConfig& detail,
+                                                      const std::string& source_id,
+                                                      loads::BatchingOptions batching) {
   const auto fail = [&](const std::string& why) { return file.string() + ": " + why; };
   std::ifstream in(file, std::ios::binary);
   if (!in) return fail("cannot open");
@@ -348,15 +348,15 @@ Expected<RestoredState, std::string> load_state(const std::filesystem::path& fil
   std::uint64_t n = 0;
   r.word("unacknowledged");
   r.count(n, "unacknowledged");
-  std::vector<twin::Batch> batches;
+  std::vector<messages::Batch> batches;
   for (std::uint64_t i = 0; r.ok() && i < n; ++i) {
     std::uint64_t seq = 0, blocks = 0;
     r.word("batch");
     r.count(seq, "seq");
     r.count(blocks, "blocks");
-    twin::Batch b{detail.id, source_id, static_cast<std::int64_t>(seq), {}};
+    messages::Batch b{detail.id, source_id, static_cast<std::int64_t>(seq), {}};
     for (std::uint64_t k = 0; r.ok() && k < blocks; ++k) {
-      LoadBlock block;
+      core::LoadBlock block;
       read_block(r, block);
       b.blocks.push_back(block);
     }

@@ -1,13 +1,14 @@
 // peritwin-stream's engine room (stream/stream_main.cpp): samples -> [detail.sensor] scale and
-// offset -> RainflowCounter (replay/rainflow.h) -> CycleBlocks (replay/cycle_blocks.h) -> Batcher
-// (replay/batcher.h) -> batches; and the state file that makes a restart neither lose nor double a
+// offset -> RainflowCounter (loads/rainflow.h) -> CycleBlocks (loads/cycle_blocks.h) -> Batcher
+// (loads/batcher.h) -> batches; and the state file that makes a restart neither lose nor double a
 // cycle.
 //
 // State file (StreamState::save/restore): text, written atomically (temporary file, fsync, rename,
 // fsync of the directory) whenever batches were closed, and at the end. It holds the counter's and
 // the converter's exact states, the open batch, the next seq, the batches not yet acknowledged by
 // the daemon, the input position (lines consumed; a FILE input skips them at a restart), the last
-// load_samples_t seq taken per source (version 2) and the counts; its last line is "checksum <FNV-1a 64 of every byte before it>". Next to it,
+// load_samples_t seq taken per source (version 2) and the counts; its last line is "checksum
+// <FNV-1a 64 of every byte before it>". Next to it,
 // "<state file>.received" holds the number of samples read so far (rewritten in place, no fsync:
 // it survives a SIGKILL of the process, the page cache keeps it), so that a restart can report
 // the samples read after the last state was written (lost_samples) for an input it cannot re-read.
@@ -21,11 +22,11 @@
 #include <string_view>
 #include <vector>
 
-#include "replay/batcher.h"
-#include "replay/cycle_blocks.h"
-#include "replay/rainflow.h"
-#include "solver/core/expected.h"
-#include "twin/config/config.h"
+#include "config/config.h"
+#include "core/expected.h"
+#include "loads/batcher.h"
+#include "loads/cycle_blocks.h"
+#include "loads/rainflow.h"
 
 namespace peritwin::stream {
 
@@ -41,17 +42,17 @@ struct StreamCounts {
 /// The pipeline from samples to batches, and everything a restart needs.
 class Pipeline {
  public:
-  Pipeline(const twin::DetailConfig& detail, const std::string& source_id,
-           replay::BatchingOptions batching, std::int64_t first_seq);
+  Pipeline(const config::DetailConfig& detail, const std::string& source_id,
+           loads::BatchingOptions batching, std::int64_t first_seq);
 
   /// One sample (measured value in the sensor's unit, angle in rad, time in s); closed batches
   /// go to `out`.
-  void sample(double t, double measured, double alpha, std::vector<twin::Batch>& out);
+  void sample(double t, double measured, double alpha, std::vector<messages::Batch>& out);
   /// End of the input: the residue by `rule`, then the open batch.
-  void finish(replay::ResidueRule rule, std::vector<twin::Batch>& out);
+  void finish(loads::ResidueRule rule, std::vector<messages::Batch>& out);
 
-  [[nodiscard]] const replay::RainflowStats& rainflow() const { return counter_.stats(); }
-  [[nodiscard]] const replay::ConversionStats& conversion() const { return blocks_.stats(); }
+  [[nodiscard]] const loads::RainflowStats& rainflow() const { return counter_.stats(); }
+  [[nodiscard]] const loads::ConversionStats& conversion() const { return blocks_.stats(); }
   [[nodiscard]] std::int64_t next_seq() const { return batcher_.next_seq(); }
   StreamCounts counts;
   std::optional<double> last_time;  ///< of the last sample taken (times must increase)
@@ -61,33 +62,33 @@ class Pipeline {
 
   /// The state text (without the unacknowledged batches and checksum: StreamState adds them).
   [[nodiscard]] std::string save() const;
-  static Expected<Pipeline, std::string> restore(std::string_view text,
-                                                 const twin::DetailConfig& detail,
-                                                 const std::string& source_id,
-                                                 replay::BatchingOptions batching);
+  static core::Expected<Pipeline, std::string> restore(std::string_view text,
+                                                       const config::DetailConfig& detail,
+                                                       const std::string& source_id,
+                                                       loads::BatchingOptions batching);
 
  private:
-  void emit(std::vector<twin::Batch>& out);
+  void emit(std::vector<messages::Batch>& out);
   double scale_, offset_;
-  replay::RainflowCounter counter_;
-  replay::CycleBlocks blocks_;
-  replay::Batcher batcher_;
-  std::vector<replay::CountedCycle> cycles_;
-  std::vector<LoadBlock> new_blocks_;
+  loads::RainflowCounter counter_;
+  loads::CycleBlocks blocks_;
+  loads::Batcher batcher_;
+  std::vector<loads::CountedCycle> cycles_;
+  std::vector<core::LoadBlock> new_blocks_;
 };
 
 /// Writes the pipeline and the unacknowledged batches to `file` atomically (see the top).
-Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
-                  const std::vector<twin::Batch>& unacknowledged);
+core::Status save_state(const std::filesystem::path& file, const Pipeline& pipeline,
+                        const std::vector<messages::Batch>& unacknowledged);
 struct RestoredState {
   Pipeline pipeline;
-  std::vector<twin::Batch> unacknowledged;
+  std::vector<messages::Batch> unacknowledged;
 };
 /// The state in `file`, or why it is none ("<file>: checksum mismatch", "...: truncated", ...).
-Expected<RestoredState, std::string> load_state(const std::filesystem::path& file,
-                                                const twin::DetailConfig& detail,
-                                                const std::string& source_id,
-                                                replay::BatchingOptions batching);
+core::Expected<RestoredState, std::string> load_state(const std::filesystem::path& file,
+                                                      const config::DetailConfig& detail,
+                                                      const std::string& source_id,
+                                                      loads::BatchingOptions batching);
 /// "<file>.received": samples read so far (see the top of the file).
 void write_received(const std::filesystem::path& state_file, std::uint64_t samples);
 std::optional<std::uint64_t> read_received(const std::filesystem::path& state_file);

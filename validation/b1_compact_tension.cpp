@@ -13,7 +13,7 @@ double critical_crack_length(const CompactTensionSpec& spec, double p_max) {
   double lo = spec.initial_crack, hi = 0.95 * spec.width;
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);
-    const double k = compact_tension_delta_k(p_max, spec.thickness, spec.width, mid);
+    const double k = crack::compact_tension_delta_k(p_max, spec.thickness, spec.width, mid);
     (k < spec.material.fracture_toughness ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
@@ -22,7 +22,8 @@ double critical_crack_length(const CompactTensionSpec& spec, double p_max) {
 double paris_life(const CompactTensionSpec& spec, const ParisLaw& paris, double p_max, double r,
                   double a_end) {
   auto dn_da = [&](double a) {  // cycles per metre
-    const double dk = compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width, a) / 1e6;
+    const double dk =
+        crack::compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width, a) / 1e6;
     return 1.0 / (paris.c * std::pow(dk, paris.m) * 1e-3);
   };
   return integrate_simpson(dn_da, spec.initial_crack, a_end, 2000);
@@ -33,19 +34,19 @@ CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
                                  double a_stop, std::int64_t record_every, bool incremental,
                                  const CompactTensionModel& model) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Specimen s = make_compact_tension(spec, model.options, dx, model.horizon_ratio);
-  FatigueSettings settings;
+  const statics::Specimen s = make_compact_tension(spec, model.options, dx, model.horizon_ratio);
+  fatigue::FatigueSettings settings;
   settings.law = model.law;
   settings.strain = law;
   settings.phase_switch_damage = model.phase_switch_damage;
   settings.incremental = incremental;
-  FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
+  fatigue::FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
   CrackHistory history;
   if (!engine.initialize()) {
     history.failure = engine.failure_reason();
     return history;
   }
-  const CrackTracker tracker(s.disc, s.geometry.notches);
+  const crack::CrackTracker tracker(s.disc, s.geometry.notches);
   const double load_line = 0.25 * spec.width;
   auto record = [&] {
     const auto cracks = tracker.measure(engine.node_damage());
@@ -58,7 +59,7 @@ CrackHistory run_compact_tension(const CompactTensionSpec& spec, double dx,
   while (true) {
     const auto status = engine.apply({p_max, r, 0.0, record_every});
     const double a = record();
-    if (status == EngineStatus::final_failure) {
+    if (status == fatigue::EngineStatus::final_failure) {
       history.final_failure = true;
       break;
     }
@@ -93,8 +94,9 @@ double fitted_paris_constant(const CompactTensionSpec& spec, const CrackHistory&
     const double n1 = cycles_at_length(h, a + step);
     if (n0 < 0 || n1 <= n0) continue;
     const double rate_mm = step * 1e3 / (n1 - n0);
-    const double dk =
-        compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width, a + 0.5 * step) / 1e6;
+    const double dk = crack::compact_tension_delta_k(p_max * (1 - r), spec.thickness, spec.width,
+                                                     a + 0.5 * step) /
+                      1e6;
     sum += std::log(rate_mm) - m * std::log(dk);
     ++count;
   }

@@ -47,9 +47,10 @@ double paris_life(const CompactTensionSpec& spec, const ParisLaw& paris, double 
 /// The PD model a CT run uses; the defaults are B1's (000 Sec. 6.1: state-based, plane stress,
 /// δ = 3.015Δx, the strain-range law, φ0 = 0.398).
 struct CompactTensionModel {
-  ModelOptions options;
-  double horizon_ratio = 3.015;               ///< δ/Δx
-  FatigueLaw law = FatigueLaw::strain_range;  ///< strain_range or energy (A1, m1, A2, m2)
+  model::ModelOptions options;
+  double horizon_ratio = 3.015;  ///< δ/Δx
+  fatigue::FatigueLaw law =
+      fatigue::FatigueLaw::strain_range;  ///< strain_range or energy (A1, m1, A2, m2)
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;  ///< φ0, 000 Sec. 4.4
 };
 

@@ -38,16 +38,17 @@ struct KinkResult {
 struct KinkRun {
   double alpha = 0.0;  ///< load angle (rad)
   double dx = 0.001;
-  double horizon_ratio = 3.015;                 ///< δ/Δx (000 Fig. 15 compares 2, 3 and 4)
-  fatigue::StrainLawParams law;                 ///< A, m (and the energy law's via 000 Eq. 44-46)
-  FatigueLaw fatigue_law = FatigueLaw::energy;  ///< 000 Sec. 6.2 uses its energy-based law
-  double growth = 0.010;                        ///< crack growth at which β is measured (m)
-  bool lower_holes_fixed = true;                ///< see CompactTensionShearSpec
-  bool rigid_fixtures = false;                  ///< see CompactTensionShearSpec
-  bool compressed_bonds_fatigue = true;         ///< see FatigueSettings
-  GridPerturbation grid;                        ///< irregular node arrangement
+  double horizon_ratio = 3.015;  ///< δ/Δx (000 Fig. 15 compares 2, 3 and 4)
+  fatigue::StrainLawParams law;  ///< A, m (and the energy law's via 000 Eq. 44-46)
+  fatigue::FatigueLaw fatigue_law =
+      fatigue::FatigueLaw::energy;       ///< 000 Sec. 6.2 uses its energy-based law
+  double growth = 0.010;                 ///< crack growth at which β is measured (m)
+  bool lower_holes_fixed = true;         ///< see CompactTensionShearSpec
+  bool rigid_fixtures = false;           ///< see CompactTensionShearSpec
+  bool compressed_bonds_fatigue = true;  ///< see FatigueSettings
+  mesh::GridPerturbation grid;           ///< irregular node arrangement
   /// 000 Sec. 6.2 is state-based; bond-based (ν = 1/3 instead of 0.33) runs about 6× faster.
-  ModelKind model = ModelKind::state_based;
+  model::ModelKind model = model::ModelKind::state_based;
   /// φ0 (000 Sec. 4.4); 0 = phase_switch_damage_for_horizon(horizon_ratio).
   double phase_switch_damage = 0.0;
   std::string snapshot_csv;                  ///< final node damage (x_m,y_m,damage) unless empty
@@ -69,9 +70,9 @@ struct KFieldRun {
   double half_size = 0.030;  ///< m
   double dx = 0.0005;
   fatigue::StrainLawParams law;
-  FatigueLaw fatigue_law = FatigueLaw::energy;
+  fatigue::FatigueLaw fatigue_law = fatigue::FatigueLaw::energy;
   double growth = 0.010;
-  GridPerturbation grid;  ///< irregular node arrangement
+  mesh::GridPerturbation grid;  ///< irregular node arrangement
   std::string snapshot_csv;
 };
 

@@ -28,18 +28,19 @@ double paris_rate(double delta_k) {
 }
 
 double delta_k_at(double p_max, double a) {
-  return compact_tension_delta_k(p_max * (1 - kLoadRatio), kThickness, kWidth, a);  // 000 Eq. A2
+  return crack::compact_tension_delta_k(p_max * (1 - kLoadRatio), kThickness, kWidth,
+                                        a);  // 000 Eq. A2
 }
 
-void write_snapshot(const std::string& path, const Discretization& d,
+void write_snapshot(const std::string& path, const mesh::Discretization& d,
                     const std::vector<double>& damage) {
   if (path.empty() || path.front() == '_') return;  // no prefix: calibration run
   write_damage_csv(path, d, damage);
 }
 
-Point bond_midpoint(const Discretization& d, std::size_t b) {
-  const Point a = d.position[static_cast<std::size_t>(d.bond_i[b])];
-  const Point c = d.position[static_cast<std::size_t>(d.bond_j[b])];
+mesh::Point bond_midpoint(const mesh::Discretization& d, std::size_t b) {
+  const mesh::Point a = d.position[static_cast<std::size_t>(d.bond_i[b])];
+  const mesh::Point c = d.position[static_cast<std::size_t>(d.bond_j[b])];
   return {0.5 * (a.x + c.x), 0.5 * (a.y + c.y)};
 }
 
@@ -60,43 +61,45 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   // README's "12.5 mm + 17 mm" takes B1's load line; with W = 30 mm the load line is at 7.5 mm, so
   // the centre is at x = 24.5 mm.
   const double w = kWidth;
-  DetailGeometry g;
+  mesh::DetailGeometry g;
   g.thickness = kThickness;
-  g.outline = {Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w}};
-  const Circle hole{{0.25 * w + 0.017, 0.005}, 0.0035};
+  g.outline = {mesh::Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w}};
+  const mesh::Circle hole{{0.25 * w + 0.017, 0.005}, 0.0035};
   g.holes = {hole};
-  const Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
-  const Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
-  g.rigid_regions = {Region::of(upper_pin), Region::of(lower_pin)};
+  const mesh::Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
+  const mesh::Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
+  g.rigid_regions = {mesh::Region::of(upper_pin), mesh::Region::of(lower_pin)};
   const double horizon = 3.015 * dx;
   // 002 Sec. 7: no-fail rings 2δ wide around the pins.
-  g.no_fail_zones = {Region::of(Circle{upper_pin.centre, upper_pin.radius + 2 * horizon}),
-                     Region::of(Circle{lower_pin.centre, lower_pin.radius + 2 * horizon})};
-  const Point tip{0.25 * w + kInitialCrack, 0.0};
+  g.no_fail_zones = {
+      mesh::Region::of(mesh::Circle{upper_pin.centre, upper_pin.radius + 2 * horizon}),
+      mesh::Region::of(mesh::Circle{lower_pin.centre, lower_pin.radius + 2 * horizon})};
+  const mesh::Point tip{0.25 * w + kInitialCrack, 0.0};
   g.notches = {{"pre-crack", {{-dx, 0.0}, tip}}};
-  const Discretization disc = discretize(g, dx, horizon);
+  const mesh::Discretization disc = discretize(g, dx, horizon);
   // SAE 1020: E = 205 GPa, ν = 0.29, plane strain (002 uses plane strain), state-based model.
-  ModelOptions options;
-  options.kind = ModelKind::state_based;
-  options.plane = PlaneCondition::plane_strain;
-  const Material steel{205e9, 0.29, 0.0};
-  const PdModel model = build_model(disc, steel, options, g.rigid_factor);
-  std::vector<Support> supports;
+  model::ModelOptions options;
+  options.kind = model::ModelKind::state_based;
+  options.plane = model::PlaneCondition::plane_strain;
+  const model::Material steel{205e9, 0.29, 0.0};
+  const model::PdModel model = model::build_model(disc, steel, options, g.rigid_factor);
+  std::vector<statics::Support> supports;
   for (const double side : {1.0, -1.0}) {
     supports.push_back({{disc.nearest_node({1.25 * w, side * 0.5 * dx})}, true, true});
   }
-  std::vector<LoadTerm> loads = {{disc.nodes_in(Region::of(upper_pin)), {0.0, 1.0}, {}, {}},
-                                 {disc.nodes_in(Region::of(lower_pin)), {0.0, -1.0}, {}, {}}};
-  FatigueSettings settings;
+  std::vector<statics::LoadTerm> loads = {
+      {disc.nodes_in(mesh::Region::of(upper_pin)), {0.0, 1.0}, {}, {}},
+      {disc.nodes_in(mesh::Region::of(lower_pin)), {0.0, -1.0}, {}, {}}};
+  fatigue::FatigueSettings settings;
   settings.strain = fatigue::sae1020_strain_params();  // 002 Table 2
   settings.strain.A2 = a2;
   if (!propagation_limit) settings.strain.eps_inf_prop = 0.0;
   settings.critical_stretch = -1.0;  // K_c not given for B3: fatigue phases only
   settings.incremental = true;
-  FatigueEngine engine(disc, model, supports, loads, settings);
+  fatigue::FatigueEngine engine(disc, model, supports, loads, settings);
   HoleRunResult result;
   if (!engine.initialize()) return result;
-  const CrackTracker tracker(disc, g.notches);
+  const crack::CrackTracker tracker(disc, g.notches);
 
   // 002 Sec. 7 protocol. While the crack grows, P_max keeps the ASTM ΔK (000 Eq. A2, crack length
   // = load line to projected tip) at its value at a0, as in 002's experiments and simulations
@@ -131,8 +134,8 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
     const auto& intact = engine.solver().intact();
     double sum = 0.0;
     int n = 0;
-    for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
-      const Point q = disc.position[k];
+    for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+      const mesh::Point q = disc.position[k];
       if (std::hypot(q.x - tip.x, q.y - tip.y) > dx) continue;
       for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
         const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
@@ -162,13 +165,15 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   // The hole's far side: within 2δ of its edge on the half away from the notch (002 Fig. 8's
   // crescent of strain concentration).
   std::vector<std::uint8_t> old_path(static_cast<std::size_t>(disc.num_nodes()), 0);
-  auto hole_distance = [&](Point q) {
+  auto hole_distance = [&](mesh::Point q) {
     return std::hypot(q.x - hole.centre.x, q.y - hole.centre.y) - hole.radius;
   };
-  auto entry_zone = [&](Point q) { return hole_distance(q) < std::max(2 * horizon, 0.002); };
-  auto far_side = [&](Point q) { return hole_distance(q) < 2 * horizon && q.x > hole.centre.x; };
+  auto entry_zone = [&](mesh::Point q) { return hole_distance(q) < std::max(2 * horizon, 0.002); };
+  auto far_side = [&](mesh::Point q) {
+    return hole_distance(q) < 2 * horizon && q.x > hole.centre.x;
+  };
   bool first_old_path = false, first_far_side = false;
-  auto add_event = [&](const char* what, std::int64_t cycle, Point where) {
+  auto add_event = [&](const char* what, std::int64_t cycle, mesh::Point where) {
     result.events.push_back({what, cycle, where, p, eps_inf_prop});
     std::fprintf(stderr, "B3 %s: %s at cycle %lld, (%.2f, %.2f) mm, P_max %.1f N, eps_prop %.3g\n",
                  propagation_limit ? "limit" : "no limit", what, static_cast<long long>(cycle),
@@ -194,7 +199,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
       if (!intact[b] || disc.no_fail[i] || disc.no_fail[j]) continue;
       const double range = fatigue::strain_range_from_ratio(s[b], kLoadRatio);
       const auto phase = static_cast<fatigue::Phase>(engine.bond_phase()[b]);
-      const Point mid = bond_midpoint(disc, b);
+      const mesh::Point mid = bond_midpoint(disc, b);
       if ((old_path[i] || old_path[j]) && engine.bond_phase()[b] == 2) {
         diag.old_path_max_range = std::max(diag.old_path_max_range, range);
         diag.old_path_min_life = std::min(diag.old_path_min_life, lives[b]);
@@ -239,7 +244,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
     const auto& events = engine.break_events();
     if (stage != Stage::growth) {
       for (std::size_t e = seen; e < events.size(); ++e) {
-        const Point mid = bond_midpoint(disc, static_cast<std::size_t>(events[e].bond));
+        const mesh::Point mid = bond_midpoint(disc, static_cast<std::size_t>(events[e].bond));
         if (far_side(mid)) {
           ++result.breaks_far_side;
           if (!first_far_side) {
@@ -268,13 +273,13 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
         result.p_entry = p;
         add_event("enters_hole", engine.total_cycles(), cracks.front().tip);
         write_snapshot(out_prefix + "_enters_hole.csv", disc, damage);
-        for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
-          const Point q = disc.position[k];
+        for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+          const mesh::Point q = disc.position[k];
           if (damage[static_cast<std::size_t>(k)] < fatigue::kPhaseSwitchDamage2D || q.x < tip.x) {
             continue;
           }
-          for (NodeIndex m = 0; m < disc.num_nodes(); ++m) {
-            const Point c = disc.position[m];
+          for (mesh::NodeIndex m = 0; m < disc.num_nodes(); ++m) {
+            const mesh::Point c = disc.position[m];
             if (std::hypot(c.x - q.x, c.y - q.y) <= horizon && !entry_zone(c)) {
               old_path[static_cast<std::size_t>(m)] = 1;
             }
@@ -300,7 +305,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
         write_snapshot(out_prefix + "_load_locked.csv", disc, damage);
       }
     }
-    if (status == EngineStatus::final_failure) {
+    if (status == fatigue::EngineStatus::final_failure) {
       // Where: the last broken bond (the crack tracker follows the notch's crack only).
       add_event("final_failure", engine.total_cycles(),
                 events.empty() ? cracks.front().tip

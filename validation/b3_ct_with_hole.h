@@ -18,7 +18,7 @@ struct CrackEvent {
   /// "final_failure"; "end" (max_cycles reached).
   std::string what;
   std::int64_t cycle = -1;
-  Point where;
+  mesh::Point where;
   double p_max = 0.0;         ///< load of the block in which the event happened (N)
   double eps_inf_prop = 0.0;  ///< ε̃∞ then (002 Eq. 12; 0 without the limit)
 };

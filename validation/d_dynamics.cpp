@@ -7,9 +7,9 @@
 #include <fstream>
 #include <numbers>
 
+#include "core/json_line.h"
+#include "outputs/damage_png.h"
 #include "solver/dynamics/dispersion.h"
-#include "tools/json_line.h"
-#include "twin/io/damage_png.h"
 #include "validation/dynamics_cases.h"
 
 namespace peritwin::validation {
@@ -18,18 +18,18 @@ namespace {
 
 using dynamics::KernelChoice;
 
-const KernelChoice kConstant{KernelChoice::Shape::constant, 0.0};
-const KernelChoice kGaussian{KernelChoice::Shape::gaussian, 2.0};
-constexpr twin::Rgb kBlue{31, 90, 180};
-constexpr twin::Rgb kRed{200, 40, 40};
-constexpr twin::Rgb kBlack{0, 0, 0};
-constexpr twin::Rgb kGreen{30, 150, 60};
+const dynamics::KernelChoice kConstant{dynamics::KernelChoice::Shape::constant, 0.0};
+const dynamics::KernelChoice kGaussian{dynamics::KernelChoice::Shape::gaussian, 2.0};
+constexpr outputs::Rgb kBlue{31, 90, 180};
+constexpr outputs::Rgb kRed{200, 40, 40};
+constexpr outputs::Rgb kBlack{0, 0, 0};
+constexpr outputs::Rgb kGreen{30, 150, 60};
 
-std::string kernel_key(const KernelChoice& k) {
-  return k.shape == KernelChoice::Shape::constant ? "constant" : "gaussian";
+std::string kernel_key(const dynamics::KernelChoice& k) {
+  return k.shape == dynamics::KernelChoice::Shape::constant ? "constant" : "gaussian";
 }
-std::string kernel_label(const KernelChoice& k) {
-  if (k.shape == KernelChoice::Shape::constant) return "constant";
+std::string kernel_label(const dynamics::KernelChoice& k) {
+  if (k.shape == dynamics::KernelChoice::Shape::constant) return "constant";
   char text[32];
   std::snprintf(text, sizeof text, "gaussian p=%g", k.p);
   return text;
@@ -59,7 +59,7 @@ std::vector<double> scaled(const std::vector<double>& v, double s) {
 }  // namespace
 
 int run_d1(const std::filesystem::path& out, int threads) {
-  twin::LinePlot plot;
+  outputs::LinePlot plot;
   plot.title = "d1 bar: strain at x = 0.5 m";
   plot.x_title = "time [ms]";
   plot.y_title = "strain [1e-3]";
@@ -74,63 +74,67 @@ int run_d1(const std::filesystem::path& out, int threads) {
       const std::string micro = calibrated ? "lattice" : "paper";
       write_columns(out / ("d1_" + kernel_key(kernel) + "_" + micro + ".csv"),
                     "time_s,strain,exact", {&r.time, &r.strain, &r.exact});
-      tools::JsonLine line;
+      core::JsonLine line;
       line["case"] = "D1";
       line["kernel"] = kernel_key(kernel);
-      if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
+      if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) line["p"] = kernel.p;
       line["micromodulus"] = calibrated ? "lattice_calibrated" : "paper_eq26_33";
       if (calibrated) {
         line["c0_factor"] =
-            tools::significant(dynamics::lattice_calibration_factor(
-                                   dynamics::Dimension::one, kernel, spec.dx, spec.m * spec.dx),
-                               5);
+            core::significant(dynamics::lattice_calibration_factor(dynamics::Dimension::one, kernel,
+                                                                   spec.dx, spec.m * spec.dx),
+                              5);
       }
       line["dx_m"] = spec.dx;
       line["horizon_m"] = spec.m * spec.dx;
       line["dt_s"] = spec.time_step;
-      line["stable_dt_s"] = tools::significant(r.stable_time_step, 4);
+      line["stable_dt_s"] = core::significant(r.stable_time_step, 4);
       line["transits"] = spec.transits;
-      line["rel_l2_error"] = tools::significant(r.rel_l2_error, 4);
-      line["max_abs_error_over_eps0"] = tools::significant(r.max_abs_error_over_strain, 4);
-      line["undershoot_first_jump_over_eps0"] = tools::significant(r.undershoot_first_jump, 3);
-      line["overshoot_second_jump_over_eps0"] = tools::significant(r.overshoot_second_jump, 3);
-      line["goal"] =
-          kernel.shape == KernelChoice::Shape::gaussian ? "rel_l2_error <= 0.05" : "measured";
-      line["met"] = kernel.shape == KernelChoice::Shape::gaussian ? r.rel_l2_error <= 0.05 : true;
-      line["wall_s"] = tools::fixed(r.wall_s, 1);
-      tools::print_line(line);
+      line["rel_l2_error"] = core::significant(r.rel_l2_error, 4);
+      line["max_abs_error_over_eps0"] = core::significant(r.max_abs_error_over_strain, 4);
+      line["undershoot_first_jump_over_eps0"] = core::significant(r.undershoot_first_jump, 3);
+      line["overshoot_second_jump_over_eps0"] = core::significant(r.overshoot_second_jump, 3);
+      line["goal"] = kernel.shape == dynamics::KernelChoice::Shape::gaussian
+                         ? "rel_l2_error <= 0.05"
+                         : "measured";
+      line["met"] =
+          kernel.shape == dynamics::KernelChoice::Shape::gaussian ? r.rel_l2_error <= 0.05 : true;
+      line["wall_s"] = core::fixed(r.wall_s, 1);
+      core::print_line(line);
       if (!exact_drawn) {
         plot.series.push_back(
             {"exact eq. 56", scaled(r.time, 1e3), scaled(r.exact, 1e3), kBlack, true});
         exact_drawn = true;
       }
       if (!calibrated) {
-        plot.series.push_back({kernel_label(kernel), scaled(r.time, 1e3), scaled(r.strain, 1e3),
-                               kernel.shape == KernelChoice::Shape::constant ? kRed : kBlue,
-                               false});
-      } else if (kernel.shape == KernelChoice::Shape::gaussian) {
+        plot.series.push_back(
+            {kernel_label(kernel), scaled(r.time, 1e3), scaled(r.strain, 1e3),
+             kernel.shape == dynamics::KernelChoice::Shape::constant ? kRed : kBlue, false});
+      } else if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) {
         plot.series.push_back(
             {"gaussian, lattice c0", scaled(r.time, 1e3), scaled(r.strain, 1e3), kGreen, false});
       }
     }
   }
   std::swap(plot.series[0], plot.series.back());  // the exact curve on top
-  twin::write_line_plot_png(out / "d1_bar_strain.png", plot);
+  outputs::write_line_plot_png(out / "d1_bar_strain.png", plot);
   return 0;
 }
 
 int run_d2(const std::filesystem::path& out) {
   const double v = std::sqrt(200e9 / 7850.0);
   // The lattice against Eq. (48)-(50): the integrator's own coefficients at an interior node.
-  twin::LinePlot plot;
+  outputs::LinePlot plot;
   plot.title = "d2 dispersion, delta = 4 mm, m = 3 (dx = 1.33 mm)";
   plot.x_title = "k [1/m]";
   plot.y_title = "omega/v [1/m]";
   for (const auto& kernel :
-       {kConstant, KernelChoice{KernelChoice::Shape::gaussian, 1.0}, kGaussian}) {
+       {kConstant, dynamics::KernelChoice{dynamics::KernelChoice::Shape::gaussian, 1.0},
+        kGaussian}) {
     for (const int m : {3, 5, 10}) {
       const double delta = 4e-3, dx = delta / m;
-      const Discretization disc = dynamics::bar_discretization(0.0, 4 * m + 1, dx, delta, 1.0);
+      const mesh::Discretization disc =
+          dynamics::bar_discretization(0.0, 4 * m + 1, dx, delta, 1.0);
       dynamics::DynamicsSetup setup;
       setup.dimension = dynamics::Dimension::one;
       setup.kernel = kernel;
@@ -151,22 +155,22 @@ int run_d2(const std::filesystem::path& out) {
         ks.push_back(k);
         omega.push_back(lattice / v);
       }
-      tools::JsonLine line;
+      core::JsonLine line;
       line["case"] = "D2";
       line["check"] = "lattice_vs_formula";
       line["kernel"] = kernel_key(kernel);
-      if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
+      if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) line["p"] = kernel.p;
       line["m"] = m;
       line["horizon_m"] = delta;
-      line["max_rel_error"] = tools::significant(worst, 3);
-      line["max_rel_error_without_partial_volumes"] = tools::significant(worst_uncorrected, 3);
+      line["max_rel_error"] = core::significant(worst, 3);
+      line["max_rel_error_without_partial_volumes"] = core::significant(worst_uncorrected, 3);
       line["goal"] = "max_rel_error <= 1e-6";
       line["met"] = worst <= 1e-6;
-      tools::print_line(line);
+      core::print_line(line);
       if (m == 3) {
-        const twin::Rgb colour = kernel.shape == KernelChoice::Shape::constant ? kRed
-                                 : kernel.p == 1.0                             ? kGreen
-                                                                               : kBlue;
+        const outputs::Rgb colour = kernel.shape == dynamics::KernelChoice::Shape::constant ? kRed
+                                    : kernel.p == 1.0                                       ? kGreen
+                                                                                            : kBlue;
         plot.series.push_back({kernel_label(kernel), ks, omega, colour, false});
       }
     }
@@ -179,15 +183,15 @@ int run_d2(const std::filesystem::path& out) {
     }
     plot.series.push_back({"local omega = vk", ks, local, kBlack, true});
   }
-  twin::write_line_plot_png(out / "d2_dispersion.png", plot);
+  outputs::write_line_plot_png(out / "d2_dispersion.png", plot);
   // 001 Figs. 5 and 9: the effect of Δx at m = 3 (Gaussian p = 2), and of m at δ = 4 mm
   // (constant kernel), the formula with the partial volumes (equal to the lattice, above).
   {
-    twin::LinePlot by_dx;
+    outputs::LinePlot by_dx;
     by_dx.title = "d2 gaussian p=2, m = 3: dx = 0.5, 1, 2 mm";
     by_dx.x_title = "k [1/m]";
     by_dx.y_title = "omega/v [1/m]";
-    const twin::Rgb colours[] = {kBlue, kGreen, kRed};
+    const outputs::Rgb colours[] = {kBlue, kGreen, kRed};
     int c = 0;
     for (const double dx : {0.5e-3, 1e-3, 2e-3}) {
       std::vector<double> ks, w;
@@ -205,12 +209,12 @@ int run_d2(const std::filesystem::path& out) {
       local.push_back(ks.back());
     }
     by_dx.series.push_back({"local", ks, local, kBlack, true});
-    twin::write_line_plot_png(out / "d2_dispersion_dx.png", by_dx);
-    twin::LinePlot by_m;
+    outputs::write_line_plot_png(out / "d2_dispersion_dx.png", by_dx);
+    outputs::LinePlot by_m;
     by_m.title = "d2 constant kernel, delta = 4 mm: m = 2, 3, 5, 10";
     by_m.x_title = "k [1/m]";
     by_m.y_title = "omega/v [1/m]";
-    const twin::Rgb more[] = {kRed, kGreen, kBlue, twin::Rgb{150, 90, 0}};
+    const outputs::Rgb more[] = {kRed, kGreen, kBlue, outputs::Rgb{150, 90, 0}};
     c = 0;
     for (const int m : {2, 3, 5, 10}) {
       std::vector<double> kk, w;
@@ -221,30 +225,30 @@ int run_d2(const std::filesystem::path& out) {
       by_m.series.push_back({"m = " + std::to_string(m), kk, w, more[c++], false});
     }
     by_m.series.push_back({"local", ks, local, kBlack, true});
-    twin::write_line_plot_png(out / "d2_dispersion_m.png", by_m);
+    outputs::write_line_plot_png(out / "d2_dispersion_m.png", by_m);
   }
   // The packet: measured speed against the group speed dω/dk of the same lattice.
   for (const auto& kernel : {kConstant, kGaussian}) {
     PacketSpec spec;
     spec.kernel = kernel;
     const PacketResult r = run_packet(spec);
-    tools::JsonLine line;
+    core::JsonLine line;
     line["case"] = "D2";
     line["check"] = "packet_speed";
     line["kernel"] = kernel_key(kernel);
-    if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
+    if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) line["p"] = kernel.p;
     line["dx_m"] = spec.dx;
     line["horizon_m"] = spec.m * spec.dx;
     line["k_per_m"] = spec.wave_number;
-    line["measured_speed"] = tools::significant(r.measured_speed, 6);
-    line["group_speed"] = tools::significant(r.group_speed, 6);
-    line["phase_speed"] = tools::significant(r.phase_speed, 6);
-    line["classical_speed"] = tools::significant(r.classical_speed, 6);
+    line["measured_speed"] = core::significant(r.measured_speed, 6);
+    line["group_speed"] = core::significant(r.group_speed, 6);
+    line["phase_speed"] = core::significant(r.phase_speed, 6);
+    line["classical_speed"] = core::significant(r.classical_speed, 6);
     const double err = r.measured_speed / r.group_speed - 1.0;
-    line["rel_error_vs_group"] = tools::significant(err, 3);
+    line["rel_error_vs_group"] = core::significant(err, 3);
     line["goal"] = "|rel_error_vs_group| <= 0.01";
     line["met"] = std::abs(err) <= 0.01;
-    tools::print_line(line);
+    core::print_line(line);
   }
   return 0;
 }
@@ -252,7 +256,7 @@ int run_d2(const std::filesystem::path& out) {
 int run_d3(const std::filesystem::path& out, int threads) {
   for (const auto kind : {dynamics::LoadHistory::Kind::ramp, dynamics::LoadHistory::Kind::step}) {
     const std::string loading = kind == dynamics::LoadHistory::Kind::ramp ? "ramp" : "step";
-    twin::LinePlot plot;
+    outputs::LinePlot plot;
     plot.title = "d3 semi-infinite crack, " + loading + ": k/(s0 sqrt h)";
     plot.x_title = "t/t_c";
     plot.y_title = "normalized k";
@@ -261,7 +265,7 @@ int run_d3(const std::filesystem::path& out, int threads) {
       for (const std::string extrapolation :
            {"delta_2delta", "nearest_nodes", "both_edges", "lattice_c0"}) {
         if ((extrapolation == "both_edges" || extrapolation == "lattice_c0") &&
-            kernel.shape == KernelChoice::Shape::constant) {
+            kernel.shape == dynamics::KernelChoice::Shape::constant) {
           continue;
         }
         CrackSpec spec;
@@ -277,10 +281,10 @@ int run_d3(const std::filesystem::path& out, int threads) {
         const CrackResult r = run_semi_infinite_crack(spec);
         const std::string name = "d3_" + loading + "_" + kernel_key(kernel) + "_" + extrapolation;
         write_columns(out / (name + ".csv"), "time_s,k_i,k_freund", {&r.time, &r.k_pd, &r.k_exact});
-        tools::JsonLine line;
+        core::JsonLine line;
         line["case"] = "D3";
         line["kernel"] = kernel_key(kernel);
-        if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
+        if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) line["p"] = kernel.p;
         line["loading"] = loading;
         line["extrapolation"] = extrapolation == "nearest_nodes" ? "nearest_nodes" : "delta_2delta";
         line["micromodulus"] = spec.lattice_calibrated ? "lattice_calibrated" : "paper_eq29";
@@ -288,24 +292,24 @@ int run_d3(const std::filesystem::path& out, int threads) {
         line["r1_m"] = r.r1;
         line["r2_m"] = r.r2;
         line["nodes"] = r.nodes;
-        line["t_c_s"] = tools::significant(r.t_c, 5);
-        line["window_s"] = {tools::significant(1.2 * r.t_c, 5),
-                            tools::significant(r.first_reflection, 5)};
-        line["mean_rel_error"] = tools::significant(r.mean_rel_error, 4);
-        line["max_rel_error"] = tools::significant(r.max_rel_error, 4);
+        line["t_c_s"] = core::significant(r.t_c, 5);
+        line["window_s"] = {core::significant(1.2 * r.t_c, 5),
+                            core::significant(r.first_reflection, 5)};
+        line["mean_rel_error"] = core::significant(r.mean_rel_error, 4);
+        line["max_rel_error"] = core::significant(r.max_rel_error, 4);
         if (spec.lattice_calibrated) {
-          line["c0_factor"] = tools::significant(
+          line["c0_factor"] = core::significant(
               dynamics::lattice_calibration_factor(dynamics::Dimension::two, kernel, spec.dx,
                                                    spec.horizon_ratio * spec.dx),
               5);
         }
-        if (kernel.shape == KernelChoice::Shape::gaussian && loading == "ramp" &&
+        if (kernel.shape == dynamics::KernelChoice::Shape::gaussian && loading == "ramp" &&
             !spec.both_edges) {
           line["goal"] = "mean <= 0.05, max <= 0.10";
           line["met"] = r.mean_rel_error <= 0.05 && r.max_rel_error <= 0.10;
         }
-        line["wall_s"] = tools::fixed(r.wall_s, 1);
-        tools::print_line(line);
+        line["wall_s"] = core::fixed(r.wall_s, 1);
+        core::print_line(line);
         const double norm = 1.0 / (spec.stress * std::sqrt(spec.half_height));  // Eq. (66)
         const auto t = scaled(r.time, 1.0 / r.t_c);
         if (!exact_drawn) {
@@ -314,25 +318,25 @@ int run_d3(const std::filesystem::path& out, int threads) {
         }
         if (extrapolation == "delta_2delta" || extrapolation == "nearest_nodes") {
           const bool nearest = extrapolation == "nearest_nodes";
-          if (!nearest || kernel.shape == KernelChoice::Shape::gaussian) {
+          if (!nearest || kernel.shape == dynamics::KernelChoice::Shape::gaussian) {
             plot.series.push_back(
                 {nearest ? std::string("gaussian, nearest nodes") : kernel_label(kernel), t,
                  scaled(r.k_pd, norm),
-                 nearest                                         ? kGreen
-                 : kernel.shape == KernelChoice::Shape::constant ? kRed
-                                                                 : kBlue,
+                 nearest                                                   ? kGreen
+                 : kernel.shape == dynamics::KernelChoice::Shape::constant ? kRed
+                                                                           : kBlue,
                  false});
           }
         }
       }
     }
-    twin::write_line_plot_png(out / ("d3_" + loading + ".png"), plot);
+    outputs::write_line_plot_png(out / ("d3_" + loading + ".png"), plot);
   }
   return 0;
 }
 
 int run_d4(const std::filesystem::path& out, int threads, double dx) {
-  twin::LinePlot plot;
+  outputs::LinePlot plot;
   plot.title = "d4 mode ii plate: k_ii/(tau sqrt(pi a))";
   plot.x_title = "time [us]";
   plot.y_title = "normalized k_ii";
@@ -344,31 +348,32 @@ int run_d4(const std::filesystem::path& out, int threads, double dx) {
     const ShearPlateResult r = run_shear_plate(spec);
     write_columns(out / ("d4_" + kernel_key(kernel) + ".csv"), "time_s,k_ii_over_tau_sqrt_pi_a",
                   {&r.time, &r.k_ii_normalized});
-    tools::JsonLine line;
+    core::JsonLine line;
     line["case"] = "D4";
     line["kernel"] = kernel_key(kernel);
-    if (kernel.shape == KernelChoice::Shape::gaussian) line["p"] = kernel.p;
+    if (kernel.shape == dynamics::KernelChoice::Shape::gaussian) line["p"] = kernel.p;
     line["dx_m"] = spec.dx;
     line["nodes"] = r.nodes;
-    line["dt_s"] = tools::significant(r.time_step, 4);
-    line["peak"] = tools::significant(r.peak, 4);
-    line["peak_time_s"] = tools::significant(r.peak_time, 4);
+    line["dt_s"] = core::significant(r.time_step, 4);
+    line["peak"] = core::significant(r.peak, 4);
+    line["peak_time_s"] = core::significant(r.peak_time, 4);
     // The series, every 1 µs.
-    tools::JsonLine series = tools::JsonLine::array();
+    core::JsonLine series = core::JsonLine::array();
     double next = 0.0;
     for (std::size_t i = 0; i < r.time.size(); ++i) {
       if (r.time[i] + 1e-12 < next) continue;
       series.push_back(
-          {tools::significant(r.time[i], 4), tools::significant(r.k_ii_normalized[i], 4)});
+          {core::significant(r.time[i], 4), core::significant(r.k_ii_normalized[i], 4)});
       next += 1e-6;
     }
     line["series_t_s_k"] = series;
-    line["wall_s"] = tools::fixed(r.wall_s, 1);
-    tools::print_line(line);
+    line["wall_s"] = core::fixed(r.wall_s, 1);
+    core::print_line(line);
     plot.series.push_back({kernel_label(kernel), scaled(r.time, 1e6), r.k_ii_normalized,
-                           kernel.shape == KernelChoice::Shape::constant ? kRed : kBlue, false});
+                           kernel.shape == dynamics::KernelChoice::Shape::constant ? kRed : kBlue,
+                           false});
   }
-  twin::write_line_plot_png(out / "d4_mode_ii.png", plot);
+  outputs::write_line_plot_png(out / "d4_mode_ii.png", plot);
   return 0;
 }
 

@@ -19,7 +19,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::unique_ptr<dynamics::ExplicitDynamics> make_dynamics(const Discretization& disc,
+std::unique_ptr<dynamics::ExplicitDynamics> make_dynamics(const mesh::Discretization& disc,
                                                           const dynamics::DynamicsSetup& setup) {
   auto d = dynamics::ExplicitDynamics::create(disc, setup);
   if (!d) throw std::invalid_argument(d.error().message());
@@ -32,7 +32,7 @@ template <class Spec>
 dynamics::DynamicsSetup setup_of(const Spec& spec, dynamics::Dimension dimension) {
   dynamics::DynamicsSetup setup;
   setup.dimension = dimension;
-  if (dimension == dynamics::Dimension::two) setup.plane = PlaneCondition::plane_stress;
+  if (dimension == dynamics::Dimension::two) setup.plane = model::PlaneCondition::plane_stress;
   setup.kernel = spec.kernel;
   setup.youngs_modulus = spec.youngs_modulus;
   setup.density = spec.density;
@@ -76,8 +76,8 @@ BarResult run_bar(const BarSpec& spec) {
   const int inner = static_cast<int>(std::lround(spec.length / spec.dx));
   const int m = spec.m;
   // Nodes at x = (i + ½)Δx on (0, L); m image nodes at −(k + ½)Δx.
-  const Discretization disc = dynamics::bar_discretization(-(m - 0.5) * spec.dx, inner + m, spec.dx,
-                                                           m * spec.dx, spec.area);
+  const mesh::Discretization disc = dynamics::bar_discretization(-(m - 0.5) * spec.dx, inner + m,
+                                                                 spec.dx, m * spec.dx, spec.area);
   dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::one);
   auto dyn = make_dynamics(disc, setup);
   for (int k = 0; k < m; ++k) dyn->add_image_node(m - 1 - k, m + k, -1.0, 1.0);
@@ -139,7 +139,7 @@ BarResult run_bar(const BarSpec& spec) {
 
 PacketResult run_packet(const PacketSpec& spec) {
   const int count = static_cast<int>(std::lround(spec.length / spec.dx));
-  const Discretization disc =
+  const mesh::Discretization disc =
       dynamics::bar_discretization(0.5 * spec.dx, count, spec.dx, spec.m * spec.dx, spec.area);
   dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::one);
   auto dyn = make_dynamics(disc, setup);
@@ -208,16 +208,17 @@ CrackResult run_semi_infinite_crack(const CrackSpec& spec) {
   const auto start = std::chrono::steady_clock::now();
   const double dx = spec.dx;
   const double horizon = spec.horizon_ratio * dx;
-  DetailGeometry g;
+  mesh::DetailGeometry g;
   g.thickness = 1.0;
-  g.outline.push_back(Region(Rectangle{0.0, -spec.half_height, spec.length, spec.half_height}));
+  g.outline.push_back(
+      mesh::Region(mesh::Rectangle{0.0, -spec.half_height, spec.length, spec.half_height}));
   // The crack along y = 0 (between two node rows) from outside the plate to x = a; ending it a
   // hair short of a keeps the bonds that cross y = 0 exactly at x = a (the tip) intact.
-  Notch crack;
+  mesh::Notch crack;
   crack.name = "crack";
-  crack.path = {Point{-dx, 0.0}, Point{spec.crack - 1e-9, 0.0}};
+  crack.path = {mesh::Point{-dx, 0.0}, mesh::Point{spec.crack - 1e-9, 0.0}};
   g.notches.push_back(crack);
-  const Discretization disc = discretize(g, dx, horizon);
+  const mesh::Discretization disc = discretize(g, dx, horizon);
   dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::two);
   auto dyn = make_dynamics(disc, setup);
   // The traction σ(t) on y = H (and y = −H) as a body force σ/Δ on the outermost node row (the
@@ -226,7 +227,7 @@ CrackResult run_semi_infinite_crack(const CrackSpec& spec) {
   // Loading both makes two waves that superpose to 2σ0 on the crack line (a stress wave pair
   // doubling, as in a bar pulled at both ends), and K_I doubles (measured: 2.1-2.2 × Eq. 67 with
   // the paper's normalization, docs/validation.md).
-  for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+  for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
     const double y = disc.position[static_cast<std::size_t>(k)].y;
     if (y > spec.half_height - dx) dyn->add_body_force(k, 0.0, spec.stress / dx);
     if (spec.both_edges && y < -spec.half_height + dx) {
@@ -252,9 +253,10 @@ CrackResult run_semi_infinite_crack(const CrackSpec& spec) {
   r.r1 = std::isnan(spec.r1) ? horizon + 0.5 * dx : spec.r1;
   r.r2 = std::isnan(spec.r2) ? 2.0 * horizon + 0.5 * dx : spec.r2;
   const double mu = spec.youngs_modulus / (2.0 * (1.0 + nu));
-  const double kappa = kolosov_kappa(nu, PlaneCondition::plane_stress);  // 001 Eq. (59)
-  const Point tip{spec.crack, 0.0};
-  const Point direction{1.0, 0.0};
+  const double kappa =
+      crack::kolosov_kappa(nu, model::PlaneCondition::plane_stress);  // 001 Eq. (59)
+  const mesh::Point tip{spec.crack, 0.0};
+  const mesh::Point direction{1.0, 0.0};
   const auto steps =
       static_cast<std::int64_t>(std::ceil(spec.end_over_tc * r.t_c / spec.time_step));
   double sum = 0.0;
@@ -262,7 +264,7 @@ CrackResult run_semi_infinite_crack(const CrackSpec& spec) {
   while (dyn->step_count() <= steps) {
     const std::vector<double> u(dyn->displacement().begin(), dyn->displacement().end());
     const auto k =
-        stress_intensity_by_extrapolation(disc, u, tip, direction, r.r1, r.r2, mu, kappa);
+        crack::stress_intensity_by_extrapolation(disc, u, tip, direction, r.r1, r.r2, mu, kappa);
     const double t = dyn->time();
     const double exact_one =
         spec.loading.kind == dynamics::LoadHistory::Kind::ramp
@@ -301,14 +303,15 @@ ShearPlateResult run_shear_plate(const ShearPlateSpec& spec) {
   const double x_left = (columns / 2 - half_columns) * dx;
   const double x_right = (columns / 2 + half_columns) * dx;
   const double a = 0.5 * (x_right - x_left);
-  DetailGeometry g;
+  mesh::DetailGeometry g;
   g.thickness = 1.0;
-  g.outline.push_back(Region(Rectangle{0.0, 0.0, length, height}));
-  Notch crack;
+  g.outline.push_back(mesh::Region(mesh::Rectangle{0.0, 0.0, length, height}));
+  mesh::Notch crack;
   crack.name = "crack";
-  crack.path = {Point{x_left + 1e-9 * dx, y_crack}, Point{x_right - 1e-9 * dx, y_crack}};
+  crack.path = {mesh::Point{x_left + 1e-9 * dx, y_crack},
+                mesh::Point{x_right - 1e-9 * dx, y_crack}};
   g.notches.push_back(crack);
-  const Discretization disc = discretize(g, dx, spec.horizon_ratio * dx);
+  const mesh::Discretization disc = discretize(g, dx, spec.horizon_ratio * dx);
   dynamics::DynamicsSetup setup = setup_of(spec, dynamics::Dimension::two);
   setup.time_step = 1e-30;  // placeholder: the real step needs the stable one
   auto probe = make_dynamics(disc, setup);
@@ -316,7 +319,7 @@ ShearPlateResult run_shear_plate(const ShearPlateSpec& spec) {
   probe.reset();
   auto dyn = make_dynamics(disc, setup);
   // Uniform shear τ·H(t) on the top (+x) and bottom (−x) edges: body force τ/Δ on the edge rows.
-  for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+  for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
     const double y = disc.position[static_cast<std::size_t>(k)].y;
     if (y > height - dx) dyn->add_body_force(k, spec.stress / dx, 0.0);
     if (y < dx) dyn->add_body_force(k, -spec.stress / dx, 0.0);
@@ -326,10 +329,10 @@ ShearPlateResult run_shear_plate(const ShearPlateSpec& spec) {
   dyn->set_initial_state(std::vector<double>(n2, 0.0), std::vector<double>(n2, 0.0));
   const double nu = 1.0 / 3.0;
   const double mu = spec.youngs_modulus / (2.0 * (1.0 + nu));
-  const double kappa = kolosov_kappa(nu, PlaneCondition::plane_stress);
+  const double kappa = crack::kolosov_kappa(nu, model::PlaneCondition::plane_stress);
   const double horizon = spec.horizon_ratio * dx;
   const double r1 = horizon + 0.5 * dx, r2 = 2.0 * horizon + 0.5 * dx;
-  const Point tip{x_right, y_crack};
+  const mesh::Point tip{x_right, y_crack};
   ShearPlateResult r;
   r.time_step = setup.time_step;
   r.nodes = disc.num_nodes();
@@ -337,8 +340,8 @@ ShearPlateResult run_shear_plate(const ShearPlateSpec& spec) {
   const double norm = spec.stress * std::sqrt(pi * a);
   while (true) {
     const std::vector<double> u(dyn->displacement().begin(), dyn->displacement().end());
-    const auto k =
-        stress_intensity_by_extrapolation(disc, u, tip, Point{1.0, 0.0}, r1, r2, mu, kappa);
+    const auto k = crack::stress_intensity_by_extrapolation(disc, u, tip, mesh::Point{1.0, 0.0}, r1,
+                                                            r2, mu, kappa);
     r.time.push_back(dyn->time());
     r.k_ii_normalized.push_back(k.k_ii / norm);
     if (std::abs(k.k_ii / norm) > std::abs(r.peak)) {

@@ -17,12 +17,12 @@
 #include <string>
 #include <vector>
 
+#include "config/config.h"
+#include "core/cli_checks.h"
 #include "core/exit_codes.h"
+#include "core/json_line.h"
 #include "core/program.h"
 #include "solver/fatigue/fatigue_engine.h"
-#include "tools/cli_checks.h"
-#include "tools/json_line.h"
-#include "twin/config/config.h"
 #include "validation/ct_calibration.h"
 
 namespace {
@@ -39,13 +39,15 @@ CLI::Validator finite_open(double lo, double hi) {
   return CLI::Validator(
       [lo, hi](std::string& text) -> std::string {
         double v = 0.0;
-        if (!cli::parse_double(text, v) || !std::isfinite(v)) return "not a finite number: " + text;
+        if (!core::parse_double(text, v) || !std::isfinite(v))
+          return "not a finite number: " + text;
         if (!(v > lo && v < hi)) {
-          return "must lie in (" + cli::shortest(lo) + ", " + cli::shortest(hi) + "), got " + text;
+          return "must lie in (" + core::shortest(lo) + ", " + core::shortest(hi) + "), got " +
+                 text;
         }
         return {};
       },
-      "FLOAT in (" + cli::shortest(lo) + ", " + cli::shortest(hi) + ")");
+      "FLOAT in (" + core::shortest(lo) + ", " + core::shortest(hi) + ")");
 }
 
 /// A real for TOML: 7 significant digits, always with a '.' or an exponent.
@@ -77,8 +79,8 @@ std::optional<std::vector<std::pair<double, double>>> parse_points(
   for (const auto& item : items) {
     const auto colon = item.find(':');
     double eps = 0.0, n = 0.0;
-    if (colon == std::string::npos || !cli::parse_double(item.substr(0, colon), eps) ||
-        !cli::parse_double(item.substr(colon + 1), n) || !(eps > 0 && eps < 1) ||
+    if (colon == std::string::npos || !core::parse_double(item.substr(0, colon), eps) ||
+        !core::parse_double(item.substr(colon + 1), n) || !(eps > 0 && eps < 1) ||
         !(n >= 1 && std::isfinite(n))) {
       error = "--sn-curve " + item +
               ": expected EPS:N, a strain range 0 < EPS < 1 and cycles N >= 1 (e.g. 0.004:2e5)";
@@ -147,24 +149,24 @@ std::string fatigue_snippet(const Inputs& in, const CalibrationResult& cal,
   return t;
 }
 
-tools::JsonLine life_json(const LifeComparison& l) {
-  tools::JsonLine j;
-  j["p_max"] = tools::significant(l.p_max, 6);
-  j["r"] = tools::fixed(l.r, 4);
-  j["critical_crack_m"] = tools::fixed(l.a_end, 6);
-  j["pd_life"] = tools::whole(l.pd_life);
-  j["paris_life"] = tools::whole(l.paris_life);
-  j["rel_error"] = tools::fixed(l.relative_error(), 4);
-  j["wall_s"] = tools::fixed(l.wall_s, 1);
+core::JsonLine life_json(const LifeComparison& l) {
+  core::JsonLine j;
+  j["p_max"] = core::significant(l.p_max, 6);
+  j["r"] = core::fixed(l.r, 4);
+  j["critical_crack_m"] = core::fixed(l.a_end, 6);
+  j["pd_life"] = core::whole(l.pd_life);
+  j["paris_life"] = core::whole(l.paris_life);
+  j["rel_error"] = core::fixed(l.relative_error(), 4);
+  j["wall_s"] = core::fixed(l.wall_s, 1);
   return j;
 }
 
-tools::JsonLine result_json(const Inputs& in, const CalibrationResult& cal,
-                            const std::vector<LifeComparison>& checks, double wall_s,
-                            const std::string& snippet) {
+core::JsonLine result_json(const Inputs& in, const CalibrationResult& cal,
+                           const std::vector<LifeComparison>& checks, double wall_s,
+                           const std::string& snippet) {
   const CalibrationSetup& s = in.setup;
   const auto& law = in.phase_one.law;
-  tools::JsonLine j;
+  core::JsonLine j;
   j["tool"] = "peritwin-calibrate";
   j["youngs_modulus_pa"] = s.coupon.material.youngs_modulus;
   j["poisson_ratio"] = s.coupon.material.poisson_ratio;
@@ -187,26 +189,26 @@ tools::JsonLine result_json(const Inputs& in, const CalibrationResult& cal,
   j["r"] = s.r;
   j["tolerance"] = s.tolerance;
   j["converged"] = cal.converged;
-  j["a2"] = tools::significant(cal.a2, 7);
+  j["a2"] = core::significant(cal.a2, 7);
   j["a1"] = law.A1;
   j["m1"] = law.m1;
   j["eps_inf"] = law.eps_inf;
   j["m2"] = law.m2;
   j["phi0"] = s.model.phase_switch_damage;
   j["a1_m1_source"] = in.phase_one.source;
-  tools::JsonLine runs = tools::JsonLine::array();
+  core::JsonLine runs = core::JsonLine::array();
   for (const auto& run : cal.runs) {
-    tools::JsonLine r = life_json(run.life);
-    r["a2"] = tools::significant(run.a2, 7);
+    core::JsonLine r = life_json(run.life);
+    r["a2"] = core::significant(run.a2, 7);
     runs.push_back(r);
   }
   j["runs"] = runs;
   if (!cal.runs.empty()) j["fit"] = life_json(cal.runs.back().life);
-  tools::JsonLine check = tools::JsonLine::array();
+  core::JsonLine check = core::JsonLine::array();
   for (const auto& c : checks) check.push_back(life_json(c));
   j["checks"] = check;
   j["failure"] = cal.failure;
-  j["wall_s"] = tools::fixed(wall_s, 1);
+  j["wall_s"] = core::fixed(wall_s, 1);
   j["fatigue_toml"] = snippet;
   return j;
 }
@@ -225,26 +227,26 @@ struct Options {
 void add_options(CLI::App& app, Options& o) {
   Inputs& in = o.in;
   CalibrationSetup& s = in.setup;
-  Material& mat = s.coupon.material;
+  model::Material& mat = s.coupon.material;
   // Material.
   app.add_option("-E,--youngs-modulus", mat.youngs_modulus, "Young's modulus E (Pa)")
       ->required()
-      ->check(cli::finite_positive());
+      ->check(core::finite_positive());
   app.add_option("--nu,--poisson-ratio", mat.poisson_ratio, "Poisson's ratio (-1 < nu < 0.5)")
       ->required()
       ->check(finite_open(-1.0, 0.5));
   app.add_option("--K-c,--fracture-toughness", mat.fracture_toughness,
                  "fracture toughness K_c (Pa*sqrt(m)); the lives run to K_max = K_c")
       ->required()
-      ->check(cli::finite_positive());
+      ->check(core::finite_positive());
   // Paris law.
   app.add_option("--paris-c", o.paris_c,
                  "Paris constant C of da/dN = C dK^M, in the units of --paris-units")
       ->required()
-      ->check(cli::finite_positive());
+      ->check(core::finite_positive());
   app.add_option("--paris-m", s.paris.m, "Paris exponent M (dimensionless; m2 = M)")
       ->required()
-      ->check(cli::finite_in(1.0, 10.0));
+      ->check(core::finite_in(1.0, 10.0));
   app.add_option("--paris-units", in.paris_units,
                  "units of C: mm-MPa (default; mm/cycle with dK in MPa*sqrt(m), as 000 Eq. A4), "
                  "m-Pa (m/cycle with dK in Pa*sqrt(m), SI), m-MPa (m/cycle with dK in "
@@ -253,10 +255,10 @@ void add_options(CLI::App& app, Options& o) {
   // Grid and model.
   app.add_option("--dx", s.dx, "grid spacing dx (m) of the detail the parameters are for")
       ->required()
-      ->check(cli::finite_in(1e-5, 0.01));
+      ->check(core::finite_in(1e-5, 0.01));
   app.add_option("--horizon-ratio", s.model.horizon_ratio,
                  "horizon over grid spacing delta/dx (default 3.015; the config's bounds)")
-      ->check(cli::finite_in(twin::kMinHorizonRatio, twin::kMaxHorizonRatio));
+      ->check(core::finite_in(config::kMinHorizonRatio, config::kMaxHorizonRatio));
   app.add_option("--model", in.model_name, "PD model: state_based (default) | bond_based")
       ->check(CLI::IsMember({"state_based", "bond_based"}));
   app.add_option("--plane", in.plane_name, "plane_stress (default) | plane_strain")
@@ -274,46 +276,46 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--phi0", o.phi0,
                  "phase-switch damage (default: the config's, the split damage at the horizon "
                  "ratio, 0.398 at 3.015)")
-      ->check(cli::finite_in(0.01, 0.99));
+      ->check(core::finite_in(0.01, 0.99));
   // Coupon and load.
   app.add_option("--width", s.coupon.width, "CT coupon width W (m), default 0.050 as B1; a0 = 0.3W")
-      ->check(cli::finite_in(0.005, 1.0));
+      ->check(core::finite_in(0.005, 1.0));
   app.add_option("--thickness", o.thickness, "CT coupon thickness B (m), default 0.2W (B1: 10 mm)")
-      ->check(cli::finite_in(1e-4, 1.0));
+      ->check(core::finite_in(1e-4, 1.0));
   app.add_option("--p-max", o.p_max,
                  "calibration P_max (N); default: K_max at a0 at B1's fraction of K_c (0.206), "
                  "i.e. 4 kN * (K_c/48.7 MPa*sqrt(m)) * (B/10 mm) * sqrt(W/50 mm)")
-      ->check(cli::finite_positive());
+      ->check(core::finite_positive());
   app.add_option("--r", s.r, "calibration load ratio R = P_min/P_max (default 0.1)")
-      ->check(cli::finite_in(0.0, 0.9));
+      ->check(core::finite_in(0.0, 0.9));
   // Phase I.
   app.add_option("--sn-curve", o.sn_points,
                  "strain-life point EPS:N (cyclic strain range, cycles to failure), repeated or "
                  "comma-separated, >= 2: A1, m1 by the least squares of 000 Eq. (23)")
       ->delimiter(',');
   o.m1_opt = app.add_option("--m1", o.m1, "phase I exponent m1 (with --a1 or --sn-intercept)")
-                 ->check(cli::finite_positive());
+                 ->check(core::finite_positive());
   o.a1_opt = app.add_option("--a1", o.a1, "phase I coefficient A1 (with --m1)")
-                 ->check(cli::finite_positive());
+                 ->check(core::finite_positive());
   o.intercept_opt =
       app.add_option("--sn-intercept", o.intercept,
                      "000 Eq. (48b): the fitted log10 intercept -log10(A1)/m1 (with --m1)")
-          ->check(cli::finite_in(-100, 100));
+          ->check(core::finite_in(-100, 100));
   o.limit_opt = app.add_option("--fatigue-limit", s.law.eps_inf,
                                "phase I fatigue limit eps_inf (000 Eq. 17, 23b; default 0)")
-                    ->check(cli::finite_in(0.0, 0.5));
+                    ->check(core::finite_in(0.0, 0.5));
   // Calibration.
   app.add_option("--a2-trial", o.a2_trial,
                  "first A2 (default: B1's 1301 scaled by C, E, M and the horizon)")
-      ->check(cli::finite_positive());
+      ->check(core::finite_positive());
   app.add_option("--tolerance", s.tolerance,
                  "stop when |PD life / Paris life - 1| <= this (default 0.005)")
-      ->check(cli::finite_in(1e-4, 0.2));
+      ->check(core::finite_in(1e-4, 0.2));
   app.add_option("--max-runs", s.max_runs, "PD runs at most (default 8)")->check(CLI::Range(1, 50));
   app.add_option("--check-loads", in.check_factors,
                  "prediction checks at these multiples of P_max (default 1.25,1.5)")
       ->delimiter(',')
-      ->check(cli::finite_in(0.2, 5.0));
+      ->check(core::finite_in(0.2, 5.0));
   app.add_flag("--no-check", o.no_check, "skip the prediction checks");
   app.add_flag("--dry-run", o.dry_run,
                "check the inputs, print what would be run (A1, m1, load, Paris life, first A2) "
@@ -323,7 +325,7 @@ void add_options(CLI::App& app, Options& o) {
 
 int usage(const std::string& what) {
   std::fprintf(stderr, "peritwin-calibrate: %s\n", what.c_str());
-  return kExitUsage;
+  return core::kExitUsage;
 }
 
 /// What prepare() found: the crack length at K_max = K_c and the Paris life to it.
@@ -336,7 +338,7 @@ struct Plan {
 std::optional<int> prepare(Options& o, Plan& plan) {
   Inputs& in = o.in;
   CalibrationSetup& s = in.setup;
-  Material& mat = s.coupon.material;
+  model::Material& mat = s.coupon.material;
   const double paris_c = o.paris_c, phi0 = o.phi0, thickness = o.thickness, p_max = o.p_max;
   const double m1 = o.m1, a1 = o.a1, intercept = o.intercept, a2_trial = o.a2_trial;
   const std::vector<std::string>& sn_points = o.sn_points;
@@ -344,17 +346,19 @@ std::optional<int> prepare(Options& o, Plan& plan) {
                     *limit_opt = o.limit_opt;
 
   // Model options (the config's rules: state-based takes the constant kernel only).
-  ModelOptions& options = s.model.options;
-  options.kind = in.model_name == "bond_based" ? ModelKind::bond_based : ModelKind::state_based;
-  options.plane =
-      in.plane_name == "plane_strain" ? PlaneCondition::plane_strain : PlaneCondition::plane_stress;
-  options.kernel = in.kernel_name == "conical"    ? Kernel::conical
-                   : in.kernel_name == "gaussian" ? Kernel::gaussian
-                                                  : Kernel::constant;
-  if (const Status st = validate(mat, options); !st) return usage(message_of(st));
-  s.model.law = in.law_name == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+  model::ModelOptions& options = s.model.options;
+  options.kind =
+      in.model_name == "bond_based" ? model::ModelKind::bond_based : model::ModelKind::state_based;
+  options.plane = in.plane_name == "plane_strain" ? model::PlaneCondition::plane_strain
+                                                  : model::PlaneCondition::plane_stress;
+  options.kernel = in.kernel_name == "conical"    ? model::Kernel::conical
+                   : in.kernel_name == "gaussian" ? model::Kernel::gaussian
+                                                  : model::Kernel::constant;
+  if (const core::Status st = validate(mat, options); !st) return usage(core::message_of(st));
+  s.model.law =
+      in.law_name == "energy" ? fatigue::FatigueLaw::energy : fatigue::FatigueLaw::strain_range;
   s.model.phase_switch_damage =
-      phi0 > 0 ? phi0 : phase_switch_damage_for_horizon(s.model.horizon_ratio);
+      phi0 > 0 ? phi0 : fatigue::phase_switch_damage_for_horizon(s.model.horizon_ratio);
 
   // Coupon: B1's proportions at W.
   s.coupon.initial_crack = 0.3 * s.coupon.width;
@@ -415,7 +419,7 @@ std::optional<int> prepare(Options& o, Plan& plan) {
   one.law.eps_inf_prop = 0.0;
   one.law.A2 =
       a2_trial > 0 ? a2_trial : a2_first_trial(s.coupon, s.paris, s.dx, s.model.horizon_ratio);
-  if (const Status st = fatigue::validate(one.law); !st) return usage(message_of(st));
+  if (const core::Status st = fatigue::validate(one.law); !st) return usage(core::message_of(st));
   s.law = one.law;
 
   // Load; the Paris life there tells a C in the wrong units.
@@ -449,19 +453,19 @@ int print_dry_run(const Options& o, const Plan& plan) {
   const bool json = o.json;
   CalibrationResult none;
   none.a2 = s.law.A2;
-  tools::JsonLine line = result_json(in, none, {}, 0.0, "");
+  core::JsonLine line = result_json(in, none, {}, 0.0, "");
   line["a2"] = nullptr;  // not calibrated
   line["dry_run"] = true;
-  line["first_a2"] = tools::significant(s.law.A2, 7);
-  line["paris_life"] = tools::whole(n_paris);
-  line["critical_crack_m"] = tools::fixed(a_end, 6);
+  line["first_a2"] = core::significant(s.law.A2, 7);
+  line["paris_life"] = core::whole(n_paris);
+  line["critical_crack_m"] = core::fixed(a_end, 6);
   line["record_every"] = s.record_every;
   if (json) {
-    tools::print_line(line);
+    core::print_line(line);
   } else {
     std::printf("%s\n", line.dump(2).c_str());
   }
-  return kExitOk;
+  return core::kExitOk;
 }
 
 /// The PD runs of the calibration and the checks; the TOML snippet (or the JSON line).
@@ -508,7 +512,7 @@ int calibrate(Options& o, const Plan& plan) {
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string snippet = cal.converged ? fatigue_snippet(in, cal, checks) : std::string{};
-  if (json) tools::print_line(result_json(in, cal, checks, wall_s, snippet));
+  if (json) core::print_line(result_json(in, cal, checks, wall_s, snippet));
   if (!cal.converged) {
     std::fprintf(stderr, "peritwin-calibrate: calibration failed: %s\n", cal.failure.c_str());
     return kExitFailed;
@@ -517,7 +521,7 @@ int calibrate(Options& o, const Plan& plan) {
     std::printf("%s", snippet.c_str());
     std::printf("# calibration: %zu PD runs, %.1f s in all\n", cal.runs.size(), wall_s);
   }
-  return kExitOk;
+  return core::kExitOk;
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 #include <numbers>
 #include <string>
 
-#include "tools/cli_checks.h"
-#include "tools/json_line.h"
+#include "core/cli_checks.h"
+#include "core/json_line.h"
 #include "validation/b1_compact_tension.h"
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
@@ -66,19 +66,19 @@ int run_b1(double dx, const std::filesystem::path& out_dir, double a2_trial, int
     char name[64];
     std::snprintf(name, sizeof name, "b1_p%.0f_r%.1f.csv", c.p_max, c.r);
     write_csv(out_dir / name, h);
-    tools::JsonLine line;
+    core::JsonLine line;
     line["case"] = "B1";
-    line["p_max"] = tools::whole(c.p_max);
-    line["r"] = tools::fixed(c.r, 2);
+    line["p_max"] = core::whole(c.p_max);
+    line["r"] = core::fixed(c.r, 2);
     line["calibration"] = c.calibration;
-    line["a2"] = tools::significant(law.A2, 6);
-    line["dx_m"] = tools::significant(dx, 6);
-    line["critical_crack_m"] = tools::fixed(life.a_end, 6);
-    line["pd_life"] = tools::whole(life.pd_life);
-    line["paris_life"] = tools::whole(life.paris_life);
-    line["rel_error"] = tools::fixed(life.relative_error(), 4);
-    line["wall_s"] = tools::fixed(h.wall_s, 1);
-    tools::print_line(line);
+    line["a2"] = core::significant(law.A2, 6);
+    line["dx_m"] = core::significant(dx, 6);
+    line["critical_crack_m"] = core::fixed(life.a_end, 6);
+    line["pd_life"] = core::whole(life.pd_life);
+    line["paris_life"] = core::whole(life.paris_life);
+    line["rel_error"] = core::fixed(life.relative_error(), 4);
+    line["wall_s"] = core::fixed(h.wall_s, 1);
+    core::print_line(line);
     std::fflush(stdout);
   }
   return 0;
@@ -106,32 +106,32 @@ int run_b2(KinkRun run, double alpha_deg, double a2_at_1mm, const std::filesyste
     return 1;
   }
   const bool loaded_lower = !run.lower_holes_fixed;
-  tools::JsonLine line;
+  core::JsonLine line;
   line["case"] = "B2";
-  line["model"] = run.model == ModelKind::bond_based ? "bond_based" : "state_based";
-  line["law"] = run.fatigue_law == FatigueLaw::energy ? "energy" : "strain_range";
+  line["model"] = run.model == model::ModelKind::bond_based ? "bond_based" : "state_based";
+  line["law"] = run.fatigue_law == fatigue::FatigueLaw::energy ? "energy" : "strain_range";
   line["lower_holes"] = loaded_lower ? "loaded" : "fixed";
   line["pin_forces"] = run.rigid_fixtures ? "rigid_fixture" : "eq51";
   line["compressed_bonds_fatigue"] = run.compressed_bonds_fatigue;
-  line["alpha_deg"] = tools::fixed(alpha_deg, 2);
-  line["beta_deg"] = tools::fixed(r.beta * 180 / pi, 2);
-  line["kii_over_ki"] = tools::fixed(r.kii_over_ki, 4);
-  line["t_over_ki"] = tools::significant(r.t_over_ki, 4);
-  line["kii_over_ki_fit"] = tools::fixed(r.kii_over_ki_fit, 4);
-  line["t_over_ki_fit"] = tools::fixed(r.t_over_ki_fit, 4);
-  line["ki_over_richard"] = tools::fixed(r.ki_over_richard, 4);
-  line["kii_over_richard"] = tools::fixed(r.kii_over_richard, 4);
-  line["mts_beta_deg"] = tools::fixed(r.mts_beta * 180 / pi, 2);
-  line["growth_m"] = tools::fixed(r.growth, 4);
+  line["alpha_deg"] = core::fixed(alpha_deg, 2);
+  line["beta_deg"] = core::fixed(r.beta * 180 / pi, 2);
+  line["kii_over_ki"] = core::fixed(r.kii_over_ki, 4);
+  line["t_over_ki"] = core::significant(r.t_over_ki, 4);
+  line["kii_over_ki_fit"] = core::fixed(r.kii_over_ki_fit, 4);
+  line["t_over_ki_fit"] = core::fixed(r.t_over_ki_fit, 4);
+  line["ki_over_richard"] = core::fixed(r.ki_over_richard, 4);
+  line["kii_over_richard"] = core::fixed(r.kii_over_richard, 4);
+  line["mts_beta_deg"] = core::fixed(r.mts_beta * 180 / pi, 2);
+  line["growth_m"] = core::fixed(r.growth, 4);
   line["cycles"] = static_cast<long long>(r.cycles);
-  line["dx_m"] = tools::significant(run.dx, 6);
-  line["horizon_ratio"] = tools::significant(run.horizon_ratio, 4);
-  line["phase_switch_damage"] = tools::fixed(r.phase_switch_damage, 3);
-  line["grid_perturbation"] = tools::fixed(run.grid.amplitude, 3);
+  line["dx_m"] = core::significant(run.dx, 6);
+  line["horizon_ratio"] = core::significant(run.horizon_ratio, 4);
+  line["phase_switch_damage"] = core::fixed(r.phase_switch_damage, 3);
+  line["grid_perturbation"] = core::fixed(run.grid.amplitude, 3);
   line["grid_seed"] = static_cast<unsigned long long>(run.grid.seed);
-  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["wall_s"] = core::fixed(r.wall_s, 1);
   line["snapshot"] = run.snapshot_csv;
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }
 
@@ -147,24 +147,24 @@ int run_b2_k_field(KFieldRun run, double a2_at_1mm, const std::filesystem::path&
     return 1;
   }
   const double deg = 180 / std::numbers::pi;
-  tools::JsonLine line;
+  core::JsonLine line;
   line["case"] = "B2-K-field";
-  line["kii_over_ki_applied"] = tools::fixed(run.kii_over_ki, 4);
-  line["t_over_ki"] = tools::significant(run.t_over_ki, 4);
-  line["beta_deg"] = tools::fixed(r.beta * deg, 2);
-  line["kii_over_ki"] = tools::fixed(r.kii_over_ki, 4);
-  line["t_over_ki_measured"] = tools::significant(r.t_over_ki, 4);
-  line["kii_over_ki_fit"] = tools::fixed(r.kii_over_ki_fit, 4);
-  line["t_over_ki_fit"] = tools::fixed(r.t_over_ki_fit, 4);
-  line["mts_beta_deg"] = tools::fixed(r.mts_beta * deg, 2);
-  line["growth_m"] = tools::fixed(r.growth, 4);
+  line["kii_over_ki_applied"] = core::fixed(run.kii_over_ki, 4);
+  line["t_over_ki"] = core::significant(run.t_over_ki, 4);
+  line["beta_deg"] = core::fixed(r.beta * deg, 2);
+  line["kii_over_ki"] = core::fixed(r.kii_over_ki, 4);
+  line["t_over_ki_measured"] = core::significant(r.t_over_ki, 4);
+  line["kii_over_ki_fit"] = core::fixed(r.kii_over_ki_fit, 4);
+  line["t_over_ki_fit"] = core::fixed(r.t_over_ki_fit, 4);
+  line["mts_beta_deg"] = core::fixed(r.mts_beta * deg, 2);
+  line["growth_m"] = core::fixed(r.growth, 4);
   line["cycles"] = static_cast<long long>(r.cycles);
-  line["dx_m"] = tools::significant(run.dx, 6);
-  line["grid_perturbation"] = tools::fixed(run.grid.amplitude, 3);
+  line["dx_m"] = core::significant(run.dx, 6);
+  line["grid_perturbation"] = core::fixed(run.grid.amplitude, 3);
   line["grid_seed"] = static_cast<unsigned long long>(run.grid.seed);
-  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["wall_s"] = core::fixed(r.wall_s, 1);
   line["snapshot"] = run.snapshot_csv;
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }
 
@@ -179,31 +179,31 @@ int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double m
   const auto r =
       run_ct_with_hole(dx, p_max, limit, a2, prefix, static_cast<std::int64_t>(max_cycles));
   for (const auto& e : r.events) {
-    tools::JsonLine line;
+    core::JsonLine line;
     line["case"] = "B3";
     line["propagation_limit"] = limit;
     line["event"] = e.what;
     line["cycle"] = static_cast<long long>(e.cycle);
-    line["x_m"] = tools::fixed(e.where.x, 5);
-    line["y_m"] = tools::fixed(e.where.y, 5);
-    line["p_max"] = tools::fixed(e.p_max, 1);
-    line["eps_inf_prop"] = tools::significant(e.eps_inf_prop, 4);
-    tools::print_line(line);
+    line["x_m"] = core::fixed(e.where.x, 5);
+    line["y_m"] = core::fixed(e.where.y, 5);
+    line["p_max"] = core::fixed(e.p_max, 1);
+    line["eps_inf_prop"] = core::significant(e.eps_inf_prop, 4);
+    core::print_line(line);
   }
   for (const auto& [when, d] : {std::pair{"entry", r.entry}, std::pair{"settled", r.settled}}) {
-    tools::JsonLine line;
+    core::JsonLine line;
     line["case"] = "B3";
     line["propagation_limit"] = limit;
     line["race"] = when;
-    line["old_path_max_range"] = tools::significant(d.old_path_max_range, 4);
-    line["old_path_min_life"] = tools::significant(d.old_path_min_life, 4);
-    line["old_path_cycles_no_limit"] = tools::significant(d.old_path_cycles, 4);
-    line["old_path_cycles_limited"] = tools::significant(d.old_path_cycles_limited, 4);
-    line["far_side_max_range"] = tools::significant(d.far_side_max_range, 4);
-    line["far_side_cycles"] = tools::significant(d.far_side_cycles, 4);
-    tools::print_line(line);
+    line["old_path_max_range"] = core::significant(d.old_path_max_range, 4);
+    line["old_path_min_life"] = core::significant(d.old_path_min_life, 4);
+    line["old_path_cycles_no_limit"] = core::significant(d.old_path_cycles, 4);
+    line["old_path_cycles_limited"] = core::significant(d.old_path_cycles_limited, 4);
+    line["far_side_max_range"] = core::significant(d.far_side_max_range, 4);
+    line["far_side_cycles"] = core::significant(d.far_side_cycles, 4);
+    core::print_line(line);
   }
-  tools::JsonLine line;
+  core::JsonLine line;
   line["case"] = "B3";
   line["propagation_limit"] = limit;
   line["cycles"] = static_cast<long long>(r.cycles);
@@ -211,16 +211,16 @@ int run_b3(double dx, bool limit, const std::filesystem::path& out_dir, double m
   line["breaks_old_path"] = static_cast<long long>(r.breaks_old_path);
   line["breaks_far_side"] = static_cast<long long>(r.breaks_far_side);
   line["breaks_other"] = static_cast<long long>(r.breaks_other);
-  line["a2"] = tools::significant(a2, 6);
-  line["delta_k"] = tools::significant(r.delta_k, 4);
-  line["eps_bar"] = tools::significant(r.eps_bar, 4);
-  line["eps_inf_prop"] = tools::significant(r.eps_inf_prop, 4);
-  line["p_entry"] = tools::fixed(r.p_entry, 1);
-  line["p_final"] = tools::fixed(r.p_final, 1);
-  line["dx_m"] = tools::significant(dx, 6);
-  line["wall_s"] = tools::fixed(r.wall_s, 1);
+  line["a2"] = core::significant(a2, 6);
+  line["delta_k"] = core::significant(r.delta_k, 4);
+  line["eps_bar"] = core::significant(r.eps_bar, 4);
+  line["eps_inf_prop"] = core::significant(r.eps_inf_prop, 4);
+  line["p_entry"] = core::fixed(r.p_entry, 1);
+  line["p_final"] = core::fixed(r.p_final, 1);
+  line["dx_m"] = core::significant(dx, 6);
+  line["wall_s"] = core::fixed(r.wall_s, 1);
   line["snapshots"] = prefix + "_*.csv";
-  tools::print_line(line);
+  core::print_line(line);
   return 0;
 }
 
@@ -241,14 +241,14 @@ int main(int argc, char** argv) {
   double max_cycles = 5e6;
   app.add_flag("--no-propagation-limit", no_limit, "B3: without 002 Eq. (12)");
   app.add_option("--max-cycles", max_cycles, "B3: stop after this many cycles")
-      ->check(peritwin::cli::finite_in(1.0, 1e12));
+      ->check(peritwin::core::finite_in(1.0, 1e12));
   double alpha = 45;
   double a2_at_1mm = 1301;
   double growth = 0.010;
   app.add_option("--alpha", alpha, "B2: load angle (degrees, 0 <= alpha < 90)")
-      ->check(peritwin::cli::finite_in(0.0, 89.999));
+      ->check(peritwin::core::finite_in(0.0, 89.999));
   app.add_option("--a2", a2_at_1mm, "B2: A2 calibrated on B1 at dx = 1 mm")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
   // Default: the lower holes carry the point reflection of the upper forces, as Richard's device
   // does. Fixed lower holes (the benchmarks README) break the CTS's half-turn symmetry: at α = 0
   // they give K_II/K_I = −0.13 and β = 13.6° where the specimen is in pure mode I (loaded: 0.02,
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
                  "each half joined by a rigid loading fixture, as in Richard's device)")
       ->check(CLI::IsMember({"eq51", "rigid-fixture"}));
   app.add_option("--growth", growth, "B2: crack growth at which beta is measured (m)")
-      ->check(peritwin::cli::finite_in(1e-4, 0.04));
+      ->check(peritwin::core::finite_in(1e-4, 0.04));
   KinkRun b2;
   app.add_flag_callback(
       "--tension-only-fatigue", [&] { b2.compressed_bonds_fatigue = false; },
@@ -273,10 +273,10 @@ int main(int argc, char** argv) {
   std::string b2_law = "energy";
   app.add_option("--law", b2_law, "B2: energy (000 Sec. 6.2) | strain_range")
       ->check(CLI::IsMember({"energy", "strain_range"}));
-  GridPerturbation& grid = b2.grid;
+  mesh::GridPerturbation& grid = b2.grid;
   app.add_option("--grid-perturbation", grid.amplitude,
                  "B2: move each node off its grid point by up to this fraction of dx")
-      ->check(peritwin::cli::finite_in(0.0, 0.249));
+      ->check(peritwin::core::finite_in(0.0, 0.249));
   app.add_option("--grid-seed", grid.seed, "B2: seed of the grid perturbation");
   std::string b2_model = "state_based";
   app.add_option("--model", b2_model,
@@ -284,30 +284,30 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"state_based", "bond_based"}));
   app.add_option("--phi0", b2.phase_switch_damage,
                  "B2: phase-switch damage (default: a straight split's damage at the horizon)")
-      ->check(peritwin::cli::finite_in(0.01, 0.99));
+      ->check(peritwin::core::finite_in(0.01, 0.99));
   app.add_option("--horizon-ratio", b2.horizon_ratio,
                  "B2: horizon over grid spacing (default 3.015; 000 Fig. 15 compares 2, 3, 4)")
-      ->check(peritwin::cli::finite_in(1.5, 6.0));
+      ->check(peritwin::core::finite_in(1.5, 6.0));
   KFieldRun k_field;
   auto* k_field_option =
       app.add_option("--k-field", k_field.kii_over_ki,
                      "B2: instead of the CTS, a square plate under the tractions of a pure "
                      "near-tip field with this |K_II|/K_I")
-          ->check(peritwin::cli::finite_in(0.0, 10.0));
+          ->check(peritwin::core::finite_in(0.0, 10.0));
   app.add_option("--t-over-ki", k_field.t_over_ki, "B2 --k-field: T-stress over K_I (1/sqrt(m))")
-      ->check(peritwin::cli::finite_in(-1e3, 1e3));
+      ->check(peritwin::core::finite_in(-1e3, 1e3));
   auto* dx_option = app.add_option("--dx", dx, "grid spacing (m); default 1 mm, B3 0.25 mm")
-                        ->check(peritwin::cli::finite_in(1e-5, 0.01));
+                        ->check(peritwin::core::finite_in(1e-5, 0.01));
   app.add_option("--a2-trial", a2_trial, "B1: trial A2 for the calibration")
-      ->check(peritwin::cli::finite_positive());
+      ->check(peritwin::core::finite_positive());
   app.add_option("--iterations", iterations, "B1: calibration iterations")
       ->check(CLI::Range(1, 10));
   app.add_option("--out", out, "directory for CSV output");
   CLI11_PARSE(app, argc, argv);
   std::filesystem::create_directories(out);
   if (which == "B1") return run_b1(dx, out, a2_trial, iterations);
-  const FatigueLaw b2_fatigue_law =
-      b2_law == "energy" ? FatigueLaw::energy : FatigueLaw::strain_range;
+  const fatigue::FatigueLaw b2_fatigue_law =
+      b2_law == "energy" ? fatigue::FatigueLaw::energy : fatigue::FatigueLaw::strain_range;
   if (which == "B2" && k_field_option->count() > 0) {
     k_field.dx = dx_option->count() > 0 ? dx : 0.0005;
     k_field.growth = growth;
@@ -321,7 +321,8 @@ int main(int argc, char** argv) {
     b2.lower_holes_fixed = lower_holes == "fixed";
     b2.rigid_fixtures = pin_forces == "rigid-fixture";
     b2.fatigue_law = b2_fatigue_law;
-    b2.model = b2_model == "bond_based" ? ModelKind::bond_based : ModelKind::state_based;
+    b2.model =
+        b2_model == "bond_based" ? model::ModelKind::bond_based : model::ModelKind::state_based;
     return run_b2(b2, alpha, a2_at_1mm, out);
   }
   // B3's default is finer: at 0.5 mm the grid's step where the path turns into the hole leaves a

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "solver/static/static_solver.h"
+#include "solver/statics/static_solver.h"
 
 namespace peritwin::validation {
 
@@ -18,27 +18,28 @@ double compact_tension_spacing(const CompactTensionSpec& spec, double target_nod
   return height / rows;
 }
 
-Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions& options,
-                              double dx, double horizon_ratio) {
+statics::Specimen make_compact_tension(const CompactTensionSpec& spec,
+                                       const model::ModelOptions& options, double dx,
+                                       double horizon_ratio) {
   const double w = spec.width;
-  Specimen s;
+  statics::Specimen s;
   s.name = "B1-CT";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back(Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w});
-  const Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
-  const Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
-  s.geometry.rigid_regions = {Region::of(upper_pin), Region::of(lower_pin)};
+  s.geometry.outline.push_back(mesh::Rectangle{0.0, -0.6 * w, 1.25 * w, 0.6 * w});
+  const mesh::Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
+  const mesh::Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
+  s.geometry.rigid_regions = {mesh::Region::of(upper_pin), mesh::Region::of(lower_pin)};
   s.initial_crack_tip = {0.25 * w + spec.initial_crack, 0.0};
   s.geometry.notches.push_back({"pre-crack", {{-dx, 0.0}, s.initial_crack_tip}});
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
-  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  s.model = model::build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   for (const double side : {1.0, -1.0}) {
-    const NodeIndex k = s.disc.nearest_node({1.25 * w, side * 0.5 * dx});
+    const mesh::NodeIndex k = s.disc.nearest_node({1.25 * w, side * 0.5 * dx});
     s.supports.push_back({{k}, true, true});
   }
-  s.loads.push_back({s.disc.nodes_in(Region::of(upper_pin)), {0.0, 1.0}, {}, {}});
-  s.loads.push_back({s.disc.nodes_in(Region::of(lower_pin)), {0.0, -1.0}, {}, {}});
+  s.loads.push_back({s.disc.nodes_in(mesh::Region::of(upper_pin)), {0.0, 1.0}, {}, {}});
+  s.loads.push_back({s.disc.nodes_in(mesh::Region::of(lower_pin)), {0.0, -1.0}, {}, {}});
   return s;
 }
 
@@ -58,36 +59,36 @@ CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& s
       nominal * std::sin(alpha) * std::sqrt((-0.23 + 1.40 * q) / (1 - 0.67 * q + 2.08 * q * q))};
 }
 
-std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
+std::vector<statics::LoadTerm> rigid_fixture_loads_by_flexibility(const statics::Specimen& s) {
   const auto n = static_cast<Eigen::Index>(s.loads.size());
   if (n == 0 || n % 3 != 0) {
     throw std::invalid_argument("rigid_fixture_loads_by_flexibility: three pin loads per fixture");
   }
   const Eigen::Index fixtures = n / 3;
   // Each pin's point: the centroid of the nodes its load is spread over (the resultant's point).
-  std::vector<Point> centre;
-  for (const LoadTerm& load : s.loads) centre.push_back(s.disc.centroid(load.nodes));
+  std::vector<mesh::Point> centre;
+  for (const statics::LoadTerm& load : s.loads) centre.push_back(s.disc.centroid(load.nodes));
   auto disc_mean = [&](const std::vector<double>& u, Eigen::Index h, int component) {
     double sum = 0.0;
     const auto& nodes = s.loads[static_cast<std::size_t>(h)].nodes;
-    for (const NodeIndex k : nodes) sum += u[2 * static_cast<std::size_t>(k) + component];
+    for (const mesh::NodeIndex k : nodes) sum += u[2 * static_cast<std::size_t>(k) + component];
     return sum / static_cast<double>(nodes.size());
   };
   // C(2h + c, j): pin h's displacement component c under unit pin force component j (pin j/2,
   // x if j even, y if odd); three unit cases per factorization (the solver's three bases).
   Eigen::MatrixXd flexibility(2 * n, 2 * n);
   for (Eigen::Index first = 0; first < 2 * n; first += 3) {
-    std::vector<LoadTerm> unit;
+    std::vector<statics::LoadTerm> unit;
     for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
-      LoadTerm t{s.loads[static_cast<std::size_t>(j / 2)].nodes, {}, {}, {}};
-      const Point f = (j % 2 == 0) ? Point{1.0, 0.0} : Point{0.0, 1.0};
+      statics::LoadTerm t{s.loads[static_cast<std::size_t>(j / 2)].nodes, {}, {}, {}};
+      const mesh::Point f = (j % 2 == 0) ? mesh::Point{1.0, 0.0} : mesh::Point{0.0, 1.0};
       (j - first == 0 ? t.constant : j - first == 1 ? t.per_cos : t.per_sin) = f;
       unit.push_back(t);
     }
-    StaticSolver solver(s.disc, s.model, s.supports, unit, s.ties);
+    statics::StaticSolver solver(s.disc, s.model, s.supports, unit, s.ties);
     if (!solver.solve().ok()) throw std::runtime_error("CTS fixture: the unit pin solve failed");
     for (Eigen::Index j = first; j < std::min(first + 3, 2 * n); ++j) {
-      const auto& u = solver.basis_displacement(static_cast<Basis>(j - first));
+      const auto& u = solver.basis_displacement(static_cast<statics::Basis>(j - first));
       for (Eigen::Index h = 0; h < n; ++h) {
         flexibility(2 * h, j) = disc_mean(u, h, 0);
         flexibility(2 * h + 1, j) = disc_mean(u, h, 1);
@@ -101,9 +102,9 @@ std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(unknowns, 2);  // cos α and sin α parts
   for (Eigen::Index h = 0; h < n; ++h) {
     const Eigen::Index motion = 2 * n + 3 * (h / 3);  // U_x, U_y, θ of h's fixture
-    const Point ref = centre[static_cast<std::size_t>(3 * (h / 3) + 1)];
-    const Point arm{centre[static_cast<std::size_t>(h)].x - ref.x,
-                    centre[static_cast<std::size_t>(h)].y - ref.y};
+    const mesh::Point ref = centre[static_cast<std::size_t>(3 * (h / 3) + 1)];
+    const mesh::Point arm{centre[static_cast<std::size_t>(h)].x - ref.x,
+                          centre[static_cast<std::size_t>(h)].y - ref.y};
     a.block(2 * h, 0, 2, 2 * n) = scale * flexibility.block(2 * h, 0, 2, 2 * n);
     a(2 * h, motion) = -scale;
     a(2 * h, motion + 2) = scale * arm.y;
@@ -114,9 +115,9 @@ std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
     a(row + 1, 2 * h + 1) = 1.0;
     a(row + 2, 2 * h) = -arm.y;
     a(row + 2, 2 * h + 1) = arm.x;
-    const LoadTerm& f = s.loads[static_cast<std::size_t>(h)];
+    const statics::LoadTerm& f = s.loads[static_cast<std::size_t>(h)];
     int part = 0;
-    for (const Point& p : {f.per_cos, f.per_sin}) {
+    for (const mesh::Point& p : {f.per_cos, f.per_sin}) {
       rhs(row, part) += p.x;
       rhs(row + 1, part) += p.y;
       rhs(row + 2, part) += arm.x * p.y - arm.y * p.x;
@@ -124,7 +125,7 @@ std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s) {
     }
   }
   const Eigen::MatrixXd z = a.fullPivLu().solve(rhs);
-  std::vector<LoadTerm> loads = s.loads;
+  std::vector<statics::LoadTerm> loads = s.loads;
   for (Eigen::Index h = 0; h < n; ++h) {
     auto& load = loads[static_cast<std::size_t>(h)];
     load.per_cos = {z(2 * h, 0), z(2 * h + 1, 0)};
@@ -144,20 +145,21 @@ namespace {
 /// energy for a rigid motion of the pins. Works for collinear pins (three on one line), where
 /// pairwise length ties would leave the middle one free to move across the line. A pin turns
 /// freely: only its mean displacement is tied, so it passes a force and no moment.
-std::vector<Tie> rigid_body_ties(const Discretization& disc,
-                                 const std::vector<std::vector<NodeIndex>>& pins, double k) {
+std::vector<statics::Tie> rigid_body_ties(const mesh::Discretization& disc,
+                                          const std::vector<std::vector<mesh::NodeIndex>>& pins,
+                                          double k) {
   const auto n = static_cast<Eigen::Index>(pins.size());
-  std::vector<Point> point;
-  Point centroid{};
+  std::vector<mesh::Point> point;
+  mesh::Point centroid{};
   for (const auto& nodes : pins) {
-    const Point c = disc.centroid(nodes);
+    const mesh::Point c = disc.centroid(nodes);
     point.push_back(c);
     centroid = {centroid.x + c.x / static_cast<double>(n),
                 centroid.y + c.y / static_cast<double>(n)};
   }
   Eigen::MatrixXd modes = Eigen::MatrixXd::Zero(2 * n, 3);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const Point p = point[static_cast<std::size_t>(i)];
+    const mesh::Point p = point[static_cast<std::size_t>(i)];
     modes(2 * i, 0) = 1.0;
     modes(2 * i + 1, 1) = 1.0;
     modes(2 * i, 2) = -(p.y - centroid.y);
@@ -165,13 +167,13 @@ std::vector<Tie> rigid_body_ties(const Discretization& disc,
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(modes);
   const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(2 * n, 2 * n);
-  std::vector<Tie> ties;
+  std::vector<statics::Tie> ties;
   for (Eigen::Index c = 3; c < 2 * n; ++c) {  // Q's columns past the first three: the complement
-    Tie tie{{}, k};
+    statics::Tie tie{{}, k};
     for (Eigen::Index i = 0; i < 2 * n; ++i) {
       const auto& nodes = pins[static_cast<std::size_t>(i / 2)];
       const double share = q(i, c) / static_cast<double>(nodes.size());
-      for (const NodeIndex node : nodes)
+      for (const mesh::NodeIndex node : nodes)
         tie.terms.push_back({node, static_cast<int>(i % 2), share});
     }
     ties.push_back(tie);
@@ -181,38 +183,41 @@ std::vector<Tie> rigid_body_ties(const Discretization& disc,
 
 }  // namespace
 
-Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
-                                    const ModelOptions& options, double dx, double horizon_ratio) {
-  Specimen s;
+statics::Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
+                                             const model::ModelOptions& options, double dx,
+                                             double horizon_ratio) {
+  statics::Specimen s;
   s.name = "B2-CTS";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back(Rectangle{0.0, -0.5 * spec.height, spec.width, 0.5 * spec.height});
+  s.geometry.outline.push_back(
+      mesh::Rectangle{0.0, -0.5 * spec.height, spec.width, 0.5 * spec.height});
   s.initial_crack_tip = {spec.crack_length, 0.0};
   s.geometry.notches.push_back({"pre-crack", {{-dx, 0.0}, s.initial_crack_tip}});
   const double xc = 0.5 * spec.width;
   const double r = 0.5 * spec.hole_diameter;
   const double xs[3] = {xc - 0.5 * spec.hole_spacing, xc, xc + 0.5 * spec.hole_spacing};
-  std::vector<Circle> upper, lower;
+  std::vector<mesh::Circle> upper, lower;
   for (double x : xs) {
     upper.push_back({{x, spec.hole_offset}, r});
     lower.push_back({{x, -spec.hole_offset}, r});
   }
-  for (const auto& c : upper) s.geometry.rigid_regions.push_back(Region::of(c));
-  for (const auto& c : lower) s.geometry.rigid_regions.push_back(Region::of(c));
+  for (const auto& c : upper) s.geometry.rigid_regions.push_back(mesh::Region::of(c));
+  for (const auto& c : lower) s.geometry.rigid_regions.push_back(mesh::Region::of(c));
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
-  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  s.model = model::build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   // 000 Eq. (51): F1 (upper left, y), F2 (middle, x), F3 (upper right, y).
   const double ef = spec.hole_offset / spec.hole_spacing;
-  std::vector<Circle> loaded_holes = upper;
+  std::vector<mesh::Circle> loaded_holes = upper;
   struct PinForce {  // per N of P: F = P·(cos α·per_cos + sin α·per_sin)
-    Point per_cos;
-    Point per_sin;
+    mesh::Point per_cos;
+    mesh::Point per_sin;
   };
   std::vector<PinForce> forces = {
       {{0.0, 0.5}, {0.0, ef}}, {{}, {-1.0, 0.0}}, {{0.0, 0.5}, {0.0, -ef}}};
   if (spec.lower_holes_fixed) {
-    for (const auto& c : lower) s.supports.push_back({s.disc.nodes_in(Region::of(c)), true, true});
+    for (const auto& c : lower)
+      s.supports.push_back({s.disc.nodes_in(mesh::Region::of(c)), true, true});
   } else {
     // The lower half of the device applies the point reflection of the upper forces (the CTS
     // loading is antisymmetric under a half turn): −F3 at the lower left, +P sin α in x at the
@@ -225,8 +230,10 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
     s.supports.push_back({{s.disc.nearest_node(lower[2].centre)}, false, true});
   }
   for (std::size_t h = 0; h < loaded_holes.size(); ++h)
-    s.loads.push_back(
-        {s.disc.nodes_in(Region::of(loaded_holes[h])), {}, forces[h].per_cos, forces[h].per_sin});
+    s.loads.push_back({s.disc.nodes_in(mesh::Region::of(loaded_holes[h])),
+                       {},
+                       forces[h].per_cos,
+                       forces[h].per_sin});
   if (spec.rigid_fixtures) {
     // Richard's loading device: the pin centres of each loaded half move as one rigid body, the
     // holes turning freely on their pins (frictionless: a pin passes a force, no moment). The
@@ -235,7 +242,7 @@ Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
     // about 10³ times the specimen's stiffness at a pin (its flexibility there is ~1e-9 m/N).
     const double k = 10.0 * s.geometry.rigid_factor * spec.material.youngs_modulus * spec.thickness;
     for (std::size_t fixture = 0; fixture < loaded_holes.size() / 3; ++fixture) {
-      std::vector<std::vector<NodeIndex>> pins;
+      std::vector<std::vector<mesh::NodeIndex>> pins;
       for (std::size_t h = 0; h < 3; ++h) pins.push_back(s.loads[3 * fixture + h].nodes);
       const auto ties = rigid_body_ties(s.disc, pins, k);
       s.ties.insert(s.ties.end(), ties.begin(), ties.end());
@@ -266,36 +273,37 @@ PlaneStress mode_ii_stress(double r, double th) {
   return {-f * s * (2 + c * c3), f * s * c * c3, f * c * (1 - s * s3)};
 }
 
-Point traction(const PlaneStress& sigma, Point normal) {
+mesh::Point traction(const PlaneStress& sigma, mesh::Point normal) {
   return {sigma.xx * normal.x + sigma.xy * normal.y, sigma.xy * normal.x + sigma.yy * normal.y};
 }
 
 }  // namespace
 
-Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& options, double dx,
-                            double horizon_ratio) {
+statics::Specimen make_k_field_plate(const KFieldPlateSpec& spec,
+                                     const model::ModelOptions& options, double dx,
+                                     double horizon_ratio) {
   const double l = std::round(spec.half_size / dx) * dx;  // y = 0 falls between node rows
-  Specimen s;
+  statics::Specimen s;
   s.name = "K-field plate";
   s.material = spec.material;
   s.geometry.thickness = spec.thickness;
-  s.geometry.outline.push_back(Rectangle{-l, -l, l, l});
+  s.geometry.outline.push_back(mesh::Rectangle{-l, -l, l, l});
   s.initial_crack_tip = {0.0, 0.0};
   s.geometry.notches.push_back({"pre-crack", {{-l - dx, 0.0}, s.initial_crack_tip}});
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
-  s.model = build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  s.model = model::build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   const double area = dx * spec.thickness;
-  for (NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {
-    const Point p = s.disc.position[n];
-    const Point normal{(p.x > l - dx ? 1.0 : 0.0) - (p.x < -l + dx ? 1.0 : 0.0),
-                       (p.y > l - dx ? 1.0 : 0.0) - (p.y < -l + dx ? 1.0 : 0.0)};
+  for (mesh::NodeIndex n = 0; n < s.disc.num_nodes(); ++n) {
+    const mesh::Point p = s.disc.position[n];
+    const mesh::Point normal{(p.x > l - dx ? 1.0 : 0.0) - (p.x < -l + dx ? 1.0 : 0.0),
+                             (p.y > l - dx ? 1.0 : 0.0) - (p.y < -l + dx ? 1.0 : 0.0)};
     if (normal.x == 0.0 && normal.y == 0.0) continue;
     const double r = std::hypot(p.x, p.y);
     const double th = std::atan2(p.y, p.x);
     PlaneStress mode_i = mode_i_stress(r, th);
     mode_i.xx += spec.t_over_ki;
-    const Point f_i = traction(mode_i, normal);
-    const Point f_ii = traction(mode_ii_stress(r, th), normal);
+    const mesh::Point f_i = traction(mode_i, normal);
+    const mesh::Point f_ii = traction(mode_ii_stress(r, th), normal);
     s.loads.push_back({{n}, {}, {f_i.x * area, f_i.y * area}, {-f_ii.x * area, -f_ii.y * area}});
   }
   s.supports.push_back({{s.disc.nearest_node({l, 0.0})}, true, true});

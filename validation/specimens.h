@@ -8,8 +8,8 @@
 #include "solver/mesh/discretization.h"
 #include "solver/mesh/geometry.h"
 #include "solver/model/pd_model.h"
-#include "solver/static/specimen.h"
-#include "solver/static/static_solver.h"
+#include "solver/statics/specimen.h"
+#include "solver/statics/static_solver.h"
 
 namespace peritwin::validation {
 
@@ -22,7 +22,7 @@ struct CompactTensionSpec {
   double width = 0.050;                ///< W
   double thickness = 0.010;            ///< B
   double initial_crack = 0.3 * 0.050;  ///< a0, measured from the load line
-  Material material{68e9, 0.33, 48.7e6};
+  model::Material material{68e9, 0.33, 48.7e6};
 };
 
 /// The oracle of the tied fixture (CompactTensionShearSpec::rigid_fixtures): the pin forces of
@@ -34,14 +34,15 @@ struct CompactTensionSpec {
 /// in equilibrium, 3 equations per fixture: 2n + 3F equations for the 2n pin forces and 3F fixture
 /// motions. Returns s.loads with the per_cos and per_sin parts replaced by that split (constant
 /// parts kept). Costs ⌈2n/3⌉ factorizations.
-std::vector<LoadTerm> rigid_fixture_loads_by_flexibility(const Specimen& s);
+std::vector<statics::LoadTerm> rigid_fixture_loads_by_flexibility(const statics::Specimen& s);
 
 /// Grid spacing giving about `target_nodes` nodes on the CT outline, rounded so that the crack
 /// line y = 0 falls midway between two rows of nodes.
 double compact_tension_spacing(const CompactTensionSpec& spec, double target_nodes);
 
-Specimen make_compact_tension(const CompactTensionSpec& spec, const ModelOptions& options,
-                              double dx, double horizon_ratio = 3.015);
+statics::Specimen make_compact_tension(const CompactTensionSpec& spec,
+                                       const model::ModelOptions& options, double dx,
+                                       double horizon_ratio = 3.015);
 
 /// B2: compact tension shear (Richard-type CTS) in Al 6061-T6 after 000 Sec. 6.2, proportions of
 /// the benchmarks README: W = 90 mm, height 90 mm, B = 10 mm, crack along y = 0 to x = 45 mm; three
@@ -58,7 +59,7 @@ struct CompactTensionShearSpec {
   double hole_offset = 0.030;   ///< e
   double hole_spacing = 0.070;  ///< f
   double hole_diameter = 0.008;
-  Material material{68e9, 0.33, 48.7e6};
+  model::Material material{68e9, 0.33, 48.7e6};
   /// true: the lower hole material is fixed (benchmarks README). false: the lower holes carry the
   /// point reflection of the upper forces (−F3 left, +P sin α middle, −F1 right) as the lower half
   /// of the loading device does, and only rigid-body motion is suppressed (two nodes).
@@ -70,7 +71,7 @@ struct CompactTensionShearSpec {
   /// and the fixture shares them out by compatibility in every solve, so the split follows the
   /// crack as it grows.
   bool rigid_fixtures = false;
-  GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
+  mesh::GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };
 
 /// Richard's K formulas for his CTS in its loading device (H. A. Richard, VDI-Forschungsheft 631,
@@ -91,9 +92,9 @@ CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& s
 /// with an even number of rows over the height, which puts y = 0 midway between two rows.
 double compact_tension_shear_grid_spacing(const CompactTensionShearSpec& spec, double dx);
 
-Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
-                                    const ModelOptions& options, double dx,
-                                    double horizon_ratio = 3.015);
+statics::Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,
+                                             const model::ModelOptions& options, double dx,
+                                             double horizon_ratio = 3.015);
 
 /// A square plate [−L, L]² with a straight crack from its left edge to the centre (the tip at the
 /// origin), loaded on its outer edges by the tractions σ·n of the Williams near-tip field
@@ -106,11 +107,12 @@ struct KFieldPlateSpec {
   double half_size = 0.030;  ///< L
   double t_over_ki = 0.0;    ///< T/K_I (1/√m)
   double thickness = 0.010;
-  Material material{68e9, 0.33, 48.7e6};
-  GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
+  model::Material material{68e9, 0.33, 48.7e6};
+  mesh::GridPerturbation grid;  ///< irregular node arrangement (default: the regular grid)
 };
 
-Specimen make_k_field_plate(const KFieldPlateSpec& spec, const ModelOptions& options, double dx,
-                            double horizon_ratio = 3.015);
+statics::Specimen make_k_field_plate(const KFieldPlateSpec& spec,
+                                     const model::ModelOptions& options, double dx,
+                                     double horizon_ratio = 3.015);
 
 }  // namespace peritwin::validation

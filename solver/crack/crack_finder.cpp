@@ -10,7 +10,7 @@
 
 #include "solver/model/pd_model.h"
 
-namespace peritwin {
+namespace peritwin::crack {
 
 namespace {
 
@@ -41,9 +41,9 @@ class Components {
   std::vector<std::size_t> parent_;
 };
 
-Point unit(Point v) {
+mesh::Point unit(mesh::Point v) {
   const double n = std::hypot(v.x, v.y);
-  return n > 0 ? Point{v.x / n, v.y / n} : Point{};
+  return n > 0 ? mesh::Point{v.x / n, v.y / n} : mesh::Point{};
 }
 
 /// Dijkstra over the crack nodes of one component from `source`, links no longer than `link`.
@@ -51,8 +51,9 @@ struct PathTree {
   std::vector<double> dist;
   std::vector<std::int32_t> parent;
 };
-PathTree shortest_paths(const Discretization& disc, const std::vector<std::int32_t>& component,
-                        std::int32_t c, std::size_t source, double link) {
+PathTree shortest_paths(const mesh::Discretization& disc,
+                        const std::vector<std::int32_t>& component, std::int32_t c,
+                        std::size_t source, double link) {
   const auto nn = static_cast<std::size_t>(disc.num_nodes());
   PathTree t{std::vector<double>(nn, kInf), std::vector<std::int32_t>(nn, -1)};
   using Item = std::pair<double, std::size_t>;
@@ -67,7 +68,7 @@ PathTree shortest_paths(const Discretization& disc, const std::vector<std::int32
       const auto b = disc.family_bonds[static_cast<std::size_t>(f)];
       const double xi = disc.bond_length[static_cast<std::size_t>(b)];
       if (xi > link) continue;
-      const auto j = static_cast<std::size_t>(disc.other_end(b, static_cast<NodeIndex>(k)));
+      const auto j = static_cast<std::size_t>(disc.other_end(b, static_cast<mesh::NodeIndex>(k)));
       if (component[j] != c) continue;
       if (d + xi < t.dist[j]) {
         t.dist[j] = d + xi;
@@ -92,7 +93,8 @@ std::size_t farthest(const PathTree& t) {
 /// within `back` of the tip's, oriented from their centroid towards the tip. (The path itself
 /// zig-zags between the two node rows or columns either side of a crack line; the axis of the
 /// nodes does not.) 0 when the tip is the only such node.
-Point tip_direction(const Discretization& disc, const PathTree& t, std::size_t tip, double back) {
+mesh::Point tip_direction(const mesh::Discretization& disc, const PathTree& t, std::size_t tip,
+                          double back) {
   const double from = t.dist[tip] - back;
   double cx = 0, cy = 0;
   int count = 0;
@@ -117,16 +119,17 @@ Point tip_direction(const Discretization& disc, const PathTree& t, std::size_t t
   }
   // Major axis of the 2x2 scatter matrix.
   const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);
-  Point d{std::cos(angle), std::sin(angle)};
-  const Point p = disc.position[tip];
+  mesh::Point d{std::cos(angle), std::sin(angle)};
+  const mesh::Point p = disc.position[tip];
   if ((p.x - cx) * d.x + (p.y - cy) * d.y < 0) d = {-d.x, -d.y};
   return d;
 }
 
 }  // namespace
 
-CrackFinder::CrackFinder(const Discretization& disc, const CrackTracker& tracker,
-                         std::vector<std::vector<Point>> notch_paths, double phase_switch_damage)
+CrackFinder::CrackFinder(const mesh::Discretization& disc, const CrackTracker& tracker,
+                         std::vector<std::vector<mesh::Point>> notch_paths,
+                         double phase_switch_damage)
     : disc_(disc),
       tracker_(tracker),
       notch_paths_(std::move(notch_paths)),
@@ -135,7 +138,7 @@ CrackFinder::CrackFinder(const Discretization& disc, const CrackTracker& tracker
       link_((1.5 + 2.0 * std::numbers::sqrt2 * disc.perturbation.amplitude) * disc.dx) {
   for (const auto& path : notch_paths_) {
     if (path.size() < 2) throw std::invalid_argument("CrackFinder: a notch path has < 2 points");
-    const Point a = path[path.size() - 2], b = path.back();
+    const mesh::Point a = path[path.size() - 2], b = path.back();
     notch_tips_.push_back(b);
     notch_directions_.push_back(unit({b.x - a.x, b.y - a.y}));
   }
@@ -175,14 +178,14 @@ CrackFinder::CrackFinder(const Discretization& disc, const CrackTracker& tracker
 }
 
 bool CrackFinder::in_notch_zone(std::size_t k, std::size_t n) const {
-  const Point p = disc_.position[k], tip = notch_tips_[n], dir = notch_directions_[n];
+  const mesh::Point p = disc_.position[k], tip = notch_tips_[n], dir = notch_directions_[n];
   const double ax = p.x - tip.x, ay = p.y - tip.y;
   // CrackTracker's seeds: ahead of the tip (by more than −Δx/2) and within δ of it.
   if (ax * dir.x + ay * dir.y > -0.5 * disc_.dx && std::hypot(ax, ay) <= disc_.horizon) return true;
   // The notch's faces: within δ of its path (a face node broken by fatigue is part of its crack).
   const auto& path = notch_paths_[n];
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
-    const Point a = path[i], b = path[i + 1];
+    const mesh::Point a = path[i], b = path[i + 1];
     const double lx = b.x - a.x, ly = b.y - a.y, l2 = lx * lx + ly * ly;
     const double t = l2 > 0 ? std::clamp(((p.x - a.x) * lx + (p.y - a.y) * ly) / l2, 0.0, 1.0) : 0;
     if (std::hypot(p.x - a.x - t * lx, p.y - a.y - t * ly) <= disc_.horizon) return true;
@@ -196,7 +199,7 @@ void CrackFinder::for_each_link(std::size_t k, const std::vector<std::uint8_t>& 
   for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
     const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
     if (disc_.bond_length[static_cast<std::size_t>(b)] > link_) continue;
-    const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)));
+    const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<mesh::NodeIndex>(k)));
     if (crack[j]) visit(j);
   }
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
@@ -260,7 +263,7 @@ CrackFindings CrackFinder::find(const std::vector<double>& node_damage,
 }
 
 CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_damage,
-                                             std::span<const BreakEvent> events) const {
+                                             std::span<const fatigue::BreakEvent> events) const {
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   const std::size_t notches = notch_tips_.size();
   // Replay: from the virgin state (only the notches' cuts) through every break event.
@@ -302,14 +305,15 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
     if (id[r] == 0) id[r] = next_id++;   // a crack of its own
     if (birth[r] < 0) birth[r] = cycle;  // its first crack node (a notch's crack too)
   };
-  for (const BreakEvent& e : events) {
+  for (const fatigue::BreakEvent& e : events) {
     const auto b = static_cast<std::size_t>(e.bond);
     if (b >= replayed.size() || !replayed[b]) continue;
     replayed[b] = 0;
-    for (const NodeIndex end : {disc_.bond_i[b], disc_.bond_j[b]}) {
+    for (const mesh::NodeIndex end : {disc_.bond_i[b], disc_.bond_j[b]}) {
       const auto k = static_cast<std::size_t>(end);
       // The engine's own damage_index arithmetic: a threshold decision here equals one there.
-      if (!crack[k] && node_damage_index(disc_, replayed, k) >= phi0_) becomes_crack(k, e.cycle);
+      if (!crack[k] && model::node_damage_index(disc_, replayed, k) >= phi0_)
+        becomes_crack(k, e.cycle);
     }
   }
   // Components in id order: notch n's is n; the others follow by id.
@@ -373,7 +377,7 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
     c.notch = static_cast<int>(n);
     c.origin_point = m.origin;
     const double cs = std::cos(m.kink_angle), sn = std::sin(m.kink_angle);
-    const Point d = notch_directions_[n];
+    const mesh::Point d = notch_directions_[n];
     c.tips = {{m.tip, {cs * d.x - sn * d.y, sn * d.x + cs * d.y}}};
     c.length = m.length;
     c.projected_length = m.projected_length;
@@ -402,7 +406,7 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
       c.mouth_depth = surface_distance_[mouth];
       const PathTree t = shortest_paths(disc_, component, cid, mouth, link_);
       const std::size_t tip = farthest(t);
-      const Point m = disc_.position[mouth], p = disc_.position[tip];
+      const mesh::Point m = disc_.position[mouth], p = disc_.position[tip];
       c.origin_point = m;
       c.length = t.dist[tip] + c.mouth_depth;
       c.projected_length = std::hypot(p.x - m.x, p.y - m.y) + c.mouth_depth;
@@ -424,7 +428,7 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
       }
     }
     c.origin_point = disc_.position[middle];
-    const Point pa = disc_.position[a], pb = disc_.position[b];
+    const mesh::Point pa = disc_.position[a], pb = disc_.position[b];
     c.projected_length = std::hypot(pb.x - pa.x, pb.y - pa.y);
     // At a: the path from b reversed; the direction from the node `back` along it towards a.
     const PathTree from_b = shortest_paths(disc_, component, cid, b, link_);
@@ -433,4 +437,4 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
   return cracks;
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::crack

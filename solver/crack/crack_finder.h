@@ -31,20 +31,22 @@
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/mesh/discretization.h"
 
-namespace peritwin {
+namespace peritwin::crack {
 
 enum class CrackOrigin : std::int8_t { notch = 1, surface = 2, interior = 3 };
 
 struct CrackTipState {
-  Point position;
-  Point direction;  ///< unit vector of growth at the tip (from the crack behind it); 0 if unknown
+  mesh::Point position;
+  mesh::Point
+      direction;  ///< unit vector of growth at the tip (from the crack behind it); 0 if unknown
 };
 
 struct FoundCrack {
   std::int32_t id = 0;  ///< 1, 2, ... (see the file comment); 0 from find() without history
   CrackOrigin origin = CrackOrigin::surface;
-  int notch = -1;      ///< the notch it grows from (origin notch), else -1
-  Point origin_point;  ///< the notch tip, the mouth node (surface) or the path's middle (interior)
+  int notch = -1;  ///< the notch it grows from (origin notch), else -1
+  mesh::Point
+      origin_point;  ///< the notch tip, the mouth node (surface) or the path's middle (interior)
   std::vector<CrackTipState> tips;     ///< one (notch, surface) or two (interior) tips
   double length = 0.0;                 ///< along the path (m); notch: CrackMetrics::length
   double projected_length = 0.0;       ///< notch: along the notch; else straight origin → tip (m)
@@ -71,8 +73,8 @@ class CrackFinder {
   /// `tracker` measures the notch cracks (its notches are the finder's, in the same order);
   /// `notch_paths` from each notch's mouth to its tip (≥ 2 points; the tip direction is the last
   /// segment's). disc and tracker must outlive the finder.
-  CrackFinder(const Discretization& disc, const CrackTracker& tracker,
-              std::vector<std::vector<Point>> notch_paths, double phase_switch_damage);
+  CrackFinder(const mesh::Discretization& disc, const CrackTracker& tracker,
+              std::vector<std::vector<mesh::Point>> notch_paths, double phase_switch_damage);
 
   /// The cracks of a state (node damage by 000 Eq. 13 and the intact flags it came from), without
   /// ids: the snapshot path, for crack lengths inside forward simulations. Notch cracks are
@@ -84,7 +86,7 @@ class CrackFinder {
   /// that led from the virgin (pre-cut) state to the state of `node_damage`: the replay rebuilds
   /// the bond state, so no intact flags are needed.
   [[nodiscard]] CrackFindings find_with_history(const std::vector<double>& node_damage,
-                                                std::span<const BreakEvent> events) const;
+                                                std::span<const fatigue::BreakEvent> events) const;
 
   /// Distance from each node to the nearest free surface (outline, hole; not a notch), estimated
   /// from the grid sites without a node: min over such sites of |x_k − site| − Δx/2, ≥ 0;
@@ -111,14 +113,14 @@ class CrackFinder {
       const std::vector<double>& node_damage, const std::vector<std::int32_t>& component,
       std::int32_t num_components) const;
 
-  const Discretization& disc_;
+  const mesh::Discretization& disc_;
   const CrackTracker& tracker_;
-  std::vector<std::vector<Point>> notch_paths_;
-  std::vector<Point> notch_tips_;
-  std::vector<Point> notch_directions_;
+  std::vector<std::vector<mesh::Point>> notch_paths_;
+  std::vector<mesh::Point> notch_tips_;
+  std::vector<mesh::Point> notch_directions_;
   double phi0_ = 0.398;
   double link_ = 0.0;
   std::vector<double> surface_distance_;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::crack

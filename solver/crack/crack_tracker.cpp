@@ -7,9 +7,9 @@
 #include <numbers>
 #include <queue>
 
-namespace peritwin {
+namespace peritwin::crack {
 
-CrackTracker::CrackTracker(const Discretization& disc, std::vector<Notch> notches,
+CrackTracker::CrackTracker(const mesh::Discretization& disc, std::vector<mesh::Notch> notches,
                            CrackTrackerOptions options)
     : disc_(disc), notches_(std::move(notches)), options_(options) {
   if (options_.kink_distance <= 0.0) options_.kink_distance = 8.0 * disc.horizon / 3.0;
@@ -22,9 +22,9 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
   // plus what a perturbed grid can add to a pair's distance (2√2·amplitude·Δx).
   const double link = (1.5 + 2.0 * std::numbers::sqrt2 * disc_.perturbation.amplitude) * disc_.dx;
   for (std::size_t n = 0; n < notches_.size(); ++n) {
-    const Segment notch = notches_[n].last_segment();  // the tip is its end b
+    const mesh::Segment notch = notches_[n].last_segment();  // the tip is its end b
     const double len = std::hypot(notch.b.x - notch.a.x, notch.b.y - notch.a.y);
-    const Point dir{(notch.b.x - notch.a.x) / len, (notch.b.y - notch.a.y) / len};
+    const mesh::Point dir{(notch.b.x - notch.a.x) / len, (notch.b.y - notch.a.y) / len};
     CrackMetrics crack;
     crack.notch = static_cast<int>(n);
     crack.origin = notch.b;
@@ -56,7 +56,8 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
         const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
         const double xi = disc_.bond_length[static_cast<std::size_t>(b)];
         if (xi > link) continue;
-        const auto j = static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)));
+        const auto j =
+            static_cast<std::size_t>(disc_.other_end(b, static_cast<mesh::NodeIndex>(k)));
         if (node_damage[j] < options_.phase_switch_damage || !ahead(j)) continue;
         if (d + xi < dist[j]) {
           dist[j] = d + xi;
@@ -87,11 +88,11 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
         const auto cu = static_cast<std::size_t>(c);
         if (std::abs(dist[cu] - at) < std::abs(dist[anchor] - at)) anchor = cu;
       }
-      const Point a = disc_.position[anchor];
+      const mesh::Point a = disc_.position[anchor];
       double cx = 0, cy = 0;
       int count = 0;
       for (std::size_t k = 0; k < nn; ++k) {
-        const Point p = disc_.position[k];
+        const mesh::Point p = disc_.position[k];
         if (std::isfinite(dist[k]) && std::abs(dist[k] - at) <= disc_.dx &&
             std::hypot(p.x - a.x, p.y - a.y) <= disc_.horizon) {
           cx += p.x;
@@ -110,10 +111,10 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
   return cracks;
 }
 
-FaceNodePair extrapolation_face_nodes(const Discretization& disc, Point tip, Point direction,
-                                      double r) {
-  const Point normal{-direction.y, direction.x};
-  const Point behind{tip.x - r * direction.x, tip.y - r * direction.y};
+FaceNodePair extrapolation_face_nodes(const mesh::Discretization& disc, mesh::Point tip,
+                                      mesh::Point direction, double r) {
+  const mesh::Point normal{-direction.y, direction.x};
+  const mesh::Point behind{tip.x - r * direction.x, tip.y - r * direction.y};
   FaceNodePair pair;
   pair.upper_target = {behind.x + 0.5 * disc.dx * normal.x, behind.y + 0.5 * disc.dx * normal.y};
   pair.lower_target = {behind.x - 0.5 * disc.dx * normal.x, behind.y - 0.5 * disc.dx * normal.y};
@@ -122,8 +123,8 @@ FaceNodePair extrapolation_face_nodes(const Discretization& disc, Point tip, Poi
   return pair;
 }
 
-bool separated_by_crack(const Discretization& disc, const std::vector<std::uint8_t>& intact,
-                        NodeIndex a, NodeIndex b) {
+bool separated_by_crack(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
+                        mesh::NodeIndex a, mesh::NodeIndex b) {
   const auto k = static_cast<std::size_t>(a);
   for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
     const auto bond = disc.family_bonds[static_cast<std::size_t>(f)];
@@ -132,11 +133,11 @@ bool separated_by_crack(const Discretization& disc, const std::vector<std::uint8
   return false;
 }
 
-StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
-                                                  const std::vector<double>& u, Point tip,
-                                                  Point direction, double r1, double r2, double mu,
-                                                  double kappa) {
-  const Point normal{-direction.y, direction.x};
+StressIntensity stress_intensity_by_extrapolation(const mesh::Discretization& disc,
+                                                  const std::vector<double>& u, mesh::Point tip,
+                                                  mesh::Point direction, double r1, double r2,
+                                                  double mu, double kappa) {
+  const mesh::Point normal{-direction.y, direction.x};
   // Face jumps [u_t, u_n] (upper minus lower) at distance r behind the tip; half of it is the
   // displacement of one face relative to the crack line, u(r, π) of 001 Eq. (57)-(58).
   auto half_jump = [&](double r, double& ut, double& un, double& r_actual) {
@@ -147,8 +148,8 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
     const double jy = u[2 * up + 1] - u[2 * low + 1];
     ut = 0.5 * (jx * direction.x + jy * direction.y);
     un = 0.5 * (jx * normal.x + jy * normal.y);
-    const Point mid{0.5 * (disc.position[up].x + disc.position[low].x),
-                    0.5 * (disc.position[up].y + disc.position[low].y)};
+    const mesh::Point mid{0.5 * (disc.position[up].x + disc.position[low].x),
+                          0.5 * (disc.position[up].y + disc.position[low].y)};
     r_actual = (tip.x - mid.x) * direction.x + (tip.y - mid.y) * direction.y;
   };
   double ut1, un1, ra, ut2, un2, rb;
@@ -162,8 +163,8 @@ StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
   return {extrapolate(un1, un2), extrapolate(ut1, ut2)};
 }
 
-double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
-                                 Point tip, double r1, double r2, double youngs_modulus) {
+double t_stress_from_crack_faces(const mesh::Discretization& disc, const std::vector<double>& u,
+                                 mesh::Point tip, double r1, double r2, double youngs_modulus) {
   double sum = 0.0;
   int count = 0;
   const auto steps = static_cast<int>(std::floor((r2 - r1) / disc.dx + 1e-9));
@@ -180,10 +181,10 @@ double t_stress_from_crack_faces(const Discretization& disc, const std::vector<d
   return count > 0 ? youngs_modulus * sum / count : 0.0;
 }
 
-WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
-                                Point direction, double r_in, double r_out, int terms, double mu,
-                                double kappa) {
-  const Point normal{-direction.y, direction.x};
+WilliamsFit williams_series_fit(const mesh::Discretization& disc, const std::vector<double>& u,
+                                mesh::Point tip, mesh::Point direction, double r_in, double r_out,
+                                int terms, double mu, double kappa) {
+  const mesh::Point normal{-direction.y, direction.x};
   std::vector<std::size_t> annulus;
   for (std::size_t i = 0; i < disc.position.size(); ++i) {
     const double dx = disc.position[i].x - tip.x, dy = disc.position[i].y - tip.y;
@@ -232,9 +233,9 @@ WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<do
   return fit;
 }
 
-double kolosov_kappa(double poisson_ratio, PlaneCondition plane) {
-  return plane == PlaneCondition::plane_strain ? 3 - 4 * poisson_ratio
-                                               : (3 - poisson_ratio) / (1 + poisson_ratio);
+double kolosov_kappa(double poisson_ratio, model::PlaneCondition plane) {
+  return plane == model::PlaneCondition::plane_strain ? 3 - 4 * poisson_ratio
+                                                      : (3 - poisson_ratio) / (1 + poisson_ratio);
 }
 
 double compact_tension_delta_k(double delta_p, double thickness, double width, double q) {
@@ -243,4 +244,4 @@ double compact_tension_delta_k(double delta_p, double thickness, double width, d
          (0.886 + 4.64 * a - 13.32 * a * a + 14.72 * a * a * a - 5.6 * a * a * a * a);
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::crack

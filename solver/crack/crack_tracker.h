@@ -12,12 +12,12 @@
 #include "solver/mesh/geometry.h"
 #include "solver/model/pd_model.h"
 
-namespace peritwin {
+namespace peritwin::crack {
 
 struct CrackMetrics {
   int notch = 0;                  ///< index of the notch it grows from
-  Point origin;                   ///< the notch tip
-  Point tip;                      ///< the crack-path node farthest along the path
+  mesh::Point origin;             ///< the notch tip
+  mesh::Point tip;                ///< the crack-path node farthest along the path
   double length = 0.0;            ///< length along the path from the notch tip (m)
   double projected_length = 0.0;  ///< (tip − origin)·notch direction (m)
   double kink_angle = 0.0;  ///< β: angle from the notch direction to the early path (rad, CCW +)
@@ -35,14 +35,14 @@ struct CrackTrackerOptions {
 
 class CrackTracker {
  public:
-  CrackTracker(const Discretization& disc, std::vector<Notch> notches,
+  CrackTracker(const mesh::Discretization& disc, std::vector<mesh::Notch> notches,
                CrackTrackerOptions options = {});
   /// One entry per notch, in notch order (length 0 when nothing has grown yet).
   [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage) const;
 
  private:
-  const Discretization& disc_;
-  std::vector<Notch> notches_;
+  const mesh::Discretization& disc_;
+  std::vector<mesh::Notch> notches_;
   CrackTrackerOptions options_;
 };
 
@@ -56,29 +56,29 @@ struct StressIntensity {
 /// The node pair whose displacement jump gives the face opening at distance r behind a tip: the
 /// nodes nearest to the points r behind the tip and Δx/2 either side of the crack line.
 struct FaceNodePair {
-  NodeIndex upper = -1;
-  NodeIndex lower = -1;
-  Point upper_target;  ///< the point the upper node is nearest to
-  Point lower_target;
+  mesh::NodeIndex upper = -1;
+  mesh::NodeIndex lower = -1;
+  mesh::Point upper_target;  ///< the point the upper node is nearest to
+  mesh::Point lower_target;
 };
-FaceNodePair extrapolation_face_nodes(const Discretization& disc, Point tip, Point direction,
-                                      double r);
+FaceNodePair extrapolation_face_nodes(const mesh::Discretization& disc, mesh::Point tip,
+                                      mesh::Point direction, double r);
 
 /// Whether nodes a and b are separated by the crack: a bond joins them and it is broken.
-bool separated_by_crack(const Discretization& disc, const std::vector<std::uint8_t>& intact,
-                        NodeIndex a, NodeIndex b);
+bool separated_by_crack(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
+                        mesh::NodeIndex a, mesh::NodeIndex b);
 
-StressIntensity stress_intensity_by_extrapolation(const Discretization& disc,
-                                                  const std::vector<double>& u, Point tip,
-                                                  Point direction, double r1, double r2, double mu,
-                                                  double kappa);
+StressIntensity stress_intensity_by_extrapolation(const mesh::Discretization& disc,
+                                                  const std::vector<double>& u, mesh::Point tip,
+                                                  mesh::Point direction, double r1, double r2,
+                                                  double mu, double kappa);
 
 /// T-stress (Pa) at a crack tip on a straight crack along +x (the tip at `tip`): on a traction-free
 /// face the singular mode I σ_xx vanishes and mode II's has opposite signs on the two faces, so the
 /// mean of E·ε_xx over the face rows (y = tip.y ± Δx/2; plane stress, σ_yy = 0 on the face) is T.
 /// ε_xx by central differences along each row, averaged over r1 ≤ r ≤ r2 behind the tip.
-double t_stress_from_crack_faces(const Discretization& disc, const std::vector<double>& u,
-                                 Point tip, double r1, double r2, double youngs_modulus);
+double t_stress_from_crack_faces(const mesh::Discretization& disc, const std::vector<double>& u,
+                                 mesh::Point tip, double r1, double r2, double youngs_modulus);
 
 /// K_I, K_II and T at a tip from a least-squares fit of the Williams series to the displacements of
 /// every node in the annulus r_in ≤ r ≤ r_out around it (the over-deterministic method): per mode
@@ -94,15 +94,15 @@ struct WilliamsFit {
   int nodes = 0;        ///< nodes in the annulus
   bool fitted = false;  ///< false: fewer nodes than unknowns, no fit (the values stay 0)
 };
-WilliamsFit williams_series_fit(const Discretization& disc, const std::vector<double>& u, Point tip,
-                                Point direction, double r_in, double r_out, int terms, double mu,
-                                double kappa);
+WilliamsFit williams_series_fit(const mesh::Discretization& disc, const std::vector<double>& u,
+                                mesh::Point tip, mesh::Point direction, double r_in, double r_out,
+                                int terms, double mu, double kappa);
 
 /// Kolosov constant of 001 Eq. (59) and the shear modulus of the model's effective material.
-double kolosov_kappa(double poisson_ratio, PlaneCondition plane);
+double kolosov_kappa(double poisson_ratio, model::PlaneCondition plane);
 
 /// 000 Eq. (A2): ASTM E647 ΔK (Pa·√m) of a compact-tension specimen, crack length q from the
 /// load line, width W, thickness h, load range ΔP = P_max(1 − R).
 double compact_tension_delta_k(double delta_p, double thickness, double width, double q);
 
-}  // namespace peritwin
+}  // namespace peritwin::crack

@@ -16,7 +16,7 @@ double coefficient(const KernelChoice& kernel, double wave_speed, int m, double 
     const double p = kernel.p;
     a *= p * p / (1.0 - std::exp(-p * p)) * kernel_weight(kernel, static_cast<double>(j) / m);
   }
-  if (volume_correction) a *= partial_volume_factor(std::abs(j) * dx, md, dx);
+  if (volume_correction) a *= mesh::partial_volume_factor(std::abs(j) * dx, md, dx);
   return a;
 }
 

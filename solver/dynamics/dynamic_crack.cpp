@@ -2,14 +2,15 @@
 
 namespace peritwin::dynamics {
 
-DynamicCrackMonitor::DynamicCrackMonitor(const Discretization& disc, std::vector<Notch> notches,
-                                         CrackTrackerOptions options)
+DynamicCrackMonitor::DynamicCrackMonitor(const mesh::Discretization& disc,
+                                         std::vector<mesh::Notch> notches,
+                                         crack::CrackTrackerOptions options)
     : disc_(disc), tracker_(disc, std::move(notches), options) {}
 
 const CrackTipSample& DynamicCrackMonitor::sample(const ExplicitDynamics& dynamics, int notch) {
-  damage_index(disc_, dynamics.intact_bonds(), damage_);  // 000 Eq. (13)
+  model::damage_index(disc_, dynamics.intact_bonds(), damage_);  // 000 Eq. (13)
   const auto metrics = tracker_.measure(damage_);
-  const CrackMetrics& m = metrics.at(static_cast<std::size_t>(notch));
+  const crack::CrackMetrics& m = metrics.at(static_cast<std::size_t>(notch));
   CrackTipSample s;
   s.time = dynamics.time();
   s.tip = m.length > 0 ? m.tip : m.origin;

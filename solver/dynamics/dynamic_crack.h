@@ -12,7 +12,7 @@ namespace peritwin::dynamics {
 
 struct CrackTipSample {
   double time = 0.0;    ///< s
-  Point tip;            ///< the crack tracker's tip (the notch tip before anything grew)
+  mesh::Point tip;      ///< the crack tracker's tip (the notch tip before anything grew)
   double length = 0.0;  ///< grown length along the path from the notch tip (m)
   double speed = 0.0;   ///< (length − previous length)/(time − previous time); 0 at the first
 };
@@ -20,15 +20,15 @@ struct CrackTipSample {
 /// Samples one notch's crack whenever asked; keep one per run.
 class DynamicCrackMonitor {
  public:
-  DynamicCrackMonitor(const Discretization& disc, std::vector<Notch> notches,
-                      CrackTrackerOptions options = {});
+  DynamicCrackMonitor(const mesh::Discretization& disc, std::vector<mesh::Notch> notches,
+                      crack::CrackTrackerOptions options = {});
   /// The crack from `notch` at the integrator's current step.
   const CrackTipSample& sample(const ExplicitDynamics& dynamics, int notch = 0);
   [[nodiscard]] const std::vector<CrackTipSample>& history() const { return history_; }
 
  private:
-  const Discretization& disc_;
-  CrackTracker tracker_;
+  const mesh::Discretization& disc_;
+  crack::CrackTracker tracker_;
   std::vector<double> damage_;
   std::vector<CrackTipSample> history_;
 };

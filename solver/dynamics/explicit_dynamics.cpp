@@ -29,7 +29,7 @@ double kernel_weight(const KernelChoice& kernel, double xi_over_delta) {
   return std::exp(-a * a);  // 001 Eq. (10)
 }
 
-double micromodulus(Dimension dimension, PlaneCondition plane, const KernelChoice& kernel,
+double micromodulus(Dimension dimension, model::PlaneCondition plane, const KernelChoice& kernel,
                     double youngs_modulus, double horizon, double measure) {
   const double e = youngs_modulus;
   const double d = horizon;
@@ -48,21 +48,21 @@ double micromodulus(Dimension dimension, PlaneCondition plane, const KernelChoic
     c0 = 9.0 * e / (measure * pi * d * d * d);  // 001 Eq. (24)
   }
   // Plane strain: Eq. (25) = Eq. (24)·16/15; the same ratio for the Gaussian (see header).
-  return plane == PlaneCondition::plane_strain ? c0 * 16.0 / 15.0 : c0;
+  return plane == model::PlaneCondition::plane_strain ? c0 * 16.0 / 15.0 : c0;
 }
 
-Discretization bar_discretization(double x_first, int count, double dx, double horizon,
-                                  double area) {
+mesh::Discretization bar_discretization(double x_first, int count, double dx, double horizon,
+                                        double area) {
   assert(count > 0 && dx > 0 && horizon >= dx);
-  Discretization d;
+  mesh::Discretization d;
   d.dx = dx;
   d.horizon = horizon;
   d.thickness = area;
-  d.box = Rectangle{x_first - 0.5 * dx, -0.5 * dx, x_first + (count - 0.5) * dx, 0.5 * dx};
+  d.box = mesh::Rectangle{x_first - 0.5 * dx, -0.5 * dx, x_first + (count - 0.5) * dx, 0.5 * dx};
   const auto n = static_cast<std::size_t>(count);
   d.position.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    d.position[i] = Point{x_first + static_cast<double>(i) * dx, 0.0};
+    d.position[i] = mesh::Point{x_first + static_cast<double>(i) * dx, 0.0};
   }
   d.volume.assign(n, area * dx);
   d.rigid.assign(n, 0);
@@ -78,19 +78,20 @@ Discretization bar_discretization(double x_first, int count, double dx, double h
       d.bond_cos.push_back(1.0);
       d.bond_sin.push_back(0.0);
       // 001 Eq. (36); the outermost bond (ξ = δ) gets ½ when δ is a multiple of Δx.
-      d.bond_volume_factor.push_back(partial_volume_factor(std::min(length, horizon), horizon, dx));
+      d.bond_volume_factor.push_back(
+          mesh::partial_volume_factor(std::min(length, horizon), horizon, dx));
       d.bond_precut.push_back(0);
     }
   }
   d.family_offset.assign(n + 1, 0);
-  for (BondIndex b = 0; b < d.num_bonds(); ++b) {
+  for (mesh::BondIndex b = 0; b < d.num_bonds(); ++b) {
     ++d.family_offset[static_cast<std::size_t>(d.bond_i[static_cast<std::size_t>(b)]) + 1];
     ++d.family_offset[static_cast<std::size_t>(d.bond_j[static_cast<std::size_t>(b)]) + 1];
   }
   for (std::size_t k = 0; k < n; ++k) d.family_offset[k + 1] += d.family_offset[k];
   d.family_bonds.resize(static_cast<std::size_t>(d.family_offset[n]));
   std::vector<std::int32_t> cursor(d.family_offset.begin(), d.family_offset.end() - 1);
-  for (BondIndex b = 0; b < d.num_bonds(); ++b) {
+  for (mesh::BondIndex b = 0; b < d.num_bonds(); ++b) {
     const auto bi = static_cast<std::size_t>(b);
     d.family_bonds[static_cast<std::size_t>(cursor[static_cast<std::size_t>(d.bond_i[bi])]++)] = b;
     d.family_bonds[static_cast<std::size_t>(cursor[static_cast<std::size_t>(d.bond_j[bi])]++)] = b;
@@ -127,7 +128,7 @@ double lattice_calibration_factor(Dimension dimension, const KernelChoice& kerne
       if (xi > horizon * (1.0 + 1e-12)) continue;  // the families of discretize()
       const double volume = dimension == Dimension::one ? dx : dx * dx;
       discrete += kernel_weight(kernel, std::min(1.0, xi / horizon)) *
-                  partial_volume_factor(std::min(xi, horizon), horizon, dx) * volume * xi;
+                  mesh::partial_volume_factor(std::min(xi, horizon), horizon, dx) * volume * xi;
     }
   }
   // ∫ W̄(ξ) ξ dV over the horizon: 1D 2∫_0^δ W̄ ξ dξ, 2D 2π∫_0^δ W̄ ξ² dξ (numerically, fine
@@ -148,16 +149,17 @@ double lattice_calibration_factor(Dimension dimension, const KernelChoice& kerne
 
 ExplicitDynamics::~ExplicitDynamics() = default;
 
-Expected<std::unique_ptr<ExplicitDynamics>> ExplicitDynamics::create(const Discretization& disc,
-                                                                     const DynamicsSetup& setup) {
-  if (!(setup.youngs_modulus > 0)) return Error{"youngs_modulus", "must be > 0"};
-  if (!(setup.density > 0)) return Error{"density", "must be > 0"};
-  if (!(setup.time_step > 0)) return Error{"time_step", "must be > 0"};
-  if (setup.threads < 1) return Error{"threads", "must be >= 1"};
+core::Expected<std::unique_ptr<ExplicitDynamics>> ExplicitDynamics::create(
+    const mesh::Discretization& disc, const DynamicsSetup& setup) {
+  if (!(setup.youngs_modulus > 0)) return core::Error{"youngs_modulus", "must be > 0"};
+  if (!(setup.density > 0)) return core::Error{"density", "must be > 0"};
+  if (!(setup.time_step > 0)) return core::Error{"time_step", "must be > 0"};
+  if (setup.threads < 1) return core::Error{"threads", "must be >= 1"};
   if (setup.kernel.shape == KernelChoice::Shape::gaussian && !(setup.kernel.p > 0)) {
-    return Error{"kernel.p", "must be > 0"};
+    return core::Error{"kernel.p", "must be > 0"};
   }
-  if (setup.critical_stretch < 0) return Error{"critical_stretch", "must be >= 0 (0: no breaking)"};
+  if (setup.critical_stretch < 0)
+    return core::Error{"critical_stretch", "must be >= 0 (0: no breaking)"};
   std::unique_ptr<ExplicitDynamics> d(new ExplicitDynamics());
   d->disc_ = &disc;
   d->setup_ = setup;
@@ -184,9 +186,9 @@ Expected<std::unique_ptr<ExplicitDynamics>> ExplicitDynamics::create(const Discr
     double sum = 0.0;  // Σ_j V_j β c(ξ)/(ρ ξ) over the family (Eq. 42-43 divided by ρ)
     for (auto e = static_cast<std::size_t>(disc.family_offset[i]);
          e < static_cast<std::size_t>(disc.family_offset[i + 1]); ++e) {
-      const BondIndex b = disc.family_bonds[e];
+      const mesh::BondIndex b = disc.family_bonds[e];
       const auto bi = static_cast<std::size_t>(b);
-      const NodeIndex j = disc.other_end(b, static_cast<NodeIndex>(i));
+      const mesh::NodeIndex j = disc.other_end(b, static_cast<mesh::NodeIndex>(i));
       const auto ju = static_cast<std::size_t>(j);
       const double xi = disc.bond_length[bi];
       d->neighbour_[e] = j;
@@ -228,7 +230,7 @@ Expected<std::unique_ptr<ExplicitDynamics>> ExplicitDynamics::create(const Discr
                   "%.6g s exceeds the stable time step %.6g s of 001 Eq. (42)-(43) "
                   "(sqrt(rho / sum V_j C_ij), the smallest over the nodes)",
                   setup.time_step, min_step);
-    return Error{"time_step", text};
+    return core::Error{"time_step", text};
   }
   d->body_.assign(2 * n, 0.0);
   d->fixed_.assign(n, 0);
@@ -322,15 +324,16 @@ void ExplicitDynamics::set_initial_state(std::span<const double> u0, std::span<c
   }
 }
 
-void ExplicitDynamics::fix_nodes(std::span<const NodeIndex> nodes) {
-  for (const NodeIndex k : nodes) fixed_[static_cast<std::size_t>(k)] = 1;
+void ExplicitDynamics::fix_nodes(std::span<const mesh::NodeIndex> nodes) {
+  for (const mesh::NodeIndex k : nodes) fixed_[static_cast<std::size_t>(k)] = 1;
 }
 
-void ExplicitDynamics::add_image_node(NodeIndex image, NodeIndex source, double sx, double sy) {
+void ExplicitDynamics::add_image_node(mesh::NodeIndex image, mesh::NodeIndex source, double sx,
+                                      double sy) {
   images_.push_back({image, source, sx, sy});
 }
 
-void ExplicitDynamics::add_body_force(NodeIndex node, double bx, double by) {
+void ExplicitDynamics::add_body_force(mesh::NodeIndex node, double bx, double by) {
   const auto k = static_cast<std::size_t>(node);
   body_[2 * k] += bx / setup_.density;
   body_[2 * k + 1] += by / setup_.density;
@@ -440,7 +443,7 @@ Energy ExplicitDynamics::energy() const {
   return en;
 }
 
-double ExplicitDynamics::lattice_omega_squared(NodeIndex i, double k) const {
+double ExplicitDynamics::lattice_omega_squared(mesh::NodeIndex i, double k) const {
   const auto iu = static_cast<std::size_t>(i);
   double sum = 0.0;
   for (auto e = static_cast<std::size_t>(offset_[iu]);

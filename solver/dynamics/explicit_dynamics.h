@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 #include "solver/mesh/discretization.h"
 #include "solver/model/pd_model.h"
 
@@ -45,14 +45,14 @@ enum class Dimension { one, two };
 /// 2D plane strain: Eq. (25) for the constant kernel; the paper gives no Gaussian plane-strain
 /// formula, so we scale Eq. (29) by the same 16/15 that turns Eq. (24) into Eq. (25) (the
 /// isotropic energy E/((1+ν)(1-2ν)) at ν = 1/4 over E/(1-ν) at ν = 1/3, kernel-independent).
-double micromodulus(Dimension dimension, PlaneCondition plane, const KernelChoice& kernel,
+double micromodulus(Dimension dimension, model::PlaneCondition plane, const KernelChoice& kernel,
                     double youngs_modulus, double horizon, double measure);
 
 /// A 1D bar on the x axis as a Discretization: `count` nodes at x = x_first + i·Δx (y = 0),
 /// volume A·Δx, every pair within δ bonded with its partial volume (001 Eq. 36), families in
 /// increasing bond order. `thickness` holds the area A.
-Discretization bar_discretization(double x_first, int count, double dx, double horizon,
-                                  double area);
+mesh::Discretization bar_discretization(double x_first, int count, double dx, double horizon,
+                                        double area);
 
 /// A load's time history g(t), multiplying a body-force pattern.
 struct LoadHistory {
@@ -64,7 +64,7 @@ struct LoadHistory {
 
 struct DynamicsSetup {
   Dimension dimension = Dimension::two;
-  PlaneCondition plane = PlaneCondition::plane_stress;
+  model::PlaneCondition plane = model::PlaneCondition::plane_stress;
   KernelChoice kernel;
   double youngs_modulus = 0.0;  ///< E (Pa)
   double density = 0.0;         ///< ρ (kg/m³)
@@ -105,8 +105,8 @@ class ExplicitDynamics {
  public:
   /// Builds the per-entry coefficients (each bond stored from both ends) and checks Δt against
   /// stable_time_step(); an error names the limit. `disc` must outlive the integrator.
-  static Expected<std::unique_ptr<ExplicitDynamics>> create(const Discretization& disc,
-                                                            const DynamicsSetup& setup);
+  static core::Expected<std::unique_ptr<ExplicitDynamics>> create(const mesh::Discretization& disc,
+                                                                  const DynamicsSetup& setup);
   ~ExplicitDynamics();
   ExplicitDynamics(const ExplicitDynamics&) = delete;
   ExplicitDynamics& operator=(const ExplicitDynamics&) = delete;
@@ -126,13 +126,13 @@ class ExplicitDynamics {
   /// Configuration (fix_nodes, add_image_node, add_body_force, set_load_history) comes first,
   /// set_initial_state last: it computes a0 with them.
   /// These nodes keep the displacement set_initial_state gives them (zero velocity).
-  void fix_nodes(std::span<const NodeIndex> nodes);
+  void fix_nodes(std::span<const mesh::NodeIndex> nodes);
   /// After every step node `image` takes (sx·u_x, sy·u_y) of node `source` (a mirrored boundary
   /// layer: sx = −1 on a bar's fixed end gives the odd image of u(0, t) = 0).
-  void add_image_node(NodeIndex image, NodeIndex source, double sx, double sy);
+  void add_image_node(mesh::NodeIndex image, mesh::NodeIndex source, double sx, double sy);
   /// Adds a body-force density pattern (N/m³ per node, interleaved) times history.at(t).
   /// All patterns share one history (set_load_history).
-  void add_body_force(NodeIndex node, double bx, double by);
+  void add_body_force(mesh::NodeIndex node, double bx, double by);
   void set_load_history(const LoadHistory& history) { history_ = history; }
 
   /// Advances `steps` steps of Eq. (41).
@@ -156,7 +156,7 @@ class ExplicitDynamics {
   /// ω² of a longitudinal plane wave e^{i(kx − ωt)} along x seen by node i's actual family in the
   /// linearized model: Σ_e coef_e (ξx/ξ)² (1 − cos kξx), coef_e = c β V_j/(ρ ξ) (001 Eq. 46-48
   /// summed over the entries the integrator uses).
-  [[nodiscard]] double lattice_omega_squared(NodeIndex i, double k) const;
+  [[nodiscard]] double lattice_omega_squared(mesh::NodeIndex i, double k) const;
 
  private:
   ExplicitDynamics() = default;
@@ -165,7 +165,7 @@ class ExplicitDynamics {
   void advance_range(int thread, int lo, int hi);
   void run_steps(int steps);
 
-  const Discretization* disc_ = nullptr;
+  const mesh::Discretization* disc_ = nullptr;
   DynamicsSetup setup_;
   int nodes_ = 0;
   double dt_ = 0.0;
@@ -178,14 +178,14 @@ class ExplicitDynamics {
   std::vector<std::int32_t> neighbour_;
   std::vector<double> xi_x_, xi_y_, xi_;  ///< ξ = x_j − x_i and |ξ|
   std::vector<double> coef_;  ///< c(ξ)·β·V_j/(ρ ξ) (1/s² per unit stretch·m), 0 = broken
-  std::vector<BondIndex> bond_of_;        ///< the Discretization bond of the entry
+  std::vector<mesh::BondIndex> bond_of_;  ///< the Discretization bond of the entry
   std::vector<double> elongation_limit_;  ///< s_c·ξ, +inf near no-fail nodes (breaking only)
   std::vector<double> mass_;              ///< ρ V_i
   std::vector<double> body_;              ///< b/ρ per node (interleaved), m/s²
   std::vector<std::uint8_t> fixed_;
   std::vector<double> fixed_u_;
   struct Image {
-    NodeIndex image, source;
+    mesh::NodeIndex image, source;
     double sx, sy;
   };
   std::vector<Image> images_;

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
-namespace peritwin {
+namespace peritwin::fatigue {
 
 namespace {
 
@@ -17,14 +17,14 @@ double advance_sum(double sum, double increment, std::int64_t k) {
   return -fatigue::advance_life(-sum, increment, k);
 }
 
-bool same_rate_key(const LoadBlock& a, const LoadBlock& b, bool dose_mode) {
+bool same_rate_key(const core::LoadBlock& a, const core::LoadBlock& b, bool dose_mode) {
   if (dose_mode) return a.alpha == b.alpha;
   return a.p_max == b.p_max && a.r == b.r && a.alpha == b.alpha;
 }
 
 }  // namespace
 
-double critical_stretch(const Material& material, double horizon) {
+double critical_stretch(const model::Material& material, double horizon) {
   const double e = material.youngs_modulus;
   const double nu = material.poisson_ratio;
   const double mu = e / (2 * (1 + nu));
@@ -34,13 +34,13 @@ double critical_stretch(const Material& material, double horizon) {
   return std::sqrt(gc / ((6 / pi * mu + 16 / (9 * pi * pi) * (kappa - 2 * mu)) * horizon));
 }
 
-double critical_bond_energy(const Material& material, double crack_interactions) {
+double critical_bond_energy(const model::Material& material, double crack_interactions) {
   if (!(crack_interactions > 0.0)) return 0.0;
   return material.critical_energy_release_rate() / crack_interactions;  // 000 Eq. (12)
 }
 
 double phase_switch_damage_for_horizon(double horizon_ratio) {
-  return std::floor(straight_crack_face_damage(horizon_ratio) * 1000.0) / 1000.0;
+  return std::floor(model::straight_crack_face_damage(horizon_ratio) * 1000.0) / 1000.0;
 }
 
 double crack_crossing_interactions(double horizon_over_dx) {
@@ -56,24 +56,25 @@ double crack_crossing_interactions(double horizon_over_dx) {
   return 2.0 * crossings;  // 000 Eq. (10a): ḡ is half the bond's energy per Δx·h
 }
 
-FatigueEngine::FatigueEngine(const Discretization& disc, const PdModel& model,
-                             std::vector<Support> supports, std::vector<LoadTerm> loads,
-                             FatigueSettings settings, std::vector<Tie> ties)
+FatigueEngine::FatigueEngine(const mesh::Discretization& disc, const model::PdModel& model,
+                             std::vector<statics::Support> supports,
+                             std::vector<statics::LoadTerm> loads, FatigueSettings settings,
+                             std::vector<statics::Tie> ties)
     : disc_(disc),
       model_(model),
       supports_(std::move(supports)),
       loads_(std::move(loads)),
       ties_(std::move(ties)),
-      solver_(std::make_unique<StaticSolver>(disc, model, supports_, loads_, ties_)),
+      solver_(std::make_unique<statics::StaticSolver>(disc, model, supports_, loads_, ties_)),
       settings_(settings) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   if (settings_.law == FatigueLaw::bilinear) {
-    if (model.options.kind != ModelKind::bond_based) {
+    if (model.options.kind != model::ModelKind::bond_based) {
       throw std::invalid_argument(
           "FatigueEngine: the bilinear law (003) needs a bond-based model (its damage scales a "
           "bond's pair stiffness, 003 Eq. 45)");
     }
-    if (const Status valid = fatigue::validate(settings_.bilinear); !valid) {
+    if (const core::Status valid = fatigue::validate(settings_.bilinear); !valid) {
       throw std::invalid_argument("FatigueEngine: bilinear law: " + valid.error().reason);
     }
     if (settings_.cycle_increment < 1) {
@@ -122,11 +123,11 @@ bool FatigueEngine::dose_mode() const {
 }
 
 bool FatigueEngine::initialize() {
-  const Status r = solver_->solve();
+  const core::Status r = solver_->solve();
   ++solves_;
   if (!r.ok()) {
     state_.failed = true;
-    state_.failure_reason = message_of(r);
+    state_.failure_reason = core::message_of(r);
     return false;
   }
   const auto& intact = solver_->intact();
@@ -165,13 +166,13 @@ void FatigueEngine::materialize() {
   state_.dose[0] = state_.dose[1] = 0.0;
 }
 
-void FatigueEngine::prepare_rates(const LoadBlock& block) {
+void FatigueEngine::prepare_rates(const core::LoadBlock& block) {
   if (state_.rates_valid && same_rate_key(state_.rate_key, block, dose_mode())) return;
   materialize();
   compute_rates(block);
 }
 
-void FatigueEngine::compute_rates(const LoadBlock& block) {
+void FatigueEngine::compute_rates(const core::LoadBlock& block) {
   const bool dose = dose_mode();
   const auto& p = settings_.strain;
   const auto& intact = solver_->intact();
@@ -183,8 +184,8 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
   std::vector<double> g;
   if (settings_.law == FatigueLaw::energy) {
     std::vector<double> theta;
-    dilatations(disc_, model_, intact, stretch_, theta);
-    bond_energy_release_rates(disc_, model_, stretch_, theta, g);  // ḡ⁺, 000 Eq. (31)
+    model::dilatations(disc_, model_, intact, stretch_, theta);
+    model::bond_energy_release_rates(disc_, model_, stretch_, theta, g);  // ḡ⁺, 000 Eq. (31)
   }
   for (std::size_t b = 0; b < rate_.size(); ++b) {
     if (!intact[b]) {
@@ -250,7 +251,8 @@ void FatigueEngine::compute_rates(const LoadBlock& block) {
   state_.rate_key.count = 0;
 }
 
-std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::int64_t limit) const {
+std::int64_t FatigueEngine::cycles_to_next_break(const core::LoadBlock& block,
+                                                 std::int64_t limit) const {
   const std::int64_t none = limit + 1;
   if (!dose_mode()) {
     std::int64_t best = none;
@@ -325,7 +327,7 @@ std::int64_t FatigueEngine::cycles_to_next_break(const LoadBlock& block, std::in
   return best;
 }
 
-void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
+void FatigueEngine::advance(const core::LoadBlock& block, std::int64_t k) {
   if (dose_mode()) {
     const auto& p = settings_.strain;
     state_.dose[0] = advance_sum(state_.dose[0], fatigue::load_dose(block.p_max, block.r, p.m1), k);
@@ -338,7 +340,7 @@ void FatigueEngine::advance(const LoadBlock& block, std::int64_t k) {
   }
 }
 
-EngineStatus FatigueEngine::apply(const LoadBlock& block, const StopCheck& stop) {
+EngineStatus FatigueEngine::apply(const core::LoadBlock& block, const StopCheck& stop) {
   if (bilinear()) return apply_bilinear(block, stop);
   // Whether the breaks since event `e0` make the caller stop.
   const auto stop_after = [&](std::size_t e0) {
@@ -375,7 +377,7 @@ void FatigueEngine::set_propagation_limit(double eps_inf_prop) {
   state_.rates_valid = false;
 }
 
-EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
+EngineStatus FatigueEngine::apply_per_cycle(const core::LoadBlock& block) {
   if (bilinear()) {
     if (block.count < 0) throw std::invalid_argument("apply_per_cycle: count < 0");
     const std::vector<std::int64_t> ones(static_cast<std::size_t>(block.count), 1);
@@ -405,12 +407,12 @@ EngineStatus FatigueEngine::apply_per_cycle(const LoadBlock& block) {
 // ------------------------------------------------------------------ bilinear law (003)
 
 namespace {
-bool same_bilinear_key(const LoadBlock& a, const LoadBlock& b) {
+bool same_bilinear_key(const core::LoadBlock& a, const core::LoadBlock& b) {
   return a.p_max == b.p_max && a.alpha == b.alpha;  // R is not used by 003's envelope
 }
 }  // namespace
 
-EngineStatus FatigueEngine::apply_bilinear(const LoadBlock& block, const StopCheck& stop) {
+EngineStatus FatigueEngine::apply_bilinear(const core::LoadBlock& block, const StopCheck& stop) {
   if (state_.failed) return EngineStatus::final_failure;
   if (block.count < 1) return EngineStatus::ok;
   // One increment of dn cycles at the pending key, then the caller's stop check if it broke bonds.
@@ -454,7 +456,7 @@ EngineStatus FatigueEngine::flush() {
                                                     : EngineStatus::final_failure;
 }
 
-EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
+EngineStatus FatigueEngine::apply_increments(const core::LoadBlock& block,
                                              std::span<const std::int64_t> increments) {
   if (!bilinear()) throw std::logic_error("apply_increments: bilinear law only");
   std::int64_t sum = 0;
@@ -473,7 +475,7 @@ EngineStatus FatigueEngine::apply_increments(const LoadBlock& block,
   return EngineStatus::ok;
 }
 
-bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
+bool FatigueEngine::bilinear_increment(const core::LoadBlock& key, std::int64_t dn) {
   const auto& p = settings_.bilinear;
   const auto nb = state_.damage.size();
   const auto delta_n = static_cast<double>(dn);
@@ -483,7 +485,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
   solver_->stretch(key.p_max, key.alpha, s_start);  // s_N: current factors, this load
   s = s_start;
   std::vector<double> iterate = state_.damage;  // D' of the factors now in the solver
-  std::vector<BondIndex> changed_bonds;
+  std::vector<mesh::BondIndex> changed_bonds;
   std::vector<double> changed_factors;
   bool converged = false;
   for (int it = 0; it < settings_.softening_max_iterations; ++it) {
@@ -502,9 +504,9 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
       const double f = fatigue::bilinear_force_factor(s[b], d, p.sc);
       if (f == 0.0) d = 1.0;
       trial[b] = d;
-      const double old_f = solver_->bond_factor(static_cast<BondIndex>(b));
+      const double old_f = solver_->bond_factor(static_cast<mesh::BondIndex>(b));
       if (f != old_f) {
-        changed_bonds.push_back(static_cast<BondIndex>(b));
+        changed_bonds.push_back(static_cast<mesh::BondIndex>(b));
         changed_factors.push_back(f);
         largest_change = std::max(largest_change, std::abs(f - old_f));
       }
@@ -520,7 +522,7 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
         (it > 0 && !breaks && largest_change <= settings_.softening_tolerance)) {
       for (std::size_t b = 0; b < nb; ++b) {
         if (breakable_[b] && fatigue::bilinear_force_factor(s[b], trial[b], p.sc) ==
-                                 solver_->bond_factor(static_cast<BondIndex>(b))) {
+                                 solver_->bond_factor(static_cast<mesh::BondIndex>(b))) {
           iterate[b] = trial[b];
         }
       }
@@ -538,12 +540,12 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
                                  s[b] >= p.sc ? BreakCause::overload : BreakCause::fatigue});
       }
     }
-    const Status r = solver_->set_bond_factors(changed_bonds, changed_factors);
+    const core::Status r = solver_->set_bond_factors(changed_bonds, changed_factors);
     ++solves_;
     if (!r.ok()) {
       state_.failed = true;
       state_.failure_reason =
-          "final failure at cycle " + std::to_string(at_cycle) + ": " + message_of(r);
+          "final failure at cycle " + std::to_string(at_cycle) + ": " + core::message_of(r);
       state_.damage = iterate;
       update_phases();
       return false;
@@ -561,21 +563,21 @@ bool FatigueEngine::bilinear_increment(const LoadBlock& key, std::int64_t dn) {
   return true;
 }
 
-bool FatigueEngine::break_and_resolve(const LoadBlock& block) {
+bool FatigueEngine::break_and_resolve(const core::LoadBlock& block) {
   materialize();
-  std::vector<BondIndex> newly;
+  std::vector<mesh::BondIndex> newly;
   for (std::size_t b = 0; b < state_.anchor_life.size(); ++b) {
     if (breakable_[b] && state_.anchor_life[b] <= 0.0) {  // 000 Eq. (20)
-      newly.push_back(static_cast<BondIndex>(b));
+      newly.push_back(static_cast<mesh::BondIndex>(b));
       state_.events.push_back(
-          {state_.total_cycles, static_cast<BondIndex>(b), BreakCause::fatigue});
+          {state_.total_cycles, static_cast<mesh::BondIndex>(b), BreakCause::fatigue});
     }
   }
   if (!newly.empty() && !resolve(newly)) return false;
   return static_cascade(block);
 }
 
-bool FatigueEngine::static_cascade(const LoadBlock& block) {
+bool FatigueEngine::static_cascade(const core::LoadBlock& block) {
   const bool energy = settings_.static_failure == StaticFailure::critical_bond_energy;
   const double limit = energy ? critical_bond_energy_ : critical_stretch_;
   if (!(limit > 0.0)) return true;
@@ -594,20 +596,20 @@ bool FatigueEngine::static_cascade(const LoadBlock& block) {
       // 000 Eq. (31): ḡ is a quadratic form in (s, θ), and s, θ are linear in P, so ḡ(P) =
       // P²·ḡ(1) exactly in real arithmetic; ḡ(1) from the unit-load stretches and dilatations.
       solver_->stretch(1.0, block.alpha, s);
-      dilatations(disc_, model_, solver_->intact(), s, theta);
-      bond_energy_release_rates(disc_, model_, s, theta, g);
+      model::dilatations(disc_, model_, solver_->intact(), s, theta);
+      model::bond_energy_release_rates(disc_, model_, s, theta, g);
     } else {
       solver_->stretch(block.p_max, block.alpha, s);
     }
-    std::vector<BondIndex> newly;
+    std::vector<mesh::BondIndex> newly;
     for (std::size_t b = 0; b < s.size(); ++b) {
       if (!breakable_[b]) continue;
       // 000 Eq. (9) (ḡ ≥ g_c) or Eq. (7) (s ≥ s_c), then Eq. (20)
       const bool breaks = energy ? p2 * g[b] >= limit : s[b] >= limit;
       if (breaks) {
-        newly.push_back(static_cast<BondIndex>(b));
+        newly.push_back(static_cast<mesh::BondIndex>(b));
         state_.events.push_back(
-            {state_.total_cycles, static_cast<BondIndex>(b), BreakCause::overload});
+            {state_.total_cycles, static_cast<mesh::BondIndex>(b), BreakCause::overload});
       }
     }
     if (newly.empty()) {
@@ -635,19 +637,19 @@ double FatigueEngine::basis_solve_seconds() const {
   return retired_basis_solve_s_ + solver_->basis_solve_seconds();
 }
 
-Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
+core::Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   const auto t0 = std::chrono::steady_clock::now();
   retired_update_s_ += solver_->update_seconds();
   retired_updates_ += solver_->updates();
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
   // The old solver (its updated simplicial factor, the largest block of memory) goes before the
   // new one factorizes: the two never coexist (the rebuild's memory peak, issue 18 item 5).
-  solver_ = std::make_unique<StaticSolver>(disc_, model_, supports_, loads_, ties_);
-  StaticSolver& fresh = *solver_;
-  Status r = fresh.solve();
-  std::vector<BondIndex> broken;
+  solver_ = std::make_unique<statics::StaticSolver>(disc_, model_, supports_, loads_, ties_);
+  statics::StaticSolver& fresh = *solver_;
+  core::Status r = fresh.solve();
+  std::vector<mesh::BondIndex> broken;
   for (std::size_t b = 0; b < intact.size(); ++b) {
-    if (!intact[b] && fresh.intact()[b]) broken.push_back(static_cast<BondIndex>(b));
+    if (!intact[b] && fresh.intact()[b]) broken.push_back(static_cast<mesh::BondIndex>(b));
   }
   if (r.ok() && !broken.empty()) {
     fresh.set_incremental(false);
@@ -660,21 +662,21 @@ Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   return r;
 }
 
-bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
-  for (BondIndex b : newly_broken) {
+bool FatigueEngine::resolve(const std::vector<mesh::BondIndex>& newly_broken) {
+  for (mesh::BondIndex b : newly_broken) {
     breakable_[static_cast<std::size_t>(b)] = 0;
     rate_[static_cast<std::size_t>(b)] = 0.0;
   }
   cascade_checked_ = false;
-  Status r = solver_->break_bonds(newly_broken);
+  core::Status r = solver_->break_bonds(newly_broken);
   ++solves_;
   state_.resolve_groups.push_back(static_cast<std::int64_t>(newly_broken.size()));
   if (r.ok() && rebuild_due(state_.resolve_groups.size())) r = rebuild_solver(solver_->intact());
   state_.rates_valid = false;
   if (!r.ok()) {
     state_.failed = true;
-    state_.failure_reason =
-        "final failure at cycle " + std::to_string(state_.total_cycles) + ": " + message_of(r);
+    state_.failure_reason = "final failure at cycle " + std::to_string(state_.total_cycles) + ": " +
+                            core::message_of(r);
     return false;
   }
   update_phases();
@@ -682,7 +684,7 @@ bool FatigueEngine::resolve(const std::vector<BondIndex>& newly_broken) {
 }
 
 void FatigueEngine::update_phases() {
-  damage_index(disc_, solver_->intact(), node_damage_);
+  model::damage_index(disc_, solver_->intact(), node_damage_);
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   // 000 Sec. 4.4: node k is in phase II once k or any family member has φ ≥ φ0.
   std::vector<std::uint8_t> node_growth(nn, 0);
@@ -691,7 +693,8 @@ void FatigueEngine::update_phases() {
     node_growth[k] = 1;
     for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
       const auto b = disc_.family_bonds[static_cast<std::size_t>(f)];
-      node_growth[static_cast<std::size_t>(disc_.other_end(b, static_cast<NodeIndex>(k)))] = 1;
+      node_growth[static_cast<std::size_t>(disc_.other_end(b, static_cast<mesh::NodeIndex>(k)))] =
+          1;
     }
   }
   // Decision: a bond follows phase II when either of its nodes does (the paper states the rule
@@ -710,7 +713,7 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       supports_(other.supports_),
       loads_(other.loads_),
       ties_(other.ties_),
-      solver_(std::make_unique<StaticSolver>(*other.solver_)),
+      solver_(std::make_unique<statics::StaticSolver>(*other.solver_)),
       retired_update_s_(other.retired_update_s_),
       retired_updates_(other.retired_updates_),
       retired_basis_solve_s_(other.retired_basis_solve_s_),
@@ -765,7 +768,7 @@ EngineState FatigueEngine::export_state() const {
   s.intact = solver_->intact();
   // Bilinear law: the key of no pending cycles is never used; exported as {} so that states that
   // differ only there export (and hash) equal.
-  if (s.pending_cycles == 0) s.pending_key = LoadBlock{};
+  if (s.pending_cycles == 0) s.pending_key = core::LoadBlock{};
   return s;
 }
 
@@ -788,7 +791,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   // The re-solves to replay: on a fresh engine, the recorded groups of events when they account
   // for every event (same updates, same factor bit for bit), else one group of every bond broken
   // since now.
-  std::vector<std::vector<BondIndex>> groups;
+  std::vector<std::vector<mesh::BondIndex>> groups;
   std::int64_t grouped = 0;
   for (auto g : s.resolve_groups) grouped += g;
   if (state_.events.empty() && !s.resolve_groups.empty() &&
@@ -801,7 +804,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   } else {
     auto& group = groups.emplace_back();
     for (std::size_t b = 0; b < s.intact.size(); ++b) {
-      if (!s.intact[b] && solver_->intact()[b]) group.push_back(static_cast<BondIndex>(b));
+      if (!s.intact[b] && solver_->intact()[b]) group.push_back(static_cast<mesh::BondIndex>(b));
     }
   }
   restore_history(s);
@@ -818,7 +821,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
     }
   }
   for (std::size_t k = 0; k < groups.size(); ++k) {
-    for (BondIndex b : groups[k]) {
+    for (mesh::BondIndex b : groups[k]) {
       breakable_[static_cast<std::size_t>(b)] = 0;
       rate_[static_cast<std::size_t>(b)] = 0.0;
     }
@@ -826,15 +829,15 @@ bool FatigueEngine::import_state(const EngineState& s) {
   if (first > 0 && !state_.failed) {
     std::vector<std::uint8_t> intact = solver_->intact();
     for (std::size_t k = 0; k < first; ++k) {
-      for (BondIndex b : groups[k]) intact[static_cast<std::size_t>(b)] = 0;
+      for (mesh::BondIndex b : groups[k]) intact[static_cast<std::size_t>(b)] = 0;
     }
-    const Status r = rebuild_solver(intact);
+    const core::Status r = rebuild_solver(intact);
     ++solves_;
     if (!r.ok()) return false;
   }
   for (std::size_t k = first; k < groups.size(); ++k) {
     if (!groups[k].empty() && !state_.failed) {
-      const Status r = solver_->break_bonds(groups[k]);
+      const core::Status r = solver_->break_bonds(groups[k]);
       ++solves_;
       if (!r.ok()) return false;
     }
@@ -856,18 +859,18 @@ bool FatigueEngine::import_bilinear_state(const EngineState& s) {
   }
   // The factor of every bond, as bilinear_increment set it: a refactorization depends only on
   // them (and the broken set), so one call rebuilds the solver state bit for bit.
-  std::vector<BondIndex> bonds;
+  std::vector<mesh::BondIndex> bonds;
   std::vector<double> factors;
   for (std::size_t b = 0; b < nb; ++b) {
     const double f = s.intact[b] ? 1.0 - s.damage[b] : 0.0;
     if (s.intact[b] && !(s.damage[b] < 1.0)) return false;
-    if (f != solver_->bond_factor(static_cast<BondIndex>(b))) {
-      bonds.push_back(static_cast<BondIndex>(b));
+    if (f != solver_->bond_factor(static_cast<mesh::BondIndex>(b))) {
+      bonds.push_back(static_cast<mesh::BondIndex>(b));
       factors.push_back(f);
     }
   }
   if (!bonds.empty() && !s.failed) {
-    const Status r = solver_->set_bond_factors(bonds, factors);
+    const core::Status r = solver_->set_bond_factors(bonds, factors);
     ++solves_;
     if (!r.ok()) return false;
   }
@@ -891,7 +894,7 @@ void hash_engine_state(Hash& h, const EngineState& state, const std::vector<std:
     if (key == "intact") {
       hash_field(h, intact);
     } else if (key == "pending_key" && state.pending_cycles == 0) {
-      hash_field(h, LoadBlock{});
+      hash_field(h, core::LoadBlock{});
     } else {
       hash_field(h, field);
     }
@@ -900,17 +903,17 @@ void hash_engine_state(Hash& h, const EngineState& state, const std::vector<std:
 
 }  // namespace
 
-void FatigueEngine::hash_state(Fnv1a64& h) const {
+void FatigueEngine::hash_state(core::Fnv1a64& h) const {
   hash_engine_state(h, state_, solver_->intact());
 }
-void FatigueEngine::hash_state(Fnv1a64Pair& h) const {
+void FatigueEngine::hash_state(core::Fnv1a64Pair& h) const {
   hash_engine_state(h, state_, solver_->intact());
 }
 
 std::uint64_t FatigueEngine::state_hash() const {
-  Fnv1a64 h;
+  core::Fnv1a64 h;
   hash_state(h);
   return h.get();
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::fatigue

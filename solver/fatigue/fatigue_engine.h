@@ -55,21 +55,21 @@
 #include <string>
 #include <vector>
 
-#include "solver/core/fnv1a.h"
-#include "solver/core/load_block.h"
+#include "core/fnv1a.h"
+#include "core/load_block.h"
 #include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/energy.h"
 #include "solver/mesh/discretization.h"
 #include "solver/model/pd_model.h"
-#include "solver/static/static_solver.h"
+#include "solver/statics/static_solver.h"
 
-namespace peritwin {
+namespace peritwin::fatigue {
 
 /// 000 Eq. (8): s_c = sqrt(G_c / ((6μ/π + 16(κ − 2μ)/(9π²))·δ)), plane-stress κ, μ of the material.
-double critical_stretch(const Material& material, double horizon);
+double critical_stretch(const model::Material& material, double horizon);
 
 /// 000 Eq. (12): g_c = G_c/N_c with G_c = K_c²/E; 0 when K_c is not given.
-double critical_bond_energy(const Material& material, double crack_interactions);
+double critical_bond_energy(const model::Material& material, double crack_interactions);
 
 /// N_c of 000 Eq. (12) counted on a square grid with families within δ: a straight cut between two
 /// grid rows is crossed, per Δx of its length, by Σ q bonds over the family offsets (p, q) with
@@ -88,7 +88,7 @@ enum class BreakCause : std::uint8_t { fatigue = 1, overload = 2 };
 
 struct BreakEvent {
   std::int64_t cycle = 0;  ///< total cycle count at which the bond broke
-  BondIndex bond = 0;
+  mesh::BondIndex bond = 0;
   BreakCause cause = BreakCause::fatigue;
 };
 
@@ -108,7 +108,7 @@ struct EngineState {
   std::vector<std::uint8_t> intact;
   double dose[2] = {0.0, 0.0};  ///< D for phase I and phase II (dose mode)
   bool rates_valid = false;
-  LoadBlock rate_key;
+  core::LoadBlock rate_key;
   std::int64_t total_cycles = 0;
   std::vector<BreakEvent> events;
   /// Number of events per re-solve, in order: import_state replays the re-solves group by group,
@@ -122,7 +122,7 @@ struct EngineState {
   std::vector<double> damage;
   std::vector<double> max_stretch;
   std::int64_t pending_cycles = 0;
-  LoadBlock pending_key;
+  core::LoadBlock pending_key;
 };
 
 /// The field table of EngineState: every field once, with its checkpoint key, in hash order.
@@ -147,7 +147,7 @@ void for_each_field(State& s, Visit&& visit) {
   visit("pending_key", s.pending_key);
 }
 
-/// Adds a state field to a word-wise FNV-1a 64 hash (solver/core/fnv1a.h): numbers by their bits,
+/// Adds a state field to a word-wise FNV-1a 64 hash (core/fnv1a.h): numbers by their bits,
 /// strings and byte arrays packed, vectors with their length first. `Hash` is Fnv1a64 or
 /// Fnv1a64Pair (the same words into two hashes).
 template <class Hash>
@@ -176,7 +176,7 @@ void hash_field(Hash& h, const std::vector<double>& v) {
   h.reals(v.data(), v.size());
 }
 template <class Hash>
-void hash_field(Hash& h, const LoadBlock& v) {
+void hash_field(Hash& h, const core::LoadBlock& v) {
   h.real(v.p_max);
   h.real(v.r);
   h.real(v.alpha);
@@ -198,8 +198,9 @@ class FatigueEngine {
  public:
   /// `ties`: constraints outside the bond families (a loading fixture, see Tie); part of the
   /// stiffness in every solve, never broken.
-  FatigueEngine(const Discretization& disc, const PdModel& model, std::vector<Support> supports,
-                std::vector<LoadTerm> loads, FatigueSettings settings, std::vector<Tie> ties = {});
+  FatigueEngine(const mesh::Discretization& disc, const model::PdModel& model,
+                std::vector<statics::Support> supports, std::vector<statics::LoadTerm> loads,
+                FatigueSettings settings, std::vector<statics::Tie> ties = {});
 
   /// First static solve. Returns false (with failure_reason()) if the model is singular.
   bool initialize();
@@ -208,19 +209,20 @@ class FatigueEngine {
   /// higher P_max, or (bilinear law) an increment that broke a bond. true stops the block there:
   /// total_cycles() is then the cycle of those breaks and the rest of the block is not applied.
   /// Since splitting a block is exact, the state at a stop is that of applying exactly the cycles
-  /// up to it, whatever the blocks were (the twin's end of life, twin/model/twin.h).
+  /// up to it, whatever the blocks were (the twin's end of life, twin/twin.h).
   using StopCheck = std::function<bool(const FatigueEngine&)>;
 
   /// Applies a block with exact next-break stepping. Stops early on final failure, or when `stop`
   /// (optional) says so after a group of breaks (EngineStatus::stopped).
-  EngineStatus apply(const LoadBlock& block, const StopCheck& stop = {});
+  EngineStatus apply(const core::LoadBlock& block, const StopCheck& stop = {});
   /// The oracle: the same block cycle by cycle. Bilinear law: flush(), then increments of one
   /// cycle (ΔN = 1, the converged reference; not bit-equal to apply()).
-  EngineStatus apply_per_cycle(const LoadBlock& block);
+  EngineStatus apply_per_cycle(const core::LoadBlock& block);
   /// Bilinear law, the increment oracle: flush(), then integrate the block in exactly the given
   /// increments (each >= 1, summing to block.count; std::invalid_argument otherwise), nothing left
   /// pending. std::logic_error for the other laws.
-  EngineStatus apply_increments(const LoadBlock& block, std::span<const std::int64_t> increments);
+  EngineStatus apply_increments(const core::LoadBlock& block,
+                                std::span<const std::int64_t> increments);
   /// Bilinear law: integrates the pending cycles now as one increment (no-op otherwise).
   EngineStatus flush();
   /// Changes the propagation-phase limit ε̃∞ (002 Eq. 12) for the blocks applied from now on, e.g.
@@ -237,8 +239,8 @@ class FatigueEngine {
   [[nodiscard]] const std::vector<double>& node_damage() const { return node_damage_; }
   [[nodiscard]] bool failed() const { return state_.failed; }
   [[nodiscard]] const std::string& failure_reason() const { return state_.failure_reason; }
-  [[nodiscard]] const StaticSolver& solver() const { return *solver_; }
-  [[nodiscard]] const Discretization& discretization() const { return disc_; }
+  [[nodiscard]] const statics::StaticSolver& solver() const { return *solver_; }
+  [[nodiscard]] const mesh::Discretization& discretization() const { return disc_; }
   [[nodiscard]] int solves() const { return solves_; }
   /// Rank-update work over the engine's life, across solver rebuilds (refactor_every_resolves):
   /// seconds in updates (incl. their re-solves), number of updates, seconds in basis solves.
@@ -273,50 +275,51 @@ class FatigueEngine {
   [[nodiscard]] std::uint64_t state_hash() const;
   /// Adds what state_hash() hashes to `h`, read in place (export_state() copies every bond's
   /// fields; the daemon hashes after every batch).
-  void hash_state(Fnv1a64& h) const;
-  void hash_state(Fnv1a64Pair& h) const;
+  void hash_state(core::Fnv1a64& h) const;
+  void hash_state(core::Fnv1a64Pair& h) const;
 
  private:
   [[nodiscard]] bool dose_mode() const;
   [[nodiscard]] bool bilinear() const { return settings_.law == FatigueLaw::bilinear; }
   /// One bilinear increment of dn >= 0 cycles at (P_max, α); false on final failure.
-  bool bilinear_increment(const LoadBlock& key, std::int64_t dn);
-  EngineStatus apply_bilinear(const LoadBlock& block, const StopCheck& stop);
+  bool bilinear_increment(const core::LoadBlock& key, std::int64_t dn);
+  EngineStatus apply_bilinear(const core::LoadBlock& block, const StopCheck& stop);
   bool import_bilinear_state(const EngineState& state);
   /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key).
-  void prepare_rates(const LoadBlock& block);
+  void prepare_rates(const core::LoadBlock& block);
   /// Recomputes rate_ (and the dose thresholds) for `block` without folding the dose.
-  void compute_rates(const LoadBlock& block);
+  void compute_rates(const core::LoadBlock& block);
   /// Folds the accumulated dose into the anchors (λ0 ← λ, D ← 0).
   void materialize();
   /// Smallest k in [1, limit] at which some breakable bond reaches λ ≤ 0, or limit + 1.
-  std::int64_t cycles_to_next_break(const LoadBlock& block, std::int64_t limit) const;
+  std::int64_t cycles_to_next_break(const core::LoadBlock& block, std::int64_t limit) const;
   /// Advances all bonds by k cycles of the block.
-  void advance(const LoadBlock& block, std::int64_t k);
+  void advance(const core::LoadBlock& block, std::int64_t k);
   /// Life of bond b after the current dose (dose mode) or as stored (direct mode).
   [[nodiscard]] double life(std::size_t b) const;
   /// Breaks the bonds at λ ≤ 0, re-solves, cascades static failure at P_max; false on failure.
-  bool break_and_resolve(const LoadBlock& block);
+  bool break_and_resolve(const core::LoadBlock& block);
   /// Phase III cascade at the block's P_max; false on final failure.
-  bool static_cascade(const LoadBlock& block);
-  bool resolve(const std::vector<BondIndex>& newly_broken);
+  bool static_cascade(const core::LoadBlock& block);
+  bool resolve(const std::vector<mesh::BondIndex>& newly_broken);
   /// The fields of `s` every law restores as they are: lives, cycles, events, failure.
   void restore_history(const EngineState& s);
   /// Whether resolve() rebuilds the factor after its `resolves`-th re-solve.
   [[nodiscard]] bool rebuild_due(std::size_t resolves) const;
   /// Replaces the solver by a fresh one with exactly the bonds not in `intact` broken (one
   /// refactorization): the same operations whatever the previous solver went through.
-  Status rebuild_solver(std::vector<std::uint8_t> intact);
+  core::Status rebuild_solver(std::vector<std::uint8_t> intact);
   void update_phases();
   /// fork(): every member copied (the solver deeply), settings_ replaced.
   FatigueEngine(const FatigueEngine& other, const FatigueSettings& settings);
 
-  const Discretization& disc_;
-  const PdModel& model_;
-  std::vector<Support> supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
-  std::vector<LoadTerm> loads_;
-  std::vector<Tie> ties_;
-  std::unique_ptr<StaticSolver> solver_;
+  const mesh::Discretization& disc_;
+  const model::PdModel& model_;
+  std::vector<statics::Support>
+      supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
+  std::vector<statics::LoadTerm> loads_;
+  std::vector<statics::Tie> ties_;
+  std::unique_ptr<statics::StaticSolver> solver_;
   double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
   int retired_updates_ = 0;
   double retired_basis_solve_s_ = 0.0;
@@ -350,4 +353,4 @@ class FatigueEngine {
   std::int64_t unconverged_increments_ = 0;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::fatigue

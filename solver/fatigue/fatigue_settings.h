@@ -10,7 +10,7 @@
 #include "solver/fatigue/laws/remaining_life.h"
 #include "solver/fatigue/laws/strain_range.h"
 
-namespace peritwin {
+namespace peritwin::fatigue {
 
 enum class FatigueLaw {
   strain_range,  ///< 000 Eq. (14)-(20)
@@ -87,4 +87,4 @@ struct FatigueSettings {
   bool release_idle_factor = false;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::fatigue

@@ -6,7 +6,7 @@
 #include <span>
 #include <string_view>
 
-#include "solver/core/param_reader.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/fatigue_settings.h"
 
 namespace peritwin::fatigue {
@@ -15,7 +15,7 @@ struct LawEntry {
   std::string_view name;  ///< `law = "..."` of the configuration's fatigue table
   FatigueLaw law;
   /// Reads the law's keys of the fatigue table into the settings (bounds checked, errors reported).
-  void (*read)(ParamReader& r, FatigueSettings& f);
+  void (*read)(core::ParamReader& r, FatigueSettings& f);
   /// Whether a phase III criterion (000 Eq. 7-12, `static_failure`) applies: false for the
   /// bilinear law (003), whose sc plays that role.
   bool static_failure;

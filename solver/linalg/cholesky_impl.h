@@ -11,11 +11,11 @@
 #include "solver/linalg/ldlt_solve.h"
 #include "solver/linalg/sparse_cholesky.h"
 
-namespace peritwin {
+namespace peritwin::linalg {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
-Status check_after_downdate(const std::vector<double>& diagonal);
+core::Status check_after_downdate(const std::vector<double>& diagonal);
 
 /// The LDLᵀ factor after the first fused update, kept in the supernodal factor's storage instead
 /// of CHOLMOD's simplicial one (issue 18, item 5). CHOLMOD's conversion (cholmod_change_factor
@@ -94,12 +94,12 @@ struct SparseCholesky::Impl {
   }
   /// Supernodal LLᵀ -> packed LDLᵀ in place (see PackedLdlt); the factor must be supernodal
   /// numeric.
-  Status to_packed_ldlt();
+  core::Status to_packed_ldlt();
   /// Packed LDLᵀ -> CHOLMOD's simplicial LDLᵀ (for cholmod_updown, when an update adds fill):
   /// holds both copies for a moment.
-  Status to_cholmod_simplicial();
+  core::Status to_cholmod_simplicial();
   /// Makes the factor LDLᵀ: packed from supernodal (`packed_form`) or CHOLMOD's simplicial.
-  Status to_ldlt(bool packed_form);
+  core::Status to_ldlt(bool packed_form);
   void free_packed() {
     if (packed.x != nullptr) {
       cholmod_free(packed.xsize, sizeof(double), packed.x, &common);
@@ -140,4 +140,4 @@ struct SparseCholesky::Impl {
   }
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::linalg

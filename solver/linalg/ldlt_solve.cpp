@@ -6,7 +6,7 @@
 #include <system_error>
 #include <thread>
 
-namespace peritwin::ldlt {
+namespace peritwin::linalg::ldlt {
 
 FactorView view_of(const cholmod_factor& l) {
   FactorView v;
@@ -565,4 +565,4 @@ void solve(int rhs_columns, const FactorView& l, const SolveSchedule& schedule, 
   }
 }
 
-}  // namespace peritwin::ldlt
+}  // namespace peritwin::linalg::ldlt

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-namespace peritwin::ldlt {
+namespace peritwin::linalg::ldlt {
 
 /// A simplicial LDLᵀ factor as the solves and the rank update read it: column j holds lnz[j]
 /// entries, D_jj then the L_ij below the diagonal, values at lx + lp[j] and their rows (sorted,
@@ -70,4 +70,4 @@ SolveSchedule make_schedule(const FactorView& l, std::int64_t pattern_nnz);
 void solve(int rhs_columns, const FactorView& l, const SolveSchedule& schedule, bool threaded,
            double* y, bool do_forward, bool do_backward);
 
-}  // namespace peritwin::ldlt
+}  // namespace peritwin::linalg::ldlt

@@ -14,7 +14,7 @@
 
 #include "solver/linalg/cholesky_impl.h"
 
-namespace peritwin {
+namespace peritwin::linalg {
 
 namespace {
 
@@ -332,8 +332,8 @@ void sweep_two_threads(const Sweep& s, const std::vector<int>& path, int group, 
 
 }  // namespace
 
-Status SparseCholesky::modify_fused(const std::vector<Column>& added,
-                                    const std::vector<Column>& removed) {
+core::Status SparseCholesky::modify_fused(const std::vector<Column>& added,
+                                          const std::vector<Column>& removed) {
   if (added.empty() && removed.empty()) return {};
   auto& impl = *impl_;
   // The supernodal factor becomes LDLᵀ in its own storage (cholesky_impl.h, PackedLdlt): no
@@ -351,7 +351,7 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
   const bool fits = impl.schedule.sorted && impl.schedule.nested &&
                     fused_ranks(impl.inverse_perm, l, added, removed, ranks);
   if (!fits) {
-    Status r = modify(added, true);
+    core::Status r = modify(added, true);
     if (r.ok()) r = modify(removed, false);
     return r;
   }
@@ -394,4 +394,4 @@ Status SparseCholesky::modify_fused(const std::vector<Column>& added,
   return {};
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::linalg

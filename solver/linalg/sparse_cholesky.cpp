@@ -16,11 +16,11 @@
 
 #include "solver/linalg/cholesky_impl.h"
 
-namespace peritwin {
+namespace peritwin::linalg {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
-Status check_after_downdate(const std::vector<double>& diagonal) {
+core::Status check_after_downdate(const std::vector<double>& diagonal) {
   double d_min = diagonal.empty() ? 0.0 : diagonal.front();
   double d_max = d_min;
   bool positive = true;
@@ -30,22 +30,22 @@ Status check_after_downdate(const std::vector<double>& diagonal) {
     d_max = std::max(d_max, d);
   }
   if (!positive) {
-    return failure(
+    return core::failure(
         "stiffness is not positive definite after breaking bonds: a part of the model has "
         "come loose");
   }
   const double rcond = d_min / d_max;
   if (!(rcond > 1e-14)) {
-    return failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
-                   "): a part of the model has come loose");
+    return core::failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                         "): a part of the model has come loose");
   }
   return {};
 }
 
-Status SparseCholesky::Impl::to_packed_ldlt() {
+core::Status SparseCholesky::Impl::to_packed_ldlt() {
   cholmod_factor* l = factor;
   if (l == nullptr || !l->is_super || !l->is_ll || l->xtype != CHOLMOD_REAL || l->x == nullptr) {
-    return failure("packed LDLt: the factor is not a supernodal numeric LLt factor");
+    return core::failure("packed LDLt: the factor is not a supernodal numeric LLt factor");
   }
   const auto n = static_cast<std::size_t>(l->n);
   const auto nsuper = static_cast<std::size_t>(l->nsuper);
@@ -88,7 +88,7 @@ Status SparseCholesky::Impl::to_packed_ldlt() {
   // it shrinks.
   std::size_t xsize = l->xsize;
   void* x = cholmod_realloc(std::max<std::size_t>(p, 1), sizeof(double), l->x, &xsize, &common);
-  if (x == nullptr) return failure("packed LDLt: cholmod_realloc failed");
+  if (x == nullptr) return core::failure("packed LDLt: cholmod_realloc failed");
   packed.x = static_cast<double*>(x);
   packed.xsize = xsize;
   // The factor keeps its supernodal analysis as a symbolic factor (CHOLMOD's
@@ -100,7 +100,7 @@ Status SparseCholesky::Impl::to_packed_ldlt() {
   return {};
 }
 
-Status SparseCholesky::Impl::to_cholmod_simplicial() {
+core::Status SparseCholesky::Impl::to_cholmod_simplicial() {
   if (!packed_active()) return {};
   cholmod_factor* l = factor;
   const auto n = static_cast<std::size_t>(l->n);
@@ -108,7 +108,7 @@ Status SparseCholesky::Impl::to_cholmod_simplicial() {
   const auto* ls = static_cast<const int*>(l->s);
   const std::size_t lnz = static_cast<std::size_t>(packed.col_x[n]);
   auto* li = static_cast<int*>(cholmod_malloc(std::max<std::size_t>(lnz, 1), sizeof(int), &common));
-  if (li == nullptr) return failure("CHOLMOD simplicial factor: out of memory");
+  if (li == nullptr) return core::failure("CHOLMOD simplicial factor: out of memory");
   for (std::size_t j = 0; j < n; ++j) {
     std::memcpy(li + packed.col_x[j], ls + packed.col_rows[j],
                 sizeof(int) * static_cast<std::size_t>(packed.col_nz[j]));
@@ -117,7 +117,7 @@ Status SparseCholesky::Impl::to_cholmod_simplicial() {
   // numeric arrays around the packed values: Lp = col_x, Li = the rows above, Lx = packed.x.
   if (!cholmod_change_factor(CHOLMOD_PATTERN, 0, 0, 1, 1, l, &common)) {
     cholmod_free(std::max<std::size_t>(lnz, 1), sizeof(int), li, &common);
-    return failure("cholmod_change_factor failed");
+    return core::failure("cholmod_change_factor failed");
   }
   auto* lp = static_cast<int*>(cholmod_malloc(n + 1, sizeof(int), &common));
   auto* nz = static_cast<int*>(cholmod_malloc(n, sizeof(int), &common));
@@ -129,7 +129,7 @@ Status SparseCholesky::Impl::to_cholmod_simplicial() {
     cholmod_free(n + 2, sizeof(int), prev, &common);
     cholmod_free(n + 2, sizeof(int), next, &common);
     cholmod_free(std::max<std::size_t>(lnz, 1), sizeof(int), li, &common);
-    return failure("CHOLMOD simplicial factor: out of memory");
+    return core::failure("CHOLMOD simplicial factor: out of memory");
   }
   std::memcpy(lp, packed.col_x.data(), sizeof(int) * (n + 1));
   std::memcpy(nz, packed.col_nz.data(), sizeof(int) * n);
@@ -160,14 +160,14 @@ Status SparseCholesky::Impl::to_cholmod_simplicial() {
   return {};
 }
 
-Status SparseCholesky::Impl::to_ldlt(bool packed_form) {
-  if (factor == nullptr) return failure("modify before factorize");
-  if (packed_active()) return packed_form ? Status{} : to_cholmod_simplicial();
-  if (factor->xtype != CHOLMOD_REAL) return failure("modify before factorize");
+core::Status SparseCholesky::Impl::to_ldlt(bool packed_form) {
+  if (factor == nullptr) return core::failure("modify before factorize");
+  if (packed_active()) return packed_form ? core::Status{} : to_cholmod_simplicial();
+  if (factor->xtype != CHOLMOD_REAL) return core::failure("modify before factorize");
   if (!factor->is_super && !factor->is_ll) return {};
   if (packed_form && factor->is_super) return to_packed_ldlt();
   if (!cholmod_change_factor(CHOLMOD_REAL, 0, 0, 1, 1, factor, &common)) {
-    return failure("cholmod_change_factor failed");
+    return core::failure("cholmod_change_factor failed");
   }
   return {};
 }
@@ -221,7 +221,7 @@ bool SparseCholesky::automatic_two_threads() {
          std::thread::hardware_concurrency() > 1;
 }
 
-Status SparseCholesky::convert_to_ldlt() { return impl_->to_ldlt(true); }
+core::Status SparseCholesky::convert_to_ldlt() { return impl_->to_ldlt(true); }
 
 bool SparseCholesky::release_values() {
   auto& impl = *impl_;
@@ -308,8 +308,9 @@ std::vector<int> SparseCholesky::fill_reducing_ordering(const SparseMatrix& uppe
   return perm;
 }
 
-Status SparseCholesky::analyze(const SparseMatrix& upper, const std::vector<int>* permutation) {
-  if (!upper.isCompressed()) return failure("matrix is not compressed");
+core::Status SparseCholesky::analyze(const SparseMatrix& upper,
+                                     const std::vector<int>* permutation) {
+  if (!upper.isCompressed()) return core::failure("matrix is not compressed");
   impl_->free_packed();
   if (impl_->factor != nullptr) cholmod_free_factor(&impl_->factor, &impl_->common);
   impl_->inverse_perm.clear();
@@ -330,12 +331,13 @@ Status SparseCholesky::analyze(const SparseMatrix& upper, const std::vector<int>
     impl_->factor = cholmod_analyze(&a, &impl_->common);
   }
   if (impl_->factor == nullptr || impl_->common.status < CHOLMOD_OK) {
-    return failure("cholmod_analyze failed (status " + std::to_string(impl_->common.status) + ")");
+    return core::failure("cholmod_analyze failed (status " + std::to_string(impl_->common.status) +
+                         ")");
   }
   return {};
 }
 
-Status SparseCholesky::factorize(const SparseMatrix& upper) {
+core::Status SparseCholesky::factorize(const SparseMatrix& upper) {
   if (impl_->factor == nullptr) {
     if (auto r = analyze(upper); !r.ok()) return r;
   }
@@ -346,23 +348,23 @@ Status SparseCholesky::factorize(const SparseMatrix& upper) {
   impl_->forward_valid = false;
   const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
-    return failure("stiffness is not positive definite (pivot " +
-                   std::to_string(impl_->factor->minor) +
-                   "): a part of the model is unconstrained or has come loose");
+    return core::failure("stiffness is not positive definite (pivot " +
+                         std::to_string(impl_->factor->minor) +
+                         "): a part of the model is unconstrained or has come loose");
   }
   if (!ok || impl_->common.status < CHOLMOD_OK) {
-    return failure("cholmod_factorize failed (status " + std::to_string(impl_->common.status) +
-                   ")");
+    return core::failure("cholmod_factorize failed (status " +
+                         std::to_string(impl_->common.status) + ")");
   }
   const double rcond = cholmod_rcond(impl_->factor, &impl_->common);
   if (!(rcond > 1e-14)) {
-    return failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
-                   "): a part of the model is unconstrained or has come loose");
+    return core::failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                         "): a part of the model is unconstrained or has come loose");
   }
   return {};
 }
 
-Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
+core::Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   if (columns.empty()) return {};
   impl_->forward_valid = false;  // CHOLMOD's updown does not update our forward solve
   if (auto r = impl_->to_ldlt(false); !r.ok()) return r;
@@ -380,7 +382,7 @@ Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   for (const auto& c : columns) nnz += c.rows.size();
   cholmod_sparse* c =
       cholmod_allocate_sparse(n, columns.size(), nnz, 1, 1, 0, CHOLMOD_REAL, &common);
-  if (c == nullptr) return failure("cholmod_allocate_sparse failed");
+  if (c == nullptr) return core::failure("cholmod_allocate_sparse failed");
   auto* cp = static_cast<int*>(c->p);
   auto* ci = static_cast<int*>(c->i);
   auto* cx = static_cast<double*>(c->x);
@@ -407,7 +409,7 @@ Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
   const int ok = cholmod_updown(add ? 1 : 0, c, l, &common);
   cholmod_free_sparse(&c, &common);
   if (!ok || common.status < CHOLMOD_OK) {
-    return failure("cholmod_updown failed (status " + std::to_string(common.status) + ")");
+    return core::failure("cholmod_updown failed (status " + std::to_string(common.status) + ")");
   }
   // The update changed the columns on the elimination-tree paths from each column's first row
   // to the root: refresh D there (all of it if the update added fill), then check the whole D.
@@ -514,4 +516,4 @@ void SparseCholesky::solve_with_cholmod(Eigen::MatrixXd& rhs) const {
   cholmod_free_dense(&x, &common);
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::linalg

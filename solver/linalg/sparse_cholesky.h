@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 
-namespace peritwin {
+namespace peritwin::linalg {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-// Factorizations, updates and solves report a Status (solver/core/expected.h): OK, or the
+// Factorizations, updates and solves report a Status (core/expected.h): OK, or the
 // reason (not positive definite, numerically singular — a part of the model has come loose — or
 // a CHOLMOD failure).
 
@@ -36,7 +36,7 @@ class SparseCholesky {
 
   /// Fill-reducing ordering and symbolic factorization of the upper triangle `upper`. With a
   /// permutation (new position -> row), that ordering is used as given.
-  Status analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
+  core::Status analyze(const SparseMatrix& upper, const std::vector<int>* permutation = nullptr);
   /// A fill-reducing ordering (METIS nested dissection, AMD when METIS does worse) of the
   /// symmetric pattern whose upper triangle is `upper`; values are ignored.
   static std::vector<int> fill_reducing_ordering(const SparseMatrix& upper,
@@ -44,7 +44,7 @@ class SparseCholesky {
   /// Numeric factorization; the pattern must be the analyzed one. Reports a matrix that is not
   /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
   /// a piece of the model that came loose) as a typed failure.
-  Status factorize(const SparseMatrix& upper);
+  core::Status factorize(const SparseMatrix& upper);
   /// A sparse column in the analyzed matrix's (unpermuted) row numbering.
   struct Column {
     std::vector<int> rows;
@@ -53,18 +53,18 @@ class SparseCholesky {
   /// Low-rank modification of the factor: A ← A + Σ c·cᵀ (add = true) or A − Σ c·cᵀ, by CHOLMOD's
   /// rank-k update/downdate (the factor becomes simplicial LDLᵀ on the first call). Reports a
   /// downdate that leaves the matrix not positive definite or numerically singular.
-  Status modify(const std::vector<Column>& columns, bool add);
+  core::Status modify(const std::vector<Column>& columns, bool add);
   /// A ← A + Σ a·aᵀ − Σ r·rᵀ in one sweep over the factor (peritwin's own multiple-rank update,
   /// method C1 rank by rank, the updates before the downdates, 16 ranks per sweep, the rows split
   /// between two threads on large paths; same arithmetic on one thread). Requires the rows of
   /// each column to be in the factor's column of its first row (no fill), else falls back to
   /// modify(added, true) then modify(removed, false). Reports like modify().
-  Status modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
+  core::Status modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
   /// Turns the supernodal LLᵀ factor into LDLᵀ in place, in its own storage (what the first
   /// modify_fused() does, with the same values): 8 B per entry of L, the supernodes' upper
   /// triangles given back. Solves with 1-3 columns then use peritwin's solve instead of
   /// CHOLMOD's (another rounding); factorize() restores the supernodal factor.
-  Status convert_to_ldlt();
+  core::Status convert_to_ldlt();
   /// Frees the factor's values, keeping the analysis (factorize() computes them again). Only a
   /// supernodal or packed factor (CHOLMOD's simplicial one has no analysis to keep): returns
   /// whether it freed them.
@@ -102,4 +102,4 @@ class SparseCholesky {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::linalg

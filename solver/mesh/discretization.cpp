@@ -5,7 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 double partial_volume_factor(double bond_length, double horizon, double dx) {
   // 001 Eq. (36)
@@ -187,4 +187,4 @@ Discretization discretize(const DetailGeometry& geometry, double dx, double hori
   return d;
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

@@ -12,7 +12,7 @@
 
 #include "solver/mesh/geometry.h"
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 using NodeIndex = std::int32_t;
 using BondIndex = std::int32_t;
@@ -74,4 +74,4 @@ struct Discretization {
 Discretization discretize(const DetailGeometry& geometry, double dx, double horizon,
                           const GridPerturbation& perturbation = {});
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

@@ -8,7 +8,7 @@
 #include <string>
 #include <utility>
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 Rectangle Region::bounding_box() const {
   switch (shape) {
@@ -161,18 +161,18 @@ Rectangle DetailGeometry::bounding_box() const {
   return box;
 }
 
-Status DetailGeometry::validate() const {
-  if (outline.empty()) return failure("outline: at least one entry is required");
+core::Status DetailGeometry::validate() const {
+  if (outline.empty()) return core::failure("outline: at least one entry is required");
   for (std::size_t i = 0; i < outline.size(); ++i) {
     const Region& entry = outline[i];
     const std::string name = "outline[" + std::to_string(i) + "]";
     if (entry.shape == Region::Shape::rectangle) {
       const auto& r = entry.rectangle;
       if (!(r.x_max > r.x_min && r.y_max > r.y_min)) {
-        return failure(name + ": x_max > x_min and y_max > y_min are required");
+        return core::failure(name + ": x_max > x_min and y_max > y_min are required");
       }
     } else if (!(entry.area() > 0)) {
-      return failure(name + ": the shape encloses no area");
+      return core::failure(name + ": the shape encloses no area");
     }
   }
   const Rectangle box = bounding_box();
@@ -180,28 +180,28 @@ Status DetailGeometry::validate() const {
     const Region& h = holes[i];
     const std::string name = "holes[" + std::to_string(i) + "]";
     if (h.shape == Region::Shape::circle && !(h.circle.radius > 0)) {
-      return failure(name + ": radius must be > 0");
+      return core::failure(name + ": radius must be > 0");
     }
-    if (!(h.area() > 0)) return failure(name + ": the hole encloses no area");
+    if (!(h.area() > 0)) return core::failure(name + ": the hole encloses no area");
     const Rectangle hole_box = h.bounding_box();
     if (hole_box.x_max < box.x_min || hole_box.x_min > box.x_max || hole_box.y_max < box.y_min ||
         hole_box.y_min > box.y_max) {
-      return failure(name + ": the hole lies outside the body");
+      return core::failure(name + ": the hole lies outside the body");
     }
   }
   for (std::size_t i = 0; i < notches.size(); ++i) {
     const std::vector<Point>& path = notches[i].path;
     const std::string name = "notches[" + std::to_string(i) + "]";
-    if (path.size() < 2) return failure(name + ": a notch path needs at least 2 points");
+    if (path.size() < 2) return core::failure(name + ": a notch path needs at least 2 points");
     for (std::size_t k = 1; k < path.size(); ++k) {
       if (path[k].x == path[k - 1].x && path[k].y == path[k - 1].y) {
-        return failure(name + ": point " + std::to_string(k) + " repeats the previous one");
+        return core::failure(name + ": point " + std::to_string(k) + " repeats the previous one");
       }
     }
   }
-  if (!(thickness > 0)) return failure("thickness must be > 0");
-  if (!(rigid_factor >= 1)) return failure("rigid_factor must be >= 1");
+  if (!(thickness > 0)) return core::failure("thickness must be > 0");
+  if (!(rigid_factor >= 1)) return core::failure("rigid_factor must be >= 1");
   return {};
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

@@ -8,10 +8,10 @@
 #include <utility>
 #include <vector>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 #include "solver/mesh/polygon.h"
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 struct Circle {
   Point centre;
@@ -104,7 +104,7 @@ struct DetailGeometry {
   /// each by the lowest index; with no surface at all: {outline, -1, +inf}.
   [[nodiscard]] SurfacePlace nearest_surface(Point p) const;
   /// OK, or a message naming what is wrong.
-  [[nodiscard]] Status validate() const;
+  [[nodiscard]] core::Status validate() const;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <string>
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 namespace {
 
@@ -98,32 +98,33 @@ struct Corner {
 
 /// Each vertex on its own: finite, distinct from the previous one, a finite fillet radius >= 0,
 /// and an arc edge's radii at its two ends that agree.
-Status check_vertices(const std::vector<PolygonVertex>& vertices) {
+core::Status check_vertices(const std::vector<PolygonVertex>& vertices) {
   const std::size_t n = vertices.size();
   const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
   for (std::size_t k = 0; k < n; ++k) {
     const PolygonVertex& v = vertices[k];
     const Point from = vertices[prev(k)].at;
     if (!std::isfinite(v.at.x) || !std::isfinite(v.at.y)) {
-      return Error{vertex_name(k), "coordinates must be finite"};
+      return core::Error{vertex_name(k), "coordinates must be finite"};
     }
     if (same(v.at, from)) {
-      return Error{vertex_name(k), "coincides with the previous vertex " + vertex_name(prev(k))};
+      return core::Error{vertex_name(k),
+                         "coincides with the previous vertex " + vertex_name(prev(k))};
     }
     if (!(v.fillet >= 0.0) || !std::isfinite(v.fillet)) {
-      return Error{vertex_name(k), "the fillet radius must be finite and >= 0"};
+      return core::Error{vertex_name(k), "the fillet radius must be finite and >= 0"};
     }
     if (v.edge != PolygonVertex::Edge::straight) {
       const double r0 = point_distance(v.arc_centre, from);
       const double r1 = point_distance(v.arc_centre, v.at);
       if (!(r0 > 0.0)) {
-        return Error{vertex_name(k), "the arc centre coincides with the previous vertex"};
+        return core::Error{vertex_name(k), "the arc centre coincides with the previous vertex"};
       }
       if (std::abs(r1 - r0) > 1e-6 * r0) {
-        return Error{vertex_name(k), "the arc ends " + number(r1) +
-                                         " m from its centre but starts (at vertex " +
-                                         vertex_name(prev(k)) + ") " + number(r0) +
-                                         " m from it: the radii must agree to 1e-6"};
+        return core::Error{vertex_name(k), "the arc ends " + number(r1) +
+                                               " m from its centre but starts (at vertex " +
+                                               vertex_name(prev(k)) + ") " + number(r0) +
+                                               " m from it: the radii must agree to 1e-6"};
       }
     }
   }
@@ -132,7 +133,7 @@ Status check_vertices(const std::vector<PolygonVertex>& vertices) {
 
 /// Fillets: the tangent points on the two edges at the corner and the arc's centre; each straight
 /// edge must then hold its two ends' tangents.
-Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& vertices) {
+core::Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& vertices) {
   const std::size_t n = vertices.size();
   const auto prev = [n](std::size_t k) { return (k + n - 1) % n; };
   const auto next = [n](std::size_t k) { return (k + 1) % n; };
@@ -142,7 +143,8 @@ Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& v
     if (v.fillet == 0.0) continue;
     if (v.edge != PolygonVertex::Edge::straight ||
         vertices[next(k)].edge != PolygonVertex::Edge::straight) {
-      return Error{vertex_name(k), "a fillet needs straight edges on both sides of its vertex"};
+      return core::Error{vertex_name(k),
+                         "a fillet needs straight edges on both sides of its vertex"};
     }
     const Point a = vertices[prev(k)].at;
     const Point b = vertices[next(k)].at;
@@ -153,7 +155,8 @@ Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& v
     const double cross = u1.x * u2.y - u1.y * u2.x;
     const double dot = std::clamp(u1.x * u2.x + u1.y * u2.y, -1.0, 1.0);
     if (cross == 0.0) {
-      return Error{vertex_name(k), "no corner to round: the edges at the vertex are collinear"};
+      return core::Error{vertex_name(k),
+                         "no corner to round: the edges at the vertex are collinear"};
     }
     const double half = 0.5 * std::acos(dot);  // half the corner angle θ between the edges
     Corner& c = corners[k];
@@ -172,9 +175,9 @@ Expected<std::vector<Corner>> fillet_corners(const std::vector<PolygonVertex>& v
     const double need = corners[prev(k)].tangent + corners[k].tangent;
     const double have = point_distance(vertices[prev(k)].at, vertices[k].at);
     if (need > have * (1.0 + 1e-12)) {
-      return Error{vertex_name(k), "the fillets need " + number(need) +
-                                       " m of the edge from vertex " + vertex_name(prev(k)) +
-                                       ", which is " + number(have) + " m long"};
+      return core::Error{vertex_name(k), "the fillets need " + number(need) +
+                                             " m of the edge from vertex " + vertex_name(prev(k)) +
+                                             ", which is " + number(have) + " m long"};
     }
   }
   return corners;
@@ -209,7 +212,7 @@ std::vector<BoundaryPiece> boundary_pieces(const std::vector<PolygonVertex>& vs,
 
 /// The flattened boundary (segments flat[i] -> flat[i + 1], closed) is simple: no segment turns
 /// back along the next one, and no two non-adjacent segments meet.
-Status check_simple(const std::vector<Point>& flat, const std::vector<int>& flat_vertex) {
+core::Status check_simple(const std::vector<Point>& flat, const std::vector<int>& flat_vertex) {
   const std::size_t m = flat.size();
   for (std::size_t i = 0; i < m; ++i) {
     const Point a0 = flat[i];
@@ -218,16 +221,16 @@ Status check_simple(const std::vector<Point>& flat, const std::vector<int>& flat
     const Point b1 = flat[(i + 2) % m];
     if (orientation(a0, a1, b1) == 0.0 &&
         (a1.x - a0.x) * (b1.x - a1.x) + (a1.y - a0.y) * (b1.y - a1.y) < 0.0) {
-      return Error{vertex_name(static_cast<std::size_t>(flat_vertex[i])),
-                   "the boundary turns back on itself"};
+      return core::Error{vertex_name(static_cast<std::size_t>(flat_vertex[i])),
+                         "the boundary turns back on itself"};
     }
     for (std::size_t j = i + 2; j < m; ++j) {
       if (i == 0 && j + 1 == m) continue;  // the last segment is adjacent to the first
       if (segments_cross(a0, a1, flat[j], flat[(j + 1) % m])) {
-        return Error{vertex_name(static_cast<std::size_t>(flat_vertex[j])),
-                     "the boundary crosses itself (the edge to this vertex meets the edge to "
-                     "vertex " +
-                         vertex_name(static_cast<std::size_t>(flat_vertex[i])) + ")"};
+        return core::Error{vertex_name(static_cast<std::size_t>(flat_vertex[j])),
+                           "the boundary crosses itself (the edge to this vertex meets the edge to "
+                           "vertex " +
+                               vertex_name(static_cast<std::size_t>(flat_vertex[i])) + ")"};
       }
     }
   }
@@ -275,14 +278,15 @@ double BoundaryPiece::distance(Point p) const {
   return std::min(point_distance(p, from), point_distance(p, to));
 }
 
-Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
+core::Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
   const std::size_t n = vertices.size();
-  if (n < 3) return failure("a polygon needs at least 3 vertices (got " + std::to_string(n) + ")");
+  if (n < 3)
+    return core::failure("a polygon needs at least 3 vertices (got " + std::to_string(n) + ")");
   if (n > kMaxVertices) {
-    return failure("a polygon may have at most " + std::to_string(kMaxVertices) +
-                   " vertices (got " + std::to_string(n) + ")");
+    return core::failure("a polygon may have at most " + std::to_string(kMaxVertices) +
+                         " vertices (got " + std::to_string(n) + ")");
   }
-  if (Status valid = check_vertices(vertices); !valid) return valid.error();
+  if (core::Status valid = check_vertices(vertices); !valid) return valid.error();
   auto corners = fillet_corners(vertices);
   if (!corners) return corners.error();
 
@@ -292,8 +296,8 @@ Expected<Polygon> Polygon::make(std::vector<PolygonVertex> vertices) {
   std::vector<Point> flat;
   std::vector<int> flat_vertex;  // the drawn vertex of the flat segment starting at flat[i]
   polygon.trace_boundary(flat, flat_vertex);
-  if (Status simple = check_simple(flat, flat_vertex); !simple) return simple.error();
-  if (!(polygon.area() > 0.0)) return failure("the polygon encloses no area");
+  if (core::Status simple = check_simple(flat, flat_vertex); !simple) return simple.error();
+  if (!(polygon.area() > 0.0)) return core::failure("the polygon encloses no area");
   return polygon;
 }
 
@@ -397,4 +401,4 @@ double Polygon::perimeter() const {
   return sum;
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

@@ -6,9 +6,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 
-namespace peritwin {
+namespace peritwin::mesh {
 
 struct Point {
   double x = 0.0;
@@ -80,7 +80,7 @@ class Polygon {
   /// consistent, fillets on corners between straight edges that fit beside their neighbours', no
   /// self-intersection (arcs checked as chords of at most 2°), non-zero area. The error's field is
   /// "[k]" naming the vertex (0-based) when one is to blame.
-  static Expected<Polygon> make(std::vector<PolygonVertex> vertices);
+  static core::Expected<Polygon> make(std::vector<PolygonVertex> vertices);
 
   [[nodiscard]] const std::vector<PolygonVertex>& vertices() const { return vertices_; }
   [[nodiscard]] const std::vector<BoundaryPiece>& boundary() const { return boundary_; }
@@ -113,4 +113,4 @@ class Polygon {
   Rectangle box_;
 };
 
-}  // namespace peritwin
+}  // namespace peritwin::mesh

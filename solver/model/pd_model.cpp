@@ -6,7 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
-namespace peritwin {
+namespace peritwin::model {
 
 namespace {
 constexpr double pi = std::numbers::pi;
@@ -19,18 +19,19 @@ double isotropic_energy_coefficient(double e, double nu, PlaneCondition plane) {
 
 }  // namespace
 
-Status validate(const Material& material, const ModelOptions& options) {
-  if (!(material.youngs_modulus > 0)) return failure("material.youngs_modulus must be > 0");
+core::Status validate(const Material& material, const ModelOptions& options) {
+  if (!(material.youngs_modulus > 0)) return core::failure("material.youngs_modulus must be > 0");
   if (options.kind == ModelKind::state_based) {
     if (!(material.poisson_ratio > -1.0 && material.poisson_ratio < 0.5)) {
-      return failure("material.poisson_ratio must lie in (-1, 0.5)");
+      return core::failure("material.poisson_ratio must lie in (-1, 0.5)");
     }
     if (options.kernel != Kernel::constant) {
-      return failure(
+      return core::failure(
           "model.kernel: the state-based constants of 000 Eq. (4) assume the constant kernel");
     }
   }
-  if (material.fracture_toughness < 0) return failure("material.fracture_toughness must be >= 0");
+  if (material.fracture_toughness < 0)
+    return core::failure("material.fracture_toughness must be >= 0");
   return {};
 }
 
@@ -89,7 +90,7 @@ StateBasedConstants state_based_constants(const Material& material, PlaneConditi
   return c;
 }
 
-PdModel build_model(const Discretization& disc, const Material& material,
+PdModel build_model(const mesh::Discretization& disc, const Material& material,
                     const ModelOptions& options, double rigid_factor) {
   PdModel m;
   m.material = material;
@@ -124,7 +125,7 @@ PdModel build_model(const Discretization& disc, const Material& material,
     for (const auto k :
          {static_cast<std::size_t>(disc.bond_i[b]), static_cast<std::size_t>(disc.bond_j[b])}) {
       const double v = disc.volume[static_cast<std::size_t>(
-          disc.other_end(static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
+          disc.other_end(static_cast<mesh::BondIndex>(b), static_cast<mesh::NodeIndex>(k)))];
       energy_moments[k] += w * v * modes * basis.transpose();
       dil_moments[k] += beta * v * dil * dil.transpose();
     }
@@ -204,7 +205,7 @@ PdModel build_model(const Discretization& disc, const Material& material,
   return m;
 }
 
-void bond_stretches(const Discretization& disc, const std::vector<double>& u,
+void bond_stretches(const mesh::Discretization& disc, const std::vector<double>& u,
                     std::vector<double>& stretch) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   stretch.resize(nb);
@@ -216,7 +217,7 @@ void bond_stretches(const Discretization& disc, const std::vector<double>& u,
   }
 }
 
-void dilatations(const Discretization& disc, const PdModel& model,
+void dilatations(const mesh::Discretization& disc, const PdModel& model,
                  const std::vector<std::uint8_t>& intact, const std::vector<double>& stretch,
                  std::vector<double>& dilatation) {
   dilatation.assign(static_cast<std::size_t>(disc.num_nodes()), 0.0);
@@ -229,7 +230,7 @@ void dilatations(const Discretization& disc, const PdModel& model,
   }
 }
 
-void bond_energy_release_rates(const Discretization& disc, const PdModel& model,
+void bond_energy_release_rates(const mesh::Discretization& disc, const PdModel& model,
                                const std::vector<double>& stretch,
                                const std::vector<double>& dilatation, std::vector<double>& g) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
@@ -251,22 +252,22 @@ void bond_energy_release_rates(const Discretization& disc, const PdModel& model,
   }
 }
 
-void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+void damage_index(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
                   std::vector<double>& damage) {
   const auto nn = static_cast<std::size_t>(disc.num_nodes());
   damage.assign(nn, 0.0);
   for (std::size_t k = 0; k < nn; ++k) damage[k] = node_damage_index(disc, intact, k);
 }
 
-double node_damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+double node_damage_index(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
                          std::size_t k) {
   double total = 0.0;
   double alive = 0.0;
   for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
     const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
-    const double w =
-        disc.bond_volume_factor[b] * disc.volume[static_cast<std::size_t>(disc.other_end(
-                                         static_cast<BondIndex>(b), static_cast<NodeIndex>(k)))];
+    const double w = disc.bond_volume_factor[b] *
+                     disc.volume[static_cast<std::size_t>(disc.other_end(
+                         static_cast<mesh::BondIndex>(b), static_cast<mesh::NodeIndex>(k)))];
     total += w;
     if (intact[b]) alive += w;
   }
@@ -280,10 +281,10 @@ double straight_crack_face_damage(double horizon_ratio) {
   // A square of unit cells wide enough that the middle node's family lies inside, cut along
   // y = 0 (between two rows) from edge to edge.
   const double half = std::ceil(horizon_ratio) + 2.0;
-  DetailGeometry plate;
-  plate.outline.push_back(Rectangle{-half, -half, half, half});
+  mesh::DetailGeometry plate;
+  plate.outline.push_back(mesh::Rectangle{-half, -half, half, half});
   plate.notches.push_back({"split", {{-half - 1.0, 0.0}, {half + 1.0, 0.0}}});
-  const Discretization disc = discretize(plate, 1.0, horizon_ratio);
+  const mesh::Discretization disc = discretize(plate, 1.0, horizon_ratio);
   std::vector<std::uint8_t> intact(disc.bond_precut.size());
   for (std::size_t b = 0; b < intact.size(); ++b) intact[b] = disc.bond_precut[b] ? 0 : 1;
   std::vector<double> damage;
@@ -291,4 +292,4 @@ double straight_crack_face_damage(double horizon_ratio) {
   return damage[static_cast<std::size_t>(disc.nearest_node({0.5, 0.5}))];
 }
 
-}  // namespace peritwin
+}  // namespace peritwin::model

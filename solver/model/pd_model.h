@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
 #include "solver/mesh/discretization.h"
 
-namespace peritwin {
+namespace peritwin::model {
 
 enum class ModelKind { bond_based, state_based };
 enum class Kernel { constant, conical, gaussian };
@@ -37,7 +37,7 @@ struct ModelOptions {
 };
 
 /// OK, or a message naming the offending field.
-Status validate(const Material& material, const ModelOptions& options);
+core::Status validate(const Material& material, const ModelOptions& options);
 
 /// Poisson's ratio the model actually represents: bond-based 2D fixes ν = 1/3 in plane stress and
 /// ν = 1/4 in plane strain; state-based represents the material's ν.
@@ -82,22 +82,22 @@ struct PdModel {
   std::vector<double> dilatation_stiffness;
 };
 
-PdModel build_model(const Discretization& disc, const Material& material,
+PdModel build_model(const mesh::Discretization& disc, const Material& material,
                     const ModelOptions& options, double rigid_factor);
 
 /// Linearized bond stretch s = e·(u_j − u_i)/ξ (000 Eq. 3d); u interleaved [u0, v0, u1, v1, ...].
-void bond_stretches(const Discretization& disc, const std::vector<double>& u,
+void bond_stretches(const mesh::Discretization& disc, const std::vector<double>& u,
                     std::vector<double>& stretch);
 
 /// Node dilatation θ_k = Σ q_b ψ_b s_b (000 Eq. 3c); zero for the bond-based model.
-void dilatations(const Discretization& disc, const PdModel& model,
+void dilatations(const mesh::Discretization& disc, const PdModel& model,
                  const std::vector<std::uint8_t>& intact, const std::vector<double>& stretch,
                  std::vector<double>& dilatation);
 
 /// Bond energy release rate ḡ (J/m²) of 000 Eq. (31), with the bond's force density written
 /// with the same (corrected) coefficients the stiffness uses; for the bond-based model a = 0 and
 /// 4b is the micromodulus c (000 Eq. 32 and the remark after it).
-void bond_energy_release_rates(const Discretization& disc, const PdModel& model,
+void bond_energy_release_rates(const mesh::Discretization& disc, const PdModel& model,
                                const std::vector<double>& stretch,
                                const std::vector<double>& dilatation, std::vector<double>& g);
 
@@ -107,10 +107,10 @@ void bond_energy_release_rates(const Discretization& disc, const PdModel& model,
 double straight_crack_face_damage(double horizon_ratio);
 
 /// Damage index φ_k = 1 − Σ ψ·β·V / Σ β·V over the family (000 Eq. 13).
-void damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+void damage_index(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
                   std::vector<double>& damage);
 /// The same for one node k (damage_index computes every node with it: equal bits).
-double node_damage_index(const Discretization& disc, const std::vector<std::uint8_t>& intact,
+double node_damage_index(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
                          std::size_t k);
 
-}  // namespace peritwin
+}  // namespace peritwin::model

@@ -11,14 +11,14 @@ namespace peritwin::dashboard {
 namespace {
 
 TEST(BoundedHistory, KeepsEverythingBelowTheBound) {
-  BoundedHistory<2> h(100);
+  dashboard::BoundedHistory<2> h(100);
   for (int i = 0; i < 100; ++i) h.push({double(i), double(-i)});
   ASSERT_EQ(h.size(), 100u);
   for (int i = 0; i < 100; ++i) EXPECT_EQ(h.rows()[std::size_t(i)][0], double(i));
 }
 
 TEST(BoundedHistory, BoundHoldsAndEndsAndExtremesStayAfterManyPushes) {
-  BoundedHistory<2> h(10000);
+  dashboard::BoundedHistory<2> h(10000);
   const int n = 1'000'003;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (int i = 0; i < n; ++i) {
@@ -50,7 +50,7 @@ TEST(BoundedHistory, BoundHoldsAndEndsAndExtremesStayAfterManyPushes) {
 }
 
 TEST(BoundedHistory, MonotoneInputKeepsItsEnds) {
-  BoundedHistory<1> h(1000);
+  dashboard::BoundedHistory<1> h(1000);
   for (int i = 0; i < 250'000; ++i) h.push({1.0 + i * 0.5});
   ASSERT_LE(h.size(), 1000u);
   EXPECT_EQ(h.rows().front()[0], 1.0);
@@ -59,7 +59,7 @@ TEST(BoundedHistory, MonotoneInputKeepsItsEnds) {
 }
 
 TEST(BoundedHistory, NanIsNoExtremeAndIsKeptAsData) {
-  BoundedHistory<2> h(50);
+  dashboard::BoundedHistory<2> h(50);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (int i = 0; i < 5000; ++i) h.push({double(i), i % 7 == 0 ? nan : double(i % 13)});
   ASSERT_LE(h.size(), 50u);

@@ -15,13 +15,11 @@
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/mesh.h"
-#include "twin/io/results_writer.h"
+#include "outputs/results_writer.h"
 
 namespace peritwin::dashboard {
 namespace {
 
-using messages::channel;
-using messages::Kind;
 using nlohmann::json;
 
 template <typename Message>
@@ -77,15 +75,15 @@ peritwin_msgs::damage_state_t state(std::int64_t seq, std::int64_t cycles, doubl
 
 const auto kT0 = Clock::time_point{} + std::chrono::hours(1);
 
-void feed(Store& store, const std::string& ch, const std::vector<unsigned char>& bytes,
+void feed(dashboard::Store& store, const std::string& ch, const std::vector<unsigned char>& bytes,
           Clock::time_point at = kT0) {
   store.on_message(ch, bytes.data(), bytes.size(), at);
 }
 
 TEST(DashboardStore, DetailJsonStartsWithTheStateJsonFields) {
-  Store store;
+  dashboard::Store store;
   const auto s = state(3, 3000, 0.0021);
-  feed(store, channel("b1-ct", Kind::kState), encode(s));
+  feed(store, messages::channel("b1-ct", messages::Kind::kState), encode(s));
   const auto text = store.detail_json("b1-ct", kT0);
   ASSERT_TRUE(text);
   const auto j = json::parse(*text);
@@ -149,7 +147,7 @@ std::vector<std::string> top_level_keys(const std::string& text) {
 // awkward values: NaN and infinities (null), -0.0, tiny and huge numbers, a non-ASCII and a
 // control character in strings, and before any state (no splice).
 TEST(DashboardStore, DetailJsonIsTheDumpOfItsOwnParseWithNoKeyTwice) {
-  Store store;
+  dashboard::Store store;
   auto s = state(5, 5000, 1.0e-300);
   s.max_damage = -0.0;
   s.k_i = std::numeric_limits<double>::infinity();
@@ -157,8 +155,8 @@ TEST(DashboardStore, DetailJsonIsTheDumpOfItsOwnParseWithNoKeyTwice) {
   s.remaining_cycles_low = 0.1 + 0.2;
   s.remaining_life_source = "r\xc3\xa9play\x01\"";
   s.state_hash = "\t";
-  feed(store, channel("b1-ct", Kind::kState), encode(s));
-  feed(store, channel("b1-dg", Kind::kStatus), encode([] {
+  feed(store, messages::channel("b1-ct", messages::Kind::kState), encode(s));
+  feed(store, messages::channel("b1-dg", messages::Kind::kStatus), encode([] {
          peritwin_msgs::status_t st{};
          st.detail_id = "b1-dg";
          st.health = "ok";
@@ -176,12 +174,13 @@ TEST(DashboardStore, DetailJsonIsTheDumpOfItsOwnParseWithNoKeyTwice) {
 }
 
 TEST(DashboardStore, HistoryHasOnePointPerStateAndNullForNoEstimate) {
-  Store store;
+  dashboard::Store store;
   for (int seq = 0; seq <= 4; ++seq) {
-    feed(store, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+    feed(store, messages::channel("b1-ct", messages::Kind::kState),
+         encode(state(seq, 1000 * seq, 0.001 * seq)));
   }
   // The daemon answers a duplicate batch with the same STATE again: no new point.
-  feed(store, channel("b1-ct", Kind::kState), encode(state(4, 4000, 0.004)));
+  feed(store, messages::channel("b1-ct", messages::Kind::kState), encode(state(4, 4000, 0.004)));
   const auto h = json::parse(*store.history_json("b1-ct"));
   EXPECT_EQ(h["state_seq"], json({0, 1, 2, 3, 4}));
   EXPECT_EQ(h["cycles"], json({0, 1000, 2000, 3000, 4000}));
@@ -194,16 +193,19 @@ TEST(DashboardStore, HistoryHasOnePointPerStateAndNullForNoEstimate) {
 }
 
 TEST(DashboardStore, UndecodableMessagesAreCountedAndIgnored) {
-  Store store;
+  dashboard::Store store;
   const auto good = encode(state(1, 1000, 0.0));
-  feed(store, channel("b1-ct", Kind::kState), good);
+  feed(store, messages::channel("b1-ct", messages::Kind::kState), good);
   // Truncated, garbage, another type on the STATE channel, a forged count, a wrong detail.
-  feed(store, channel("b1-ct", Kind::kState),
+  feed(store, messages::channel("b1-ct", messages::Kind::kState),
        std::vector<unsigned char>(good.begin(), good.end() - 3));
-  feed(store, channel("b1-ct", Kind::kStatus), std::vector<unsigned char>(40, 0xff));
-  feed(store, channel("b1-ct", Kind::kReject), good);
-  feed(store, channel("b1-ct", Kind::kField), std::vector<unsigned char>{1, 2, 3});
-  feed(store, channel("other", Kind::kState), good);  // detail_id b1-ct on OTHER's channel
+  feed(store, messages::channel("b1-ct", messages::Kind::kStatus),
+       std::vector<unsigned char>(40, 0xff));
+  feed(store, messages::channel("b1-ct", messages::Kind::kReject), good);
+  feed(store, messages::channel("b1-ct", messages::Kind::kField),
+       std::vector<unsigned char>{1, 2, 3});
+  feed(store, messages::channel("other", messages::Kind::kState),
+       good);  // detail_id b1-ct on OTHER's channel
   feed(store, "PERITWIN_bad", good);
   EXPECT_EQ(store.undecodable_total(), 6);
   const auto j = json::parse(*store.detail_json("b1-ct", kT0));
@@ -214,15 +216,15 @@ TEST(DashboardStore, UndecodableMessagesAreCountedAndIgnored) {
 }
 
 TEST(DashboardStore, StatusRejectFieldAndStaleness) {
-  Store store;
+  dashboard::Store store;
   peritwin_msgs::status_t st{};
   st.detail_id = "b1-ct";
   st.health = "degraded";
   st.last_seq = 2;
-  feed(store, channel("b1-ct", Kind::kStatus), encode(st));
+  feed(store, messages::channel("b1-ct", messages::Kind::kStatus), encode(st));
   peritwin_msgs::reject_t r = messages::reject_message(
       "b1-ct", "replay", 9, {messages::Verdict::gap, "seq", "seq 9 skips 3..8"}, 1);
-  feed(store, channel("b1-ct", Kind::kReject), encode(r));
+  feed(store, messages::channel("b1-ct", messages::Kind::kReject), encode(r));
   peritwin_msgs::damage_field_t f{};
   f.detail_id = "b1-ct";
   f.mesh_hash = "0123456789abcdef";
@@ -230,7 +232,7 @@ TEST(DashboardStore, StatusRejectFieldAndStaleness) {
   f.total_nodes = 2;
   f.num_nodes = 2;
   f.damage = {0.0F, 0.5F};
-  feed(store, channel("b1-ct", Kind::kField), encode(f));
+  feed(store, messages::channel("b1-ct", messages::Kind::kField), encode(f));
   auto j = json::parse(*store.detail_json("b1-ct", kT0 + std::chrono::seconds(1)));
   EXPECT_EQ(j["health"], "degraded");
   EXPECT_EQ(j["status_age_s"], 1.0);
@@ -297,8 +299,8 @@ std::vector<peritwin_msgs::damage_field_t> field_chunks(std::int64_t seq, const 
 }
 
 TEST(DashboardStore, MeshAndFieldAreReassembledServedAndRequestedWhenMissing) {
-  Store store;
-  feed(store, channel("b1-ct", Kind::kState), encode(state(1, 1000, 0.002)));
+  dashboard::Store store;
+  feed(store, messages::channel("b1-ct", messages::Kind::kState), encode(state(1, 1000, 0.002)));
   EXPECT_EQ(store.mesh_json("b1-ct"), std::string());  // known, no mesh yet
   EXPECT_FALSE(store.mesh_json("nope"));
   // Without a mesh: asked for once, again only after kMeshRequestPeriodS.
@@ -314,8 +316,9 @@ TEST(DashboardStore, MeshAndFieldAreReassembledServedAndRequestedWhenMissing) {
   // A malformed chunk is counted and its reason kept; the mesh still completes after it.
   auto bad = chunks[1];
   bad.chunk_index = 5;
-  feed(store, channel("b1-ct", Kind::kMesh), encode(bad));
-  for (const auto& c : chunks) feed(store, channel("b1-ct", Kind::kMesh), encode(c));
+  feed(store, messages::channel("b1-ct", messages::Kind::kMesh), encode(bad));
+  for (const auto& c : chunks)
+    feed(store, messages::channel("b1-ct", messages::Kind::kMesh), encode(c));
   auto j = json::parse(*store.detail_json("b1-ct", kT0));
   EXPECT_EQ(j["mesh_hash"], hash);
   EXPECT_EQ(j["mesh_nodes"], 6000);
@@ -338,9 +341,9 @@ TEST(DashboardStore, MeshAndFieldAreReassembledServedAndRequestedWhenMissing) {
   for (std::size_t i = 0; i < damage.size(); ++i) damage[i] = static_cast<float>(i % 97) / 96.0F;
   EXPECT_EQ(store.field_json("b1-ct"), std::string());
   const auto parts = field_chunks(3, hash, damage, 2500);
-  feed(store, channel("b1-ct", Kind::kField), encode(parts[0]));
-  feed(store, channel("b1-ct", Kind::kField), encode(parts[2]));
-  feed(store, channel("b1-ct", Kind::kField), encode(parts[1]));
+  feed(store, messages::channel("b1-ct", messages::Kind::kField), encode(parts[0]));
+  feed(store, messages::channel("b1-ct", messages::Kind::kField), encode(parts[2]));
+  feed(store, messages::channel("b1-ct", messages::Kind::kField), encode(parts[1]));
   const auto f = json::parse(*store.field_json("b1-ct"));
   EXPECT_EQ(f["state_seq"], 3);
   EXPECT_EQ(f["mesh_hash"], hash);
@@ -351,7 +354,7 @@ TEST(DashboardStore, MeshAndFieldAreReassembledServedAndRequestedWhenMissing) {
 
   // A field of another mesh (the daemon restarted on a new grid): the mesh is asked for again.
   for (const auto& p : field_chunks(4, "00000000000000aa", damage, 6000)) {
-    feed(store, channel("b1-ct", Kind::kField), encode(p));
+    feed(store, messages::channel("b1-ct", messages::Kind::kField), encode(p));
   }
   EXPECT_EQ(store.take_mesh_requests(kT0 + std::chrono::seconds(120)),
             std::vector<std::string>{"b1-ct"});
@@ -363,12 +366,12 @@ TEST(DashboardStore, BackfillFromAResultsFileGivesTheSameHistoryAsTheStates) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "b1-ct");
   {
-    twin::ResultsWriter writer(dir / "b1-ct" / "b1-ct.h5", {"b1-ct"});
+    outputs::ResultsWriter writer(dir / "b1-ct" / "b1-ct.h5", {"b1-ct"});
     const std::vector<double> x{0.0, 1.0}, y{0.0, 0.0};
     writer.write_mesh(x, y);
     for (int seq = 0; seq <= 6; ++seq) {
       const auto s = state(seq, 1000 * seq, 0.001 * seq);
-      twin::TimeSeriesRow row;
+      outputs::TimeSeriesRow row;
       row.state_seq = s.state_seq;
       row.total_cycles = s.total_cycles;
       row.crack_length_m = s.crack_length_m;
@@ -379,28 +382,31 @@ TEST(DashboardStore, BackfillFromAResultsFileGivesTheSameHistoryAsTheStates) {
     }
   }
   std::ofstream(dir / "not-a-detail.txt") << "x";
-  const auto files = find_results_files(dir);
+  const auto files = dashboard::find_results_files(dir);
   ASSERT_EQ(files.size(), 1u);
   EXPECT_EQ(files[0].detail_id, "b1-ct");
-  const auto points = read_history_points(files[0].path);
+  const auto points = dashboard::read_history_points(files[0].path);
   ASSERT_EQ(points.size(), 7u);
 
   // Live from the start: every state.
-  Store live;
+  dashboard::Store live;
   for (int seq = 0; seq <= 8; ++seq) {
-    feed(live, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+    feed(live, messages::channel("b1-ct", messages::Kind::kState),
+         encode(state(seq, 1000 * seq, 0.001 * seq)));
   }
   // Started late (states 5.. live): the file fills in 0..4; started later still (nothing live
   // yet): the whole file, then the live states after it (6 again is no new point).
-  Store late;
+  dashboard::Store late;
   for (int seq = 5; seq <= 8; ++seq) {
-    feed(late, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+    feed(late, messages::channel("b1-ct", messages::Kind::kState),
+         encode(state(seq, 1000 * seq, 0.001 * seq)));
   }
   EXPECT_EQ(late.backfill("b1-ct", points, kT0), 5u);
-  Store later;
+  dashboard::Store later;
   EXPECT_EQ(later.backfill("b1-ct", points, kT0), 7u);
   for (int seq = 6; seq <= 8; ++seq) {
-    feed(later, channel("b1-ct", Kind::kState), encode(state(seq, 1000 * seq, 0.001 * seq)));
+    feed(later, messages::channel("b1-ct", messages::Kind::kState),
+         encode(state(seq, 1000 * seq, 0.001 * seq)));
   }
   auto strip = [](std::string text) {
     auto j = json::parse(text);

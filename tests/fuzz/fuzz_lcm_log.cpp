@@ -1,5 +1,5 @@
 // Fuzz target: the input as an LCM log file (the replay tool's --format lcm-log) -> read_lcm_log,
-// i.e. replay/lcm_log.h's bounded reader and the batch decoder on every event of the detail's
+// i.e. loads/lcm_log.h's bounded reader and the batch decoder on every event of the detail's
 // channel. Properties: blocks or a one-line error naming the file.
 #include <sstream>
 

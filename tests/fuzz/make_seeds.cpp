@@ -17,16 +17,17 @@
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/mesh.h"
-#include "twin/io/checkpoint_io.h"
+#include "outputs/checkpoint_io.h"
 
 namespace fs = std::filesystem;
-using peritwin::LoadBlock;
+using peritwin::core::LoadBlock;
 using peritwin::messages::Batch;
 
 namespace {
 
 // An unsigned batch, or one carrying `tag` (not a valid HMAC: the decoder only bounds it).
-std::vector<std::uint8_t> encode(const Batch& batch, const std::vector<std::uint8_t>& tag = {}) {
+std::vector<std::uint8_t> encode(const peritwin::messages::Batch& batch,
+                                 const std::vector<std::uint8_t>& tag = {}) {
   auto msg = peritwin::messages::batch_message(batch, 1'700'000'000'000'000);
   msg.tag_length = static_cast<std::int32_t>(tag.size());
   msg.auth_tag = tag;
@@ -45,7 +46,7 @@ void write(const fs::path& file, const std::vector<std::uint8_t>& bytes) {
 
 // The batches of the seeds: valid ones of the demo's shape, edge values, invalid values (a
 // well-formed payload whose check_batch rejects it).
-std::vector<std::pair<std::string, Batch>> batches() {
+std::vector<std::pair<std::string, peritwin::messages::Batch>> batches() {
   return {
       {"one-block", {"b1-ct", "replay", 1, {{4000.0, 0.1, 0.0, 1000}}}},
       {"three-blocks",
@@ -83,10 +84,12 @@ std::vector<std::uint8_t> encode_message(const Message& m) {
 void samples_seeds(const fs::path& dir) {
   using peritwin::messages::Samples;
   fs::create_directories(dir);
-  const Samples even{"b1-ct", "gauge-1", 1, 12.5, 1e-4, {400.0, 4000.0, 400.0, 4000.0}, {}, {}};
-  const Samples timed{"b1-ct",           "gauge-1",      2, 0.0, 0.0, {400.0, 4000.0, 500.0},
-                      {0.0, 0.01, 0.03}, {0.0, 0.1, 0.2}};
-  const Samples invalid{"b1-ct", "gauge-1", 0, 0.0, -1.0, {1.0, 2.0}, {1.0}, {}};
+  const peritwin::messages::Samples even{
+      "b1-ct", "gauge-1", 1, 12.5, 1e-4, {400.0, 4000.0, 400.0, 4000.0}, {}, {}};
+  const peritwin::messages::Samples timed{
+      "b1-ct", "gauge-1", 2, 0.0, 0.0, {400.0, 4000.0, 500.0}, {0.0, 0.01, 0.03}, {0.0, 0.1, 0.2}};
+  const peritwin::messages::Samples invalid{"b1-ct", "gauge-1",  0,     0.0,
+                                            -1.0,    {1.0, 2.0}, {1.0}, {}};
   write(dir / "even.bin", encode_message(peritwin::messages::samples_message(even, 1)));
   write(dir / "timed.bin", encode_message(peritwin::messages::samples_message(timed, 1)));
   write(dir / "invalid.bin", encode_message(peritwin::messages::samples_message(invalid, 1)));
@@ -242,7 +245,7 @@ void checkpoint_seed(const fs::path& file) {
   data.f64_scalars["max_damage"] = 0.375;
   data.strings["detail"] = "b1-ct";
   data.strings["sources"] = "replay\nstrain-gauge-3";
-  peritwin::twin::write_checkpoint(file, data);
+  peritwin::outputs::write_checkpoint(file, data);
   std::printf("%s (%ju bytes)\n", file.c_str(), static_cast<std::uintmax_t>(fs::file_size(file)));
 }
 

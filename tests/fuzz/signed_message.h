@@ -22,7 +22,7 @@ std::optional<Message> decode_signed(const std::uint8_t* data, std::size_t size,
   using namespace peritwin::messages;
   AuthKey key;
   std::iota(key.bytes.begin(), key.bytes.end(), std::uint8_t{1});
-  const Status on_bytes = verify_encoded<Message>(data, size, key);
+  const core::Status on_bytes = verify_encoded<Message>(data, size, key);
   std::optional<Message> message = decode(data, size);
   if (!message) return message;
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message->getEncodedSize()));
@@ -31,7 +31,7 @@ std::optional<Message> decode_signed(const std::uint8_t* data, std::size_t size,
           "a decoded message encodes");
   require(bytes.size() == size && std::equal(bytes.begin(), bytes.end(), data),
           "encode(decode(payload)) == payload");
-  const Status on_message = verify(*message, key);
+  const core::Status on_message = verify(*message, key);
   const bool reads_both_ways = auth_reason_is_a_guess(data, size, message->tag_length);
   require(
       on_bytes.ok() == on_message.ok() && (on_bytes.ok() || reads_both_ways ||

@@ -36,8 +36,8 @@ std::string hex_of(std::span<const std::uint8_t> bytes) {
 
 std::vector<std::uint8_t> bytes_of(std::string_view s) { return {s.begin(), s.end()}; }
 
-AuthKey key_of(std::uint8_t first) {
-  AuthKey k;
+messages::AuthKey key_of(std::uint8_t first) {
+  messages::AuthKey k;
   for (std::size_t i = 0; i < k.bytes.size(); ++i)
     k.bytes[i] = static_cast<std::uint8_t>(first + i);
   return k;
@@ -57,7 +57,7 @@ template <typename Message>
 std::optional<Message> decode(const std::vector<std::uint8_t>& bytes);
 template <>
 std::optional<peritwin_msgs::load_batch_t> decode(const std::vector<std::uint8_t>& bytes) {
-  if (!decode_batch(bytes.data(), bytes.size()).batch) return std::nullopt;
+  if (!messages::decode_batch(bytes.data(), bytes.size()).batch) return std::nullopt;
   peritwin_msgs::load_batch_t m{};  // the layout is checked: LCM's decoder is safe on it
   if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) != static_cast<int>(bytes.size())) {
     return std::nullopt;
@@ -66,15 +66,15 @@ std::optional<peritwin_msgs::load_batch_t> decode(const std::vector<std::uint8_t
 }
 template <>
 std::optional<peritwin_msgs::damage_state_t> decode(const std::vector<std::uint8_t>& bytes) {
-  return decode_state(bytes.data(), bytes.size());
+  return messages::decode_state(bytes.data(), bytes.size());
 }
 template <>
 std::optional<peritwin_msgs::reject_t> decode(const std::vector<std::uint8_t>& bytes) {
-  return decode_reject(bytes.data(), bytes.size());
+  return messages::decode_reject(bytes.data(), bytes.size());
 }
 
 peritwin_msgs::load_batch_t sample_batch() {
-  return batch_message(
+  return messages::batch_message(
       {"b1-ct", "replay", 7, {{4000, 0.1, 0, 1000}, {4200, 0.1, 0.25, 5}, {3900, -1, 0, 1}}},
       1'700'000'000'000'000);
 }
@@ -114,8 +114,9 @@ peritwin_msgs::damage_state_t sample_state() {
 }
 
 peritwin_msgs::reject_t sample_reject() {
-  return reject_message("b1-ct", "replay", 9, {Verdict::gap, "seq", "seq 9 after 7"},
-                        1'700'000'000'000'002);
+  return messages::reject_message("b1-ct", "replay", 9,
+                                  {messages::Verdict::gap, "seq", "seq 9 after 7"},
+                                  1'700'000'000'000'002);
 }
 
 // --- the primitive -------------------------------------------------------------------------
@@ -124,70 +125,70 @@ TEST(AuthHmac, Rfc4231TestCases) {
   // RFC 4231 section 4: test cases 1, 2, 3 and 6 (a key longer than SHA-256's block), HMAC-SHA-256.
   const std::vector<std::uint8_t> key1(20, 0x0b);
   const auto data1 = bytes_of("Hi There");
-  EXPECT_EQ(hex_of(hmac_sha256(key1, data1.data(), data1.size())),
+  EXPECT_EQ(hex_of(messages::hmac_sha256(key1, data1.data(), data1.size())),
             "b0344c61d8db38535ca8afceaf0bf12b881dc200c9833da726e9376c2e32cff7");
   const auto key2 = bytes_of("Jefe");
   const auto data2 = bytes_of("what do ya want for nothing?");
-  EXPECT_EQ(hex_of(hmac_sha256(key2, data2.data(), data2.size())),
+  EXPECT_EQ(hex_of(messages::hmac_sha256(key2, data2.data(), data2.size())),
             "5bdcc146bf60754e6a042426089575c75a003f089d2739839dec58b964ec3843");
   const std::vector<std::uint8_t> key3(20, 0xaa), data3(50, 0xdd);
-  EXPECT_EQ(hex_of(hmac_sha256(key3, data3.data(), data3.size())),
+  EXPECT_EQ(hex_of(messages::hmac_sha256(key3, data3.data(), data3.size())),
             "773ea91e36800e46854db8ebd09181a72959098b3ef8c122d9635514ced565fe");
   const std::vector<std::uint8_t> key6(131, 0xaa);
   const auto data6 = bytes_of("Test Using Larger Than Block-Size Key - Hash Key First");
-  EXPECT_EQ(hex_of(hmac_sha256(key6, data6.data(), data6.size())),
+  EXPECT_EQ(hex_of(messages::hmac_sha256(key6, data6.data(), data6.size())),
             "60e431591ee0b67f0d8a26aacbf5b77f8e0bc6213728c5140546040f0ee37f54");
 }
 
 TEST(AuthHmac, AuthTagIsHmacSha256WithTheThirtyTwoByteKey) {
   // Reference value from Python's hmac module (independent of libsodium):
   // hmac.new(bytes(range(32)), b"peritwin message set 2", hashlib.sha256).hexdigest()
-  const AuthKey key = key_of(0);
+  const messages::AuthKey key = key_of(0);
   const auto data = bytes_of("peritwin message set 2");
-  const AuthTag tag = auth_tag(key, data.data(), data.size());
+  const messages::AuthTag tag = messages::auth_tag(key, data.data(), data.size());
   EXPECT_EQ(hex_of(tag), "6934d867487cb0a8c93900f418ceaa50cc1e71c09218453039f38b33ccb677f9");
-  EXPECT_EQ(tag, hmac_sha256(key.bytes, data.data(), data.size()));
-  EXPECT_TRUE(tag_matches(key, data.data(), data.size(), tag));
-  AuthTag other = tag;
+  EXPECT_EQ(tag, messages::hmac_sha256(key.bytes, data.data(), data.size()));
+  EXPECT_TRUE(messages::tag_matches(key, data.data(), data.size(), tag));
+  messages::AuthTag other = tag;
   other[31] ^= 1;
-  EXPECT_FALSE(tag_matches(key, data.data(), data.size(), other));
-  EXPECT_FALSE(tag_matches(key, data.data(), data.size(), std::span(tag).first(31)));
-  EXPECT_FALSE(tag_matches(key, data.data(), data.size(), {}));
-  EXPECT_FALSE(tag_matches(key_of(1), data.data(), data.size(), tag));
+  EXPECT_FALSE(messages::tag_matches(key, data.data(), data.size(), other));
+  EXPECT_FALSE(messages::tag_matches(key, data.data(), data.size(), std::span(tag).first(31)));
+  EXPECT_FALSE(messages::tag_matches(key, data.data(), data.size(), {}));
+  EXPECT_FALSE(messages::tag_matches(key_of(1), data.data(), data.size(), tag));
 }
 
 // --- signing and verifying -----------------------------------------------------------------
 
 template <typename Message>
 void expect_sign_verify(Message m) {
-  const AuthKey key = key_of(7);
-  EXPECT_EQ(verify(m, key).error().reason, "unsigned");
-  EXPECT_EQ(verify(m, key).error().field, "auth_tag");
+  const messages::AuthKey key = key_of(7);
+  EXPECT_EQ(messages::verify(m, key).error().reason, "unsigned");
+  EXPECT_EQ(messages::verify(m, key).error().field, "auth_tag");
   const auto unsigned_bytes = encode(m);
   EXPECT_EQ(
       verify_encoded<Message>(unsigned_bytes.data(), unsigned_bytes.size(), key).error().reason,
       "unsigned");
 
-  sign(m, key);
+  messages::sign(m, key);
   ASSERT_EQ(m.tag_length, 32);
   ASSERT_EQ(m.auth_tag.size(), 32u);
-  EXPECT_TRUE(verify(m, key).ok()) << message_of(verify(m, key));
-  EXPECT_EQ(verify(m, key_of(8)).error().reason, "wrong tag");
+  EXPECT_TRUE(messages::verify(m, key).ok()) << core::message_of(messages::verify(m, key));
+  EXPECT_EQ(messages::verify(m, key_of(8)).error().reason, "wrong tag");
   const auto bytes = encode(m);
   ASSERT_EQ(bytes.size(), unsigned_bytes.size() + 32);
   // The signed region is the unsigned encoding without its tag_length: the fingerprint first.
   EXPECT_TRUE(std::equal(unsigned_bytes.begin(), unsigned_bytes.end() - 4, bytes.begin()));
-  EXPECT_TRUE(tag_matches(key, bytes.data(), bytes.size() - 36, m.auth_tag));
+  EXPECT_TRUE(messages::tag_matches(key, bytes.data(), bytes.size() - 36, m.auth_tag));
   EXPECT_TRUE(verify_encoded<Message>(bytes.data(), bytes.size(), key).ok());
   EXPECT_EQ(verify_encoded<Message>(bytes.data(), bytes.size(), key_of(8)).error().reason,
             "wrong tag");
   const auto decoded = decode<Message>(bytes);
   ASSERT_TRUE(decoded);
-  EXPECT_TRUE(verify(*decoded, key).ok());
+  EXPECT_TRUE(messages::verify(*decoded, key).ok());
   // Signing again gives the same tag (deterministic), whatever tag was there.
   Message again = *decoded;
   again.auth_tag[0] ^= 0xff;
-  sign(again, key);
+  messages::sign(again, key);
   EXPECT_EQ(again.auth_tag, m.auth_tag);
 
   // Every single-bit change of the encoded signed message fails: on the bytes, and (where the
@@ -201,7 +202,7 @@ void expect_sign_verify(Message m) {
           << "byte " << i << " bit " << bit;
       if (const auto d = decode<Message>(changed)) {
         ++decodable;
-        EXPECT_FALSE(verify(*d, key).ok()) << "byte " << i << " bit " << bit;
+        EXPECT_FALSE(messages::verify(*d, key).ok()) << "byte " << i << " bit " << bit;
       }
     }
   }
@@ -218,7 +219,7 @@ void expect_sign_verify(Message m) {
   Message short_tag = m;
   short_tag.auth_tag.resize(31);
   short_tag.tag_length = 31;
-  EXPECT_EQ(verify(short_tag, key).error().reason, "wrong tag");
+  EXPECT_EQ(messages::verify(short_tag, key).error().reason, "wrong tag");
 
   // A tag ending in four zero bytes that does not match reads, on the bytes, like an unsigned
   // trailer too: it is a wrong tag on the bytes as in the decoded message (found by fuzz_state).
@@ -228,7 +229,7 @@ void expect_sign_verify(Message m) {
             "wrong tag");
   const auto decoded_zero_ended = decode<Message>(zero_ended);
   ASSERT_TRUE(decoded_zero_ended);
-  EXPECT_EQ(verify(*decoded_zero_ended, key).error().reason, "wrong tag");
+  EXPECT_EQ(messages::verify(*decoded_zero_ended, key).error().reason, "wrong tag");
 }
 
 TEST(AuthSign, LoadBatchRoundTripAndEveryBitFlip) { expect_sign_verify(sample_batch()); }
@@ -236,25 +237,25 @@ TEST(AuthSign, DamageStateRoundTripAndEveryBitFlip) { expect_sign_verify(sample_
 TEST(AuthSign, RejectRoundTripAndEveryBitFlip) { expect_sign_verify(sample_reject()); }
 
 TEST(AuthSign, TheTagCoversDetailSourceAndSeq) {
-  const AuthKey key = key_of(3);
+  const messages::AuthKey key = key_of(3);
   auto m = sample_batch();
-  sign(m, key);
+  messages::sign(m, key);
   for (auto change : std::vector<std::function<void(peritwin_msgs::load_batch_t&)>>{
            [](auto& b) { b.detail_id = "b2-cts"; }, [](auto& b) { b.source_id = "gauge-3"; },
            [](auto& b) { b.seq = 8; }, [](auto& b) { b.utime += 1; },
            [](auto& b) { b.blocks[2].count = 2; }}) {
     auto changed = m;
     change(changed);
-    EXPECT_EQ(verify(changed, key).error().reason, "wrong tag");
+    EXPECT_EQ(messages::verify(changed, key).error().reason, "wrong tag");
   }
 }
 
 TEST(AuthSign, TagsDoNotMoveBetweenTypes) {
-  const AuthKey key = key_of(5);
+  const messages::AuthKey key = key_of(5);
   auto batch = sample_batch();
-  sign(batch, key);
+  messages::sign(batch, key);
   const auto bytes = encode(batch);
-  const Status as_state =
+  const core::Status as_state =
       verify_encoded<peritwin_msgs::damage_state_t>(bytes.data(), bytes.size(), key);
   ASSERT_FALSE(as_state.ok());
   EXPECT_EQ(as_state.error().field, "message");
@@ -267,39 +268,40 @@ TEST(AuthSign, TagsDoNotMoveBetweenTypes) {
   const std::int64_t h = peritwin_msgs::reject_t::getHash();
   for (int i = 0; i < 8; ++i)
     other[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(h >> (56 - 8 * i));
-  EXPECT_FALSE(tag_matches(key, other.data(), other.size() - 36, batch.auth_tag));
+  EXPECT_FALSE(messages::tag_matches(key, other.data(), other.size() - 36, batch.auth_tag));
 }
 
 TEST(AuthSign, DaemonRawByteCheckEqualsVerify) {
   // The daemon checks a batch on the bytes it received: tag_matches(key of source_id, bytes,
   // decoded.signed_size, decoded.auth_tag). That must say what verify(decoded message) says.
-  const AuthKey key = key_of(11);
+  const messages::AuthKey key = key_of(11);
   auto check = [&](const std::vector<std::uint8_t>& bytes) {
-    const Decoded d = decode_batch(bytes.data(), bytes.size());
+    const messages::Decoded d = messages::decode_batch(bytes.data(), bytes.size());
     const auto m = decode<peritwin_msgs::load_batch_t>(bytes);
     if (!d.batch) {
       EXPECT_FALSE(m && verify(*m, key).ok());  // what does not decode cannot verify
       return;
     }
     ASSERT_TRUE(m);
-    EXPECT_EQ(tag_matches(key, bytes.data(), d.signed_size, d.auth_tag), verify(*m, key).ok());
-    EXPECT_EQ(tag_matches(key, bytes.data(), d.signed_size, d.auth_tag),
+    EXPECT_EQ(messages::tag_matches(key, bytes.data(), d.signed_size, d.auth_tag),
+              messages::verify(*m, key).ok());
+    EXPECT_EQ(messages::tag_matches(key, bytes.data(), d.signed_size, d.auth_tag),
               verify_encoded<peritwin_msgs::load_batch_t>(bytes.data(), bytes.size(), key).ok());
   };
   auto m = sample_batch();
   const auto unsigned_bytes = encode(m);
-  const Decoded u = decode_batch(unsigned_bytes.data(), unsigned_bytes.size());
+  const messages::Decoded u = messages::decode_batch(unsigned_bytes.data(), unsigned_bytes.size());
   ASSERT_TRUE(u.batch);
   EXPECT_EQ(u.signed_size, unsigned_bytes.size() - 4);
   EXPECT_TRUE(u.auth_tag.empty());
   check(unsigned_bytes);
-  sign(m, key);
+  messages::sign(m, key);
   const auto bytes = encode(m);
-  const Decoded s = decode_batch(bytes.data(), bytes.size());
+  const messages::Decoded s = messages::decode_batch(bytes.data(), bytes.size());
   ASSERT_TRUE(s.batch);
   EXPECT_EQ(s.signed_size, bytes.size() - 36);
   EXPECT_EQ(s.auth_tag, m.auth_tag);
-  EXPECT_TRUE(tag_matches(key, bytes.data(), s.signed_size, s.auth_tag));
+  EXPECT_TRUE(messages::tag_matches(key, bytes.data(), s.signed_size, s.auth_tag));
   check(bytes);
   for (std::size_t i = 0; i < bytes.size(); ++i) {
     auto changed = bytes;
@@ -314,9 +316,9 @@ TEST(CheckedDecoders, RoundTripAndForgedCountsRefusedWithoutAllocating) {
   auto state = sample_state();
   state.cracks.resize(3, state.cracks[0]);
   state.num_cracks = 3;
-  sign(state, key_of(1));
+  messages::sign(state, key_of(1));
   const auto bytes = encode(state);
-  const auto back = decode_state(bytes.data(), bytes.size());
+  const auto back = messages::decode_state(bytes.data(), bytes.size());
   ASSERT_TRUE(back);
   EXPECT_EQ(encode(*back), bytes);
   EXPECT_EQ(back->source_ids, state.source_ids);
@@ -324,20 +326,21 @@ TEST(CheckedDecoders, RoundTripAndForgedCountsRefusedWithoutAllocating) {
   EXPECT_EQ(back->auth_tag, state.auth_tag);
   const auto reject = sample_reject();
   const auto reject_bytes = encode(reject);
-  const auto reject_back = decode_reject(reject_bytes.data(), reject_bytes.size());
+  const auto reject_back = messages::decode_reject(reject_bytes.data(), reject_bytes.size());
   ASSERT_TRUE(reject_back);
   EXPECT_EQ(reject_back->why, reject.why);
   EXPECT_EQ(reject_back->tag_length, 0);
 
-  for (std::size_t n = 0; n < bytes.size(); ++n) EXPECT_FALSE(decode_state(bytes.data(), n)) << n;
+  for (std::size_t n = 0; n < bytes.size(); ++n)
+    EXPECT_FALSE(messages::decode_state(bytes.data(), n)) << n;
   for (std::size_t n = 0; n < reject_bytes.size(); ++n) {
-    EXPECT_FALSE(decode_reject(reject_bytes.data(), n)) << n;
+    EXPECT_FALSE(messages::decode_reject(reject_bytes.data(), n)) << n;
   }
   auto longer = bytes;
   longer.push_back(0);
-  EXPECT_FALSE(decode_state(longer.data(), longer.size()));
-  EXPECT_FALSE(decode_reject(bytes.data(), bytes.size()));  // another type
-  EXPECT_FALSE(decode_state(reject_bytes.data(), reject_bytes.size()));
+  EXPECT_FALSE(messages::decode_state(longer.data(), longer.size()));
+  EXPECT_FALSE(messages::decode_reject(bytes.data(), bytes.size()));  // another type
+  EXPECT_FALSE(messages::decode_state(reject_bytes.data(), reject_bytes.size()));
 
   auto put32 = [](std::vector<std::uint8_t> b, std::size_t at, std::uint32_t v) {
     for (int i = 0; i < 4; ++i)
@@ -348,29 +351,31 @@ TEST(CheckedDecoders, RoundTripAndForgedCountsRefusedWithoutAllocating) {
   // decoder would resize source_ids to 2^30 strings (32 GB) before reading one.
   const std::size_t num_sources_at = 8 + 8 + 4 + 6 + 8;
   ASSERT_EQ(put32(bytes, num_sources_at, 2)[num_sources_at + 3], bytes[num_sources_at + 3]);
-  EXPECT_FALSE(decode_state(put32(bytes, num_sources_at, 1u << 30).data(), bytes.size()));
-  EXPECT_FALSE(decode_state(put32(bytes, num_sources_at, 0xffffffffu).data(), bytes.size()));
-  EXPECT_FALSE(decode_state(put32(bytes, bytes.size() - 36, 0x7fffffffu).data(), bytes.size()));
-  EXPECT_FALSE(decode_reject(put32(reject_bytes, reject_bytes.size() - 4, 0xffffffffu).data(),
-                             reject_bytes.size()));
-  EXPECT_FALSE(decode_reject(put32(reject_bytes, reject_bytes.size() - 4, 0x7fffffffu).data(),
-                             reject_bytes.size()));
+  EXPECT_FALSE(messages::decode_state(put32(bytes, num_sources_at, 1u << 30).data(), bytes.size()));
+  EXPECT_FALSE(
+      messages::decode_state(put32(bytes, num_sources_at, 0xffffffffu).data(), bytes.size()));
+  EXPECT_FALSE(
+      messages::decode_state(put32(bytes, bytes.size() - 36, 0x7fffffffu).data(), bytes.size()));
+  EXPECT_FALSE(messages::decode_reject(
+      put32(reject_bytes, reject_bytes.size() - 4, 0xffffffffu).data(), reject_bytes.size()));
+  EXPECT_FALSE(messages::decode_reject(
+      put32(reject_bytes, reject_bytes.size() - 4, 0x7fffffffu).data(), reject_bytes.size()));
   // A NUL inside a string, or none at its end: refused (LCM's encoder would stop at it, so the
   // message would not re-encode to its bytes).
   auto nul = bytes;
   nul[8 + 8 + 4 + 2] = 0;  // "b1\0ct"
-  EXPECT_FALSE(decode_state(nul.data(), nul.size()));
+  EXPECT_FALSE(messages::decode_state(nul.data(), nul.size()));
   auto unterminated = bytes;
   unterminated[8 + 8 + 4 + 5] = 'x';
-  EXPECT_FALSE(decode_state(unterminated.data(), unterminated.size()));
+  EXPECT_FALSE(messages::decode_state(unterminated.data(), unterminated.size()));
 }
 
 TEST(CheckedDecoders, AStringWithANulVerifiesAsAWrongTagAndCannotBeSigned) {
   auto state = sample_state();
-  sign(state, key_of(2));
+  messages::sign(state, key_of(2));
   state.source_ids[0] = std::string("gauge\0-3", 8);
-  EXPECT_EQ(verify(state, key_of(2)).error().reason, "wrong tag");
-  EXPECT_THROW(sign(state, key_of(2)), std::invalid_argument);
+  EXPECT_EQ(messages::verify(state, key_of(2)).error().reason, "wrong tag");
+  EXPECT_THROW(messages::sign(state, key_of(2)), std::invalid_argument);
 }
 
 // --- key files -----------------------------------------------------------------------------
@@ -411,17 +416,18 @@ TEST_F(KeyFiles, ModeAndContent) {
   const std::string text = "# keys\n[keys]\nreplay = \"" + kHexA + "\"\n\"gauge.3\" = \"" + kHexB +
                            "\"\nperitwin = \"" + kHexA + "\"\n";
   const fs::path open = write("open.toml", text, 0644);
-  const auto refused = KeyRing::load(open);
+  const auto refused = messages::KeyRing::load(open);
   ASSERT_FALSE(refused.ok());
   const std::string why = refused.error().message();
   EXPECT_NE(why.find(open.string()), std::string::npos) << why;
   EXPECT_NE(why.find("mode 0644"), std::string::npos) << why;
   expect_no_key_material(why);
-  EXPECT_FALSE(KeyRing::load(write("group.toml", text, 0640)).ok());
-  EXPECT_FALSE(KeyRing::load(write("others.toml", text, 0604)).ok());
+  EXPECT_FALSE(messages::KeyRing::load(write("group.toml", text, 0640)).ok());
+  EXPECT_FALSE(messages::KeyRing::load(write("others.toml", text, 0604)).ok());
 
   for (const mode_t mode : {0600u, 0400u}) {
-    const auto ring = KeyRing::load(write("ok" + std::to_string(mode) + ".toml", text, mode));
+    const auto ring =
+        messages::KeyRing::load(write("ok" + std::to_string(mode) + ".toml", text, mode));
     ASSERT_TRUE(ring.ok()) << ring.error().message();
     EXPECT_EQ(ring->ids(), (std::vector<std::string>{"gauge.3", "peritwin", "replay"}));
     ASSERT_NE(ring->find("replay"), nullptr);
@@ -433,10 +439,10 @@ TEST_F(KeyFiles, ModeAndContent) {
     EXPECT_EQ(ring->find(""), nullptr);
   }
 
-  EXPECT_FALSE(KeyRing::load(dir_ / "missing.toml").ok());
+  EXPECT_FALSE(messages::KeyRing::load(dir_ / "missing.toml").ok());
   fs::create_directories(dir_ / "dir.toml");
   ::chmod((dir_ / "dir.toml").c_str(), 0700);
-  const auto dir = KeyRing::load(dir_ / "dir.toml");
+  const auto dir = messages::KeyRing::load(dir_ / "dir.toml");
   ASSERT_FALSE(dir.ok());
   EXPECT_NE(dir.error().message().find("not a regular file"), std::string::npos)
       << dir.error().message();
@@ -484,7 +490,7 @@ TEST_F(KeyFiles, ErrorsNameFileLineAndIdButNeverTheKey) {
   };
   for (const auto& c : cases) {
     const fs::path file = write(c.name + ".toml", c.text);
-    const auto ring = KeyRing::load(file);
+    const auto ring = messages::KeyRing::load(file);
     ASSERT_FALSE(ring.ok()) << c.name;
     const std::string why = ring.error().message();
     EXPECT_EQ(ring.error().field, file.string() + ":" + std::to_string(c.line))
@@ -499,42 +505,43 @@ TEST_F(KeyFiles, ErrorsNameFileLineAndIdButNeverTheKey) {
 TEST_F(KeyFiles, GeneratedFileIsPrivateFreshAndNeverOverwritten) {
   const fs::path file = dir_ / "generated.toml";
   const std::vector<std::string> ids{"replay", "peritwin", "gauge.3"};
-  const Status written = write_key_file(file, ids);
-  ASSERT_TRUE(written.ok()) << message_of(written);
+  const core::Status written = messages::write_key_file(file, ids);
+  ASSERT_TRUE(written.ok()) << core::message_of(written);
   struct stat st {};
   ASSERT_EQ(::stat(file.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0600u);
-  const auto ring = KeyRing::load(file);
+  const auto ring = messages::KeyRing::load(file);
   ASSERT_TRUE(ring.ok()) << ring.error().message();
   EXPECT_EQ(ring->ids(), (std::vector<std::string>{"gauge.3", "peritwin", "replay"}));
   EXPECT_NE(ring->find("replay")->bytes, ring->find("peritwin")->bytes);
-  EXPECT_NE(ring->find("replay")->bytes, AuthKey{}.bytes);
+  EXPECT_NE(ring->find("replay")->bytes, messages::AuthKey{}.bytes);
 
   std::ifstream in(file);
   const std::string before{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  const Status again = write_key_file(file, ids);
+  const core::Status again = messages::write_key_file(file, ids);
   ASSERT_FALSE(again.ok());
-  EXPECT_NE(message_of(again).find("exists"), std::string::npos) << message_of(again);
+  EXPECT_NE(core::message_of(again).find("exists"), std::string::npos) << core::message_of(again);
   std::ifstream in2(file);
   EXPECT_EQ(before,
             std::string(std::istreambuf_iterator<char>(in2), std::istreambuf_iterator<char>()));
 
   // A second file has other keys.
   const fs::path second = dir_ / "second.toml";
-  ASSERT_TRUE(write_key_file(second, ids).ok());
-  EXPECT_NE(KeyRing::load(second)->find("replay")->bytes, ring->find("replay")->bytes);
+  ASSERT_TRUE(messages::write_key_file(second, ids).ok());
+  EXPECT_NE(messages::KeyRing::load(second)->find("replay")->bytes, ring->find("replay")->bytes);
 
   // A symlink at the path is not followed.
   fs::create_symlink(dir_ / "target.toml", dir_ / "link.toml");
-  EXPECT_FALSE(write_key_file(dir_ / "link.toml", ids).ok());
+  EXPECT_FALSE(messages::write_key_file(dir_ / "link.toml", ids).ok());
   EXPECT_FALSE(fs::exists(dir_ / "target.toml"));
 
   const std::vector<std::string> twice{"replay", "replay"};
-  EXPECT_NE(message_of(write_key_file(dir_ / "twice.toml", twice)).find("given twice"),
-            std::string::npos);
+  EXPECT_NE(
+      core::message_of(messages::write_key_file(dir_ / "twice.toml", twice)).find("given twice"),
+      std::string::npos);
   const std::vector<std::string> blank{"strain gauge"};
-  EXPECT_FALSE(write_key_file(dir_ / "blank.toml", blank).ok());
-  EXPECT_FALSE(write_key_file(dir_ / "none.toml", {}).ok());
+  EXPECT_FALSE(messages::write_key_file(dir_ / "blank.toml", blank).ok());
+  EXPECT_FALSE(messages::write_key_file(dir_ / "none.toml", {}).ok());
   EXPECT_FALSE(fs::exists(dir_ / "twice.toml"));
 }
 

@@ -11,9 +11,9 @@
 #include <peritwin_msgs/damage_field_t.hpp>
 #include <vector>
 
+#include "core/fnv1a.h"
 #include "messages/channels.h"
 #include "messages/mesh.h"
-#include "solver/core/fnv1a.h"
 
 namespace peritwin::messages {
 namespace {
@@ -29,8 +29,8 @@ std::vector<std::uint8_t> encode(const Message& m) {
 }
 
 /// A plate of nx x ny nodes on a 0.5 mm grid with a hole (a 72-chord circle) and a notch.
-Mesh plate(int nx, int ny, std::string id = "b1-ct") {
-  Mesh m;
+messages::Mesh plate(int nx, int ny, std::string id = "b1-ct") {
+  messages::Mesh m;
   m.detail_id = std::move(id);
   m.dx = 0.5e-3;
   m.horizon = 3.015 * m.dx;
@@ -46,7 +46,7 @@ Mesh plate(int nx, int ny, std::string id = "b1-ct") {
   }
   m.polylines.push_back(
       {mesh_polyline_t::KIND_OUTLINE, 0, true, {0, m.x_max, m.x_max, 0}, {0, 0, m.y_max, m.y_max}});
-  MeshPolyline hole{mesh_polyline_t::KIND_HOLE, 0, true, {}, {}};
+  messages::MeshPolyline hole{mesh_polyline_t::KIND_HOLE, 0, true, {}, {}};
   for (int k = 0; k < 72; ++k) {
     hole.x.push_back(0.5 * m.x_max + 0.01 * std::cos(k * 2 * M_PI / 72));
     hole.y.push_back(0.5 * m.y_max + 0.01 * std::sin(k * 2 * M_PI / 72));
@@ -56,12 +56,12 @@ Mesh plate(int nx, int ny, std::string id = "b1-ct") {
   return m;
 }
 
-Mesh reassemble(const std::vector<detail_mesh_t>& chunks) {
-  MeshAssembler assembler;
-  std::optional<Mesh> mesh;
+messages::Mesh reassemble(const std::vector<detail_mesh_t>& chunks) {
+  messages::MeshAssembler assembler;
+  std::optional<messages::Mesh> mesh;
   for (const auto& c : chunks) {
     const auto bytes = encode(c);
-    auto decoded = decode_mesh_chunk(bytes.data(), bytes.size());
+    auto decoded = messages::decode_mesh_chunk(bytes.data(), bytes.size());
     EXPECT_TRUE(decoded.chunk) << decoded.error;
     if (!decoded.chunk) return {};
     auto r = assembler.add(*decoded.chunk);
@@ -71,23 +71,23 @@ Mesh reassemble(const std::vector<detail_mesh_t>& chunks) {
   }
   EXPECT_TRUE(mesh);
   EXPECT_EQ(assembler.partial(), 0u);
-  return mesh ? *mesh : Mesh{};
+  return mesh ? *mesh : messages::Mesh{};
 }
 
 TEST(Mesh, SixtyThousandNodesChunkBelow64kBAndReassembleEqual) {
-  const Mesh mesh = plate(300, 200);  // 60 000 nodes
+  const messages::Mesh mesh = plate(300, 200);  // 60 000 nodes
   ASSERT_EQ(mesh.x.size(), 60000u);
-  const auto chunks = mesh_messages(mesh, 1'700'000'000'000'000);
+  const auto chunks = messages::mesh_messages(mesh, 1'700'000'000'000'000);
   // 16 bytes a node: at least 960 000 / 60 000 chunks.
   EXPECT_GE(chunks.size(), 17u);
   std::int64_t nodes = 0;
   for (const auto& c : chunks) {
     const auto bytes = encode(c);
-    EXPECT_LE(bytes.size(), kMaxMeshChunkBytes) << c.chunk_index;
+    EXPECT_LE(bytes.size(), messages::kMaxMeshChunkBytes) << c.chunk_index;
     EXPECT_LT(bytes.size(), 64u * 1024u) << c.chunk_index;
     EXPECT_EQ(c.num_chunks, static_cast<std::int32_t>(chunks.size()));
     EXPECT_EQ(c.first_node, nodes);
-    EXPECT_EQ(c.mesh_hash, mesh_hash(mesh));
+    EXPECT_EQ(c.mesh_hash, messages::mesh_hash(mesh));
     EXPECT_EQ(c.num_polylines, c.chunk_index == 0 ? 3 : 0);
     nodes += c.num_nodes;
     // Round trip: decoded equal, and re-encoded to the same bytes.
@@ -105,47 +105,47 @@ TEST(Mesh, SixtyThousandNodesChunkBelow64kBAndReassembleEqual) {
 }
 
 TEST(Mesh, TheLongestDetailIdStillFits) {
-  const Mesh mesh = plate(100, 80, std::string(kMaxDetailIdLength, 'z'));
-  for (const auto& c : mesh_messages(mesh, 0)) {
+  const messages::Mesh mesh = plate(100, 80, std::string(messages::kMaxDetailIdLength, 'z'));
+  for (const auto& c : messages::mesh_messages(mesh, 0)) {
     const auto size = encode(c).size();
-    EXPECT_LE(size, kMaxMeshChunkBytes);
+    EXPECT_LE(size, messages::kMaxMeshChunkBytes);
     // With its channel name: one UDP datagram of LCM 1.3.1 (65 499 bytes).
-    EXPECT_LT(size + channel(mesh.detail_id, Kind::kMesh).size() + 1, 65'499u);
+    EXPECT_LT(size + messages::channel(mesh.detail_id, messages::Kind::kMesh).size() + 1, 65'499u);
   }
-  EXPECT_EQ(reassemble(mesh_messages(mesh, 0)), mesh);
+  EXPECT_EQ(reassemble(messages::mesh_messages(mesh, 0)), mesh);
 }
 
 TEST(Mesh, HashChangesWithAnyCoordinate) {
-  const Mesh a = plate(10, 10);
-  Mesh b = a;
+  const messages::Mesh a = plate(10, 10);
+  messages::Mesh b = a;
   b.x[57] = std::nextafter(b.x[57], 1.0);
-  EXPECT_NE(mesh_hash(a), mesh_hash(b));
-  Mesh c = a;
+  EXPECT_NE(messages::mesh_hash(a), messages::mesh_hash(b));
+  messages::Mesh c = a;
   c.polylines[1].y[3] += 1e-9;
-  EXPECT_NE(mesh_hash(a), mesh_hash(c));
-  EXPECT_EQ(mesh_hash(a).size(), 16u);
+  EXPECT_NE(messages::mesh_hash(a), messages::mesh_hash(c));
+  EXPECT_EQ(messages::mesh_hash(a).size(), 16u);
   c = a;
   c.detail_id = "other";  // the hash is of the mesh, not of its detail
-  EXPECT_EQ(mesh_hash(a), mesh_hash(c));
+  EXPECT_EQ(messages::mesh_hash(a), messages::mesh_hash(c));
 }
 
 TEST(Mesh, NoNodeOrOversizedPolylinesAreRefusedWhenBuilding) {
-  EXPECT_THROW(mesh_messages(Mesh{}, 0), std::invalid_argument);
-  Mesh m = plate(4, 4);
-  MeshPolyline huge{mesh_polyline_t::KIND_OUTLINE, 1, true, {}, {}};
+  EXPECT_THROW(messages::mesh_messages(messages::Mesh{}, 0), std::invalid_argument);
+  messages::Mesh m = plate(4, 4);
+  messages::MeshPolyline huge{mesh_polyline_t::KIND_OUTLINE, 1, true, {}, {}};
   huge.x.assign(4000, 0.0);
   huge.y.assign(4000, 0.0);
   m.polylines.push_back(huge);
-  EXPECT_THROW(mesh_messages(m, 0), std::invalid_argument);
+  EXPECT_THROW(messages::mesh_messages(m, 0), std::invalid_argument);
 }
 
 /// The error decode_mesh_chunk gives for the chunk after `edit`.
 std::string error_after(const std::function<void(detail_mesh_t&)>& edit) {
-  auto chunks = mesh_messages(plate(20, 10), 0);
+  auto chunks = messages::mesh_messages(plate(20, 10), 0);
   detail_mesh_t c = chunks[0];
   edit(c);
   const auto bytes = encode(c);
-  const auto decoded = decode_mesh_chunk(bytes.data(), bytes.size());
+  const auto decoded = messages::decode_mesh_chunk(bytes.data(), bytes.size());
   EXPECT_EQ(decoded.chunk.has_value(), decoded.error.empty());
   return decoded.error;
 }
@@ -181,13 +181,13 @@ TEST(Mesh, MalformedChunksAreRefusedWithTheReason) {
 }
 
 TEST(Mesh, TruncatedForgedOrForeignBytesAreRefused) {
-  const auto bytes = encode(mesh_messages(plate(20, 10), 0)[0]);
+  const auto bytes = encode(messages::mesh_messages(plate(20, 10), 0)[0]);
   for (std::size_t len = 0; len < bytes.size(); len += (len < 200 ? 1 : 97)) {
-    EXPECT_FALSE(decode_mesh_chunk(bytes.data(), len).chunk) << len;
+    EXPECT_FALSE(messages::decode_mesh_chunk(bytes.data(), len).chunk) << len;
   }
   auto longer = bytes;
   longer.push_back(0);
-  EXPECT_NE(decode_mesh_chunk(longer.data(), longer.size()).error.find("bytes after"),
+  EXPECT_NE(messages::decode_mesh_chunk(longer.data(), longer.size()).error.find("bytes after"),
             std::string::npos);
   // A forged num_nodes of 2^30 (at its offset: after the fixed header) cannot allocate.
   auto forged = bytes;
@@ -195,24 +195,25 @@ TEST(Mesh, TruncatedForgedOrForeignBytesAreRefused) {
   ASSERT_LT(at + 4, forged.size());
   forged[at] = 0x40;
   forged[at + 1] = forged[at + 2] = forged[at + 3] = 0;
-  EXPECT_FALSE(decode_mesh_chunk(forged.data(), forged.size()).chunk);
+  EXPECT_FALSE(messages::decode_mesh_chunk(forged.data(), forged.size()).chunk);
   // Another type's bytes: a wrong fingerprint.
   peritwin_msgs::damage_field_t field{};
   field.detail_id = "b1-ct";
   const auto other = encode(field);
-  EXPECT_NE(decode_mesh_chunk(other.data(), other.size()).error.find("fingerprint"),
+  EXPECT_NE(messages::decode_mesh_chunk(other.data(), other.size()).error.find("fingerprint"),
             std::string::npos);
   // Above the size limit.
-  std::vector<std::uint8_t> big(kMaxMeshChunkBytes + 1, 0);
-  EXPECT_NE(decode_mesh_chunk(big.data(), big.size()).error.find("oversized"), std::string::npos);
+  std::vector<std::uint8_t> big(messages::kMaxMeshChunkBytes + 1, 0);
+  EXPECT_NE(messages::decode_mesh_chunk(big.data(), big.size()).error.find("oversized"),
+            std::string::npos);
 }
 
 TEST(Mesh, AssemblerDropsChunksThatDisagreeOrDoNotMatchTheirHash) {
-  const Mesh mesh = plate(200, 100);
-  auto chunks = mesh_messages(mesh, 0);
+  const messages::Mesh mesh = plate(200, 100);
+  auto chunks = messages::mesh_messages(mesh, 0);
   ASSERT_GE(chunks.size(), 3u);
   {
-    MeshAssembler a;
+    messages::MeshAssembler a;
     EXPECT_TRUE(a.add(chunks[0]).error.empty());
     auto bad = chunks[1];
     bad.total_nodes += 1;
@@ -220,56 +221,56 @@ TEST(Mesh, AssemblerDropsChunksThatDisagreeOrDoNotMatchTheirHash) {
     EXPECT_EQ(a.partial(), 0u);
   }
   {
-    MeshAssembler a;
+    messages::MeshAssembler a;
     auto tampered = chunks;
     tampered[1].x[3] += 1e-3;  // same hash claimed, other coordinates
-    MeshAssembler::Result last;
+    messages::MeshAssembler::Result last;
     for (const auto& c : tampered) last = a.add(c);
     EXPECT_FALSE(last.mesh);
     EXPECT_NE(last.error.find("hashes to"), std::string::npos) << last.error;
   }
   {
-    MeshAssembler a;
+    messages::MeshAssembler a;
     auto shifted = chunks;
     shifted[1].first_node += 1;
-    MeshAssembler::Result last;
+    messages::MeshAssembler::Result last;
     for (const auto& c : shifted) last = a.add(c);
     EXPECT_FALSE(last.mesh);
     EXPECT_NE(last.error.find("starts at node"), std::string::npos) << last.error;
   }
   {
     // Incomplete sets are bounded.
-    MeshAssembler a;
+    messages::MeshAssembler a;
     for (int k = 0; k < 20; ++k) {
       auto c = chunks[0];
-      c.mesh_hash = hex64(static_cast<std::uint64_t>(k));
+      c.mesh_hash = core::hex64(static_cast<std::uint64_t>(k));
       a.add(c);
     }
-    EXPECT_EQ(a.partial(), MeshAssembler::kMaxPartial);
+    EXPECT_EQ(a.partial(), messages::MeshAssembler::kMaxPartial);
   }
 }
 
 TEST(Mesh, RequestRoundTripAndMalformedRequests) {
-  const auto request = mesh_request_message("b1-ct", "peritwin-dashboard", 42);
+  const auto request = messages::mesh_request_message("b1-ct", "peritwin-dashboard", 42);
   const auto bytes = encode(request);
-  const auto back = decode_mesh_request(bytes.data(), bytes.size());
+  const auto back = messages::decode_mesh_request(bytes.data(), bytes.size());
   ASSERT_TRUE(back);
   EXPECT_EQ(back->detail_id, "b1-ct");
   EXPECT_EQ(back->requester, "peritwin-dashboard");
   EXPECT_EQ(back->utime, 42);
   for (std::size_t len = 0; len < bytes.size(); ++len) {
-    EXPECT_FALSE(decode_mesh_request(bytes.data(), len)) << len;
+    EXPECT_FALSE(messages::decode_mesh_request(bytes.data(), len)) << len;
   }
   auto bad_id = request;
   bad_id.detail_id = "b1 ct";
   const auto b = encode(bad_id);
-  EXPECT_FALSE(decode_mesh_request(b.data(), b.size()));
+  EXPECT_FALSE(messages::decode_mesh_request(b.data(), b.size()));
   auto long_requester = request;
-  long_requester.requester = std::string(kMaxRequesterLength + 1, 'r');
+  long_requester.requester = std::string(messages::kMaxRequesterLength + 1, 'r');
   const auto l = encode(long_requester);
-  EXPECT_FALSE(decode_mesh_request(l.data(), l.size()));
-  EXPECT_EQ(mesh_request_message("b1-ct", std::string(100, 'r'), 0).requester.size(),
-            kMaxRequesterLength);
+  EXPECT_FALSE(messages::decode_mesh_request(l.data(), l.size()));
+  EXPECT_EQ(messages::mesh_request_message("b1-ct", std::string(100, 'r'), 0).requester.size(),
+            messages::kMaxRequesterLength);
 }
 
 }  // namespace

@@ -26,8 +26,6 @@ namespace peritwin {
 namespace {
 
 namespace msgs = ::peritwin_msgs;
-using messages::channel;
-using messages::Kind;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -467,20 +465,22 @@ TEST(MessagesSize, FullFieldChunkStaysBelow64KB) {
   EXPECT_EQ(size, 60'102u);  // messages/README.md
   EXPECT_LT(size, std::size_t{64} * 1024);
   // Sent by UDP multicast as one datagram, never as LCM fragments.
-  EXPECT_LE(channel(longest_id, Kind::kField).size() + 1 + size, kLcmShortMessageMax);
+  EXPECT_LE(messages::channel(longest_id, messages::Kind::kField).size() + 1 + size,
+            kLcmShortMessageMax);
 }
 
 // ---- channel names ---------------------------------------------------------------------------
 
 TEST(Channels, NamesOfEveryKind) {
-  EXPECT_EQ(channel("b1-ct", Kind::kLoad), "PERITWIN_B1_CT_LOAD");
-  EXPECT_EQ(channel("b1-ct", Kind::kState), "PERITWIN_B1_CT_STATE");
-  EXPECT_EQ(channel("b1-ct", Kind::kField), "PERITWIN_B1_CT_FIELD");
-  EXPECT_EQ(channel("b1-ct", Kind::kReject), "PERITWIN_B1_CT_REJECT");
-  EXPECT_EQ(channel("b1-ct", Kind::kStatus), "PERITWIN_B1_CT_STATUS");
-  EXPECT_EQ(channel("b1-ct", Kind::kSamples), "PERITWIN_B1_CT_SAMPLES");
-  EXPECT_EQ(channel("b1-ct", Kind::kMesh), "PERITWIN_B1_CT_MESH");
-  EXPECT_EQ(channel("b1-ct", Kind::kMeshRequest), "PERITWIN_B1_CT_MESH_REQUEST");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kLoad), "PERITWIN_B1_CT_LOAD");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kState), "PERITWIN_B1_CT_STATE");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kField), "PERITWIN_B1_CT_FIELD");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kReject), "PERITWIN_B1_CT_REJECT");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kStatus), "PERITWIN_B1_CT_STATUS");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kSamples), "PERITWIN_B1_CT_SAMPLES");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kMesh), "PERITWIN_B1_CT_MESH");
+  EXPECT_EQ(messages::channel("b1-ct", messages::Kind::kMeshRequest),
+            "PERITWIN_B1_CT_MESH_REQUEST");
 }
 
 TEST(Channels, DetailTokenIsUpperCaseWithUnderscores) {
@@ -501,11 +501,11 @@ TEST(Channels, InvalidDetailIdsAreRejected) {
   for (const std::string_view id : bad) {
     EXPECT_FALSE(messages::is_valid_detail_id(id)) << id;
     EXPECT_THROW(messages::detail_token(id), std::invalid_argument) << id;
-    EXPECT_THROW(channel(id, Kind::kLoad), std::invalid_argument) << id;
+    EXPECT_THROW(messages::channel(id, messages::Kind::kLoad), std::invalid_argument) << id;
   }
   const std::string too_long(messages::kMaxDetailIdLength + 1, 'a');
   EXPECT_FALSE(messages::is_valid_detail_id(too_long));
-  EXPECT_THROW(channel(too_long, Kind::kState), std::invalid_argument);
+  EXPECT_THROW(messages::channel(too_long, messages::Kind::kState), std::invalid_argument);
 }
 
 TEST(Channels, LongestDetailIdFitsLcmChannelLimit) {
@@ -513,25 +513,25 @@ TEST(Channels, LongestDetailIdFitsLcmChannelLimit) {
   static_assert(!messages::is_valid_detail_id("b1.ct"));
   const std::string longest(messages::kMaxDetailIdLength, 'z');
   ASSERT_TRUE(messages::is_valid_detail_id(longest));
-  for (const Kind kind : messages::kAllKinds) {
-    EXPECT_LE(channel(longest, kind).size(), messages::kMaxChannelLength);
+  for (const messages::Kind kind : messages::kAllKinds) {
+    EXPECT_LE(messages::channel(longest, kind).size(), messages::kMaxChannelLength);
   }
 }
 
 TEST(Channels, RegexMatchesEveryDetailOfOneKind) {
-  for (const Kind kind : messages::kAllKinds) {
+  for (const messages::Kind kind : messages::kAllKinds) {
     const std::regex re(messages::channel_regex(kind));
-    for (const Kind other : messages::kAllKinds) {
-      EXPECT_EQ(std::regex_match(channel("b1-ct", other), re), other == kind);
-      EXPECT_EQ(std::regex_match(channel("Weld_Toe-07", other), re), other == kind);
+    for (const messages::Kind other : messages::kAllKinds) {
+      EXPECT_EQ(std::regex_match(messages::channel("b1-ct", other), re), other == kind);
+      EXPECT_EQ(std::regex_match(messages::channel("Weld_Toe-07", other), re), other == kind);
     }
     EXPECT_FALSE(std::regex_match("OTHER_B1_" + std::string(messages::suffix(kind)), re));
   }
 }
 
 TEST(Channels, ParseIsInverseUpToToken) {
-  for (const Kind kind : messages::kAllKinds) {
-    const auto parts = messages::parse_channel(channel("weld_toe-7", kind));
+  for (const messages::Kind kind : messages::kAllKinds) {
+    const auto parts = messages::parse_channel(messages::channel("weld_toe-7", kind));
     ASSERT_TRUE(parts.has_value());
     EXPECT_EQ(parts->token, "WELD_TOE_7");
     EXPECT_EQ(parts->kind, kind);
@@ -539,7 +539,7 @@ TEST(Channels, ParseIsInverseUpToToken) {
   const auto state = messages::parse_channel("PERITWIN_LOAD_STATE");
   ASSERT_TRUE(state.has_value());
   EXPECT_EQ(state->token, "LOAD");
-  EXPECT_EQ(state->kind, Kind::kState);
+  EXPECT_EQ(state->kind, messages::Kind::kState);
   for (const char* name :
        {"PERITWIN_LOAD", "PERITWIN__LOAD", "PERITWIN_b1_LOAD", "OTHER_B1_LOAD",
         "PERITWIN_B1_CT_FOO", "PERITWIN_B1.CT_LOAD", "PERITWIN_B1CT_XLOAD", ""}) {
@@ -564,18 +564,20 @@ TEST(MessagesLcm, MemqPublishSubscribeRoundTrip) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
 
-  const std::string load = channel("b1-ct", Kind::kLoad);
+  const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
   BatchCatcher exact;
   BatchCatcher every_detail;
   BatchCatcher other_detail;
   BatchCatcher other_kind;
   ASSERT_NE(lcm.subscribe(load, &BatchCatcher::on_batch, &exact), nullptr);
-  ASSERT_NE(
-      lcm.subscribe(messages::channel_regex(Kind::kLoad), &BatchCatcher::on_batch, &every_detail),
-      nullptr);
-  ASSERT_NE(lcm.subscribe(channel("b1-ct2", Kind::kLoad), &BatchCatcher::on_batch, &other_detail),
+  ASSERT_NE(lcm.subscribe(messages::channel_regex(messages::Kind::kLoad), &BatchCatcher::on_batch,
+                          &every_detail),
             nullptr);
-  ASSERT_NE(lcm.subscribe(channel("b1-ct", Kind::kState), &BatchCatcher::on_batch, &other_kind),
+  ASSERT_NE(lcm.subscribe(messages::channel("b1-ct2", messages::Kind::kLoad),
+                          &BatchCatcher::on_batch, &other_detail),
+            nullptr);
+  ASSERT_NE(lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState),
+                          &BatchCatcher::on_batch, &other_kind),
             nullptr);
 
   const msgs::load_batch_t sent = make_batch();

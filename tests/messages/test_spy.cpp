@@ -21,7 +21,7 @@
 
 namespace fs = std::filesystem;
 using namespace peritwin::testing;
-using peritwin::twin::free_loopback_port;
+using peritwin::core::free_loopback_port;
 
 namespace {
 
@@ -93,13 +93,13 @@ class LcmSpy : public ::testing::Test {
   }
   // Environment changes of one test, undone after it.
   void set_env(const char* name, const std::string& value) {
-    saved_.emplace_back(name, std::getenv(name) ? std::optional<std::string>(std::getenv(name))
-                                                : std::nullopt);
+    saved_.emplace_back(
+        name, std::getenv(name) ? std::optional<std::string>(std::getenv(name)) : std::nullopt);
     setenv(name, value.c_str(), 1);
   }
   void unset_env(const char* name) {
-    saved_.emplace_back(name, std::getenv(name) ? std::optional<std::string>(std::getenv(name))
-                                                : std::nullopt);
+    saved_.emplace_back(
+        name, std::getenv(name) ? std::optional<std::string>(std::getenv(name)) : std::nullopt);
     unsetenv(name);
   }
   void TearDown() override {
@@ -123,7 +123,8 @@ TEST_F(LcmSpy, HelpAndClassPath) {
   EXPECT_NE(help.out.find("libjchart2d-java"), std::string::npos) << help.out;
 
   unset_env("CLASSPATH");
-  const Outcome cp = run({kSpy.string(), "--build-dir", kBuildDir.string(), "--classpath"}, dir_, "cp");
+  const Outcome cp =
+      run({kSpy.string(), "--build-dir", kBuildDir.string(), "--classpath"}, dir_, "cp");
   ASSERT_EQ(cp.exit_code, 0) << cp.err;
   std::vector<std::string> entries;
   std::stringstream in(cp.out.substr(0, cp.out.find('\n')));
@@ -136,8 +137,8 @@ TEST_F(LcmSpy, HelpAndClassPath) {
 
   // $CLASSPATH is appended (other type jars, Spy plugins).
   set_env("CLASSPATH", "/x/extra.jar");
-  const Outcome extra = run({kSpy.string(), "--build-dir", kBuildDir.string(), "--classpath"}, dir_,
-                        "extra");
+  const Outcome extra =
+      run({kSpy.string(), "--build-dir", kBuildDir.string(), "--classpath"}, dir_, "extra");
   EXPECT_EQ(extra.out, cp.out.substr(0, cp.out.find('\n')) + ":/x/extra.jar\n");
 
   const Outcome bad = run({kSpy.string(), "--no-such-option"}, dir_, "bad");
@@ -167,7 +168,8 @@ TEST_F(LcmSpy, MissingJarNamesThePackage) {
 TEST_F(LcmSpy, WithoutDisplaySaysHow) {
   unset_env("DISPLAY");
   unset_env("WAYLAND_DISPLAY");
-  const Outcome r = run({kSpy.string(), "--build-dir", kBuildDir.string(), "memq://"}, dir_, "nodisp");
+  const Outcome r =
+      run({kSpy.string(), "--build-dir", kBuildDir.string(), "memq://"}, dir_, "nodisp");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("xvfb-run -a scripts/spy.sh"), std::string::npos) << r.err;
 }
@@ -190,7 +192,7 @@ TEST_F(LcmSpy, DecodesEveryTypeAndOpensViewerAndPlot) {
   std::unique_ptr<Process> hub;
   int port = 0;
   for (int attempt = 0; attempt < 5 && !hub; ++attempt) {
-    port = free_loopback_port();
+    port = peritwin::core::free_loopback_port();
     hub = start_lcm_hub(java, port, dir_ / "hub.log", 60);
   }
   ASSERT_TRUE(hub) << read_file(dir_ / "hub.log");
@@ -233,8 +235,8 @@ TEST_F(LcmSpy, DecodesEveryTypeAndOpensViewerAndPlot) {
     EXPECT_NE(spy.out.find("spy-check: " + prefix + t + ": viewer open, plot of "),
               std::string::npos);
   }
-  EXPECT_TRUE(publisher.running()) << "the publisher ended before the check: "
-                                   << read_file(dir_ / "publisher.err");
+  EXPECT_TRUE(publisher.running())
+      << "the publisher ended before the check: " << read_file(dir_ / "publisher.err");
 }
 
 }  // namespace

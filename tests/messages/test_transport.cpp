@@ -6,10 +6,10 @@
 #include <chrono>
 #include <thread>
 
+#include "core/loopback_port.h"
 #include "messages/codec.h"
 #include "messages/transport.h"
 #include "tests/support/fake_tcpq_hub.h"
-#include "tests/support/loopback_port.h"
 
 namespace peritwin::messages {
 namespace {
@@ -21,42 +21,44 @@ std::uint32_t ipv4(const char* text) {
 }
 
 TEST(TcpqHub, AsLcmReadsTheUrl) {
-  const auto hub = tcpq_hub("tcpq://127.0.0.1:7701");
+  const auto hub = messages::tcpq_hub("tcpq://127.0.0.1:7701");
   ASSERT_TRUE(hub.has_value());
   EXPECT_EQ(hub->host, "127.0.0.1");
   EXPECT_EQ(hub->address, ipv4("127.0.0.1"));
   EXPECT_EQ(hub->port, 7701);
-  const auto with_options = tcpq_hub("tcpq://10.1.2.3:0x1e15?foo=bar");  // strtol base 0
+  const auto with_options = messages::tcpq_hub("tcpq://10.1.2.3:0x1e15?foo=bar");  // strtol base 0
   ASSERT_TRUE(with_options.has_value());
   EXPECT_EQ(with_options->address, ipv4("10.1.2.3"));
   EXPECT_EQ(with_options->port, 7701);
-  const auto defaults = tcpq_hub("tcpq://");  // lcm_tcpq_create's 127.0.0.1:7700
+  const auto defaults = messages::tcpq_hub("tcpq://");  // lcm_tcpq_create's 127.0.0.1:7700
   ASSERT_TRUE(defaults.has_value());
   EXPECT_EQ(defaults->address, ipv4("127.0.0.1"));
   EXPECT_EQ(defaults->port, 7700);
-  const auto name = tcpq_hub("tcpq://localhost:7000");  // never resolved by LCM 1.3.1: 0.0.0.0
+  const auto name =
+      messages::tcpq_hub("tcpq://localhost:7000");  // never resolved by LCM 1.3.1: 0.0.0.0
   ASSERT_TRUE(name.has_value());
   EXPECT_EQ(name->address, 0u);
   EXPECT_EQ(name->port, 7000);
-  EXPECT_FALSE(tcpq_hub("tcpq://127.0.0.1:65536").has_value());
-  EXPECT_FALSE(tcpq_hub("udpm://239.255.76.67:7667?ttl=0").has_value());
-  EXPECT_FALSE(tcpq_hub("memq://").has_value());
+  EXPECT_FALSE(messages::tcpq_hub("tcpq://127.0.0.1:65536").has_value());
+  EXPECT_FALSE(messages::tcpq_hub("udpm://239.255.76.67:7667?ttl=0").has_value());
+  EXPECT_FALSE(messages::tcpq_hub("memq://").has_value());
 }
 
 TEST(TcpqHub, ProbeTellsListeningFromRefused) {
   testing::FakeTcpqHub listening(0);
-  const auto up = tcpq_hub(listening.url());
+  const auto up = messages::tcpq_hub(listening.url());
   ASSERT_TRUE(up.has_value());
-  EXPECT_TRUE(probe_hub(*up).ok());
-  const auto down = tcpq_hub("tcpq://127.0.0.1:" + std::to_string(twin::free_loopback_port()));
+  EXPECT_TRUE(messages::probe_hub(*up).ok());
+  const auto down =
+      messages::tcpq_hub("tcpq://127.0.0.1:" + std::to_string(core::free_loopback_port()));
   ASSERT_TRUE(down.has_value());
-  const Status refused = probe_hub(*down);
+  const core::Status refused = messages::probe_hub(*down);
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.error().message(), "Connection refused");
 }
 
 TEST(Backoff, DoublesFromATenthToFiveSeconds) {
-  Backoff backoff;
+  messages::Backoff backoff;
   const std::vector<double> expected{0.1, 0.2, 0.4, 0.8, 1.6, 3.2, 5.0, 5.0};
   for (const double e : expected) EXPECT_DOUBLE_EQ(backoff.next(), e);
   backoff.reset();
@@ -64,29 +66,30 @@ TEST(Backoff, DoublesFromATenthToFiveSeconds) {
 }
 
 TEST(HandleLcm, WithoutHubWaitsAndReturnsZero) {
-  lcm::LCM lcm("tcpq://127.0.0.1:" + std::to_string(twin::free_loopback_port()));
+  lcm::LCM lcm("tcpq://127.0.0.1:" + std::to_string(core::free_loopback_port()));
   ASSERT_TRUE(lcm.good());         // LCM 1.3.1 says good without a connection ...
   EXPECT_EQ(lcm.getFileno(), -1);  // ... and its descriptor is -1
-  EXPECT_FALSE(transport_up(lcm));
-  EXPECT_EQ(handle_lcm(lcm, 10), 0);  // lcm.handleTimeout() aborted here
-  EXPECT_EQ(handle_lcm(lcm, 0), 0);
+  EXPECT_FALSE(messages::transport_up(lcm));
+  EXPECT_EQ(messages::handle_lcm(lcm, 10), 0);  // lcm.handleTimeout() aborted here
+  EXPECT_EQ(messages::handle_lcm(lcm, 0), 0);
   lcm::LCM memq("memq://");  // no connection to lose
-  EXPECT_TRUE(transport_up(memq));
+  EXPECT_TRUE(messages::transport_up(memq));
 }
 
 TEST(HandleLcm, HubClosingTheConnectionIsNoFailure) {
   testing::FakeTcpqHub hub(0);  // closes right after the handshake
   lcm::LCM lcm(hub.url());
-  ASSERT_TRUE(transport_up(lcm));
+  ASSERT_TRUE(messages::transport_up(lcm));
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
   int calls = 0;
-  while (transport_up(lcm) && std::chrono::steady_clock::now() < deadline) {
-    EXPECT_EQ(handle_lcm(lcm, 100), 0);  // the end of the stream is handled, not a message
+  while (messages::transport_up(lcm) && std::chrono::steady_clock::now() < deadline) {
+    EXPECT_EQ(messages::handle_lcm(lcm, 100),
+              0);  // the end of the stream is handled, not a message
     ++calls;
   }
-  EXPECT_FALSE(transport_up(lcm));
+  EXPECT_FALSE(messages::transport_up(lcm));
   EXPECT_GE(calls, 1);
-  EXPECT_EQ(handle_lcm(lcm, 10), 0);  // and after it, no FD_SET(-1)
+  EXPECT_EQ(messages::handle_lcm(lcm, 10), 0);  // and after it, no FD_SET(-1)
 }
 
 TEST(Reconnect, SameInstanceResubscribesAndPublishesNothing) {
@@ -97,10 +100,11 @@ TEST(Reconnect, SameInstanceResubscribesAndPublishesNothing) {
       static_cast<void*>(nullptr));
   ASSERT_NE(sub, nullptr);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(5);
-  while (transport_up(lcm) && std::chrono::steady_clock::now() < deadline) handle_lcm(lcm, 100);
-  ASSERT_FALSE(transport_up(lcm));
-  ASSERT_TRUE(reconnect(lcm).ok());
-  EXPECT_TRUE(transport_up(lcm));
+  while (messages::transport_up(lcm) && std::chrono::steady_clock::now() < deadline)
+    messages::handle_lcm(lcm, 100);
+  ASSERT_FALSE(messages::transport_up(lcm));
+  ASSERT_TRUE(messages::reconnect(lcm).ok());
+  EXPECT_TRUE(messages::transport_up(lcm));
   // The hub saw the daemon's subscription again and the probe's come and go, and no message.
   while ((hub.resubscribes() < 2 || hub.unsubscribes() < 1) &&
          std::chrono::steady_clock::now() < deadline) {
@@ -109,17 +113,17 @@ TEST(Reconnect, SameInstanceResubscribesAndPublishesNothing) {
   EXPECT_EQ(hub.resubscribes(), 2);  // PERITWIN_B1_CT_LOAD and the probe
   EXPECT_EQ(hub.unsubscribes(), 1);  // the probe
   EXPECT_EQ(hub.republishes(), 0);
-  EXPECT_TRUE(reconnect(lcm).ok());  // connected: nothing to do
+  EXPECT_TRUE(messages::reconnect(lcm).ok());  // connected: nothing to do
   lcm.unsubscribe(sub);
 }
 
 TEST(Reconnect, WithoutHubFails) {
-  lcm::LCM lcm("tcpq://127.0.0.1:" + std::to_string(twin::free_loopback_port()));
-  const Status again = reconnect(lcm);
+  lcm::LCM lcm("tcpq://127.0.0.1:" + std::to_string(core::free_loopback_port()));
+  const core::Status again = messages::reconnect(lcm);
   ASSERT_FALSE(again.ok());
   EXPECT_EQ(again.error().message(), "LCM could not connect");
   lcm::LCM memq("memq://");
-  EXPECT_TRUE(reconnect(memq).ok());
+  EXPECT_TRUE(messages::reconnect(memq).ok());
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// Tests of replay/rainflow.h, replay/cycle_blocks.h and replay/load_history.h (the incremental
+// Tests of loads/rainflow.h, loads/cycle_blocks.h and loads/load_history.h (the incremental
 // counter's own properties: tests/replay/test_rainflow_stream.cpp). Expected numbers come from ASTM
 // E1049-85 (Sec. 5.4.4 example), from hand traces written next to each case, or from an independent
 // brute-force four-point rainflow written here.
@@ -19,8 +19,8 @@
 #include <tuple>
 #include <vector>
 
-#include "replay/load_history.h"
-#include "replay/rainflow.h"
+#include "loads/load_history.h"
+#include "loads/rainflow.h"
 
 namespace peritwin::replay {
 namespace {
@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 
 const std::vector<double> kAstmHistory = {-2, 1, -3, 5, -1, 3, -4, 4, -2};
 
-std::map<double, double> counts_by_range(const std::vector<CountedCycle>& cycles) {
+std::map<double, double> counts_by_range(const std::vector<loads::CountedCycle>& cycles) {
   std::map<double, double> out;
   for (const auto& c : cycles) out[std::abs(c.to - c.from)] += c.count;
   return out;
@@ -95,17 +95,17 @@ std::vector<double> random_history(std::mt19937_64& rng, std::size_t n, bool int
 // ---------------------------------------------------------------- rainflow
 
 TEST(Rainflow, AstmE1049ExampleAggregateCounts) {
-  const auto cycles = count_cycles(kAstmHistory);
+  const auto cycles = loads::count_cycles(kAstmHistory);
   const std::map<double, double> expected = {{3, 0.5}, {4, 1.5}, {6, 0.5}, {8, 1.0}, {9, 0.5}};
   EXPECT_EQ(counts_by_range(cycles), expected);
 }
 
 TEST(Rainflow, AstmE1049ExampleCycleByCycle) {
   // Hand trace of Sec. 5.4.4 on the reversals -2, 1, -3, 5, -1, 3, -4, 4, -2, in counting order.
-  const std::vector<CountedCycle> expected = {{-2, 1, 0.5, 0}, {1, -3, 0.5, 0}, {-1, 3, 1.0, 0},
-                                              {-3, 5, 0.5, 0}, {5, -4, 0.5, 0}, {-4, 4, 0.5, 0},
-                                              {4, -2, 0.5, 0}};
-  EXPECT_EQ(count_cycles(kAstmHistory), expected);
+  const std::vector<loads::CountedCycle> expected = {
+      {-2, 1, 0.5, 0}, {1, -3, 0.5, 0}, {-1, 3, 1.0, 0}, {-3, 5, 0.5, 0},
+      {5, -4, 0.5, 0}, {-4, 4, 0.5, 0}, {4, -2, 0.5, 0}};
+  EXPECT_EQ(loads::count_cycles(kAstmHistory), expected);
 }
 
 TEST(Rainflow, MonotonePointsAndPlateausAreNoReversals) {
@@ -115,12 +115,13 @@ TEST(Rainflow, MonotonePointsAndPlateausAreNoReversals) {
   const std::vector<double> x = {0, 1, 2, 2, 1, -1, -1, -1, 3, 3};
   std::vector<double> angle(x.size());
   std::iota(angle.begin(), angle.end(), 0.0);
-  const std::vector<CountedCycle> expected = {{0, 2, 0.5, 2}, {2, -1, 0.5, 2}, {-1, 3, 0.5, 8}};
-  EXPECT_EQ(count_cycles(x, angle), expected);
-  EXPECT_TRUE(count_cycles(std::vector<double>{}).empty());
-  EXPECT_TRUE(count_cycles(std::vector<double>{4, 4, 4}).empty());
-  EXPECT_TRUE(count_cycles(std::vector<double>{NAN, 4, INFINITY}).empty());
-  EXPECT_THROW((void)count_cycles(x, std::vector<double>{1.0}), std::invalid_argument);
+  const std::vector<loads::CountedCycle> expected = {
+      {0, 2, 0.5, 2}, {2, -1, 0.5, 2}, {-1, 3, 0.5, 8}};
+  EXPECT_EQ(loads::count_cycles(x, angle), expected);
+  EXPECT_TRUE(loads::count_cycles(std::vector<double>{}).empty());
+  EXPECT_TRUE(loads::count_cycles(std::vector<double>{4, 4, 4}).empty());
+  EXPECT_TRUE(loads::count_cycles(std::vector<double>{NAN, 4, INFINITY}).empty());
+  EXPECT_THROW((void)loads::count_cycles(x, std::vector<double>{1.0}), std::invalid_argument);
 }
 
 // Against the brute-force four-point method on random histories. Both compute range and mean from
@@ -138,7 +139,7 @@ TEST(Rainflow, MatchesBruteForceFourPointOnRandomHistories) {
     const auto x = random_history(rng, 5 + static_cast<std::size_t>(trial % 60), integer_levels);
     const std::vector<double> rev = naive_reversals(x);
     std::vector<RefCycle> got;
-    for (const auto& c : count_cycles(x)) {
+    for (const auto& c : loads::count_cycles(x)) {
       got.push_back({std::abs(c.to - c.from), 0.5 * (c.from + c.to), c.count});
     }
     std::sort(got.begin(), got.end());
@@ -167,30 +168,30 @@ TEST(Rainflow, MatchesBruteForceFourPointOnRandomHistories) {
 // ---------------------------------------------------------------- cycles -> blocks
 
 TEST(CyclesToBlocks, AstmExampleGivesOneBlockPerCycleWithHalvesRoundedUp) {
-  const BlockConversion conv = series_to_blocks({{}, kAstmHistory, {}});
+  const loads::BlockConversion conv = loads::series_to_blocks({{}, kAstmHistory, {}});
   // Counting order of the hand trace above; every half cycle has its own key -> rounded up.
-  const std::vector<LoadBlock> expected = {
+  const std::vector<core::LoadBlock> expected = {
       {1, -2.0, 0, 1},       {1, -3.0, 0, 1}, {3, -1.0 / 3.0, 0, 1}, {5, -3.0 / 5.0, 0, 1},
       {5, -4.0 / 5.0, 0, 1}, {4, -1.0, 0, 1}, {4, -2.0 / 4.0, 0, 1}};
   EXPECT_EQ(conv.blocks, expected);
   EXPECT_EQ(conv.stats.reversals, 9u);
   EXPECT_EQ(conv.stats.full_cycles, 1u);
   EXPECT_EQ(conv.stats.half_cycles, 6u);
-  EXPECT_EQ(conv.stats.skipped, ConversionStats::SkippedCycles{});
+  EXPECT_EQ(conv.stats.skipped, loads::ConversionStats::SkippedCycles{});
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 6u);
 }
 
 TEST(CyclesToBlocks, HalfCyclesOfTheSameKeyPairIntoWholeCycles) {
   // 0,10,0,10,0: ASTM step (5) gives three halves 0-10 and the residue a fourth -> 2 cycles.
-  LoadSeries even{{0, 1, 2, 3, 4}, {0, 10, 0, 10, 0}, {}};
-  BlockConversion conv = series_to_blocks(even);
-  EXPECT_EQ(conv.blocks, (std::vector<LoadBlock>{{10, 0, 0, 2}}));
+  loads::LoadSeries even{{0, 1, 2, 3, 4}, {0, 10, 0, 10, 0}, {}};
+  loads::BlockConversion conv = loads::series_to_blocks(even);
+  EXPECT_EQ(conv.blocks, (std::vector<core::LoadBlock>{{10, 0, 0, 2}}));
   EXPECT_EQ(conv.stats.half_cycles, 4u);
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 0u);
   // 0,10,0,10: three halves -> one pair + one rounded up = 2 cycles.
-  LoadSeries odd{{0, 1, 2, 3}, {0, 10, 0, 10}, {}};
-  conv = series_to_blocks(odd);
-  EXPECT_EQ(conv.blocks, (std::vector<LoadBlock>{{10, 0, 0, 2}}));
+  loads::LoadSeries odd{{0, 1, 2, 3}, {0, 10, 0, 10}, {}};
+  conv = loads::series_to_blocks(odd);
+  EXPECT_EQ(conv.blocks, (std::vector<core::LoadBlock>{{10, 0, 0, 2}}));
   EXPECT_EQ(conv.stats.half_cycles, 3u);
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 1u);
 }
@@ -198,11 +199,11 @@ TEST(CyclesToBlocks, HalfCyclesOfTheSameKeyPairIntoWholeCycles) {
 TEST(CyclesToBlocks, CompressiveCyclesAreSkippedWhenCompressedBondsDoNotFatigue) {
   // Reversals 0,-10,-2,-8,5 (trace): full -2/-8 (P_max -2), half 0/-10 (P_max 0), residue half
   // -10/5 -> only the last one drives fatigue: P_max 5, R -2, alpha at the sample of 5.
-  LoadSeries s{{0, 1, 2, 3, 4}, {0, -10, -2, -8, 5}, {0.0, 0.1, 0.2, 0.3, 0.4}};
-  SeriesRules rules;
+  loads::LoadSeries s{{0, 1, 2, 3, 4}, {0, -10, -2, -8, 5}, {0.0, 0.1, 0.2, 0.3, 0.4}};
+  loads::SeriesRules rules;
   rules.compressed_bonds_fatigue = false;
-  const BlockConversion conv = series_to_blocks(s, rules);
-  EXPECT_EQ(conv.blocks, (std::vector<LoadBlock>{{5, -2, 0.4, 1}}));
+  const loads::BlockConversion conv = loads::series_to_blocks(s, rules);
+  EXPECT_EQ(conv.blocks, (std::vector<core::LoadBlock>{{5, -2, 0.4, 1}}));
   EXPECT_EQ(conv.stats.skipped.compressive, 1.5);
   EXPECT_EQ(conv.stats.skipped.mirrored_compressive, 0.0);
   EXPECT_EQ(conv.stats.full_cycles, 1u);
@@ -213,11 +214,11 @@ TEST(CyclesToBlocks, CompressiveCyclesAreSkippedWhenCompressedBondsDoNotFatigue)
 TEST(CyclesToBlocks, AngleIsTakenAtTheMaximumReversal) {
   // Loads 0,4,10,10,2,5,8,0 -> reversals 0(s0),10(s2),2(s4),8(s6),0(s7). Trace: full 2/8
   // (P_max 8 at s6), half 0/10 (max at s2), residue half 10/0 (max at s2, same key -> paired).
-  LoadSeries s{{0, 1, 2, 3, 4, 5, 6, 7},
-               {0, 4, 10, 10, 2, 5, 8, 0},
-               {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7}};
-  const BlockConversion conv = series_to_blocks(s);
-  EXPECT_EQ(conv.blocks, (std::vector<LoadBlock>{{8, 0.25, 0.6, 1}, {10, 0, 0.2, 1}}));
+  loads::LoadSeries s{{0, 1, 2, 3, 4, 5, 6, 7},
+                      {0, 4, 10, 10, 2, 5, 8, 0},
+                      {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7}};
+  const loads::BlockConversion conv = loads::series_to_blocks(s);
+  EXPECT_EQ(conv.blocks, (std::vector<core::LoadBlock>{{8, 0.25, 0.6, 1}, {10, 0, 0.2, 1}}));
   EXPECT_EQ(conv.stats.rounded_up_half_cycles, 0u);
 }
 
@@ -229,15 +230,15 @@ TEST(CyclesToBlocks, HalfCycleRuleNeverLosesDamage) {
     SCOPED_TRACE(trial);
     auto x = random_history(rng, 40, trial % 2 == 1);
     for (auto& v : x) v += 200.0;  // all tensile
-    const auto cycles = count_cycles(x);
-    BlockConversion conv;
-    CycleBlocks converter({});
+    const auto cycles = loads::count_cycles(x);
+    loads::BlockConversion conv;
+    loads::CycleBlocks converter({});
     for (const auto& c : cycles) converter.add(c, conv.blocks);
     conv.stats = converter.stats();
     double d_rf = 0, d_blocks = 0;
     for (const auto& c : cycles) d_rf += c.count * std::pow(std::abs(c.to - c.from), 3);
     std::int64_t total = 0;
-    for (const auto& b : merge_consecutive(conv.blocks)) {
+    for (const auto& b : loads::merge_consecutive(conv.blocks)) {
       d_blocks += static_cast<double>(b.count) * std::pow(b.p_max * (1.0 - b.r), 3);
       total += b.count;
     }
@@ -249,12 +250,12 @@ TEST(CyclesToBlocks, HalfCycleRuleNeverLosesDamage) {
 }
 
 TEST(CyclesToBlocks, MergeConsecutiveSumsRunsOnly) {
-  const std::vector<LoadBlock> in = {{1, 0, 0, 2}, {1, 0, 0, 3}, {2, 0, 0, 1}, {1, 0, 0, 4}};
-  EXPECT_EQ(merge_consecutive(in),
-            (std::vector<LoadBlock>{{1, 0, 0, 5}, {2, 0, 0, 1}, {1, 0, 0, 4}}));
+  const std::vector<core::LoadBlock> in = {{1, 0, 0, 2}, {1, 0, 0, 3}, {2, 0, 0, 1}, {1, 0, 0, 4}};
+  EXPECT_EQ(loads::merge_consecutive(in),
+            (std::vector<core::LoadBlock>{{1, 0, 0, 5}, {2, 0, 0, 1}, {1, 0, 0, 4}}));
   const std::int64_t big = std::numeric_limits<std::int64_t>::max() - 1;
-  const std::vector<LoadBlock> overflow = {{1, 0, 0, big}, {1, 0, 0, 5}};
-  EXPECT_EQ(merge_consecutive(overflow), overflow);  // never overflows the count
+  const std::vector<core::LoadBlock> overflow = {{1, 0, 0, big}, {1, 0, 0, 5}};
+  EXPECT_EQ(loads::merge_consecutive(overflow), overflow);  // never overflows the count
 }
 
 // ---------------------------------------------------------------- readers
@@ -281,15 +282,16 @@ TEST_F(LoadHistoryFiles, SeriesWithAngleCommentsBlanksAndCrlf) {
                        "# recorded 2024-06-01\r\n\r\n time_s , load_N , angle_rad \r\n"
                        "0,0,0.0\r\n# mid comment\r\n1,4,0.1\n2,10,0.2\n3,10,0.3\n4,2,0.4\n"
                        "5,5,0.5\n6,8,0.6\n7,0,0.7\n\n");
-  const auto series = read_series_csv(p);
+  const auto series = loads::read_series_csv(p);
   ASSERT_TRUE(series.ok()) << series.error().message();
   EXPECT_EQ(series.value().time_s, (std::vector<double>{0, 1, 2, 3, 4, 5, 6, 7}));
   EXPECT_EQ(series.value().load_n, (std::vector<double>{0, 4, 10, 10, 2, 5, 8, 0}));
   EXPECT_EQ(series.value().angle_rad.size(), 8u);
   EXPECT_EQ(series.value().angle_rad[6], 0.6);
-  const auto blocks = read_blocks(p, HistoryFormat::series);
+  const auto blocks = loads::read_blocks(p, loads::HistoryFormat::series);
   ASSERT_TRUE(blocks.ok());
-  EXPECT_EQ(blocks.value().blocks, (std::vector<LoadBlock>{{8, 0.25, 0.6, 1}, {10, 0, 0.2, 1}}));
+  EXPECT_EQ(blocks.value().blocks,
+            (std::vector<core::LoadBlock>{{8, 0.25, 0.6, 1}, {10, 0, 0.2, 1}}));
 }
 
 TEST_F(LoadHistoryFiles, SeriesWithoutAngleIsTheAstmExample) {
@@ -298,21 +300,21 @@ TEST_F(LoadHistoryFiles, SeriesWithoutAngleIsTheAstmExample) {
     text += std::to_string(0.5 * static_cast<double>(i)) + "," +
             std::to_string(static_cast<int>(kAstmHistory[i])) + "\n";
   }
-  const auto series = read_series_csv(write("s.csv", text));
+  const auto series = loads::read_series_csv(write("s.csv", text));
   ASSERT_TRUE(series.ok()) << series.error().message();
   EXPECT_TRUE(series.value().angle_rad.empty());
   EXPECT_EQ(series.value().load_n, kAstmHistory);
-  EXPECT_EQ(series_to_blocks(series.value()).blocks.size(), 7u);
+  EXPECT_EQ(loads::series_to_blocks(series.value()).blocks.size(), 7u);
 }
 
 TEST_F(LoadHistoryFiles, CyclesListKeptAsGiven) {
   const auto p = write("c.csv",
                        "p_max_N,r,angle_rad,count\n1e4,0.1,0,1000\n1e4,0.1,0,5\n"
                        "2.5e4,-1,1.5707963267948966,7\n");
-  const auto blocks = read_cycles_csv(p);
+  const auto blocks = loads::read_cycles_csv(p);
   ASSERT_TRUE(blocks.ok()) << blocks.error().message();
   EXPECT_EQ(blocks.value(),
-            (std::vector<LoadBlock>{
+            (std::vector<core::LoadBlock>{
                 {1e4, 0.1, 0, 1000}, {1e4, 0.1, 0, 5}, {2.5e4, -1, 1.5707963267948966, 7}}));
 }
 
@@ -320,38 +322,39 @@ TEST_F(LoadHistoryFiles, SpectrumRepeatDirective) {
   const auto p = write("sp.csv",
                        "# repeat 3\n# two-level spectrum\np_max_N,r,angle_rad,count\n"
                        "100,0.1,0,10\n200,0.5,0.2,1\n");
-  const auto spectrum = read_spectrum_csv(p);
+  const auto spectrum = loads::read_spectrum_csv(p);
   ASSERT_TRUE(spectrum.ok()) << spectrum.error().message();
   EXPECT_EQ(spectrum.value().repeat, 3);
-  const std::vector<LoadBlock> one = {{100, 0.1, 0, 10}, {200, 0.5, 0.2, 1}};
+  const std::vector<core::LoadBlock> one = {{100, 0.1, 0, 10}, {200, 0.5, 0.2, 1}};
   EXPECT_EQ(spectrum.value().blocks, one);
-  std::vector<LoadBlock> three;
+  std::vector<core::LoadBlock> three;
   for (int k = 0; k < 3; ++k) three.insert(three.end(), one.begin(), one.end());
-  EXPECT_EQ(expand(spectrum.value()), three);
-  const auto blocks = read_blocks(p, HistoryFormat::spectrum);
+  EXPECT_EQ(loads::expand(spectrum.value()), three);
+  const auto blocks = loads::read_blocks(p, loads::HistoryFormat::spectrum);
   ASSERT_TRUE(blocks.ok());
   EXPECT_EQ(blocks.value().blocks, three);
 
   // At the cap exactly: 2 blocks x 500 000.
-  const auto at_cap = read_blocks(
+  const auto at_cap = loads::read_blocks(
       write("cap.csv", "# repeat 500000\np_max_N,r,angle_rad,count\n100,0.1,0,10\n200,0.5,0.2,1\n"),
-      HistoryFormat::spectrum);
+      loads::HistoryFormat::spectrum);
   ASSERT_TRUE(at_cap.ok()) << at_cap.error().message();
-  ASSERT_EQ(at_cap.value().blocks.size(), kMaxSpectrumBlocks);
+  ASSERT_EQ(at_cap.value().blocks.size(), loads::kMaxSpectrumBlocks);
   EXPECT_EQ(at_cap.value().blocks.back(), one.back());
-  EXPECT_THROW((void)expand({one, 500'001}), std::length_error);
+  EXPECT_THROW((void)loads::expand({one, 500'001}), std::length_error);
 
-  const auto plain = read_spectrum_csv(write("p.csv", "p_max_N,r,angle_rad,count\n100,0,0,1\n"));
+  const auto plain =
+      loads::read_spectrum_csv(write("p.csv", "p_max_N,r,angle_rad,count\n100,0,0,1\n"));
   ASSERT_TRUE(plain.ok());
   EXPECT_EQ(plain.value().repeat, 1);
   // "# repeated ..." is an ordinary comment, not the directive.
-  const auto comment =
-      read_cycles_csv(write("k.csv", "# repeated test\np_max_N,r,angle_rad,count\n1,0,0,1\n"));
+  const auto comment = loads::read_cycles_csv(
+      write("k.csv", "# repeated test\np_max_N,r,angle_rad,count\n1,0,0,1\n"));
   EXPECT_TRUE(comment.ok());
 }
 
 struct BadCase {
-  HistoryFormat format;
+  loads::HistoryFormat format;
   std::string text;
   std::size_t line;
   std::string reason;  // substring of the message
@@ -361,45 +364,51 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
   const std::string series = "time_s,load_N,angle_rad\n";
   const std::string blocks = "p_max_N,r,angle_rad,count\n";
   const std::vector<BadCase> cases = {
-      {HistoryFormat::series, "time,load\n0,1\n", 1, "expected header"},
-      {HistoryFormat::series, "# c\n\n" + series + "0,1,0\n1,2,0,9\n", 5,
+      {loads::HistoryFormat::series, "time,load\n0,1\n", 1, "expected header"},
+      {loads::HistoryFormat::series, "# c\n\n" + series + "0,1,0\n1,2,0,9\n", 5,
        "expected 3 fields, got 4"},
-      {HistoryFormat::series, series + "nan,1,0\n", 2, "non-finite value 'nan' in 'time_s'"},
-      {HistoryFormat::series, series + "0,1,0\ninf,1,0\n", 3, "non-finite value 'inf'"},
-      {HistoryFormat::series, series + "0,1,0\n1,2x,0\n", 3, "malformed number '2x'"},
-      {HistoryFormat::series, series + "0,,0\n", 2, "empty field 'load_N'"},
-      {HistoryFormat::series, series + "0,1e999,0\n", 2, "out of range"},
-      {HistoryFormat::series, series + "0,1,0\n\n0,2,0\n", 4, "strictly increasing"},
-      {HistoryFormat::series, "# repeat 2\n" + series + "0,1,0\n", 1, "only valid in a spectrum"},
-      {HistoryFormat::cycles, blocks + "1,0,0,0\n", 2, "'count' must be an integer >= 1, got '0'"},
-      {HistoryFormat::cycles, blocks + "1,0,0,1.5\n", 2, "'count' must be an integer >= 1"},
-      {HistoryFormat::cycles, blocks + "1,0,0,-3\n", 2, "'count' must be an integer >= 1"},
-      {HistoryFormat::cycles, blocks + "1,0,0,99999999999999999999\n", 2, "out of range"},
-      {HistoryFormat::cycles, blocks + "1,0,nan,1\n", 2, "non-finite value 'nan' in 'angle_rad'"},
+      {loads::HistoryFormat::series, series + "nan,1,0\n", 2, "non-finite value 'nan' in 'time_s'"},
+      {loads::HistoryFormat::series, series + "0,1,0\ninf,1,0\n", 3, "non-finite value 'inf'"},
+      {loads::HistoryFormat::series, series + "0,1,0\n1,2x,0\n", 3, "malformed number '2x'"},
+      {loads::HistoryFormat::series, series + "0,,0\n", 2, "empty field 'load_N'"},
+      {loads::HistoryFormat::series, series + "0,1e999,0\n", 2, "out of range"},
+      {loads::HistoryFormat::series, series + "0,1,0\n\n0,2,0\n", 4, "strictly increasing"},
+      {loads::HistoryFormat::series, "# repeat 2\n" + series + "0,1,0\n", 1,
+       "only valid in a spectrum"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,0,0\n", 2,
+       "'count' must be an integer >= 1, got '0'"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,0,1.5\n", 2, "'count' must be an integer >= 1"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,0,-3\n", 2, "'count' must be an integer >= 1"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,0,99999999999999999999\n", 2, "out of range"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,nan,1\n", 2,
+       "non-finite value 'nan' in 'angle_rad'"},
       // The rows follow check_load_block, the daemon's own rule (R = 1 is no cycle, R >= -10).
-      {HistoryFormat::cycles, blocks + "0,0,0,1\n", 2, "p_max = 0 must be > 0"},
-      {HistoryFormat::cycles, blocks + "1,1.5,0,1\n", 2, "r = 1.5 must be < 1"},
-      {HistoryFormat::cycles, blocks + "1,1,0,1\n", 2, "r = 1 must be < 1"},
-      {HistoryFormat::cycles, blocks + "1,-11,0,1\n", 2, "r = -11 must be >= -10"},
-      {HistoryFormat::cycles, blocks + "1,0,0\n", 2, "expected 4 fields, got 3"},
-      {HistoryFormat::spectrum, blocks + "# repeat 2\n1,0,0,1\n", 2, "must be the first line"},
-      {HistoryFormat::spectrum, "# repeat 0\n" + blocks + "1,0,0,1\n", 1, "'repeat' must be"},
-      {HistoryFormat::spectrum, "# repeat x\n" + blocks + "1,0,0,1\n", 1, "'repeat' must be"},
+      {loads::HistoryFormat::cycles, blocks + "0,0,0,1\n", 2, "p_max = 0 must be > 0"},
+      {loads::HistoryFormat::cycles, blocks + "1,1.5,0,1\n", 2, "r = 1.5 must be < 1"},
+      {loads::HistoryFormat::cycles, blocks + "1,1,0,1\n", 2, "r = 1 must be < 1"},
+      {loads::HistoryFormat::cycles, blocks + "1,-11,0,1\n", 2, "r = -11 must be >= -10"},
+      {loads::HistoryFormat::cycles, blocks + "1,0,0\n", 2, "expected 4 fields, got 3"},
+      {loads::HistoryFormat::spectrum, blocks + "# repeat 2\n1,0,0,1\n", 2,
+       "must be the first line"},
+      {loads::HistoryFormat::spectrum, "# repeat 0\n" + blocks + "1,0,0,1\n", 1,
+       "'repeat' must be"},
+      {loads::HistoryFormat::spectrum, "# repeat x\n" + blocks + "1,0,0,1\n", 1,
+       "'repeat' must be"},
       // Found by fuzz_spectrum: the repeat used to be expanded unchecked (std::bad_alloc, the
       // replay tool aborted; 10^8 x 2 blocks took 6 GB and a minute).
-      {HistoryFormat::spectrum, "# repeat 100000000000000000\n" + blocks + "1,0,0,1\n", 1,
+      {loads::HistoryFormat::spectrum, "# repeat 100000000000000000\n" + blocks + "1,0,0,1\n", 1,
        "'# repeat 100000000000000000' of 1 blocks expands to more than 1000000 blocks"},
-      {HistoryFormat::spectrum, "# repeat 500001\n" + blocks + "1,0,0,1\n2,0,0,1\n", 1,
+      {loads::HistoryFormat::spectrum, "# repeat 500001\n" + blocks + "1,0,0,1\n2,0,0,1\n", 1,
        "'# repeat 500001' of 2 blocks expands to more than 1000000 blocks"},
-      {HistoryFormat::spectrum, "# only comments\n\n", 0, "no header line"},
-      {HistoryFormat::spectrum, blocks + "# nothing\n", 0, "no data rows"},
+      {loads::HistoryFormat::spectrum, "# only comments\n\n", 0, "no header line"},
+      {loads::HistoryFormat::spectrum, blocks + "# nothing\n", 0, "no data rows"},
   };
   for (std::size_t i = 0; i < cases.size(); ++i) {
     SCOPED_TRACE(i);
     const fs::path p = write("bad" + std::to_string(i) + ".csv", cases[i].text);
-    const auto r = read_blocks(p, cases[i].format);
+    const auto r = loads::read_blocks(p, cases[i].format);
     ASSERT_FALSE(r.ok());
-    const ParseError& e = r.error();
+    const loads::ParseError& e = r.error();
     EXPECT_EQ(e.file, p.string());
     EXPECT_EQ(e.line, cases[i].line);
     const std::string prefix =
@@ -407,7 +416,7 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
     EXPECT_EQ(e.message().rfind(prefix, 0), 0u) << e.message();
     EXPECT_NE(e.message().find(cases[i].reason), std::string::npos) << e.message();
   }
-  const auto missing = read_cycles_csv(dir_ / "missing.csv");
+  const auto missing = loads::read_cycles_csv(dir_ / "missing.csv");
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.error().message(), (dir_ / "missing.csv").string() + ": cannot open file");
 }
@@ -415,21 +424,21 @@ TEST_F(LoadHistoryFiles, EveryErrorNamesFileLineAndReason) {
 // ---------------------------------------------------------------- batching
 
 TEST(Batching, SplitsIntoBatchesOfAtMostMaxBlocks) {
-  std::vector<LoadBlock> blocks;
+  std::vector<core::LoadBlock> blocks;
   for (int i = 0; i < 7; ++i) blocks.push_back({100.0 + i, 0.1, 0, i + 1});
-  const auto batches = make_batches(blocks, 3);
+  const auto batches = loads::make_batches(blocks, 3);
   ASSERT_EQ(batches.size(), 3u);
   EXPECT_EQ(batches[0].size(), 3u);
   EXPECT_EQ(batches[1].size(), 3u);
   EXPECT_EQ(batches[2].size(), 1u);
-  std::vector<LoadBlock> joined;
+  std::vector<core::LoadBlock> joined;
   for (const auto& b : batches) joined.insert(joined.end(), b.begin(), b.end());
   EXPECT_EQ(joined, blocks);
-  EXPECT_EQ(make_batches(blocks, 7).size(), 1u);
-  EXPECT_EQ(make_batches(blocks, 100).size(), 1u);
-  EXPECT_EQ(make_batches(blocks, 1).size(), 7u);
-  EXPECT_TRUE(make_batches({}, 4).empty());
-  EXPECT_THROW((void)make_batches(blocks, 0), std::invalid_argument);
+  EXPECT_EQ(loads::make_batches(blocks, 7).size(), 1u);
+  EXPECT_EQ(loads::make_batches(blocks, 100).size(), 1u);
+  EXPECT_EQ(loads::make_batches(blocks, 1).size(), 7u);
+  EXPECT_TRUE(loads::make_batches({}, 4).empty());
+  EXPECT_THROW((void)loads::make_batches(blocks, 0), std::invalid_argument);
 }
 
 }  // namespace

@@ -34,11 +34,11 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
-  std::vector<peritwin::LoadBlock> blocks;
+  std::vector<peritwin::core::LoadBlock> blocks;
   for (int i = 0; i < 40; ++i) blocks.push_back({4000, 0.1, 0, 1});
   blocks.push_back({4000, 0.1, 0, 5000});
   blocks.push_back({4000, 0.1, 0, 1});
-  const auto batches = make_twin_batches(blocks, "b1-ct", "src", {16, 1000});
+  const auto batches = loads::make_twin_batches(blocks, "b1-ct", "src", {16, 1000});
   ASSERT_EQ(batches.size(), 4u);  // 16 + 16 + (8 + the 5000-cycle block) + 1
   EXPECT_EQ(batches[0].blocks.size(), 16u);
   EXPECT_EQ(batches[2].blocks.size(), 9u);
@@ -48,12 +48,12 @@ TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
     EXPECT_EQ(batches[i].detail_id, "b1-ct");
     EXPECT_EQ(batches[i].source_id, "src");
   }
-  EXPECT_TRUE(make_twin_batches({}, "b1-ct", "src", {}).empty());
+  EXPECT_TRUE(loads::make_twin_batches({}, "b1-ct", "src", {}).empty());
 }
 
 TEST(ReplayBatches, ContinueNumbersFromTheGivenSeq) {
-  const std::vector<LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
-  const auto batches = make_twin_batches(blocks, "b1-ct", "src", {1024, 1000}, 6);
+  const std::vector<core::LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
+  const auto batches = loads::make_twin_batches(blocks, "b1-ct", "src", {1024, 1000}, 6);
   ASSERT_EQ(batches.size(), 3u);
   EXPECT_EQ(batches[0].seq, 6);
   EXPECT_EQ(batches[2].seq, 8);
@@ -61,8 +61,8 @@ TEST(ReplayBatches, ContinueNumbersFromTheGivenSeq) {
 
 TEST(ReplayBatches, StreamBatcherClosesBySampleTime) {
   // 2 s of sample time per batch; blocks arrive between ticks.
-  Batcher batcher("b1-ct", "s", 1, {1024, 1000, 2.0});
-  std::vector<twin::Batch> out;
+  loads::Batcher batcher("b1-ct", "s", 1, {1024, 1000, 2.0});
+  std::vector<messages::Batch> out;
   batcher.tick(10.0, out);  // opens at t = 10
   batcher.add({4000, 0.1, 0, 1}, out);
   batcher.tick(11.5, out);
@@ -85,9 +85,9 @@ TEST(ReplayBatches, StreamBatcherClosesBySampleTime) {
 }
 
 TEST(ReplayBatches, StreamBatcherMergesIdenticalConsecutiveBlocks) {
-  BatchingOptions options{1024, 5, 0.0, true};
-  Batcher batcher("b1-ct", "s", 1, options);
-  std::vector<twin::Batch> out;
+  loads::BatchingOptions options{1024, 5, 0.0, true};
+  loads::Batcher batcher("b1-ct", "s", 1, options);
+  std::vector<messages::Batch> out;
   for (int i = 0; i < 3; ++i) batcher.add({4000, 0.1, 0, 1}, out);
   batcher.add({3000, 0.1, 0, 1}, out);
   batcher.add({3000, 0.1, 0, 1}, out);  // 5 cycles: closed
@@ -98,88 +98,92 @@ TEST(ReplayBatches, StreamBatcherMergesIdenticalConsecutiveBlocks) {
 }
 
 TEST(ReplayBatches, CheckBlocksNamesTheFirstBadOne) {
-  const std::vector<LoadBlock> good{{4000, 0.1, 0, 1}};
-  EXPECT_TRUE(check_blocks(good).ok());
-  const std::vector<LoadBlock> blocks{{4000, 0.1, 0, 1}, {4000, 1.0, 0, 1}};
-  const Status bad = check_blocks(blocks);
+  const std::vector<core::LoadBlock> good{{4000, 0.1, 0, 1}};
+  EXPECT_TRUE(replay::check_blocks(good).ok());
+  const std::vector<core::LoadBlock> blocks{{4000, 0.1, 0, 1}, {4000, 1.0, 0, 1}};
+  const core::Status bad = replay::check_blocks(blocks);
   ASSERT_FALSE(bad.ok());
   EXPECT_EQ(bad.error().field, "blocks[1].r") << bad.error().message();
   // A history may exceed one batch's cap but not what the engine's int64 cycle count holds:
   // 2^13 blocks of 2^50 cycles sum to 2^63, one more than int64's maximum, at the last block.
-  const std::vector<LoadBlock> beyond_batch(2, {4000, 0.1, 0, kMaxBatchCycles});
-  EXPECT_TRUE(check_blocks(beyond_batch).ok());
-  const std::vector<LoadBlock> beyond_int64(8192, {4000, 0.1, 0, kMaxBatchCycles});
-  const Status overflow = check_blocks(beyond_int64);
+  const std::vector<core::LoadBlock> beyond_batch(2, {4000, 0.1, 0, core::kMaxBatchCycles});
+  EXPECT_TRUE(replay::check_blocks(beyond_batch).ok());
+  const std::vector<core::LoadBlock> beyond_int64(8192, {4000, 0.1, 0, core::kMaxBatchCycles});
+  const core::Status overflow = replay::check_blocks(beyond_int64);
   ASSERT_FALSE(overflow.ok());
   EXPECT_EQ(overflow.error().field, "blocks[8191].count") << overflow.error().message();
 }
 
 TEST(ReplayHistory, ExampleFilesInEveryFormat) {
   const fs::path examples = PERITWIN_EXAMPLES_DIR;
-  const auto cycles_read = read_history(examples / "b1-cycles.csv", InputFormat::cycles, "b1-ct");
+  const auto cycles_read =
+      replay::read_history(examples / "b1-cycles.csv", replay::InputFormat::cycles, "b1-ct");
   ASSERT_TRUE(cycles_read.ok()) << cycles_read.error().message();
-  const HistoryBlocks& cycles = *cycles_read;
+  const replay::HistoryBlocks& cycles = *cycles_read;
   EXPECT_EQ(cycles.blocks.size(), 64u);
   const auto spectrum_read =
-      read_history(examples / "b1-spectrum.csv", InputFormat::spectrum, "b1-ct");
+      replay::read_history(examples / "b1-spectrum.csv", replay::InputFormat::spectrum, "b1-ct");
   ASSERT_TRUE(spectrum_read.ok()) << spectrum_read.error().message();
-  const HistoryBlocks& spectrum = *spectrum_read;
+  const replay::HistoryBlocks& spectrum = *spectrum_read;
   std::int64_t total = 0;
   for (const auto& b : spectrum.blocks) total += b.count;
   EXPECT_EQ(total, 60000);
-  const auto series_read = read_history(examples / "b1-series.csv", InputFormat::series, "b1-ct");
+  const auto series_read =
+      replay::read_history(examples / "b1-series.csv", replay::InputFormat::series, "b1-ct");
   ASSERT_TRUE(series_read.ok()) << series_read.error().message();
-  const HistoryBlocks& series = *series_read;
+  const replay::HistoryBlocks& series = *series_read;
   EXPECT_GT(series.blocks.size(), 10u);
   EXPECT_NE(series.note.find("rainflow"), std::string::npos);
-  for (const auto* h : {&cycles, &spectrum, &series}) EXPECT_TRUE(check_blocks(h->blocks).ok());
-  const auto missing = read_history(examples / "none.csv", InputFormat::cycles, "b1-ct");
+  for (const auto* h : {&cycles, &spectrum, &series})
+    EXPECT_TRUE(replay::check_blocks(h->blocks).ok());
+  const auto missing =
+      replay::read_history(examples / "none.csv", replay::InputFormat::cycles, "b1-ct");
   EXPECT_FALSE(missing.ok());
 }
 
 // A series whose only cycle has R = -11 (the issue's "100, -1100", refused before as
 // blocks[0].r = -11 < -10) with two dropouts: applied as the same range at R = -10
-// (replay/cycle_blocks.h), the counts reach HistoryBlocks, the stderr line and the summary.
+// (loads/cycle_blocks.h), the counts reach HistoryBlocks, the stderr line and the summary.
 TEST(ReplayHistory, SeriesRulesReachTheBlocksTheCountsAndTheSummary) {
   const fs::path path =
       fs::temp_directory_path() / ("peritwin_replay_series_" + std::to_string(::getpid()) + ".csv");
   std::ofstream(path) << "time_s,load_N\n0,100\n1,nan\n2,-1100\n3,inf\n";
-  const auto half = read_history(path, InputFormat::series, "b1-ct");
+  const auto half = replay::read_history(path, replay::InputFormat::series, "b1-ct");
   ASSERT_TRUE(half.ok()) << half.error().message();
-  EXPECT_EQ(half->blocks, (std::vector<LoadBlock>{{1200.0 / 11.0, -10.0, 0.0, 1}}));
-  EXPECT_TRUE(check_blocks(half->blocks).ok());
+  EXPECT_EQ(half->blocks, (std::vector<core::LoadBlock>{{1200.0 / 11.0, -10.0, 0.0, 1}}));
+  EXPECT_TRUE(replay::check_blocks(half->blocks).ok());
   ASSERT_TRUE(half->conversion.has_value());
   EXPECT_EQ(half->conversion->skipped.remapped_below_floor, 0.5);
   EXPECT_EQ(half->conversion->nonfinite_samples, 2u);
-  EXPECT_EQ(describe_skipped(*half->conversion),
+  EXPECT_EQ(replay::describe_skipped(*half->conversion),
             "skipped cycles: compressive 0, mirrored_compressive 0, remapped_below_floor 0.5, "
             "degenerate 0, nonfinite_samples 2");
   peritwin_msgs::damage_state_t state{};
   state.detail_id = "b1-ct";
-  const std::string summary =
-      twin::summary_json(state, {{"skipped_cycles", skipped_cycles(*half->conversion)}});
+  const std::string summary = messages::summary_json(
+      state, {{"skipped_cycles", replay::skipped_cycles(*half->conversion)}});
   const std::string tail = R"(,"skipped_cycles":{"compressive":0,"mirrored_compressive":0,)"
                            R"("remapped_below_floor":0.5,"degenerate":0,"nonfinite_samples":2}})";
   ASSERT_GE(summary.size(), tail.size());
   EXPECT_EQ(summary.substr(summary.size() - tail.size()), tail) << summary;
-  EXPECT_EQ(twin::summary_json(state).find("skipped_cycles"), std::string::npos);
+  EXPECT_EQ(messages::summary_json(state).find("skipped_cycles"), std::string::npos);
   // keep: the only range is the open residue, nothing is applied; whole: one whole cycle.
-  SeriesRules keep;
-  keep.residue = ResidueRule::keep;
-  const auto kept = read_history(path, InputFormat::series, "b1-ct", keep);
+  loads::SeriesRules keep;
+  keep.residue = loads::ResidueRule::keep;
+  const auto kept = replay::read_history(path, replay::InputFormat::series, "b1-ct", keep);
   ASSERT_TRUE(kept.ok());
   EXPECT_TRUE(kept->blocks.empty());
-  SeriesRules whole;
-  whole.residue = ResidueRule::whole;
-  const auto whole_read = read_history(path, InputFormat::series, "b1-ct", whole);
+  loads::SeriesRules whole;
+  whole.residue = loads::ResidueRule::whole;
+  const auto whole_read = replay::read_history(path, replay::InputFormat::series, "b1-ct", whole);
   ASSERT_TRUE(whole_read.ok());
   EXPECT_EQ(whole_read->blocks, half->blocks);
   EXPECT_EQ(whole_read->conversion->full_cycles, 1u);
   EXPECT_EQ(whole_read->conversion->rounded_up_half_cycles, 0u);
   // Other formats carry no conversion counts.
-  EXPECT_FALSE(
-      read_history(fs::path(PERITWIN_EXAMPLES_DIR) / "b1-cycles.csv", InputFormat::cycles, "b1-ct")
-          ->conversion.has_value());
+  EXPECT_FALSE(replay::read_history(fs::path(PERITWIN_EXAMPLES_DIR) / "b1-cycles.csv",
+                                    replay::InputFormat::cycles, "b1-ct")
+                   ->conversion.has_value());
   fs::remove(path);
 }
 
@@ -199,7 +203,7 @@ TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
       ASSERT_EQ(log.writeEvent(&e), 0);
     };
     auto batch = [](const std::string& detail, std::int64_t seq, double p) {
-      const auto m = twin::batch_message({detail, "gauge", seq, {{p, 0.1, 0, 10}}}, 0);
+      const auto m = messages::batch_message({detail, "gauge", seq, {{p, 0.1, 0, 10}}}, 0);
       std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
       m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
       return bytes;
@@ -213,19 +217,19 @@ TEST(ReplayHistory, LcmLogKeepsEachBatchOnceInLogOrder) {
     write("OTHER", batch("b1-ct", 9, 9000));  // another channel
     write(load, batch("b1-ct", 3, 3000));
   }
-  const auto read = read_history(path, InputFormat::lcm_log, "b1-ct");
+  const auto read = replay::read_history(path, replay::InputFormat::lcm_log, "b1-ct");
   ASSERT_TRUE(read.ok()) << read.error().message();
-  const HistoryBlocks& h = *read;
+  const replay::HistoryBlocks& h = *read;
   ASSERT_EQ(h.blocks.size(), 3u);
   EXPECT_EQ(h.blocks[0].p_max, 1000);
   EXPECT_EQ(h.blocks[1].p_max, 2000);
   EXPECT_EQ(h.blocks[2].p_max, 3000);
   EXPECT_NE(h.note.find("2 skipped"), std::string::npos) << h.note;
-  EXPECT_FALSE(read_history(path, InputFormat::lcm_log, "b2-cts")->blocks.empty());
+  EXPECT_FALSE(replay::read_history(path, replay::InputFormat::lcm_log, "b2-cts")->blocks.empty());
   fs::remove(path);
 }
 
-// One LCM log event as lcm-logger writes it (big-endian header; replay/lcm_log.h), with the
+// One LCM log event as lcm-logger writes it (big-endian header; loads/lcm_log.h), with the
 // lengths given explicitly so that they can lie.
 std::string log_event(const std::string& channel, const std::string& data,
                       std::int32_t channel_length, std::int32_t data_length) {
@@ -247,7 +251,7 @@ std::string log_event(const std::string& channel, const std::string& data) {
 }
 
 std::string encoded_batch(std::int64_t seq, double p_max) {
-  const auto m = twin::batch_message({"b1-ct", "gauge", seq, {{p_max, 0.1, 0, 10}}}, 0);
+  const auto m = messages::batch_message({"b1-ct", "gauge", seq, {{p_max, 0.1, 0, 10}}}, 0);
   std::string bytes(static_cast<std::size_t>(m.getEncodedSize()), '\0');
   m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
@@ -275,7 +279,7 @@ TEST(ReplayHistory, MalformedLcmLogsAreRefusedWithTheEventAndItsOffset) {
   for (std::size_t i = 0; i < cases.size(); ++i) {
     SCOPED_TRACE(i);
     std::istringstream in(cases[i].first);
-    const auto read = read_lcm_log(in, "log", "b1-ct");
+    const auto read = replay::read_lcm_log(in, "log", "b1-ct");
     ASSERT_FALSE(read.ok());
     EXPECT_EQ(read.error().message(), cases[i].second);
   }
@@ -283,7 +287,7 @@ TEST(ReplayHistory, MalformedLcmLogsAreRefusedWithTheEventAndItsOffset) {
   std::istringstream in(good + log_event(load, std::string(messages::kMaxBatchPayload + 1, '\0')) +
                         log_event("OTHER", std::string(100'000, 'x')) +
                         log_event(load, encoded_batch(2, 2000)));
-  const auto read = read_lcm_log(in, "log", "b1-ct");
+  const auto read = replay::read_lcm_log(in, "log", "b1-ct");
   ASSERT_TRUE(read.ok()) << read.error().message();
   ASSERT_EQ(read.value().blocks.size(), 2u);
   EXPECT_EQ(read.value().blocks[1].p_max, 2000);
@@ -400,31 +404,31 @@ messages::AuthKey test_key(std::uint8_t seed) {
   return k;
 }
 
-std::vector<twin::Batch> three_batches() {
-  const std::vector<LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
-  return make_twin_batches(blocks, "b1-ct", "replay", {1024, 1000});
+std::vector<messages::Batch> three_batches() {
+  const std::vector<core::LoadBlock> blocks(3, {4000, 0.1, 0, 1000});
+  return loads::make_twin_batches(blocks, "b1-ct", "replay", {1024, 1000});
 }
 
 /// The library on memq://: the replayer and the fake share one LCM.
 struct MemqRun {
-  ReplayResult result;
+  replay::ReplayResult result;
   int batches = 0, verified = 0;
   std::vector<std::string> hashes;  ///< of the states the run accepted
 };
-MemqRun run_memq(Answer answer, ReplayAuth auth) {
+MemqRun run_memq(Answer answer, loads::ReplayAuth auth) {
   lcm::LCM lcm("memq://");
   EXPECT_TRUE(lcm.good());
   const messages::AuthKey daemon = test_key(1), source = test_key(2);
   FakeDaemon fake(lcm, answer, daemon, source);
   MemqRun run;
-  LcmReplayer replayer(lcm, three_batches(), {true, 1, 3.0, kWaitS}, std::move(auth));
+  replay::LcmReplayer replayer(lcm, three_batches(), {true, 1, 3.0, kWaitS}, std::move(auth));
   run.result = replayer.run([&](const auto& s) { run.hashes.push_back(s.state_hash); });
   run.batches = fake.batches();
   run.verified = fake.verified();
   return run;
 }
 
-ReplayAuth both_keys() { return {test_key(2), test_key(1), "peritwin"}; }
+loads::ReplayAuth both_keys() { return {test_key(2), test_key(1), "peritwin"}; }
 
 TEST(ReplayAuthMemq, SignedBatchesAndVerifiedStates) {
   const auto run = run_memq(Answer::signed_states, both_keys());

@@ -15,13 +15,14 @@ TEST(ReplayTransport, HubClosingMidRunFailsTheRun) {
   testing::FakeTcpqHub hub(3);
   lcm::LCM lcm(hub.url());
   ASSERT_TRUE(messages::transport_up(lcm));
-  std::vector<LoadBlock> blocks(10, {4000, 0.1, 0, 1});
-  ReplayOptions options;
+  std::vector<core::LoadBlock> blocks(10, {4000, 0.1, 0, 1});
+  loads::ReplayOptions options;
   options.window = 8;
   options.give_up_after_s = 600;
-  ReplayResult result;
+  replay::ReplayResult result;
   {
-    LcmReplayer replayer(lcm, make_twin_batches(blocks, "b1-ct", "test", {1, 1000}), options);
+    replay::LcmReplayer replayer(lcm, loads::make_twin_batches(blocks, "b1-ct", "test", {1, 1000}),
+                                 options);
     result = replayer.run({}, {});
   }
   EXPECT_FALSE(result.ok);

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "solver/fatigue/fatigue_engine.h"
-#include "solver/static/specimen.h"
+#include "solver/statics/specimen.h"
 #include "tests/support/plates.h"
 
 namespace peritwin {
@@ -22,15 +22,15 @@ TEST(BilinearClosedForm, ConstantStretchLifeEq27) {
   // 003 Eq. (27) at a constant stretch s < s0: D = A N (s/sc)^m, so D = 1 after
   // N = 1/(A (s/sc)^m) cycles. Eq. (50) in increments of ΔN = 1000 must give D(N) for N a multiple
   // of ΔN to round-off (rel 1e-9) and reach 1 in the increment containing N.
-  const BilinearParams p{2e-3, 8e-3, 3.7e-3, 4.0};
+  const fatigue::BilinearParams p{2e-3, 8e-3, 3.7e-3, 4.0};
   const double s = 1.5e-3;
-  const double n_exact = third_law_cycles_constant_stretch(s, p);
+  const double n_exact = fatigue::third_law_cycles_constant_stretch(s, p);
   EXPECT_NEAR(n_exact, 1.0 / (p.A * std::pow(s / p.sc, p.m)), 1e-12 * n_exact);
   double damage = 0.0;
   std::int64_t cycles = 0;
   const double dn = 1000.0;
   while (damage < 1.0 && cycles < 100000000) {
-    damage = third_law_update_damage(damage, s, s, dn, p);
+    damage = fatigue::third_law_update_damage(damage, s, s, dn, p);
     cycles += 1000;
     if (cycles == 100000) {
       EXPECT_NEAR(damage, 100000.0 / n_exact, 1e-9 * damage);
@@ -44,9 +44,9 @@ TEST(BilinearClosedForm, LoadControlledBondLifeConvergesAtSecondOrder) {
   // ((m+1) A (s_e/sc)^m) (see third_law_bar_cycles_to_failure). The increment integration with
   // Eq. (29)-(30) converges to it at second order: halving ΔN quarters the error (observed ratio
   // within [3.6, 4.4]) and ΔN = N_f/1e4 is within 1e-7 relative.
-  const BilinearParams p{2e-3, 8e-3, 3.7e-3, 4.0};
+  const fatigue::BilinearParams p{2e-3, 8e-3, 3.7e-3, 4.0};
   const double s_e = 1.2e-3;
-  const double exact = third_law_bar_cycles_to_failure(s_e, p);
+  const double exact = fatigue::third_law_bar_cycles_to_failure(s_e, p);
   // Independent check of the closed form: RK4 on dD/dN = A (s_e/((1 − D) sc))^m up to
   // D* = 1 − s_e/s0 in D as the independent variable (dN/dD = 1/rate), 20000 steps.
   const double d_star = 1.0 - s_e / p.s0;
@@ -62,29 +62,29 @@ TEST(BilinearClosedForm, LoadControlledBondLifeConvergesAtSecondOrder) {
   double previous_error = 0.0;
   for (int k = 0; k < 5; ++k) {
     const double dn = exact / 100.0 / std::pow(2.0, k);
-    const double error = std::abs(third_law_bar_cycles_numerical(s_e, dn, p) - exact);
+    const double error = std::abs(fatigue::third_law_bar_cycles_numerical(s_e, dn, p) - exact);
     if (k > 0) {
       EXPECT_GT(previous_error / error, 3.6) << "dn = " << dn;
       EXPECT_LT(previous_error / error, 4.4) << "dn = " << dn;
     }
     previous_error = error;
   }
-  EXPECT_NEAR(third_law_bar_cycles_numerical(s_e, exact / 1e4, p), exact, 1e-7 * exact);
-  EXPECT_EQ(third_law_bar_cycles_to_failure(2.5e-3, p), 0.0);  // beyond s0: fails at once
+  EXPECT_NEAR(fatigue::third_law_bar_cycles_numerical(s_e, exact / 1e4, p), exact, 1e-7 * exact);
+  EXPECT_EQ(fatigue::third_law_bar_cycles_to_failure(2.5e-3, p), 0.0);  // beyond s0: fails at once
 }
 
 // ------------------------------------------------------------------ the engine mode
 
-using Plate = Specimen;
+using Plate = statics::Specimen;
 
 /// The engine tests' edge-notched plate (24 × 16 nodes), ν = 1/3 (the bond-based value).
-Plate make_plate(ModelKind kind = ModelKind::bond_based, bool notched = true) {
+Plate make_plate(model::ModelKind kind = model::ModelKind::bond_based, bool notched = true) {
   return testing::make_notched_plate(kind, notched, 24, 16, 1.0 / 3.0);
 }
 
 /// Largest stretch of an intact bond at load P (α = 0) on the undamaged plate.
 double largest_stretch(const Plate& p, double load, std::vector<double>* all = nullptr) {
-  StaticSolver probe(p.disc, p.model, p.supports, p.loads);
+  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
   EXPECT_TRUE(probe.solve().ok());
   std::vector<double> s;
   probe.stretch(load, 0.0, s);
@@ -98,10 +98,11 @@ double largest_stretch(const Plate& p, double load, std::vector<double>* all = n
 
 /// s0 = 1.3 × the tip stretch at `load`, sc = 3 s0, m = 4, A such that the tip bond would reach
 /// D = 1 at constant stretch in `life` cycles (003 Eq. 27).
-FatigueSettings bilinear_settings(const Plate& p, double load, double life, std::int64_t dn) {
+fatigue::FatigueSettings bilinear_settings(const Plate& p, double load, double life,
+                                           std::int64_t dn) {
   const double smax = largest_stretch(p, load);
-  FatigueSettings f;
-  f.law = FatigueLaw::bilinear;
+  fatigue::FatigueSettings f;
+  f.law = fatigue::FatigueLaw::bilinear;
   f.bilinear.s0 = 1.3 * smax;
   f.bilinear.sc = 3.0 * f.bilinear.s0;
   f.bilinear.m = 4.0;
@@ -110,7 +111,7 @@ FatigueSettings bilinear_settings(const Plate& p, double load, double life, std:
   return f;
 }
 
-void expect_same_bilinear_state(const FatigueEngine& a, const FatigueEngine& b) {
+void expect_same_bilinear_state(const fatigue::FatigueEngine& a, const fatigue::FatigueEngine& b) {
   testing::expect_same_breaks(a, b);
   ASSERT_EQ(a.pending_cycles(), b.pending_cycles());
   for (std::size_t i = 0; i < a.damage().size(); ++i) {
@@ -121,26 +122,28 @@ void expect_same_bilinear_state(const FatigueEngine& a, const FatigueEngine& b) 
 }
 
 TEST(BilinearEngine, RejectsStateBasedModelsAndBadSettings) {
-  const auto osb = make_plate(ModelKind::state_based);
-  FatigueSettings f;
-  f.law = FatigueLaw::bilinear;
+  const auto osb = make_plate(model::ModelKind::state_based);
+  fatigue::FatigueSettings f;
+  f.law = fatigue::FatigueLaw::bilinear;
   f.bilinear = {1e-4, 4e-4, 1e-3, 4.0};
-  EXPECT_THROW(FatigueEngine(osb.disc, osb.model, osb.supports, osb.loads, f),
+  EXPECT_THROW(fatigue::FatigueEngine(osb.disc, osb.model, osb.supports, osb.loads, f),
                std::invalid_argument);
   const auto bb = make_plate();
-  EXPECT_NO_THROW(FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f));
+  EXPECT_NO_THROW(fatigue::FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f));
   f.cycle_increment = 0;
-  EXPECT_THROW(FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f), std::invalid_argument);
+  EXPECT_THROW(fatigue::FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f),
+               std::invalid_argument);
   f.cycle_increment = 10;
-  FatigueEngine engine(bb.disc, bb.model, bb.supports, bb.loads, f);
+  fatigue::FatigueEngine engine(bb.disc, bb.model, bb.supports, bb.loads, f);
   ASSERT_TRUE(engine.initialize());
   const std::vector<std::int64_t> wrong_sum{1, 2}, zero{0, 5};
   EXPECT_THROW(engine.apply_increments({1.0, 0.0, 0.0, 5}, wrong_sum), std::invalid_argument);
   EXPECT_THROW(engine.apply_increments({1.0, 0.0, 0.0, 5}, zero), std::invalid_argument);
   f.bilinear.sc = 0.5e-4;  // sc <= s0
-  EXPECT_THROW(FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f), std::invalid_argument);
-  FatigueSettings strain;
-  FatigueEngine other(bb.disc, bb.model, bb.supports, bb.loads, strain);
+  EXPECT_THROW(fatigue::FatigueEngine(bb.disc, bb.model, bb.supports, bb.loads, f),
+               std::invalid_argument);
+  fatigue::FatigueSettings strain;
+  fatigue::FatigueEngine other(bb.disc, bb.model, bb.supports, bb.loads, strain);
   ASSERT_TRUE(other.initialize());
   EXPECT_THROW(other.apply_increments({1.0, 0.0, 0.0, 5}, wrong_sum), std::logic_error);
 }
@@ -152,15 +155,15 @@ TEST(BilinearEngine, OverloadSeparatesThePlateIntoFinalFailure) {
   const auto plate = make_plate();
   auto f = bilinear_settings(plate, 1000.0, 1e12, 1000);
   f.softening_max_iterations = 1000;
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(engine.initialize());
-  EXPECT_EQ(engine.apply({4000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
+  EXPECT_EQ(engine.apply({4000.0, 0.0, 0.0, 1000}), fatigue::EngineStatus::final_failure);
   EXPECT_TRUE(engine.failed());
   EXPECT_FALSE(engine.failure_reason().empty());
   std::printf("[ measured ] %s after %zu breaks\n", engine.failure_reason().c_str(),
               engine.break_events().size());
-  EXPECT_EQ(engine.break_events().front().cause, BreakCause::overload);
-  EXPECT_EQ(engine.apply({1000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
+  EXPECT_EQ(engine.break_events().front().cause, fatigue::BreakCause::overload);
+  EXPECT_EQ(engine.apply({1000.0, 0.0, 0.0, 1000}), fatigue::EngineStatus::final_failure);
 }
 
 TEST(BilinearEngine, SmallDamageFollowsTheLawBondByBond) {
@@ -172,7 +175,7 @@ TEST(BilinearEngine, SmallDamageFollowsTheLawBondByBond) {
   auto f = bilinear_settings(plate, load, 5e10, 10000);
   std::vector<double> s;
   largest_stretch(plate, load, &s);
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(engine.initialize());
   engine.apply({load, 0.1, 0.0, 50000});
   ASSERT_EQ(engine.pending_cycles(), 0);
@@ -199,9 +202,9 @@ TEST(BilinearEngine, AnySplitOfABlockEqualsTheIncrementOracle) {
   const auto plate = make_plate();
   const std::int64_t dn = 1000;
   const auto f = bilinear_settings(plate, 1000.0, 10000.0, dn);
-  FatigueEngine split(plate.disc, plate.model, plate.supports, plate.loads, f);
-  FatigueEngine whole(plate.disc, plate.model, plate.supports, plate.loads, f);
-  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine split(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine whole(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(split.initialize());
   ASSERT_TRUE(whole.initialize());
   ASSERT_TRUE(oracle.initialize());
@@ -234,33 +237,33 @@ TEST(BilinearEngine, ExportImportResumesBitIdentically) {
   // Stop with cycles pending (10300 = 20 × 500 + 300), restore into a fresh engine, continue.
   const auto plate = make_plate();
   const auto f = bilinear_settings(plate, 1000.0, 20000.0, 500);
-  FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(straight.initialize());
   straight.apply({1000.0, 0.1, 0.0, 10300});
   straight.apply({1000.0, 0.1, 0.0, 3000});
   straight.apply({1100.0, 0.1, 0.0, 1200});
-  FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(first.initialize());
   first.apply({1000.0, 0.1, 0.0, 10300});
   ASSERT_EQ(first.pending_cycles(), 300);
   ASSERT_GT(first.broken_bonds(), 0);
-  const EngineState saved = first.export_state();
+  const fatigue::EngineState saved = first.export_state();
   // The hash read in place equals the hash of the exported copy, with cycles pending (their key
   // hashed) and with none (the key exported and hashed as {}).
-  const auto hash_of_copy = [](const FatigueEngine& engine) {
-    Fnv1a64 copy;
-    const EngineState state = engine.export_state();
-    for_each_field(state,
-                   [&copy](std::string_view, const auto& field) { hash_field(copy, field); });
+  const auto hash_of_copy = [](const fatigue::FatigueEngine& engine) {
+    core::Fnv1a64 copy;
+    const fatigue::EngineState state = engine.export_state();
+    fatigue::for_each_field(
+        state, [&copy](std::string_view, const auto& field) { fatigue::hash_field(copy, field); });
     return copy.get();
   };
   EXPECT_EQ(first.state_hash(), hash_of_copy(first));
-  FatigueEngine whole(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine whole(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(whole.initialize());
   whole.apply({1000.0, 0.1, 0.0, 500});
   ASSERT_EQ(whole.pending_cycles(), 0);
   EXPECT_EQ(whole.state_hash(), hash_of_copy(whole));
-  FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(resumed.initialize());
   ASSERT_TRUE(resumed.import_state(saved));
   EXPECT_EQ(resumed.state_hash(), first.state_hash());
@@ -278,17 +281,17 @@ TEST(BilinearEngine, ExportImportResumesBitIdentically) {
 
 TEST(BilinearSolve, ReferenceFactorIsTheNextPowerOfTwoToTheStep) {
   // f ≤ f_ref < 2^step·f, f_ref a power of 2^step; 1 and 0 are their own references.
-  EXPECT_EQ(StaticSolver::reference_factor(1.0, 1), 1.0);
-  EXPECT_EQ(StaticSolver::reference_factor(0.0, 3), 0.0);
-  EXPECT_EQ(StaticSolver::reference_factor(0.5, 1), 0.5);
-  EXPECT_EQ(StaticSolver::reference_factor(0.3, 1), 0.5);
-  EXPECT_EQ(StaticSolver::reference_factor(0.3, 2), 1.0);
-  EXPECT_EQ(StaticSolver::reference_factor(0.25, 2), 0.25);
-  EXPECT_EQ(StaticSolver::reference_factor(0.05, 2), 0.0625);
-  EXPECT_EQ(StaticSolver::reference_factor(1e-300, 1), std::ldexp(1.0, -996));
+  EXPECT_EQ(statics::StaticSolver::reference_factor(1.0, 1), 1.0);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.0, 3), 0.0);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.5, 1), 0.5);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.3, 1), 0.5);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.3, 2), 1.0);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.25, 2), 0.25);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(0.05, 2), 0.0625);
+  EXPECT_EQ(statics::StaticSolver::reference_factor(1e-300, 1), std::ldexp(1.0, -996));
   for (int step : {1, 2, 3, 5}) {
     for (double f = 0.999; f > 1e-12; f *= 0.787) {
-      const double r = StaticSolver::reference_factor(f, step);
+      const double r = statics::StaticSolver::reference_factor(f, step);
       ASSERT_GE(r, f);
       ASSERT_LT(r, std::ldexp(f, step));
       int e = 0;
@@ -304,19 +307,19 @@ TEST(BilinearSolve, PreconditionedSolveMatchesTheRefactorizedOneAndRefactorsOnly
   // breaks; its displacements equal the refactorized solve's to 1e-10 relative (max norm), and
   // are in equilibrium bond by bond (internal_force) to 1e-9 of the load.
   const auto plate = make_plate();
-  StaticSolver oracle(plate.disc, plate.model, plate.supports, plate.loads);
-  StaticSolver fast(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver oracle(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver fast(plate.disc, plate.model, plate.supports, plate.loads);
   fast.set_preconditioned(true, 1e-12, 1);
   ASSERT_TRUE(oracle.solve().ok());
   ASSERT_TRUE(fast.solve().ok());
   std::vector<double> s;
   oracle.stretch(1.0, 0.0, s);
-  std::vector<BondIndex> loaded;  // the 40 most stretched bonds
+  std::vector<mesh::BondIndex> loaded;  // the 40 most stretched bonds
   for (std::size_t b = 0; b < s.size(); ++b) {
-    if (oracle.intact()[b]) loaded.push_back(static_cast<BondIndex>(b));
+    if (oracle.intact()[b]) loaded.push_back(static_cast<mesh::BondIndex>(b));
   }
   std::partial_sort(loaded.begin(), loaded.begin() + 40, loaded.end(),
-                    [&](BondIndex a, BondIndex b) {
+                    [&](mesh::BondIndex a, mesh::BondIndex b) {
                       return s[static_cast<std::size_t>(a)] > s[static_cast<std::size_t>(b)];
                     });
   loaded.resize(40);
@@ -331,7 +334,7 @@ TEST(BilinearSolve, PreconditionedSolveMatchesTheRefactorizedOneAndRefactorsOnly
     }
     EXPECT_LT(diff, 1e-10 * umax) << what;
     const auto f_int = fast.internal_force(ub);
-    const auto f_ext = fast.basis_force(basis_constant);
+    const auto f_ext = fast.basis_force(statics::basis_constant);
     double fmax = 0.0, residual = 0.0;
     for (std::size_t i = 0; i < f_ext.size(); ++i) {
       fmax = std::max(fmax, std::abs(f_ext[i]));
@@ -372,8 +375,8 @@ TEST(BilinearEngine, PreconditionedPathReproducesTheRefactorizingOracle) {
   const auto f = bilinear_settings(plate, 1000.0, 10000.0, 1000);
   auto fo = f;
   fo.bilinear_refactor_every_iteration = true;
-  FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
-  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
+  fatigue::FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
   for (auto* e : {&fast, &oracle}) {
     ASSERT_TRUE(e->initialize());
     e->apply({1000.0, 0.1, 0.0, 10250});
@@ -413,11 +416,11 @@ TEST(BilinearEngine, OverloadFailsAlikeOnBothPaths) {
   f.softening_max_iterations = 1000;
   auto fo = f;
   fo.bilinear_refactor_every_iteration = true;
-  FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
-  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
+  fatigue::FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, fo);
   for (auto* e : {&fast, &oracle}) {
     ASSERT_TRUE(e->initialize());
-    EXPECT_EQ(e->apply({4000.0, 0.0, 0.0, 1000}), EngineStatus::final_failure);
+    EXPECT_EQ(e->apply({4000.0, 0.0, 0.0, 1000}), fatigue::EngineStatus::final_failure);
   }
   testing::expect_same_breaks(fast, oracle);
 }
@@ -434,7 +437,7 @@ TEST(BilinearEngine, IncrementsHalvedConvergeAtSecondOrderThenLifeAtFirst) {
   std::vector<double> dmax;
   for (std::int64_t dn : {3200, 1600, 800, 400}) {
     const auto f = bilinear_settings(plate, 1000.0, 20000.0, dn);
-    FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
+    fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
     ASSERT_TRUE(engine.initialize());
     engine.apply({1000.0, 0.1, 0.0, 6400});
     ASSERT_TRUE(engine.break_events().empty());
@@ -451,7 +454,7 @@ TEST(BilinearEngine, IncrementsHalvedConvergeAtSecondOrderThenLifeAtFirst) {
   std::vector<double> lives;
   for (std::int64_t dn : {800, 400, 200}) {
     const auto f = bilinear_settings(plate, 1000.0, 20000.0, dn);
-    FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
+    fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
     ASSERT_TRUE(engine.initialize());
     while (engine.break_events().size() < 10 && engine.total_cycles() < 100000) {
       engine.apply({1000.0, 0.1, 0.0, dn});

@@ -3,14 +3,14 @@
 #include <cstdlib>
 #include <string>
 
-#include "solver/core/blas_kernel.h"
+#include "core/blas_kernel.h"
 
 namespace peritwin {
 namespace {
 
 TEST(BlasKernel, NamesTheKernelSetOpenBlasRuns) {
   // Debian's libblas.so.3 is OpenBLAS (scripts/install-deps.sh installs libopenblas0-pthread).
-  const std::string name = blas_kernel_name();
+  const std::string name = core::blas_kernel_name();
   EXPECT_NE(name, "unknown");
   EXPECT_FALSE(name.empty());
   // Run once more by CTest with OPENBLAS_CORETYPE=Nehalem (tests/solver/CMakeLists.txt): the

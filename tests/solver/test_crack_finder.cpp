@@ -15,30 +15,31 @@ namespace {
 constexpr double kDx = 0.0005;
 
 struct Plate {
-  DetailGeometry geometry;
-  Discretization disc;
-  std::unique_ptr<CrackTracker> tracker;
-  std::unique_ptr<CrackFinder> finder;
+  mesh::DetailGeometry geometry;
+  mesh::Discretization disc;
+  std::unique_ptr<crack::CrackTracker> tracker;
+  std::unique_ptr<crack::CrackFinder> finder;
 };
 
 /// 40 × 20 mm plate (Δx = 0.5 mm, δ = 3.015Δx) with the given holes and notches.
-std::unique_ptr<Plate> make_plate(std::vector<Circle> holes, std::vector<Segment> notches = {}) {
+std::unique_ptr<Plate> make_plate(std::vector<mesh::Circle> holes,
+                                  std::vector<mesh::Segment> notches = {}) {
   auto p = std::make_unique<Plate>();
-  p->geometry.outline = {Rectangle{0.0, -0.01, 0.04, 0.01}};
+  p->geometry.outline = {mesh::Rectangle{0.0, -0.01, 0.04, 0.01}};
   p->geometry.holes.assign(holes.begin(), holes.end());
   for (std::size_t n = 0; n < notches.size(); ++n) {
     p->geometry.notches.push_back({"notch " + std::to_string(n), {notches[n].a, notches[n].b}});
   }
   p->disc = discretize(p->geometry, kDx, 3.015 * kDx);
-  p->tracker = std::make_unique<CrackTracker>(p->disc, p->geometry.notches);
-  std::vector<std::vector<Point>> paths;
+  p->tracker = std::make_unique<crack::CrackTracker>(p->disc, p->geometry.notches);
+  std::vector<std::vector<mesh::Point>> paths;
   for (const auto& n : notches) paths.push_back({n.a, n.b});
-  p->finder = std::make_unique<CrackFinder>(p->disc, *p->tracker, paths, 0.398);
+  p->finder = std::make_unique<crack::CrackFinder>(p->disc, *p->tracker, paths, 0.398);
   return p;
 }
 
 /// The virgin bond state (notch cuts only).
-std::vector<std::uint8_t> virgin(const Discretization& disc) {
+std::vector<std::uint8_t> virgin(const mesh::Discretization& disc) {
   std::vector<std::uint8_t> intact(static_cast<std::size_t>(disc.num_bonds()));
   for (std::size_t b = 0; b < intact.size(); ++b) intact[b] = disc.bond_precut[b] ? 0 : 1;
   return intact;
@@ -46,30 +47,32 @@ std::vector<std::uint8_t> virgin(const Discretization& disc) {
 
 /// Breaks every intact bond crossing the segment a→b, in order of the crossing's distance from a,
 /// appending one event per bond at cycle `cycle0` + (distance in Δx, rounded down).
-void cut(const Discretization& disc, Point a, Point b, std::int64_t cycle0,
-         std::vector<std::uint8_t>& intact, std::vector<BreakEvent>& events) {
-  std::vector<std::pair<double, BondIndex>> crossing;
-  for (BondIndex k = 0; k < disc.num_bonds(); ++k) {
+void cut(const mesh::Discretization& disc, mesh::Point a, mesh::Point b, std::int64_t cycle0,
+         std::vector<std::uint8_t>& intact, std::vector<fatigue::BreakEvent>& events) {
+  std::vector<std::pair<double, mesh::BondIndex>> crossing;
+  for (mesh::BondIndex k = 0; k < disc.num_bonds(); ++k) {
     if (!intact[static_cast<std::size_t>(k)]) continue;
-    const Point p =
+    const mesh::Point p =
         disc.position[static_cast<std::size_t>(disc.bond_i[static_cast<std::size_t>(k)])];
-    const Point q =
+    const mesh::Point q =
         disc.position[static_cast<std::size_t>(disc.bond_j[static_cast<std::size_t>(k)])];
-    if (!segments_cross(p, q, a, b)) continue;
-    const Point mid{0.5 * (p.x + q.x), 0.5 * (p.y + q.y)};
+    if (!mesh::segments_cross(p, q, a, b)) continue;
+    const mesh::Point mid{0.5 * (p.x + q.x), 0.5 * (p.y + q.y)};
     crossing.emplace_back(std::hypot(mid.x - a.x, mid.y - a.y), k);
   }
   std::stable_sort(crossing.begin(), crossing.end(),
                    [](const auto& l, const auto& r) { return l.first < r.first; });
   for (const auto& [d, k] : crossing) {
     intact[static_cast<std::size_t>(k)] = 0;
-    events.push_back({cycle0 + static_cast<std::int64_t>(d / kDx), k, BreakCause::fatigue});
+    events.push_back(
+        {cycle0 + static_cast<std::int64_t>(d / kDx), k, fatigue::BreakCause::fatigue});
   }
 }
 
-std::vector<double> damage_of(const Discretization& disc, const std::vector<std::uint8_t>& intact) {
+std::vector<double> damage_of(const mesh::Discretization& disc,
+                              const std::vector<std::uint8_t>& intact) {
   std::vector<double> damage;
-  damage_index(disc, intact, damage);
+  model::damage_index(disc, intact, damage);
   return damage;
 }
 
@@ -78,7 +81,7 @@ TEST(CrackFinder, SurfaceDistanceIsExactAtAStraightEdgeAndWithinHalfACellAtAHole
   const auto& sd = p->finder->surface_distance();
   int edge = 0, rim = 0;
   for (std::size_t k = 0; k < sd.size(); ++k) {
-    const Point x = p->disc.position[k];
+    const mesh::Point x = p->disc.position[k];
     const double to_left = x.x;  // the edge x = 0
     const double to_hole = std::hypot(x.x - 0.02, x.y) - 0.004;
     if (to_left < 0.002 && std::abs(x.y) < 0.005) {
@@ -106,16 +109,16 @@ TEST(CrackFinder, TwoCracksAtAHoleAreFoundWithTheirLengthsTipsAndDirections) {
   // end), the tips on the cut line, growing along ±y (within 2°).
   const auto p = make_plate({{{0.02, 0.0}, 0.004}});
   auto intact = virgin(p->disc);
-  std::vector<BreakEvent> events;
+  std::vector<fatigue::BreakEvent> events;
   cut(p->disc, {0.02, 0.0039}, {0.02, 0.007}, 100, intact, events);
   cut(p->disc, {0.02, -0.0039}, {0.02, -0.007}, 100, intact, events);
   const auto damage = damage_of(p->disc, intact);
   const auto found = p->finder->find(damage, intact);
   ASSERT_EQ(found.cracks.size(), 2u);
   for (const auto& c : found.cracks) {
-    EXPECT_EQ(c.origin, CrackOrigin::surface);
+    EXPECT_EQ(c.origin, crack::CrackOrigin::surface);
     ASSERT_EQ(c.tips.size(), 1u);
-    const Point tip = c.tips[0].position;
+    const mesh::Point tip = c.tips[0].position;
     const double sign = tip.y > 0 ? 1.0 : -1.0;
     EXPECT_NEAR(c.length, 0.003 - kDx, kDx) << tip.y;
     EXPECT_NEAR(c.projected_length, 0.003 - kDx, kDx);
@@ -150,7 +153,7 @@ TEST(CrackFinder, CracksThatMeetBecomeOneKeepingTheOlderId) {
   // crack at the end with id 1, the merge of 2 into 1 reported at a cycle after both births.
   const auto p = make_plate({{{0.01, 0.0}, 0.003}, {{0.03, 0.0}, 0.003}});
   auto intact = virgin(p->disc);
-  std::vector<BreakEvent> events;
+  std::vector<fatigue::BreakEvent> events;
   cut(p->disc, {0.0129, 0.0}, {0.0205, 0.0}, 100, intact, events);
   const std::size_t first_cut = events.size();
   cut(p->disc, {0.0271, 0.0}, {0.019, 0.0}, 1000, intact, events);
@@ -175,7 +178,7 @@ TEST(CrackFinder, CracksThatMeetBecomeOneKeepingTheOlderId) {
   EXPECT_GE(h.merges[0].cycle, 1000);
   // Between the holes the crack spans the 14 mm ligament: a surface crack (its mouth at one rim),
   // 14 mm long less up to 2Δx.
-  EXPECT_EQ(h.cracks[0].origin, CrackOrigin::surface);
+  EXPECT_EQ(h.cracks[0].origin, crack::CrackOrigin::surface);
   EXPECT_NEAR(h.cracks[0].length, 0.014 - kDx, kDx);
   // The snapshot path finds the same single crack.
   const auto s = p->finder->find(damage, intact);
@@ -188,13 +191,13 @@ TEST(CrackFinder, InteriorCrackHasTwoTipsAndIsIdentifiedByItsHistory) {
   // tips 6 mm apart less 1-2Δx at each end, its origin near the middle, tips growing outwards.
   const auto p = make_plate({});
   auto intact = virgin(p->disc);
-  std::vector<BreakEvent> events;
+  std::vector<fatigue::BreakEvent> events;
   cut(p->disc, {0.017, 0.0}, {0.023, 0.0}, 5, intact, events);
   const auto damage = damage_of(p->disc, intact);
   const auto h = p->finder->find_with_history(damage, events);
   ASSERT_EQ(h.cracks.size(), 1u);
   const auto& c = h.cracks[0];
-  EXPECT_EQ(c.origin, CrackOrigin::interior);
+  EXPECT_EQ(c.origin, crack::CrackOrigin::interior);
   ASSERT_EQ(c.tips.size(), 2u);
   EXPECT_NEAR(c.projected_length, 0.006 - 3 * kDx, kDx);
   EXPECT_NEAR(c.origin_point.x, 0.02, 2 * kDx);
@@ -208,10 +211,10 @@ TEST(CrackFinder, NotchCrackEqualsTheTrackersAndAHoleCrackIsSeparate) {
   // A notch from the left edge to x = 10 mm with a cut crack of 6 mm ahead of it, and a 2 mm crack
   // at a hole far away: the notch crack (id 1) has exactly CrackTracker's numbers, the hole crack
   // is the second (id 2), and the notch's faces (cut bonds only) are in no crack.
-  const Segment notch{{-kDx, 0.0}, {0.01, 0.0}};
+  const mesh::Segment notch{{-kDx, 0.0}, {0.01, 0.0}};
   const auto p = make_plate({{{0.032, 0.004}, 0.002}}, {notch});
   auto intact = virgin(p->disc);
-  std::vector<BreakEvent> events;
+  std::vector<fatigue::BreakEvent> events;
   cut(p->disc, {0.01, 0.0}, {0.016, 0.0}, 10, intact, events);
   cut(p->disc, {0.032, 0.0059}, {0.032, 0.008}, 50, intact, events);
   const auto damage = damage_of(p->disc, intact);
@@ -219,19 +222,19 @@ TEST(CrackFinder, NotchCrackEqualsTheTrackersAndAHoleCrackIsSeparate) {
   ASSERT_EQ(h.cracks.size(), 2u);
   const auto tracked = p->tracker->measure(damage);
   EXPECT_EQ(h.cracks[0].id, 1);
-  EXPECT_EQ(h.cracks[0].origin, CrackOrigin::notch);
+  EXPECT_EQ(h.cracks[0].origin, crack::CrackOrigin::notch);
   EXPECT_EQ(h.cracks[0].length, tracked[0].length);
   EXPECT_EQ(h.cracks[0].projected_length, tracked[0].projected_length);
   EXPECT_EQ(h.cracks[0].tips[0].position.x, tracked[0].tip.x);
   EXPECT_NEAR(h.cracks[0].length, 0.006 - kDx, kDx);
   EXPECT_EQ(h.cracks[1].id, 2);
-  EXPECT_EQ(h.cracks[1].origin, CrackOrigin::surface);
+  EXPECT_EQ(h.cracks[1].origin, crack::CrackOrigin::surface);
   EXPECT_NEAR(h.cracks[1].length, 0.002 - kDx, kDx);
   // Without growth the notch crack is still listed (length 0), as CrackTracker lists it.
   const auto v = virgin(p->disc);
   const auto none = p->finder->find(damage_of(p->disc, v), v);
   ASSERT_EQ(none.cracks.size(), 1u);
-  EXPECT_EQ(none.cracks[0].origin, CrackOrigin::notch);
+  EXPECT_EQ(none.cracks[0].origin, crack::CrackOrigin::notch);
   EXPECT_EQ(none.cracks[0].nodes, 0);
 }
 

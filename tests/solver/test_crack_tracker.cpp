@@ -16,13 +16,13 @@ using namespace peritwin::validation;  // the benchmark specimens
 constexpr double pi = std::numbers::pi;
 
 struct Grid {
-  DetailGeometry geometry;
-  Discretization disc;
+  mesh::DetailGeometry geometry;
+  mesh::Discretization disc;
 };
 
-Grid make_grid(const GridPerturbation& perturbation = {}) {
+Grid make_grid(const mesh::GridPerturbation& perturbation = {}) {
   Grid g;
-  g.geometry.outline = {Rectangle{0.0, -0.02, 0.04, 0.02}};
+  g.geometry.outline = {mesh::Rectangle{0.0, -0.02, 0.04, 0.02}};
   g.geometry.notches = {{"notch 0", {{-0.001, 0.0}, {0.01, 0.0}}}};
   g.disc = discretize(g.geometry, 0.0005, 3.015 * 0.0005, perturbation);
   return g;
@@ -30,11 +30,11 @@ Grid make_grid(const GridPerturbation& perturbation = {}) {
 
 /// Damage 0.5 on a band of half-width `half_width` along the ray at β from the notch tip, 8 mm
 /// long; every `gap_every`-th node of the band (in index order) is left below φ0 (0 = none).
-std::vector<double> kinked_band(const Discretization& disc, double beta, int gap_every = 0,
+std::vector<double> kinked_band(const mesh::Discretization& disc, double beta, int gap_every = 0,
                                 double half_width = 0.0006) {
   std::vector<double> damage(static_cast<std::size_t>(disc.num_nodes()), 0.0);
   int in_band = 0;
-  for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+  for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
     const double rx = disc.position[k].x - 0.01;
     const double ry = disc.position[k].y;
     const double along = rx * std::cos(beta) + ry * std::sin(beta);
@@ -54,11 +54,11 @@ TEST(CrackTracker, StraightCrackHasItsLengthAndNoKink) {
   // β = 0 (the two rows are symmetric about the crack line).
   auto g = make_grid();
   std::vector<double> damage(static_cast<std::size_t>(g.disc.num_nodes()), 0.0);
-  for (NodeIndex k = 0; k < g.disc.num_nodes(); ++k) {
-    const Point p = g.disc.position[k];
+  for (mesh::NodeIndex k = 0; k < g.disc.num_nodes(); ++k) {
+    const mesh::Point p = g.disc.position[k];
     if (std::abs(p.y) < 0.0005 && p.x <= 0.018) damage[static_cast<std::size_t>(k)] = 0.45;
   }
-  const CrackTracker tracker(g.disc, g.geometry.notches);
+  const crack::CrackTracker tracker(g.disc, g.geometry.notches);
   const auto cracks = tracker.measure(damage);
   ASSERT_EQ(cracks.size(), 1u);
   EXPECT_NEAR(cracks[0].tip.x, 0.01775, 1e-9);
@@ -73,9 +73,9 @@ TEST(CrackTracker, KinkedCrackReportsItsAngle) {
   auto g = make_grid();
   const double beta = 40.0 * pi / 180.0;
   const auto damage = kinked_band(g.disc, beta);
-  CrackTrackerOptions o;
+  crack::CrackTrackerOptions o;
   o.kink_distance = 0.004;
-  const CrackTracker tracker(g.disc, g.geometry.notches, o);
+  const crack::CrackTracker tracker(g.disc, g.geometry.notches, o);
   const auto cracks = tracker.measure(damage);
   EXPECT_NEAR(cracks[0].kink_angle * 180 / pi, 40.0, 2.0);
   EXPECT_NEAR(cracks[0].projected_length, 0.008 * std::cos(beta), 0.001);
@@ -90,9 +90,9 @@ TEST(CrackTracker, KinkedCrackOnAPerturbedGridWithGapsIsFollowedToItsTip) {
   auto g = make_grid({0.2, 11});
   const double beta = 40.0 * pi / 180.0;
   const auto damage = kinked_band(g.disc, beta, 3, 0.00035);
-  CrackTrackerOptions o;
+  crack::CrackTrackerOptions o;
   o.kink_distance = 0.004;
-  const auto cracks = CrackTracker(g.disc, g.geometry.notches, o).measure(damage);
+  const auto cracks = crack::CrackTracker(g.disc, g.geometry.notches, o).measure(damage);
   EXPECT_NEAR(cracks[0].kink_angle * 180 / pi, 40.0, 3.0);
   EXPECT_NEAR(cracks[0].projected_length, 0.008 * std::cos(beta), 0.001);
 }
@@ -106,17 +106,17 @@ TEST(CrackTracker, CutCrackIsFollowedToItsTip) {
   for (const double beta_deg : {0.0, 30.0, 45.0}) {
     auto g = make_grid();
     const double beta = beta_deg * pi / 180.0;
-    const Point tip{0.01, 0.0};
-    const Point end{0.01 + 0.008 * std::cos(beta), 0.008 * std::sin(beta)};
+    const mesh::Point tip{0.01, 0.0};
+    const mesh::Point end{0.01 + 0.008 * std::cos(beta), 0.008 * std::sin(beta)};
     std::vector<std::uint8_t> intact(static_cast<std::size_t>(g.disc.num_bonds()));
     for (std::size_t b = 0; b < intact.size(); ++b) {
-      const Point p = g.disc.position[static_cast<std::size_t>(g.disc.bond_i[b])];
-      const Point q = g.disc.position[static_cast<std::size_t>(g.disc.bond_j[b])];
-      intact[b] = g.disc.bond_precut[b] || segments_cross(p, q, tip, end) ? 0 : 1;
+      const mesh::Point p = g.disc.position[static_cast<std::size_t>(g.disc.bond_i[b])];
+      const mesh::Point q = g.disc.position[static_cast<std::size_t>(g.disc.bond_j[b])];
+      intact[b] = g.disc.bond_precut[b] || mesh::segments_cross(p, q, tip, end) ? 0 : 1;
     }
     std::vector<double> damage;
-    damage_index(g.disc, intact, damage);
-    const auto cracks = CrackTracker(g.disc, g.geometry.notches).measure(damage);
+    model::damage_index(g.disc, intact, damage);
+    const auto cracks = crack::CrackTracker(g.disc, g.geometry.notches).measure(damage);
     EXPECT_NEAR(cracks[0].projected_length, 0.008 * std::cos(beta), 0.001) << "beta " << beta_deg;
     if (beta_deg > 0) {
       EXPECT_NEAR(cracks[0].kink_angle * 180 / pi, beta_deg, 3.0);
@@ -132,13 +132,13 @@ TEST(CrackTracker, BranchedCrackIsMeasuredOnTheBranchThatLeadsToTheTip) {
   auto damage = kinked_band(g.disc, 60.0 * pi / 180.0);
   const auto lower = kinked_band(g.disc, -60.0 * pi / 180.0);
   for (std::size_t k = 0; k < damage.size(); ++k) {
-    const double rx = g.disc.position[static_cast<NodeIndex>(k)].x - 0.01;
-    const double ry = g.disc.position[static_cast<NodeIndex>(k)].y;
+    const double rx = g.disc.position[static_cast<mesh::NodeIndex>(k)].x - 0.01;
+    const double ry = g.disc.position[static_cast<mesh::NodeIndex>(k)].y;
     if (std::hypot(rx, ry) < 0.005) damage[k] = std::max(damage[k], lower[k]);
   }
-  CrackTrackerOptions o;
+  crack::CrackTrackerOptions o;
   o.kink_distance = 0.004;
-  const auto cracks = CrackTracker(g.disc, g.geometry.notches, o).measure(damage);
+  const auto cracks = crack::CrackTracker(g.disc, g.geometry.notches, o).measure(damage);
   EXPECT_NEAR(cracks[0].kink_angle * 180 / pi, 60.0, 2.0);
   EXPECT_GT(cracks[0].tip.y, 0.006);
 }
@@ -146,7 +146,7 @@ TEST(CrackTracker, BranchedCrackIsMeasuredOnTheBranchThatLeadsToTheTip) {
 TEST(CrackTracker, UndamagedModelHasNoCrack) {
   auto g = make_grid();
   std::vector<double> damage(static_cast<std::size_t>(g.disc.num_nodes()), 0.0);
-  const auto cracks = CrackTracker(g.disc, g.geometry.notches).measure(damage);
+  const auto cracks = crack::CrackTracker(g.disc, g.geometry.notches).measure(damage);
   EXPECT_EQ(cracks[0].length, 0.0);
   EXPECT_EQ(cracks[0].nodes, 0);
 }
@@ -155,7 +155,7 @@ TEST(CompactTensionK, MatchesAstmE647Polynomial) {
   // 000 Eq. (A2) at q/W = 0.5: f = (2.5/0.5^1.5)(0.886 + 2.32 − 3.33 + 1.84 − 0.35) = 9.6591...
   const double f =
       2.5 / std::pow(0.5, 1.5) * (0.886 + 4.64 * 0.5 - 13.32 * 0.25 + 14.72 * 0.125 - 5.6 * 0.0625);
-  EXPECT_NEAR(compact_tension_delta_k(1000.0, 0.01, 0.05, 0.025),
+  EXPECT_NEAR(crack::compact_tension_delta_k(1000.0, 0.01, 0.05, 0.025),
               1000.0 / (0.01 * std::sqrt(0.05)) * f, 1e-6);
   EXPECT_NEAR(f, 9.6591, 1e-3);
 }

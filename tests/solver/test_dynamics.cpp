@@ -19,18 +19,21 @@ namespace {
 using dynamics::KernelChoice;
 constexpr double pi = std::numbers::pi;
 
-KernelChoice constant_kernel() { return {KernelChoice::Shape::constant, 0.0}; }
-KernelChoice gaussian_kernel(double p = 2.0) { return {KernelChoice::Shape::gaussian, p}; }
+dynamics::KernelChoice constant_kernel() { return {dynamics::KernelChoice::Shape::constant, 0.0}; }
+dynamics::KernelChoice gaussian_kernel(double p = 2.0) {
+  return {dynamics::KernelChoice::Shape::gaussian, p};
+}
 
-Discretization plate(double width, double height, double dx, double ratio,
-                     const std::vector<Notch>& notches = {}, double no_fail_rows = 0) {
-  DetailGeometry g;
+mesh::Discretization plate(double width, double height, double dx, double ratio,
+                           const std::vector<mesh::Notch>& notches = {}, double no_fail_rows = 0) {
+  mesh::DetailGeometry g;
   g.thickness = 1.0;
-  g.outline.push_back(Region(Rectangle{0.0, 0.0, width, height}));
+  g.outline.push_back(mesh::Region(mesh::Rectangle{0.0, 0.0, width, height}));
   g.notches = notches;
   if (no_fail_rows > 0) {  // the loaded edges
-    g.no_fail_zones.push_back(Region(Rectangle{0.0, 0.0, width, no_fail_rows * dx}));
-    g.no_fail_zones.push_back(Region(Rectangle{0.0, height - no_fail_rows * dx, width, height}));
+    g.no_fail_zones.push_back(mesh::Region(mesh::Rectangle{0.0, 0.0, width, no_fail_rows * dx}));
+    g.no_fail_zones.push_back(
+        mesh::Region(mesh::Rectangle{0.0, height - no_fail_rows * dx, width, height}));
   }
   return discretize(g, dx, ratio * dx);
 }
@@ -39,28 +42,29 @@ Discretization plate(double width, double height, double dx, double ratio,
 // static micromodulus (energy matching with the kernel's second moment, p = 2) and Eq. (30).
 TEST(Dynamics, MicromodulusMatchesThePapersClosedForms) {
   const double e = 210e9, delta = 0.15, h = 1.0;
-  const double gauss = dynamics::micromodulus(
-      dynamics::Dimension::two, PlaneCondition::plane_stress, gaussian_kernel(2.0), e, delta, h);
-  ModelOptions options;
-  options.kind = ModelKind::bond_based;
-  options.kernel = Kernel::gaussian;
-  Material mat;
+  const double gauss =
+      dynamics::micromodulus(dynamics::Dimension::two, model::PlaneCondition::plane_stress,
+                             gaussian_kernel(2.0), e, delta, h);
+  model::ModelOptions options;
+  options.kind = model::ModelKind::bond_based;
+  options.kernel = model::Kernel::gaussian;
+  model::Material mat;
   mat.youngs_modulus = e;
-  EXPECT_NEAR(gauss / bond_micromodulus(mat, options, delta, h), 1.0, 1e-12);
+  EXPECT_NEAR(gauss / model::bond_micromodulus(mat, options, delta, h), 1.0, 1e-12);
   const double e4 = std::exp(4.0);  // Eq. (30)
   EXPECT_NEAR(gauss / (96 * e4 * e /
                        ((e4 * std::sqrt(pi) * std::erf(2.0) - 4) * h * pi * delta * delta * delta)),
               1.0, 1e-12);
-  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::two, PlaneCondition::plane_stress,
+  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::two, model::PlaneCondition::plane_stress,
                                      constant_kernel(), e, delta, h) /
                   (9 * e / (h * pi * delta * delta * delta)),
               1.0, 1e-14);
-  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::two, PlaneCondition::plane_strain,
+  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::two, model::PlaneCondition::plane_strain,
                                      constant_kernel(), e, delta, h) /
                   (48 * e / (5 * h * pi * delta * delta * delta)),
               1.0, 1e-14);
   const double area = 1e-6, d1 = 6.25e-3;
-  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::one, PlaneCondition::plane_stress,
+  EXPECT_NEAR(dynamics::micromodulus(dynamics::Dimension::one, model::PlaneCondition::plane_stress,
                                      gaussian_kernel(2.0), e, d1, area) /
                   (2 * e / (area * d1 * d1) * 4 / (1 - std::exp(-4.0))),
               1.0, 1e-14);
@@ -71,7 +75,7 @@ TEST(Dynamics, MicromodulusMatchesThePapersClosedForms) {
 // only through the rotation of the bond, of relative size ~ the strain (1e-6 here), so the drift
 // of E over 10⁴ steps must stay below 1e-6 of it.
 TEST(Dynamics, FreePlateConservesTheSchemesDiscreteEnergy) {
-  const Discretization disc = plate(0.02, 0.02, 1e-3, 3.0);
+  const mesh::Discretization disc = plate(0.02, 0.02, 1e-3, 3.0);
   dynamics::DynamicsSetup setup;
   setup.kernel = gaussian_kernel(2.0);
   setup.youngs_modulus = 210e9;
@@ -121,7 +125,7 @@ TEST(Dynamics, FreePlateConservesTheSchemesDiscreteEnergy) {
 // accepted; and it is a sufficient one: 2/ω_max of the actual lattice (max over k of the lattice
 // sum at the bar's middle node) is not below it, nor below the √2-larger von Neumann bound.
 TEST(Dynamics, RefusesATimeStepAboveTheStableOne) {
-  const Discretization disc = dynamics::bar_discretization(0.0, 200, 1.25e-3, 6.25e-3, 1e-6);
+  const mesh::Discretization disc = dynamics::bar_discretization(0.0, 200, 1.25e-3, 6.25e-3, 1e-6);
   dynamics::DynamicsSetup setup;
   setup.dimension = dynamics::Dimension::one;
   setup.kernel = constant_kernel();
@@ -160,9 +164,9 @@ TEST(Dynamics, RefusesATimeStepAboveTheStableOne) {
 // Two threads give the same bits as one: a notched plate pulled by a step traction hard enough to
 // break bonds at the notch tip (critical stretch), every displacement compared bit for bit.
 TEST(Dynamics, TwoThreadsEqualOneThreadBitForBit) {
-  Notch notch;
-  notch.path = {Point{-0.001, 0.01}, Point{0.008, 0.01}};
-  const Discretization disc = plate(0.03, 0.02, 0.5e-3, 3.0, {notch});
+  mesh::Notch notch;
+  notch.path = {mesh::Point{-0.001, 0.01}, mesh::Point{0.008, 0.01}};
+  const mesh::Discretization disc = plate(0.03, 0.02, 0.5e-3, 3.0, {notch});
   std::vector<std::vector<double>> results;
   std::vector<std::int64_t> broken;
   for (const int threads : {1, 2}) {
@@ -176,7 +180,7 @@ TEST(Dynamics, TwoThreadsEqualOneThreadBitForBit) {
     auto made = dynamics::ExplicitDynamics::create(disc, setup);
     ASSERT_TRUE(made) << made.error().message();
     auto& dyn = *made.value();
-    for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+    for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
       const double y = disc.position[static_cast<std::size_t>(k)].y;
       if (y > 0.02 - 0.5e-3) dyn.add_body_force(k, 0.0, 1.5e9 / 0.5e-3);
       if (y < 0.5e-3) dyn.add_body_force(k, 0.0, -1.5e9 / 0.5e-3);
@@ -203,7 +207,7 @@ TEST(Dynamics, TwoThreadsEqualOneThreadBitForBit) {
 TEST(Dynamics, LatticeDispersionEqualsThePapersFormula) {
   for (const auto& kernel : {constant_kernel(), gaussian_kernel(1.0), gaussian_kernel(2.0)}) {
     const double dx = 1.25e-3, e = 200e9, rho = 7850;
-    const Discretization disc = dynamics::bar_discretization(0.0, 41, dx, 5 * dx, 1.0);
+    const mesh::Discretization disc = dynamics::bar_discretization(0.0, 41, dx, 5 * dx, 1.0);
     dynamics::DynamicsSetup setup;
     setup.dimension = dynamics::Dimension::one;
     setup.kernel = kernel;
@@ -221,7 +225,7 @@ TEST(Dynamics, LatticeDispersionEqualsThePapersFormula) {
       worst = std::max(worst, std::abs(lattice - formula) / formula);
     }
     EXPECT_LE(worst, 1e-12) << kernel.name();
-    if (kernel.shape == KernelChoice::Shape::constant) {
+    if (kernel.shape == dynamics::KernelChoice::Shape::constant) {
       const double k = 1e-2;
       EXPECT_NEAR(dynamics::dispersion_omega(kernel, v, 5, dx, k, true) / (k * v), 1.0, 1e-6);
     }
@@ -328,13 +332,13 @@ namespace {
 // Ch. 5). Initiation is known to the sampling interval (0.5 µs), late rather than early, so the
 // measured mean speed errs high: the bound stays a fair test.
 TEST(Dynamics, CrackRunsUnderTheRayleighSpeed) {
-  Notch notch;
+  mesh::Notch notch;
   notch.name = "notch";
-  notch.path = {Point{-0.001, 0.01}, Point{0.008, 0.01}};
+  notch.path = {mesh::Point{-0.001, 0.01}, mesh::Point{0.008, 0.01}};
   // Bonds of the loaded (and fixed) rows and the four next to them never break (002 Sec. 7's
   // no-fail zones): the load row's own bonds stretch far more than the bulk as the wave starts.
-  const Discretization disc = plate(0.03, 0.02, 0.5e-3, 3.0, {notch}, 5);
-  std::vector<NodeIndex> bottom;
+  const mesh::Discretization disc = plate(0.03, 0.02, 0.5e-3, 3.0, {notch}, 5);
+  std::vector<mesh::NodeIndex> bottom;
   dynamics::DynamicsSetup setup;
   setup.kernel = gaussian_kernel(2.0);
   setup.youngs_modulus = 210e9;
@@ -344,7 +348,7 @@ TEST(Dynamics, CrackRunsUnderTheRayleighSpeed) {
   auto made = dynamics::ExplicitDynamics::create(disc, setup);
   ASSERT_TRUE(made) << made.error().message();
   auto& dyn = *made.value();
-  for (NodeIndex k = 0; k < disc.num_nodes(); ++k) {
+  for (mesh::NodeIndex k = 0; k < disc.num_nodes(); ++k) {
     const double y = disc.position[static_cast<std::size_t>(k)].y;
     if (y > 0.02 - 0.5e-3) dyn.add_body_force(k, 0.0, 0.15e9 / 0.5e-3);
     if (y < 0.5e-3) bottom.push_back(k);

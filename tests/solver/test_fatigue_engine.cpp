@@ -6,21 +6,22 @@
 #include <ostream>
 
 #include "solver/fatigue/fatigue_engine.h"
-#include "solver/static/specimen.h"
+#include "solver/statics/specimen.h"
 #include "tests/support/plates.h"
 
 namespace peritwin {
 namespace {
 
-using NotchedPlate = Specimen;
+using NotchedPlate = statics::Specimen;
 using testing::make_notched_plate;
 
 /// Parameters scaled so that the most stretched bond fails after about `first_failure` cycles
 /// of P_max = p, R = r: A = 1/(N·ε^m) from 000 Eq. (21).
-FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load, double r,
-                             double first_failure, double eps_inf_fraction = 0.0,
-                             StaticFailure static_failure = StaticFailure::critical_stretch) {
-  StaticSolver probe(p.disc, p.model, p.supports, p.loads);
+fatigue::FatigueSettings settings_for(
+    const NotchedPlate& p, fatigue::FatigueLaw law, double load, double r, double first_failure,
+    double eps_inf_fraction = 0.0,
+    fatigue::StaticFailure static_failure = fatigue::StaticFailure::critical_stretch) {
+  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
   EXPECT_TRUE(probe.solve().ok());
   std::vector<double> s;
   probe.stretch(load, 0.0, s);
@@ -29,16 +30,16 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
     if (!p.disc.bond_precut[b]) smax = std::max(smax, s[b]);
   }
   const double eps = smax * (1 - r);
-  FatigueSettings f;
+  fatigue::FatigueSettings f;
   f.law = law;
   f.critical_stretch = 4 * smax;  // phase III only for the bonds at the very tip, late
   f.static_failure = static_failure;
-  if (static_failure == StaticFailure::critical_bond_energy) {
+  if (static_failure == fatigue::StaticFailure::critical_bond_energy) {
     // 000 Eq. (9): g_c 10 % above the largest intact-bond ḡ (Eq. 31) at the load, so that phase
     // III breaks bonds in the blocks at a higher P_max.
     std::vector<double> theta, g;
-    dilatations(p.disc, p.model, probe.intact(), s, theta);
-    bond_energy_release_rates(p.disc, p.model, s, theta, g);
+    model::dilatations(p.disc, p.model, probe.intact(), s, theta);
+    model::bond_energy_release_rates(p.disc, p.model, s, theta, g);
     double gmax = 0.0;
     for (std::size_t b = 0; b < g.size(); ++b) {
       if (!p.disc.bond_precut[b]) gmax = std::max(gmax, g[b]);
@@ -51,7 +52,7 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
   f.strain.A1 = 1.0 / (first_failure * std::pow(eps - f.strain.eps_inf, f.strain.m1));
   f.strain.A2 = 0.2 / (first_failure * std::pow(eps, f.strain.m2));
   f.incremental = false;
-  if (law == FatigueLaw::kinetic) {
+  if (law == fatigue::FatigueLaw::kinetic) {
     // 004 Eq. (12)-(15): pick the activation energy U so that the most stressed bond
     // (σ = E·s_max) loses its unit life in `first_failure` cycles (Φ monotone in U: bisection).
     // 004's test conditions (T = 293 K, f = 0.56 Hz) and the activation volume γ with γσ/θ = 10
@@ -76,7 +77,7 @@ FatigueSettings settings_for(const NotchedPlate& p, FatigueLaw law, double load,
   return f;
 }
 
-void expect_same_state(const FatigueEngine& a, const FatigueEngine& b) {
+void expect_same_state(const fatigue::FatigueEngine& a, const fatigue::FatigueEngine& b) {
   testing::expect_same_breaks(a, b);
   const auto la = a.remaining_life();
   const auto lb = b.remaining_life();
@@ -88,11 +89,11 @@ void expect_same_state(const FatigueEngine& a, const FatigueEngine& b) {
 /// cycles at the constant P_max, R of `block` leave the most stretched intact bond (stretch
 /// s_max from a separate static solve) the remaining life 1 − cycles·Φ(E·s_max), Φ the per-cycle
 /// dose, which settings_for calibrated to 1/first_failure.
-void expect_kinetic_hottest_life(const NotchedPlate& p, const FatigueSettings& f,
-                                 const FatigueEngine& engine, const LoadBlock& block,
+void expect_kinetic_hottest_life(const NotchedPlate& p, const fatigue::FatigueSettings& f,
+                                 const fatigue::FatigueEngine& engine, const core::LoadBlock& block,
                                  double first_failure) {
   ASSERT_EQ(engine.break_events().size(), 0u) << engine.broken_bonds();
-  StaticSolver probe(p.disc, p.model, p.supports, p.loads);
+  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
   ASSERT_TRUE(probe.solve().ok());
   std::vector<double> s;
   probe.stretch(block.p_max, block.alpha, s);
@@ -113,10 +114,10 @@ void expect_kinetic_hottest_life(const NotchedPlate& p, const FatigueSettings& f
 
 struct LawCase {
   const char* name;
-  FatigueLaw law;
-  ModelKind kind;
+  fatigue::FatigueLaw law;
+  model::ModelKind kind;
   double eps_inf_fraction;
-  StaticFailure static_failure = StaticFailure::critical_stretch;
+  fatigue::StaticFailure static_failure = fatigue::StaticFailure::critical_stretch;
   bool compressed_bonds_fatigue = true;
   /// Bonds broken in the blocks at least (measured: 1 or 2 for the strain-range and energy
   /// laws, whose phase II rate A2 is a fifth of A1; ~35 for the kinetic law).
@@ -136,20 +137,20 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
   auto settings =
       settings_for(plate, c.law, 1000.0, 0.1, 150.0, c.eps_inf_fraction, c.static_failure);
   settings.compressed_bonds_fatigue = c.compressed_bonds_fatigue;
-  FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, settings);
-  FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(fast.initialize());
   ASSERT_TRUE(slow.initialize());
-  const std::vector<LoadBlock> blocks = {{1000.0, 0.1, 0.0, 120},
-                                         {800.0, 0.1, 0.0, 1},
-                                         {1000.0, 0.3, 0.0, 37},
-                                         {1100.0, -0.2, 0.2, 90},
-                                         {1000.0, 0.1, 0.0, 400}};
+  const std::vector<core::LoadBlock> blocks = {{1000.0, 0.1, 0.0, 120},
+                                               {800.0, 0.1, 0.0, 1},
+                                               {1000.0, 0.3, 0.0, 37},
+                                               {1100.0, -0.2, 0.2, 90},
+                                               {1000.0, 0.1, 0.0, 400}};
   for (const auto& block : blocks) {
     fast.apply(block);
     slow.apply_per_cycle(block);
     expect_same_state(fast, slow);
-    if (c.law == FatigueLaw::kinetic && &block == &blocks.front()) {
+    if (c.law == fatigue::FatigueLaw::kinetic && &block == &blocks.front()) {
       expect_kinetic_hottest_life(plate, settings, fast, block, 150.0);
     }
   }
@@ -157,10 +158,10 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
   // broken_bonds() counts the notch's 102 pre-cut bonds too; the breaks in these blocks:
   EXPECT_GE(fast.break_events().size(), c.min_fatigue_breaks);
   EXPECT_FALSE(fast.failed());  // every block was applied, none cut short by final failure
-  if (c.static_failure == StaticFailure::critical_bond_energy) {
-    const auto overloads =
-        std::count_if(fast.break_events().begin(), fast.break_events().end(),
-                      [](const BreakEvent& e) { return e.cause == BreakCause::overload; });
+  if (c.static_failure == fatigue::StaticFailure::critical_bond_energy) {
+    const auto overloads = std::count_if(
+        fast.break_events().begin(), fast.break_events().end(),
+        [](const fatigue::BreakEvent& e) { return e.cause == fatigue::BreakCause::overload; });
     EXPECT_GT(overloads, 0);  // phase III by 000 Eq. (9) must actually have happened
   }
 }
@@ -168,26 +169,29 @@ TEST_P(BlockEqualsPerCycle, SameBreaksSameCyclesSameLives) {
 INSTANTIATE_TEST_SUITE_P(
     Laws, BlockEqualsPerCycle,
     ::testing::Values(
-        LawCase{"strain_dose_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0},
-        LawCase{"strain_dose_osb", FatigueLaw::strain_range, ModelKind::state_based, 0},
-        LawCase{"strain_limit_bb", FatigueLaw::strain_range, ModelKind::bond_based, 0.3},
-        LawCase{"energy_osb", FatigueLaw::energy, ModelKind::state_based, 0},
-        LawCase{"strain_dose_bb_gc", FatigueLaw::strain_range, ModelKind::bond_based, 0,
-                StaticFailure::critical_bond_energy},
-        LawCase{"strain_limit_osb_gc", FatigueLaw::strain_range, ModelKind::state_based, 0.3,
-                StaticFailure::critical_bond_energy},
-        LawCase{"energy_osb_gc", FatigueLaw::energy, ModelKind::state_based, 0,
-                StaticFailure::critical_bond_energy},
-        LawCase{"strain_dose_bb_tension_only", FatigueLaw::strain_range, ModelKind::bond_based, 0,
-                StaticFailure::critical_stretch, false},
-        LawCase{"energy_osb_tension_only", FatigueLaw::energy, ModelKind::state_based, 0,
-                StaticFailure::critical_stretch, false},
+        LawCase{"strain_dose_bb", fatigue::FatigueLaw::strain_range, model::ModelKind::bond_based,
+                0},
+        LawCase{"strain_dose_osb", fatigue::FatigueLaw::strain_range, model::ModelKind::state_based,
+                0},
+        LawCase{"strain_limit_bb", fatigue::FatigueLaw::strain_range, model::ModelKind::bond_based,
+                0.3},
+        LawCase{"energy_osb", fatigue::FatigueLaw::energy, model::ModelKind::state_based, 0},
+        LawCase{"strain_dose_bb_gc", fatigue::FatigueLaw::strain_range,
+                model::ModelKind::bond_based, 0, fatigue::StaticFailure::critical_bond_energy},
+        LawCase{"strain_limit_osb_gc", fatigue::FatigueLaw::strain_range,
+                model::ModelKind::state_based, 0.3, fatigue::StaticFailure::critical_bond_energy},
+        LawCase{"energy_osb_gc", fatigue::FatigueLaw::energy, model::ModelKind::state_based, 0,
+                fatigue::StaticFailure::critical_bond_energy},
+        LawCase{"strain_dose_bb_tension_only", fatigue::FatigueLaw::strain_range,
+                model::ModelKind::bond_based, 0, fatigue::StaticFailure::critical_stretch, false},
+        LawCase{"energy_osb_tension_only", fatigue::FatigueLaw::energy,
+                model::ModelKind::state_based, 0, fatigue::StaticFailure::critical_stretch, false},
         // 004's kinetic law; settings_for picks U so that the most stressed bond fails after
         // about 150 cycles of the first block.
-        LawCase{"kinetic_bb", FatigueLaw::kinetic, ModelKind::bond_based, 0,
-                StaticFailure::critical_stretch, true, 21},
-        LawCase{"kinetic_osb", FatigueLaw::kinetic, ModelKind::state_based, 0,
-                StaticFailure::critical_stretch, true, 21}),
+        LawCase{"kinetic_bb", fatigue::FatigueLaw::kinetic, model::ModelKind::bond_based, 0,
+                fatigue::StaticFailure::critical_stretch, true, 21},
+        LawCase{"kinetic_osb", fatigue::FatigueLaw::kinetic, model::ModelKind::state_based, 0,
+                fatigue::StaticFailure::critical_stretch, true, 21}),
     [](const ::testing::TestParamInfo<LawCase>& p) { return std::string(p.param.name); });
 
 TEST(EnergyLaw, EqualsTheStrainRangeLawIncludingBondsWithNegativeEnergyReleaseRate) {
@@ -195,23 +199,23 @@ TEST(EnergyLaw, EqualsTheStrainRangeLawIncludingBondsWithNegativeEnergyReleaseRa
   // A_i·ε^m_i for every bond, also where the dilatation term makes ḡ of Eq. (31) negative (a
   // compressed bond in a dilated region). The state-based plate must break the same bonds at the
   // same cycles under both laws, with remaining lives equal to rounding (1e-9 relative).
-  const auto plate = make_notched_plate(ModelKind::state_based);
+  const auto plate = make_notched_plate(model::ModelKind::state_based);
   {  // the test must contain bonds with ḡ < 0 at the load
-    StaticSolver probe(plate.disc, plate.model, plate.supports, plate.loads);
+    statics::StaticSolver probe(plate.disc, plate.model, plate.supports, plate.loads);
     ASSERT_TRUE(probe.solve().ok());
     std::vector<double> s, theta, g;
     probe.stretch(1000.0, 0.0, s);
-    dilatations(plate.disc, plate.model, probe.intact(), s, theta);
-    bond_energy_release_rates(plate.disc, plate.model, s, theta, g);
+    model::dilatations(plate.disc, plate.model, probe.intact(), s, theta);
+    model::bond_energy_release_rates(plate.disc, plate.model, s, theta, g);
     const auto negative = std::count_if(g.begin(), g.end(), [](double v) { return v < 0.0; });
     EXPECT_GT(negative, 0);
   }
-  const auto strain = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  const auto strain = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
   auto energy = strain;
-  energy.law = FatigueLaw::energy;
-  auto run = [&plate](const FatigueSettings& settings) {
-    auto engine = std::make_unique<FatigueEngine>(plate.disc, plate.model, plate.supports,
-                                                  plate.loads, settings);
+  energy.law = fatigue::FatigueLaw::energy;
+  auto run = [&plate](const fatigue::FatigueSettings& settings) {
+    auto engine = std::make_unique<fatigue::FatigueEngine>(plate.disc, plate.model, plate.supports,
+                                                           plate.loads, settings);
     EXPECT_TRUE(engine->initialize());
     engine->apply({1000.0, 0.1, 0.0, 300});
     return engine;
@@ -233,15 +237,16 @@ TEST(CompressedBonds, FatigueBy000Eq15AndNotWhenTurnedOff) {
   // much. With compressed_bonds_fatigue = false it keeps its full life; bonds in tension are
   // unchanged bit for bit. 100 cycles, before the first break (about 150), in both the dose path
   // (strain range) and the per-block path (energy law).
-  for (const FatigueLaw law : {FatigueLaw::strain_range, FatigueLaw::energy}) {
-    const auto plate = make_notched_plate(ModelKind::state_based);
-    StaticSolver probe(plate.disc, plate.model, plate.supports, plate.loads);
+  for (const fatigue::FatigueLaw law :
+       {fatigue::FatigueLaw::strain_range, fatigue::FatigueLaw::energy}) {
+    const auto plate = make_notched_plate(model::ModelKind::state_based);
+    statics::StaticSolver probe(plate.disc, plate.model, plate.supports, plate.loads);
     ASSERT_TRUE(probe.solve().ok());
     std::vector<double> s;
     probe.stretch(1000.0, 0.0, s);
-    auto run = [&plate](const FatigueSettings& settings) {
-      auto engine = std::make_unique<FatigueEngine>(plate.disc, plate.model, plate.supports,
-                                                    plate.loads, settings);
+    auto run = [&plate](const fatigue::FatigueSettings& settings) {
+      auto engine = std::make_unique<fatigue::FatigueEngine>(plate.disc, plate.model,
+                                                             plate.supports, plate.loads, settings);
       EXPECT_TRUE(engine->initialize());
       engine->apply({1000.0, 0.1, 0.0, 100});
       EXPECT_TRUE(engine->break_events().empty());  // no break yet (pre-cut bonds aside)
@@ -269,10 +274,10 @@ TEST(CompressedBonds, FatigueBy000Eq15AndNotWhenTurnedOff) {
 TEST(BlockStepping, ManyOneCycleBlocksEqualOneLongBlock) {
   // A rainflow-counted history is mostly 1-cycle blocks: 600 blocks of one cycle must give the
   // state of one block of 600 cycles, bit for bit (dose accumulation is repeated addition).
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine one(plate.disc, plate.model, plate.supports, plate.loads, settings);
-  FatigueEngine many(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine one(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine many(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(one.initialize());
   ASSERT_TRUE(many.initialize());
   one.apply({1000.0, 0.1, 0.0, 600});
@@ -285,24 +290,24 @@ TEST(SingleBond, FirstFailureMatchesNguyenEq21) {
   // B4: the most stretched bond at constant strain range ε fails at N = 1/(A1 ε^m1) (000 Eq. 21),
   // here with A1 set so that N = 150.4: the first break must come at cycle ceil(150.4) = 151.
   // No notch: a notch puts its tip nodes in phase II from the start (000 Sec. 4.4).
-  const auto plate = make_notched_plate(ModelKind::bond_based, false);
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.4);
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based, false);
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.4);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(engine.initialize());
   engine.apply({1000.0, 0.1, 0.0, 1000});
   ASSERT_FALSE(engine.break_events().empty());
   EXPECT_EQ(engine.break_events().front().cycle, 151);
-  EXPECT_EQ(engine.break_events().front().cause, BreakCause::fatigue);
+  EXPECT_EQ(engine.break_events().front().cause, fatigue::BreakCause::fatigue);
 }
 
 TEST(PropagationLimit, SetBetweenBlocksFreezesPhaseTwoAndMatchesPerCycle) {
   // 002 Sec. 7 raises ε̃∞ (002 Eq. 12) with the load between blocks. Starting without limits (dose
   // mode), a limit above every strain range freezes the phase II lives while phase I keeps
   // losing life; switching limits back and forth, blocks equal the per-cycle oracle bit for bit.
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine block(plate.disc, plate.model, plate.supports, plate.loads, settings);
-  FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine block(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine oracle(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(block.initialize());
   ASSERT_TRUE(oracle.initialize());
   block.apply({1000.0, 0.1, 0.0, 40});
@@ -332,19 +337,25 @@ TEST(PropagationLimit, SetBetweenBlocksFreezesPhaseTwoAndMatchesPerCycle) {
 }
 
 TEST(LoadBlockValidation, RejectsWhatCannotBeApplied) {
-  EXPECT_TRUE(check_load_block(LoadBlock{1000, 0.1, 0, 1}).ok());
-  EXPECT_EQ(check_load_block(LoadBlock{std::nan(""), 0.1, 0, 1}).error().field, "p_max");
-  EXPECT_EQ(check_load_block(LoadBlock{1000, 1.0, 0, 1}).error().field, "r");
-  EXPECT_EQ(check_load_block(LoadBlock{1000, -10.5, 0, 1}).error().field, "r");
-  EXPECT_TRUE(check_load_block(LoadBlock{1000, -10.0, 0, 1}).ok());
-  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, 0, 0}).error().field, "count");
-  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, 0, kMaxBatchCycles + 1}).error().field, "count");
-  EXPECT_EQ(check_load_block(LoadBlock{-5, 0.1, 0, 1}).error().field, "p_max");
-  EXPECT_EQ(check_load_block(LoadBlock{1000, 0.1, std::nan(""), 1}).error().field, "alpha");
+  EXPECT_TRUE(core::check_load_block(core::LoadBlock{1000, 0.1, 0, 1}).ok());
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{std::nan(""), 0.1, 0, 1}).error().field,
+            "p_max");
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{1000, 1.0, 0, 1}).error().field, "r");
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{1000, -10.5, 0, 1}).error().field, "r");
+  EXPECT_TRUE(core::check_load_block(core::LoadBlock{1000, -10.0, 0, 1}).ok());
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{1000, 0.1, 0, 0}).error().field, "count");
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{1000, 0.1, 0, core::kMaxBatchCycles + 1})
+                .error()
+                .field,
+            "count");
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{-5, 0.1, 0, 1}).error().field, "p_max");
+  EXPECT_EQ(core::check_load_block(core::LoadBlock{1000, 0.1, std::nan(""), 1}).error().field,
+            "alpha");
   // The batch total: two blocks of 2^49 + 1 pass alone and fail together, at the second.
-  const LoadBlock half{1000, 0.1, 0, kMaxBatchCycles / 2 + 1};
-  EXPECT_TRUE(check_load_blocks(std::vector<LoadBlock>{half}).ok());
-  EXPECT_EQ(check_load_blocks(std::vector<LoadBlock>{half, half}).error().field, "blocks[1].count");
+  const core::LoadBlock half{1000, 0.1, 0, core::kMaxBatchCycles / 2 + 1};
+  EXPECT_TRUE(core::check_load_blocks(std::vector<core::LoadBlock>{half}).ok());
+  EXPECT_EQ(core::check_load_blocks(std::vector<core::LoadBlock>{half, half}).error().field,
+            "blocks[1].count");
 }
 
 }  // namespace
@@ -354,27 +365,28 @@ namespace peritwin {
 namespace {
 
 /// The state hash the way it was first defined: word-wise FNV-1a over export_state()'s copy.
-std::uint64_t hash_of_exported_state(const FatigueEngine& engine) {
-  Fnv1a64 h;
-  const EngineState state = engine.export_state();
-  for_each_field(state, [&h](std::string_view, const auto& field) { hash_field(h, field); });
+std::uint64_t hash_of_exported_state(const fatigue::FatigueEngine& engine) {
+  core::Fnv1a64 h;
+  const fatigue::EngineState state = engine.export_state();
+  fatigue::for_each_field(
+      state, [&h](std::string_view, const auto& field) { fatigue::hash_field(h, field); });
   return h.get();
 }
 
 TEST(EngineState, HashReadInPlaceEqualsTheHashOfTheExportedCopy) {
   // state_hash() reads the engine's fields in place (the solver's intact flags); the oracle hashes
   // export_state()'s copy. A pair of hashes fed the same words gives each one's value.
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(engine.initialize());
-  for (const LoadBlock& block :
-       {LoadBlock{1000.0, 0.1, 0.0, 333}, LoadBlock{900.0, 0.2, 0.0, 400}}) {
+  for (const core::LoadBlock& block :
+       {core::LoadBlock{1000.0, 0.1, 0.0, 333}, core::LoadBlock{900.0, 0.2, 0.0, 400}}) {
     engine.apply(block);
     EXPECT_EQ(engine.state_hash(), hash_of_exported_state(engine));
-    Fnv1a64Pair pair{Fnv1a64::from(12345), Fnv1a64{}};
+    core::Fnv1a64Pair pair{core::Fnv1a64::from(12345), core::Fnv1a64{}};
     engine.hash_state(pair);
-    Fnv1a64 alone = Fnv1a64::from(12345);
+    core::Fnv1a64 alone = core::Fnv1a64::from(12345);
     engine.hash_state(alone);
     EXPECT_EQ(pair.first.get(), alone.get());
     EXPECT_EQ(pair.second.get(), engine.state_hash());
@@ -385,17 +397,17 @@ TEST(EngineState, HashReadInPlaceEqualsTheHashOfTheExportedCopy) {
 TEST(EngineState, ExportImportResumesBitIdentically) {
   // Checkpoint contract: stop anywhere (here in the middle of a dose accumulation), restore into a
   // fresh engine, continue: the final state equals the uninterrupted run bit for bit.
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(straight.initialize());
   straight.apply({1000.0, 0.1, 0.0, 333});
   straight.apply({900.0, 0.2, 0.0, 400});
-  FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(first.initialize());
   first.apply({1000.0, 0.1, 0.0, 333});
-  const EngineState saved = first.export_state();
-  FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const fatigue::EngineState saved = first.export_state();
+  fatigue::FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(resumed.initialize());
   ASSERT_TRUE(resumed.import_state(saved));
   EXPECT_EQ(resumed.state_hash(), first.state_hash());
@@ -411,20 +423,21 @@ TEST(EngineState, ExportImportResumesBitIdentically) {
 namespace peritwin {
 namespace {
 
-class IncrementalEqualsRefactor : public ::testing::TestWithParam<ModelKind> {};
+class IncrementalEqualsRefactor : public ::testing::TestWithParam<model::ModelKind> {};
 
 TEST_P(IncrementalEqualsRefactor, SameBreakSequence) {
   // The incremental re-solve (CHOLMOD rank updates) against the refactorizing oracle: the same
   // bonds break at the same cycles; lives agree to round-off.
   const auto plate = make_notched_plate(GetParam());
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine refactor(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine refactor(plate.disc, plate.model, plate.supports, plate.loads, settings);
   settings.incremental = true;
-  FatigueEngine incremental(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine incremental(plate.disc, plate.model, plate.supports, plate.loads,
+                                     settings);
   ASSERT_TRUE(refactor.initialize());
   ASSERT_TRUE(incremental.initialize());
-  for (const LoadBlock block :
-       {LoadBlock{1000.0, 0.1, 0.0, 500}, LoadBlock{1100.0, 0.1, 0.3, 300}}) {
+  for (const core::LoadBlock block :
+       {core::LoadBlock{1000.0, 0.1, 0.0, 500}, core::LoadBlock{1100.0, 0.1, 0.3, 300}}) {
     refactor.apply(block);
     incremental.apply(block);
   }
@@ -441,27 +454,29 @@ TEST_P(IncrementalEqualsRefactor, PeriodicRebuildsKeepResumeBitIdenticalAndShort
   // round-off), and a resume from an exported state replays only the re-solves since the last
   // rebuild yet continues bit for bit like the uninterrupted run.
   const auto plate = make_notched_plate(GetParam());
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
   settings.incremental = true;
   settings.refactor_every_resolves = 0;
-  FatigueEngine updates_only(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine updates_only(plate.disc, plate.model, plate.supports, plate.loads,
+                                      settings);
   settings.refactor_every_resolves = 4;
-  FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, settings);
-  FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine first(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(updates_only.initialize());
   ASSERT_TRUE(straight.initialize());
   ASSERT_TRUE(first.initialize());
-  const LoadBlock a{1000.0, 0.1, 0.0, 500}, b{1100.0, 0.1, 0.3, 700}, c{1100.0, 0.1, 0.3, 300};
+  const core::LoadBlock a{1000.0, 0.1, 0.0, 500}, b{1100.0, 0.1, 0.3, 700},
+      c{1100.0, 0.1, 0.3, 300};
   for (auto* e : {&updates_only, &straight, &first}) {
     e->apply(a);
     e->apply(b);
   }
   updates_only.apply(c);
   straight.apply(c);
-  const EngineState saved = first.export_state();
+  const fatigue::EngineState saved = first.export_state();
   const auto groups = saved.resolve_groups.size();
   ASSERT_GE(groups, 6u);  // at least one rebuild and re-solves after it
-  FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(resumed.initialize());
   ASSERT_TRUE(resumed.import_state(saved));
   EXPECT_EQ(resumed.state_hash(), first.state_hash());
@@ -479,7 +494,7 @@ TEST_P(IncrementalEqualsRefactor, PeriodicRebuildsKeepResumeBitIdenticalAndShort
 }
 
 TEST_P(IncrementalEqualsRefactor, ForkContinuesBitForBitAsAFreshEngineThatImports) {
-  // FatigueEngine::fork (the remaining-life simulations, twin/model/life.h) copies the live
+  // FatigueEngine::fork (the remaining-life simulations, twin/life.h) copies the live
   // factor instead of rebuilding it. With other coefficients (A2 and A1 × 1.2, the life band), a
   // rebuild every 4 re-solves and re-solves after it, in dose mode and in direct mode (a fatigue
   // limit), the fork's state and every later step equal those of a fresh engine with the same
@@ -487,26 +502,26 @@ TEST_P(IncrementalEqualsRefactor, ForkContinuesBitForBitAsAFreshEngineThatImport
   const auto plate = make_notched_plate(GetParam());
   for (const double eps_inf_fraction : {0.0, 0.2}) {
     SCOPED_TRACE(eps_inf_fraction);
-    auto settings =
-        settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0, eps_inf_fraction);
+    auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0,
+                                 eps_inf_fraction);
     settings.incremental = true;
     settings.refactor_every_resolves = 4;
-    FatigueEngine live(plate.disc, plate.model, plate.supports, plate.loads, settings);
+    fatigue::FatigueEngine live(plate.disc, plate.model, plate.supports, plate.loads, settings);
     ASSERT_TRUE(live.initialize());
     live.apply({1000.0, 0.1, 0.0, 500});
     live.apply({1100.0, 0.1, 0.3, 700});
     ASSERT_GE(live.export_state().resolve_groups.size(), 6u);  // a rebuild and re-solves after
     ASSERT_GT(live.rebuilds(), 0);
-    FatigueSettings band = settings;
+    fatigue::FatigueSettings band = settings;
     band.strain.A2 *= 1.2;
     band.strain.A1 *= 1.2;
-    FatigueEngine fresh(plate.disc, plate.model, plate.supports, plate.loads, band);
+    fatigue::FatigueEngine fresh(plate.disc, plate.model, plate.supports, plate.loads, band);
     ASSERT_TRUE(fresh.initialize());
     ASSERT_TRUE(fresh.import_state(live.export_state()));
     const auto fork = live.fork(band);
     EXPECT_EQ(fork->state_hash(), fresh.state_hash());
     EXPECT_EQ(fork->state_hash(), live.state_hash());  // the state is the same, not the rates
-    const LoadBlock c{1100.0, 0.1, 0.3, 400}, d{900.0, 0.2, 0.0, 2000};
+    const core::LoadBlock c{1100.0, 0.1, 0.3, 400}, d{900.0, 0.2, 0.0, 2000};
     for (const auto& block : {c, d}) {
       EXPECT_EQ(fork->apply(block), fresh.apply(block));
     }
@@ -519,18 +534,18 @@ TEST_P(IncrementalEqualsRefactor, ForkContinuesBitForBitAsAFreshEngineThatImport
 }
 
 TEST(FatigueEngineFork, RefusesOtherStructuralSettingsAndTheBilinearLaw) {
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(engine.initialize());
-  FatigueSettings other = settings;
+  fatigue::FatigueSettings other = settings;
   other.critical_stretch *= 2;
   EXPECT_THROW((void)engine.fork(other), std::invalid_argument);
   other = settings;
-  other.law = FatigueLaw::energy;
+  other.law = fatigue::FatigueLaw::energy;
   EXPECT_THROW((void)engine.fork(other), std::invalid_argument);
   other = settings;
-  other.law = FatigueLaw::bilinear;
+  other.law = fatigue::FatigueLaw::bilinear;
   EXPECT_THROW((void)engine.fork(other), std::logic_error);
 }
 
@@ -540,12 +555,12 @@ TEST_P(IncrementalEqualsRefactor, ReleasingTheIdleFactorChangesNoBit) {
   // be those of the engine that kept its factor, bit for bit (rebuilds every 4 re-solves, so
   // that the release after a rebuild is exercised too).
   const auto plate = make_notched_plate(GetParam());
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
   settings.incremental = true;
   settings.refactor_every_resolves = 4;
-  FatigueEngine kept(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine kept(plate.disc, plate.model, plate.supports, plate.loads, settings);
   settings.release_idle_factor = true;
-  FatigueEngine released(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine released(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(kept.initialize());
   ASSERT_TRUE(released.initialize());
   EXPECT_TRUE(kept.solver().factor().has_values());
@@ -554,11 +569,11 @@ TEST_P(IncrementalEqualsRefactor, ReleasingTheIdleFactorChangesNoBit) {
   EXPECT_EQ(kept.state_hash(), released.state_hash());
   // A fork of the engine whose factor is released (a remaining-life simulation of an idle live
   // twin) factorizes again at its first break and continues as the engine that kept its factor.
-  FatigueSettings simulation = settings;
+  fatigue::FatigueSettings simulation = settings;
   simulation.release_idle_factor = false;
   const auto fork = released.fork(simulation);
   EXPECT_FALSE(fork->solver().factor().has_values());
-  const LoadBlock a{1000.0, 0.1, 0.0, 500}, b{1100.0, 0.1, 0.3, 700};
+  const core::LoadBlock a{1000.0, 0.1, 0.0, 500}, b{1100.0, 0.1, 0.3, 700};
   for (auto* e : {&kept, &released, fork.get()}) {
     e->apply(a);
     e->apply(b);
@@ -578,15 +593,17 @@ TEST_P(IncrementalEqualsRefactor, TiesStayThroughUpdatesAndRebuilds) {
   // (without it the lives differ).
   const auto plate = make_notched_plate(GetParam());
   const double h = 0.008;
-  const NodeIndex left = plate.disc.nearest_node({0.0, h});
-  const NodeIndex right = plate.disc.nearest_node({0.024, h});
-  const std::vector<Tie> ties = {{{{left, 0, 1.0}, {right, 0, -1.0}}, 1e12}};
-  auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine refactor(plate.disc, plate.model, plate.supports, plate.loads, settings, ties);
-  FatigueEngine untied(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const mesh::NodeIndex left = plate.disc.nearest_node({0.0, h});
+  const mesh::NodeIndex right = plate.disc.nearest_node({0.024, h});
+  const std::vector<statics::Tie> ties = {{{{left, 0, 1.0}, {right, 0, -1.0}}, 1e12}};
+  auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine refactor(plate.disc, plate.model, plate.supports, plate.loads, settings,
+                                  ties);
+  fatigue::FatigueEngine untied(plate.disc, plate.model, plate.supports, plate.loads, settings);
   settings.incremental = true;
   settings.refactor_every_resolves = 4;
-  FatigueEngine incremental(plate.disc, plate.model, plate.supports, plate.loads, settings, ties);
+  fatigue::FatigueEngine incremental(plate.disc, plate.model, plate.supports, plate.loads, settings,
+                                     ties);
   for (auto* e : {&refactor, &untied, &incremental}) {
     ASSERT_TRUE(e->initialize());
     e->apply({1000.0, 0.1, 0.3, 800});
@@ -606,7 +623,8 @@ TEST_P(IncrementalEqualsRefactor, TiesStayThroughUpdatesAndRebuilds) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothModels, IncrementalEqualsRefactor,
-                         ::testing::Values(ModelKind::bond_based, ModelKind::state_based),
+                         ::testing::Values(model::ModelKind::bond_based,
+                                           model::ModelKind::state_based),
                          testing::model_kind_param_name);
 
 }  // namespace
@@ -620,16 +638,16 @@ TEST(Phases, PreCrackPutsItsTipInPhaseTwoAndFarBondsInPhaseOne) {
   // δ = 3.015Δx with the partial volumes of 001 Eq. (36), more near a free edge), so the
   // pre-crack's neighbourhood is in phase II from the start; a bond far from it (more than 2δ) is
   // in phase I.
-  const auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  const auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(engine.initialize());
   const double dx = plate.disc.dx;
-  const NodeIndex face = plate.disc.nearest_node({3 * dx, 0.5 * dx});
+  const mesh::NodeIndex face = plate.disc.nearest_node({3 * dx, 0.5 * dx});
   EXPECT_GE(engine.node_damage()[static_cast<std::size_t>(face)], 0.398);
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
-    const Point a = plate.disc.position[plate.disc.bond_i[b]];
-    const Point c = plate.disc.position[plate.disc.bond_j[b]];
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    const mesh::Point a = plate.disc.position[plate.disc.bond_i[b]];
+    const mesh::Point c = plate.disc.position[plate.disc.bond_j[b]];
     const double mid_x = 0.5 * (a.x + c.x), mid_y = 0.5 * (a.y + c.y);
     if (std::abs(mid_y) < dx && mid_x < 6 * dx) {
       EXPECT_EQ(engine.bond_phase()[b], 2) << b;
@@ -643,13 +661,13 @@ TEST(Phases, PreCrackPutsItsTipInPhaseTwoAndFarBondsInPhaseOne) {
 TEST(NoFailZone, BondsInsideNeverBreak) {
   // 002 Sec. 7: a no-fail zone around the notch tip: its bonds keep losing life but never break,
   // while the same load breaks them without the zone.
-  auto plate = make_notched_plate(ModelKind::bond_based);
-  const auto settings = settings_for(plate, FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
-  const Circle zone{{6 * plate.disc.dx, 0.0}, 4 * plate.disc.dx};
-  for (NodeIndex k = 0; k < plate.disc.num_nodes(); ++k) {
+  auto plate = make_notched_plate(model::ModelKind::bond_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  const mesh::Circle zone{{6 * plate.disc.dx, 0.0}, 4 * plate.disc.dx};
+  for (mesh::NodeIndex k = 0; k < plate.disc.num_nodes(); ++k) {
     plate.disc.no_fail[static_cast<std::size_t>(k)] = zone.contains(plate.disc.position[k]) ? 1 : 0;
   }
-  FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
   ASSERT_TRUE(engine.initialize());
   engine.apply({1000.0, 0.1, 0.0, 1000});  // the phase II tip bonds last 750 cycles
   for (const auto& e : engine.break_events()) {

@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-#include "solver/core/param_reader.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/law_registry.h"
 #include "solver/fatigue/laws/bilinear.h"
@@ -47,17 +47,18 @@ void check_against_loop(double lambda, double d) {
   SCOPED_TRACE(testing::Message() << std::hexfloat << "lambda=" << lambda << " d=" << d);
   const std::int64_t n_loop = loop_cycles(lambda, d, 3'000'000);
   ASSERT_GT(n_loop, 0) << "test case too long for the loop";
-  EXPECT_EQ(cycles_to_failure(lambda, d), n_loop);
-  const CycleBounds bounds = cycles_to_failure_bounds(lambda, d);
+  EXPECT_EQ(fatigue::cycles_to_failure(lambda, d), n_loop);
+  const fatigue::CycleBounds bounds = fatigue::cycles_to_failure_bounds(lambda, d);
   EXPECT_LE(bounds.lo, n_loop);
   EXPECT_GE(bounds.hi, n_loop);
   for (std::int64_t k : {std::int64_t{0}, std::int64_t{1}, n_loop / 3, n_loop - 1, n_loop,
                          n_loop + 7, 2 * n_loop + 3}) {
-    EXPECT_EQ(bits(advance_life(lambda, d, k)), bits(loop_life(lambda, d, k))) << "k=" << k;
+    EXPECT_EQ(bits(fatigue::advance_life(lambda, d, k)), bits(loop_life(lambda, d, k)))
+        << "k=" << k;
   }
   // Block stepping with an arbitrary split equals per-cycle stepping.
   const std::int64_t k1 = n_loop / 2 + 1;
-  EXPECT_EQ(bits(advance_life(advance_life(lambda, d, k1), d, n_loop - k1)),
+  EXPECT_EQ(bits(fatigue::advance_life(fatigue::advance_life(lambda, d, k1), d, n_loop - k1)),
             bits(loop_life(lambda, d, n_loop)));
 }
 
@@ -95,28 +96,29 @@ TEST(LifeArithmetic, MatchesLoopOnTiesAndBinadeEdges) {
 }
 
 TEST(LifeArithmetic, SpecialValues) {
-  EXPECT_EQ(cycles_to_failure(1.0, 0.0), kNeverFails);  // no damage (below a fatigue limit)
-  EXPECT_EQ(cycles_to_failure(0.0, 0.0), 1);            // 0 - 0 <= 0 after one cycle
-  EXPECT_EQ(cycles_to_failure(-0.5, 0.1), 1);           // already failed
-  EXPECT_EQ(cycles_to_failure(0.1, 0.1), 1);
-  EXPECT_EQ(cycles_to_failure(1.0, std::nan("")), kNeverFails);
-  EXPECT_EQ(cycles_to_failure(1.0, -1e-3), kNeverFails);
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, 0.0),
+            fatigue::kNeverFails);                      // no damage (below a fatigue limit)
+  EXPECT_EQ(fatigue::cycles_to_failure(0.0, 0.0), 1);   // 0 - 0 <= 0 after one cycle
+  EXPECT_EQ(fatigue::cycles_to_failure(-0.5, 0.1), 1);  // already failed
+  EXPECT_EQ(fatigue::cycles_to_failure(0.1, 0.1), 1);
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, std::nan("")), fatigue::kNeverFails);
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, -1e-3), fatigue::kNeverFails);
   // d below half an ulp of lambda: 1 - d == 1 forever, the loop stalls.
   const double tiny = std::ldexp(1.0, -54);
   EXPECT_EQ(1.0 - tiny, 1.0);
-  EXPECT_EQ(cycles_to_failure(1.0, tiny), kNeverFails);
-  EXPECT_EQ(bits(advance_life(1.0, tiny, 1'000'000'000'000)), bits(1.0));
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, tiny), fatigue::kNeverFails);
+  EXPECT_EQ(bits(fatigue::advance_life(1.0, tiny, 1'000'000'000'000)), bits(1.0));
   // Stall that starts after one step: from 1.5 + ulp with d = ulp/2 (a tie), the first step rounds
   // to the even 1.5, after which 1.5 - d rounds back to 1.5 for ever.
   const double odd = 1.5 + std::ldexp(1.0, -52);
-  EXPECT_EQ(bits(advance_life(odd, std::ldexp(1.0, -53), 9)),
+  EXPECT_EQ(bits(fatigue::advance_life(odd, std::ldexp(1.0, -53), 9)),
             bits(loop_life(odd, std::ldexp(1.0, -53), 9)));
-  EXPECT_EQ(advance_life(odd, std::ldexp(1.0, -53), 1'000'000'000'000), 1.5);
-  EXPECT_EQ(cycles_to_failure(odd, std::ldexp(1.0, -53)), kNeverFails);
-  EXPECT_EQ(bits(advance_life(-0.0, 0.0, 5)), bits(-0.0));
-  EXPECT_EQ(advance_life(1.0, std::numeric_limits<double>::infinity(), 3),
+  EXPECT_EQ(fatigue::advance_life(odd, std::ldexp(1.0, -53), 1'000'000'000'000), 1.5);
+  EXPECT_EQ(fatigue::cycles_to_failure(odd, std::ldexp(1.0, -53)), fatigue::kNeverFails);
+  EXPECT_EQ(bits(fatigue::advance_life(-0.0, 0.0, 5)), bits(-0.0));
+  EXPECT_EQ(fatigue::advance_life(1.0, std::numeric_limits<double>::infinity(), 3),
             -std::numeric_limits<double>::infinity());
-  EXPECT_EQ(bits(advance_life(0.5, -0.25, 3)), bits(loop_life(0.5, -0.25, 3)));
+  EXPECT_EQ(bits(fatigue::advance_life(0.5, -0.25, 3)), bits(loop_life(0.5, -0.25, 3)));
 }
 
 TEST(LifeArithmetic, TinyDecrementStaysInsideRoundingBracket) {
@@ -124,79 +126,83 @@ TEST(LifeArithmetic, TinyDecrementStaysInsideRoundingBracket) {
   // 2e9 cycles: too long for the loop). Each iterated subtraction removes d + err with
   // |err| <= ulp(1)/2 = 2^-53, so n lies in [(1-d)/(d+u/2) + 1, (1-d)/(d-u/2) + 2) with u = 2^-52;
   // that bracket is ~1300 cycles wide here, so "closed form ± a few cycles" would not be exact.
-  const double d = strain_decrement_phase1(1e-5, 103.7465, 2.29153, 0.0);
-  const std::int64_t n = cycles_to_failure(1.0, d);
+  const double d = fatigue::strain_decrement_phase1(1e-5, 103.7465, 2.29153, 0.0);
+  const std::int64_t n = fatigue::cycles_to_failure(1.0, d);
   const double u = std::ldexp(1.0, -52);
   EXPECT_GE(static_cast<double>(n), (1.0 - d) / (d + 0.5 * u) + 1.0);
   EXPECT_LT(static_cast<double>(n), (1.0 - d) / (d - 0.5 * u) + 2.0);
-  const CycleBounds b = cycles_to_failure_bounds(1.0, d);
+  const fatigue::CycleBounds b = fatigue::cycles_to_failure_bounds(1.0, d);
   EXPECT_LE(b.lo, n);
   EXPECT_GE(b.hi, n);
   EXPECT_GT(b.hi - b.lo, 100);
   // The fast path agrees with itself across splits at this size.
-  EXPECT_GT(advance_life(1.0, d, n - 1), 0.0);
-  EXPECT_LE(advance_life(1.0, d, n), 0.0);
-  EXPECT_EQ(bits(advance_life(advance_life(1.0, d, 123'456'789), d, n - 1 - 123'456'789)),
-            bits(advance_life(1.0, d, n - 1)));
+  EXPECT_GT(fatigue::advance_life(1.0, d, n - 1), 0.0);
+  EXPECT_LE(fatigue::advance_life(1.0, d, n), 0.0);
+  EXPECT_EQ(bits(fatigue::advance_life(fatigue::advance_life(1.0, d, 123'456'789), d,
+                                       n - 1 - 123'456'789)),
+            bits(fatigue::advance_life(1.0, d, n - 1)));
 }
 
 // ---------------------------------------------------------------- law 1: strain range
 
 TEST(StrainLaw, StrainRangeEq15) {
   // 000 Eq. (15): |s+ - s-| = |s+ (1 - R)| with s- = R s+ (Eq. 16); R < 0 counts the full range.
-  EXPECT_DOUBLE_EQ(strain_range_from_ratio(1e-3, 0.1), 9e-4);
-  EXPECT_DOUBLE_EQ(strain_range_from_ratio(1e-3, -1.0), 2e-3);
-  EXPECT_DOUBLE_EQ(strain_range(1e-3, -1e-3), 2e-3);
-  EXPECT_DOUBLE_EQ(strain_range_from_ratio(-2e-3, 0.5), 1e-3);
+  EXPECT_DOUBLE_EQ(fatigue::strain_range_from_ratio(1e-3, 0.1), 9e-4);
+  EXPECT_DOUBLE_EQ(fatigue::strain_range_from_ratio(1e-3, -1.0), 2e-3);
+  EXPECT_DOUBLE_EQ(fatigue::strain_range(1e-3, -1e-3), 2e-3);
+  EXPECT_DOUBLE_EQ(fatigue::strain_range_from_ratio(-2e-3, 0.5), 1e-3);
 }
 
 TEST(StrainLaw, B4NucleationWithoutLimitEq21) {
   // B1 Al 6061-T6, ε = 1e-3: N = 1/(A1 ε^m1) (000 Eq. 21) = 72,213.19 (evaluated independently
   // with Python floats). The per-cycle loop from λ = 1 must fail at ceil(N), ±1 for rounding drift.
-  const StrainLawParams p = al6061_t6_strain_params();
-  const double d = strain_decrement(1e-3, Phase::kNucleation, p);
+  const fatigue::StrainLawParams p = fatigue::al6061_t6_strain_params();
+  const double d = fatigue::strain_decrement(1e-3, fatigue::Phase::kNucleation, p);
   const double n_closed = 1.0 / (p.A1 * std::pow(1e-3, p.m1));
   EXPECT_NEAR(n_closed, 72213.19, 0.01);
-  EXPECT_NEAR(nucleation_cycles(1e-3, p.A1, p.m1), n_closed, 1e-9 * n_closed);
+  EXPECT_NEAR(fatigue::nucleation_cycles(1e-3, p.A1, p.m1), n_closed, 1e-9 * n_closed);
   const std::int64_t n_loop = loop_cycles(1.0, d, 10'000'000);
-  EXPECT_EQ(cycles_to_failure(1.0, d), n_loop);
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, d), n_loop);
   EXPECT_NEAR(static_cast<double>(n_loop), std::ceil(n_closed), 1.0);
 }
 
 TEST(StrainLaw, B4NucleationWithLimitEq22) {
   // B3 SAE 1020, ε = 5e-3, ε∞ = 1e-3: N = 1/(1.32e15 · 4e-3^9) = 2,889,922.17 (000 Eq. 22; by
   // hand 4e-3^9 = 2.62144e-22).
-  const StrainLawParams p = sae1020_strain_params();
-  const double d = strain_decrement(5e-3, Phase::kNucleation, p);
+  const fatigue::StrainLawParams p = fatigue::sae1020_strain_params();
+  const double d = fatigue::strain_decrement(5e-3, fatigue::Phase::kNucleation, p);
   const double n_closed = 1.0 / (1.32e15 * std::pow(4e-3, 9.0));
   EXPECT_NEAR(n_closed, 2889922.17, 0.01);
   const std::int64_t n_loop = loop_cycles(1.0, d, 10'000'000);
-  EXPECT_EQ(cycles_to_failure(1.0, d), n_loop);
+  EXPECT_EQ(fatigue::cycles_to_failure(1.0, d), n_loop);
   EXPECT_NEAR(static_cast<double>(n_loop), std::ceil(n_closed), 1.0);
   // At or below the limit nothing happens (000 Eq. 17).
-  EXPECT_EQ(strain_decrement(1e-3, Phase::kNucleation, p), 0.0);
-  EXPECT_EQ(cycles_to_failure(1.0, strain_decrement(5e-4, Phase::kNucleation, p)), kNeverFails);
+  EXPECT_EQ(fatigue::strain_decrement(1e-3, fatigue::Phase::kNucleation, p), 0.0);
+  EXPECT_EQ(fatigue::cycles_to_failure(
+                1.0, fatigue::strain_decrement(5e-4, fatigue::Phase::kNucleation, p)),
+            fatigue::kNeverFails);
 }
 
 TEST(StrainLaw, PropagationLimitIsACutOffEq12) {
   // 002 Eq. (12): A2 ε^p2 above ε̃∞ (not A2 (ε − ε̃∞)^p2), 0 at or below it.
-  const StrainLawParams p = sae1020_strain_params();
-  EXPECT_EQ(strain_decrement(1e-4, Phase::kGrowth, p), 0.0);
-  EXPECT_DOUBLE_EQ(strain_decrement(1.5e-4, Phase::kGrowth, p), 7.76e6 * std::pow(1.5e-4, 2.1));
+  const fatigue::StrainLawParams p = fatigue::sae1020_strain_params();
+  EXPECT_EQ(fatigue::strain_decrement(1e-4, fatigue::Phase::kGrowth, p), 0.0);
+  EXPECT_DOUBLE_EQ(fatigue::strain_decrement(1.5e-4, fatigue::Phase::kGrowth, p),
+                   7.76e6 * std::pow(1.5e-4, 2.1));
   // 002 Eq. (13): ε̃∞/ε̄ = ΔK_th/ΔK with ΔK_th = 11.6, ΔK = 20 (002 Sec. 6) gives Table 2's 1e-4
   // for ε̄ = 1e-4 · 20/11.6.
-  EXPECT_NEAR(propagation_fatigue_limit(1e-4 * 20.0 / 11.6, 11.6, 20.0), 1e-4, 1e-18);
+  EXPECT_NEAR(fatigue::propagation_fatigue_limit(1e-4 * 20.0 / 11.6, 11.6, 20.0), 1e-4, 1e-18);
 }
 
 TEST(StrainLaw, FactorizationEqualsDirectDecrement) {
   // A2 ε^m2 with ε = |s_unit P (1-R)|: bond factor × load dose, relative 1e-14.
-  const StrainLawParams p;
+  const fatigue::StrainLawParams p;
   const double s_unit = 3.7e-8;  // stretch per newton
   for (double r : {0.1, 0.3, -0.5}) {
-    const double direct =
-        strain_decrement_phase2(strain_range_from_ratio(s_unit * 5e3, r), p.A2, p.m2);
-    const double fact =
-        factorized_decrement(strain_bond_factor(p.A2, p.m2, s_unit), load_dose(5e3, r, p.m2));
+    const double direct = fatigue::strain_decrement_phase2(
+        fatigue::strain_range_from_ratio(s_unit * 5e3, r), p.A2, p.m2);
+    const double fact = fatigue::factorized_decrement(
+        fatigue::strain_bond_factor(p.A2, p.m2, s_unit), fatigue::load_dose(5e3, r, p.m2));
     EXPECT_NEAR(fact, direct, 1e-14 * direct) << "R=" << r;
   }
 }
@@ -204,18 +210,18 @@ TEST(StrainLaw, FactorizationEqualsDirectDecrement) {
 TEST(StrainLaw, ParameterRelationsEq21To29) {
   // 000 Eq. (48b) -> (48c): −log A1/m1 = −0.87975 with m1 = 2.29153 gives A1 = 103.7465 (the
   // paper's rounding of 0.87975 limits agreement to ~3e-5 relative).
-  EXPECT_NEAR(a1_from_log_intercept(2.29153, -0.87975), 103.7465, 103.7465 * 5e-5);
+  EXPECT_NEAR(fatigue::a1_from_log_intercept(2.29153, -0.87975), 103.7465, 103.7465 * 5e-5);
   // Eq. (22) inverted and re-applied.
-  const double a1 = a1_from_nucleation(1e5, 4e-3, 9.0, 1e-3);
-  EXPECT_NEAR(nucleation_cycles(4e-3, a1, 9.0, 1e-3), 1e5, 1e-7);
+  const double a1 = fatigue::a1_from_nucleation(1e5, 4e-3, 9.0, 1e-3);
+  EXPECT_NEAR(fatigue::nucleation_cycles(4e-3, a1, 9.0, 1e-3), 1e5, 1e-7);
   // Eq. (27)-(29): A2 ∝ δ^((m2-2)/2); m2 = 4 makes it linear: A2(2δ) = 2 A2(δ).
-  EXPECT_NEAR(a2_scaled(1000.0, 1.8e-3, 3.6e-3, 4.0), 2000.0, 1e-9);
-  const double hat = a2_hat(1055.0, 1.809e-3, 2.6183);
-  EXPECT_NEAR(hat * std::pow(0.9e-3, 0.5 * 0.6183), a2_scaled(1055.0, 1.809e-3, 0.9e-3, 2.6183),
-              1e-9);
+  EXPECT_NEAR(fatigue::a2_scaled(1000.0, 1.8e-3, 3.6e-3, 4.0), 2000.0, 1e-9);
+  const double hat = fatigue::a2_hat(1055.0, 1.809e-3, 2.6183);
+  EXPECT_NEAR(hat * std::pow(0.9e-3, 0.5 * 0.6183),
+              fatigue::a2_scaled(1055.0, 1.809e-3, 0.9e-3, 2.6183), 1e-9);
   // Eq. (26b).
-  EXPECT_DOUBLE_EQ(a2_calibrated(1e4, 4.34e-7, 3.7e-6), 1e4 * 4.34e-7 / 3.7e-6);
-  EXPECT_EQ(m2_from_paris_exponent(2.6183), 2.6183);
+  EXPECT_DOUBLE_EQ(fatigue::a2_calibrated(1e4, 4.34e-7, 3.7e-6), 1e4 * 4.34e-7 / 3.7e-6);
+  EXPECT_EQ(fatigue::m2_from_paris_exponent(2.6183), 2.6183);
 }
 
 TEST(StrainLaw, FitPhase1RecoversGeneratingParameters) {
@@ -223,98 +229,101 @@ TEST(StrainLaw, FitPhase1RecoversGeneratingParameters) {
   std::vector<double> eps, n;
   for (double e : {2e-3, 3e-3, 4e-3, 6e-3, 1e-2}) {
     eps.push_back(e);
-    n.push_back(nucleation_cycles(e, 1.32e15, 9.0, 1e-3));
+    n.push_back(fatigue::nucleation_cycles(e, 1.32e15, 9.0, 1e-3));
   }
-  const Phase1Fit fit = fit_phase1(eps, n, 1e-3);
+  const fatigue::Phase1Fit fit = fatigue::fit_phase1(eps, n, 1e-3);
   ASSERT_TRUE(fit.ok);
   EXPECT_NEAR(fit.m1, 9.0, 1e-9);
   EXPECT_NEAR(fit.A1, 1.32e15, 1.32e15 * 1e-8);
-  EXPECT_FALSE(fit_phase1(std::vector<double>{2e-3}, std::vector<double>{1e5}, 0.0).ok);
+  EXPECT_FALSE(fatigue::fit_phase1(std::vector<double>{2e-3}, std::vector<double>{1e5}, 0.0).ok);
 }
 
 TEST(StrainLaw, Validation) {
-  EXPECT_EQ(message_of(validate(StrainLawParams{})), "");
-  EXPECT_EQ(message_of(validate(sae1020_strain_params())), "");
-  StrainLawParams p;
+  EXPECT_EQ(core::message_of(validate(fatigue::StrainLawParams{})), "");
+  EXPECT_EQ(core::message_of(validate(fatigue::sae1020_strain_params())), "");
+  fatigue::StrainLawParams p;
   p.A1 = 0.0;
   p.m1 = -1.0;
   p.eps_inf_prop = -1e-4;
-  const std::string msg = message_of(validate(p));
+  const std::string msg = core::message_of(validate(p));
   EXPECT_NE(msg.find("A1"), std::string::npos);
   EXPECT_NE(msg.find("m1"), std::string::npos);
   EXPECT_NE(msg.find("eps_inf_prop"), std::string::npos);
-  p = StrainLawParams{};
+  p = fatigue::StrainLawParams{};
   p.A2 = std::nan("");
-  EXPECT_NE(message_of(validate(p)).find("A2"), std::string::npos);
+  EXPECT_NE(core::message_of(validate(p)).find("A2"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- law 2: energy based
 
 TEST(EnergyLaw, RangeEq30Eq34Eq35) {
-  const double c0 = c0_bond_based(2.5e19, 1.8e-3, 3.6e-9, 3.6e-9, 6e-4, 1e-2);
+  const double c0 = fatigue::c0_bond_based(2.5e19, 1.8e-3, 3.6e-9, 3.6e-9, 6e-4, 1e-2);
   // Eq. (33) by hand: b V V ξ / (Δx h²).
   EXPECT_NEAR(c0, 2.5e19 * 3.6e-9 * 3.6e-9 * 1.8e-3 / (6e-4 * 1e-4), 1e-12 * c0);
   const double s = 2e-3;
   for (double r : {0.1, 0.0, -0.5, -1.0}) {
-    const double g_plus = bond_energy_release_rate(c0, s);       // Eq. (32b)
-    const double g_minus = bond_energy_release_rate(c0, r * s);  // s- = R s+ (Eq. 16)
-    const double g = energy_release_rate_range(g_plus, g_minus, r);
-    EXPECT_NEAR(g, energy_release_rate_range_from_ratio(c0, s, r), 1e-13 * g) << r;
+    const double g_plus = fatigue::bond_energy_release_rate(c0, s);       // Eq. (32b)
+    const double g_minus = fatigue::bond_energy_release_rate(c0, r * s);  // s- = R s+ (Eq. 16)
+    const double g = fatigue::energy_release_rate_range(g_plus, g_minus, r);
+    EXPECT_NEAR(g, fatigue::energy_release_rate_range_from_ratio(c0, s, r), 1e-13 * g) << r;
     // Eq. (35b): g = C1 ε² with ε from Eq. (15).
-    const double eps = strain_range_from_ratio(s, r);
-    EXPECT_NEAR(g, c1_coefficient(c0, r) * eps * eps, 1e-13 * g) << r;
+    const double eps = fatigue::strain_range_from_ratio(s, r);
+    EXPECT_NEAR(g, fatigue::c1_coefficient(c0, r) * eps * eps, 1e-13 * g) << r;
   }
   // Eq. (30b) R < 0 branch: the energies add.
-  EXPECT_DOUBLE_EQ(energy_release_rate_range(3.0, 1.0, -0.5), 4.0);
-  EXPECT_TRUE(std::isnan(c1_coefficient(c0, 1.0)));
+  EXPECT_DOUBLE_EQ(fatigue::energy_release_rate_range(3.0, 1.0, -0.5), 4.0);
+  EXPECT_TRUE(std::isnan(fatigue::c1_coefficient(c0, 1.0)));
 }
 
 TEST(EnergyLaw, StateBasedC0MatchesEq31) {
   // Eq. (32c) must reproduce Eq. (31) through Eq. (32b); with a = 0 it reduces to Eq. (33).
   const double a = 1.3e10, b = 2.2e19, d = 1.7e3, th_k = 1.1e-3, th_j = 0.9e-3, s = 1.4e-3;
   const double xi = 1.2e-3, v = 3.6e-9, dx = 6e-4, h = 1e-2;
-  const double g31 = bond_energy_release_rate_osb(a, b, d, th_k, th_j, s, xi, v, v, dx, h);
-  EXPECT_NEAR(bond_energy_release_rate(c0_osb(a, b, d, th_k, th_j, s, xi, v, v, dx, h), s), g31,
-              1e-13 * std::abs(g31));
-  EXPECT_NEAR(c0_osb(0.0, b, d, th_k, th_j, s, xi, v, v, dx, h), c0_bond_based(b, xi, v, v, dx, h),
+  const double g31 = fatigue::bond_energy_release_rate_osb(a, b, d, th_k, th_j, s, xi, v, v, dx, h);
+  EXPECT_NEAR(fatigue::bond_energy_release_rate(
+                  fatigue::c0_osb(a, b, d, th_k, th_j, s, xi, v, v, dx, h), s),
+              g31, 1e-13 * std::abs(g31));
+  EXPECT_NEAR(fatigue::c0_osb(0.0, b, d, th_k, th_j, s, xi, v, v, dx, h),
+              fatigue::c0_bond_based(b, xi, v, v, dx, h),
               1e-13 * c0_bond_based(b, xi, v, v, dx, h));
 }
 
 TEST(EnergyLaw, ExponentsEq45Eq49) {
   // 000 Eq. (49a): n1 = 1.145765; Sec. 6.1: n2 = 1.3092 (= 2.6183/2 rounded).
-  EXPECT_DOUBLE_EQ(energy_params_from_strain(103.7465, 2.29153, 5.0).n, 1.145765);
-  EXPECT_NEAR(energy_params_from_strain(1055.0, 2.6183, 5.0).n, 1.3092, 5e-5);
-  EXPECT_DOUBLE_EQ(energy_params_from_strain(8.0, 4.0, 2.0).B, 2.0);  // 8 / 2^2, Eq. (44b)
+  EXPECT_DOUBLE_EQ(fatigue::energy_params_from_strain(103.7465, 2.29153, 5.0).n, 1.145765);
+  EXPECT_NEAR(fatigue::energy_params_from_strain(1055.0, 2.6183, 5.0).n, 1.3092, 5e-5);
+  EXPECT_DOUBLE_EQ(fatigue::energy_params_from_strain(8.0, 4.0, 2.0).B, 2.0);  // 8 / 2^2, Eq. (44b)
 }
 
 TEST(EnergyLaw, B4SameLifeAsStrainLaw) {
   // B4: a single bond at constant load; the energy model with B_i, n_i from Eq. (44)-(46) must give
   // the strain model's cycles to failure (both checked against the per-cycle loop). Tolerance: the
   // two decrements agree to 1e-13 relative, so N may differ by at most one cycle.
-  const StrainLawParams p = al6061_t6_strain_params();
-  const double c0 = c0_bond_based(2.5e19, 1.8e-3, 3.6e-9, 3.6e-9, 6e-4, 1e-2);
-  for (Phase phase : {Phase::kNucleation, Phase::kGrowth}) {
+  const fatigue::StrainLawParams p = fatigue::al6061_t6_strain_params();
+  const double c0 = fatigue::c0_bond_based(2.5e19, 1.8e-3, 3.6e-9, 3.6e-9, 6e-4, 1e-2);
+  for (fatigue::Phase phase : {fatigue::Phase::kNucleation, fatigue::Phase::kGrowth}) {
     for (double r : {0.1, 0.3, -0.5}) {
       const double s_plus = 1.2e-3;
-      const double eps = strain_range_from_ratio(s_plus, r);
-      const double c1 = c1_coefficient(c0, r);
-      const double g = energy_release_rate_range(bond_energy_release_rate(c0, s_plus),
-                                                 bond_energy_release_rate(c0, r * s_plus), r);
-      const double d_strain = strain_decrement(eps, phase, p);
-      const double d_energy = energy_decrement(g, phase, c1, p);
+      const double eps = fatigue::strain_range_from_ratio(s_plus, r);
+      const double c1 = fatigue::c1_coefficient(c0, r);
+      const double g =
+          fatigue::energy_release_rate_range(fatigue::bond_energy_release_rate(c0, s_plus),
+                                             fatigue::bond_energy_release_rate(c0, r * s_plus), r);
+      const double d_strain = fatigue::strain_decrement(eps, phase, p);
+      const double d_energy = fatigue::energy_decrement(g, phase, c1, p);
       EXPECT_NEAR(d_energy, d_strain, 1e-13 * d_strain);
-      const std::int64_t n_strain = cycles_to_failure(1.0, d_strain);
-      const std::int64_t n_energy = cycles_to_failure(1.0, d_energy);
+      const std::int64_t n_strain = fatigue::cycles_to_failure(1.0, d_strain);
+      const std::int64_t n_energy = fatigue::cycles_to_failure(1.0, d_energy);
       EXPECT_EQ(n_energy, loop_cycles(1.0, d_energy, 10'000'000));
       EXPECT_LE(std::abs(n_energy - n_strain), 1);
-      const double m = phase == Phase::kNucleation ? p.m1 : p.m2;
-      const double a = phase == Phase::kNucleation ? p.A1 : p.A2;
+      const double m = phase == fatigue::Phase::kNucleation ? p.m1 : p.m2;
+      const double a = phase == fatigue::Phase::kNucleation ? p.A1 : p.A2;
       EXPECT_NEAR(static_cast<double>(n_energy), 1.0 / (a * std::pow(eps, m)), 1.0);  // Eq. (21)
       // Threshold-free factorization of the energy law.
       const double s_unit = s_plus / 5e3;
-      const EnergyLawBondParams e = energy_params_from_strain(a, m, c1);
-      const double fact = factorized_decrement(energy_bond_factor(e.B, e.n, c1, s_unit),
-                                               load_dose(5e3, r, 2.0 * e.n));
+      const fatigue::EnergyLawBondParams e = fatigue::energy_params_from_strain(a, m, c1);
+      const double fact = fatigue::factorized_decrement(
+          fatigue::energy_bond_factor(e.B, e.n, c1, s_unit), fatigue::load_dose(5e3, r, 2.0 * e.n));
       EXPECT_NEAR(fact, d_strain, 1e-13 * d_strain);
     }
   }
@@ -323,15 +332,15 @@ TEST(EnergyLaw, B4SameLifeAsStrainLaw) {
 TEST(EnergyLaw, FatigueLimitFormDiffersFromStrainLaw) {
   // With ε∞ > 0, Eq. (37)-(38) give A1 (ε² − ε∞²)^(m1/2), not A1 (ε − ε∞)^m1 (Eq. 18). Closed
   // form for SAE 1020 at ε = 5e-3, R = 0.1.
-  const StrainLawParams p = sae1020_strain_params();
-  const double c1 = c1_coefficient(7.0e3, 0.1);
+  const fatigue::StrainLawParams p = fatigue::sae1020_strain_params();
+  const double c1 = fatigue::c1_coefficient(7.0e3, 0.1);
   const double eps = 5e-3;
-  const double d = energy_decrement(c1 * eps * eps, Phase::kNucleation, c1, p);
+  const double d = fatigue::energy_decrement(c1 * eps * eps, fatigue::Phase::kNucleation, c1, p);
   const double expected = p.A1 * std::pow(eps * eps - p.eps_inf * p.eps_inf, 0.5 * p.m1);
   EXPECT_NEAR(d, expected, 1e-12 * expected);
-  EXPECT_GT(d, strain_decrement(eps, Phase::kNucleation, p));
+  EXPECT_GT(d, fatigue::strain_decrement(eps, fatigue::Phase::kNucleation, p));
   // The phase II cut-off is equivalent: g > C1 ε̃∞² iff ε > ε̃∞.
-  EXPECT_EQ(energy_decrement(c1 * 0.9e-4 * 0.9e-4, Phase::kGrowth, c1, p), 0.0);
+  EXPECT_EQ(fatigue::energy_decrement(c1 * 0.9e-4 * 0.9e-4, fatigue::Phase::kGrowth, c1, p), 0.0);
 }
 
 // ---------------------------------------------------------------- law 3: bilinear bond (003)
@@ -340,27 +349,28 @@ TEST(BilinearLaw, DamageFormReproducesSofteningBranch) {
   // 003 Eq. (13)-(14) must give Eq. (10): c(1-D)s = c s0 (sc - s)/(sc - s0) for s0 < s < sc.
   const double s0 = 1e-3, sc = 4e-3, c = 2.0e18;
   for (double s : {1.2e-3, 2e-3, 3.9e-3}) {
-    EXPECT_NEAR(bilinear_bond_force(c, s, bilinear_static_damage(s, s0, sc), sc),
+    EXPECT_NEAR(fatigue::bilinear_bond_force(c, s, fatigue::bilinear_static_damage(s, s0, sc), sc),
                 c * s0 * (sc - s) / (sc - s0), 1e-12 * c * s0);
   }
-  EXPECT_EQ(bilinear_static_damage(0.5e-3, s0, sc), 0.0);
-  EXPECT_EQ(bilinear_static_damage(4e-3, s0, sc), 1.0);
-  EXPECT_EQ(bilinear_force_factor(4e-3, 0.0, sc), 0.0);
-  EXPECT_EQ(bilinear_force_factor(1e-3, 1.0, sc), 0.0);
-  EXPECT_DOUBLE_EQ(bilinear_force_factor(0.5e-3, 0.25, sc), 0.75);  // fatigue-softened, Eq. (13)
+  EXPECT_EQ(fatigue::bilinear_static_damage(0.5e-3, s0, sc), 0.0);
+  EXPECT_EQ(fatigue::bilinear_static_damage(4e-3, s0, sc), 1.0);
+  EXPECT_EQ(fatigue::bilinear_force_factor(4e-3, 0.0, sc), 0.0);
+  EXPECT_EQ(fatigue::bilinear_force_factor(1e-3, 1.0, sc), 0.0);
+  EXPECT_DOUBLE_EQ(fatigue::bilinear_force_factor(0.5e-3, 0.25, sc),
+                   0.75);  // fatigue-softened, Eq. (13)
 }
 
 TEST(BilinearLaw, StaticIncrementEq15AndEnergyEq12) {
   const double s0 = 1e-3, sc = 4e-3;
   // Eq. (15)/(46) closed form inside the softening branch.
-  EXPECT_NEAR(bilinear_static_damage_increment(1.5e-3, 2.5e-3, s0, sc),
+  EXPECT_NEAR(fatigue::bilinear_static_damage_increment(1.5e-3, 2.5e-3, s0, sc),
               s0 * sc / (sc - s0) * (1.0 / 1.5e-3 - 1.0 / 2.5e-3), 1e-14);
-  EXPECT_EQ(bilinear_static_damage_increment(2.5e-3, 1.5e-3, s0, sc), 0.0);  // unloading
+  EXPECT_EQ(fatigue::bilinear_static_damage_increment(2.5e-3, 1.5e-3, s0, sc), 0.0);  // unloading
   // Eq. (12): the area under the monotonic force-stretch curve is c s0 sc / 2; composite Simpson
   // with 20000 intervals on each linear piece (exact for piecewise-linear up to round-off).
   const double c = 3.0;
   auto f = [&](double s) {
-    return bilinear_bond_force(c, s, bilinear_static_damage(s, s0, sc), sc);
+    return fatigue::bilinear_bond_force(c, s, fatigue::bilinear_static_damage(s, s0, sc), sc);
   };
   double area = 0.0;
   const int n = 20000;
@@ -377,42 +387,44 @@ TEST(BilinearLaw, ThirdLawConstantStretchLifeEq27) {
   // At constant s = 2e-3 < s0 (no static damage) Eq. (50) integrates to D = A N (s/sc)^m; with
   // A = 0.25, m = 4, s/sc = 1/2 the rate is 2^-6 (exact in binary), so D(32) = 0.5 and the bond
   // fails (D = 1) at N = 1/(A (s/sc)^m) = 64 cycles.
-  const BilinearParams p{2.5e-3, 4e-3, 0.25, 4.0};
-  ASSERT_EQ(message_of(validate(p)), "");
+  const fatigue::BilinearParams p{2.5e-3, 4e-3, 0.25, 4.0};
+  ASSERT_EQ(core::message_of(validate(p)), "");
   double damage = 0.0;
   int cycles = 0;
   while (damage < 1.0 && cycles < 1000) {
-    damage = third_law_update_damage(damage, 2e-3, 2e-3, 1.0, p);
+    damage = fatigue::third_law_update_damage(damage, 2e-3, 2e-3, 1.0, p);
     ++cycles;
     if (cycles == 32) {
       EXPECT_EQ(damage, 0.5);
     }
   }
   EXPECT_EQ(cycles, 64);
-  EXPECT_EQ(bilinear_force_factor(2e-3, damage, p.sc), 0.0);
-  EXPECT_DOUBLE_EQ(third_law_fatigue_rate(2e-3, 4e-3, 0.25, 4.0), 1.0 / 64.0);
-  EXPECT_EQ(third_law_fatigue_damage_increment(-1e-3, -1e-3, 10.0, p), 0.0);  // compression
+  EXPECT_EQ(fatigue::bilinear_force_factor(2e-3, damage, p.sc), 0.0);
+  EXPECT_DOUBLE_EQ(fatigue::third_law_fatigue_rate(2e-3, 4e-3, 0.25, 4.0), 1.0 / 64.0);
+  EXPECT_EQ(fatigue::third_law_fatigue_damage_increment(-1e-3, -1e-3, 10.0, p),
+            0.0);  // compression
 }
 
 TEST(BilinearLaw, ThirdLawLinearRampConverges) {
   // Stretch rising linearly from sa to sb over 1e5 cycles, in 1000 increments ΔN of Eq. (50).
   // Static part telescopes exactly to D14(sb) − D14(sa); the fatigue part converges (mid-point
   // rule, O(ΔN²)) to A ∫ (s/sc)^m dN = A N (sb^(m+1) − sa^(m+1)) / ((m+1)(sb − sa) sc^m).
-  BilinearParams p{1e-3, 4e-3, 1e-6, 4.0};
+  fatigue::BilinearParams p{1e-3, 4e-3, 1e-6, 4.0};
   const double sa = 1.5e-3, sb = 3e-3, total = 1e5;
   const int steps = 1000;
   double d_static = 0.0, d_fatigue = 0.0;
   for (int i = 0; i < steps; ++i) {
     const double s1 = sa + (sb - sa) * i / steps, s2 = sa + (sb - sa) * (i + 1) / steps;
-    d_static += bilinear_static_damage_increment(s1, s2, p.s0, p.sc);
-    d_fatigue += third_law_fatigue_damage_increment(s1, s2, total / steps, p);
-    EXPECT_NEAR(third_law_damage_increment(s1, s2, total / steps, p),
-                bilinear_static_damage_increment(s1, s2, p.s0, p.sc) +
-                    third_law_fatigue_damage_increment(s1, s2, total / steps, p),
+    d_static += fatigue::bilinear_static_damage_increment(s1, s2, p.s0, p.sc);
+    d_fatigue += fatigue::third_law_fatigue_damage_increment(s1, s2, total / steps, p);
+    EXPECT_NEAR(fatigue::third_law_damage_increment(s1, s2, total / steps, p),
+                fatigue::bilinear_static_damage_increment(s1, s2, p.s0, p.sc) +
+                    fatigue::third_law_fatigue_damage_increment(s1, s2, total / steps, p),
                 1e-15);
   }
   EXPECT_NEAR(d_static,
-              bilinear_static_damage(sb, p.s0, p.sc) - bilinear_static_damage(sa, p.s0, p.sc),
+              fatigue::bilinear_static_damage(sb, p.s0, p.sc) -
+                  fatigue::bilinear_static_damage(sa, p.s0, p.sc),
               1e-12);
   const double exact = p.A * total * (std::pow(sb, 5.0) - std::pow(sa, 5.0)) /
                        (5.0 * (sb - sa) * std::pow(p.sc, 4.0));
@@ -423,7 +435,7 @@ TEST(BilinearLaw, PlaneStressS0MatchesFractureEnergyIntegral) {
   // 003 Eq. (43) (Ha & Bobaru): G0 = ∫0^δ ∫z^δ ∫ w h ξ dφ dξ dz with w = c s0² ξ/2 per bond and
   // c = 9E/(π h δ³) (003 Eq. 41). Midpoint rule in (z, ξ), φ analytic (2 acos(z/ξ)).
   const double e_mod = 70e9, delta = 3.75e-4, g0 = 50.0, h = 1e-3;
-  const double s0 = bilinear_s0_plane_stress(g0, e_mod, delta);
+  const double s0 = fatigue::bilinear_s0_plane_stress(g0, e_mod, delta);
   const double c = 9.0 * e_mod / (std::numbers::pi * h * delta * delta * delta);
   const int n = 1500;
   double integral = 0.0;
@@ -436,22 +448,23 @@ TEST(BilinearLaw, PlaneStressS0MatchesFractureEnergyIntegral) {
   }
   integral *= delta / n;
   EXPECT_NEAR(integral, g0, 2e-3 * g0);
-  EXPECT_NEAR(bilinear_s0_plane_strain(g0, e_mod, delta) / s0, std::sqrt(15.0 / 16.0), 1e-14);
+  EXPECT_NEAR(fatigue::bilinear_s0_plane_strain(g0, e_mod, delta) / s0, std::sqrt(15.0 / 16.0),
+              1e-14);
 }
 
 TEST(BilinearLaw, Validation) {
-  EXPECT_NE(message_of(validate(BilinearParams{})).find("A must"),
+  EXPECT_NE(core::message_of(validate(fatigue::BilinearParams{})).find("A must"),
             std::string::npos);  // A has no default
-  BilinearParams p{2e-3, 1e-3, 1.0, 4.0};
-  EXPECT_NE(message_of(validate(p)).find("sc must"), std::string::npos);
+  fatigue::BilinearParams p{2e-3, 1e-3, 1.0, 4.0};
+  EXPECT_NE(core::message_of(validate(p)).find("sc must"), std::string::npos);
 }
 
 // ---------------------------------------------------------------- law 4: kinetic theory (004)
 
 // RK4 integration of 004 Eq. (12) dn/dt = (n0 − n)^λ K_b(σ(t)), σ ramping linearly from Rσmax to
 // σmax in each cycle of length 1/f (the load path assumed by Eq. 15), `per_cycle` steps per cycle.
-std::vector<double> rk4_ktf(double sigma_max, double r, const KineticParams& p, double theta,
-                            int cycles, int per_cycle) {
+std::vector<double> rk4_ktf(double sigma_max, double r, const fatigue::KineticParams& p,
+                            double theta, int cycles, int per_cycle) {
   const double dt = 1.0 / (p.frequency * per_cycle);
   auto rate = [&](double n, double tau) {  // tau: time within the cycle
     const double sigma = r * sigma_max + (1.0 - r) * sigma_max * tau * p.frequency;
@@ -471,11 +484,11 @@ std::vector<double> rk4_ktf(double sigma_max, double r, const KineticParams& p, 
   return n_at;
 }
 
-KineticParams test_kinetic_params(double theta) {
+fatigue::KineticParams test_kinetic_params(double theta) {
   // 316L-like: λ = 9, T = 293 K, f = 0.56 Hz (004); U, γ chosen (004 gives no numbers) so that
   // γσmax/θ = 4 at σmax = 200 MPa and life is a few hundred cycles.
-  KineticParams p;
-  p.n0 = kt_n0_for_unit_life(p.lambda);
+  fatigue::KineticParams p;
+  p.n0 = fatigue::kt_n0_for_unit_life(p.lambda);
   p.gamma = 4.0 * theta / 200e6;
   p.U = 38.0 * theta;
   return p;
@@ -483,39 +496,41 @@ KineticParams test_kinetic_params(double theta) {
 
 TEST(KineticLaw, N0ForUnitLife) {
   // 004 Sec. KTF: n0 = 1.771 for λ = 9; λ = 1: ln(n0/(n0 − 1)) = 1 → n0 = e/(e − 1).
-  EXPECT_NEAR(kt_n0_for_unit_life(9.0), 1.771, 5e-4);
-  EXPECT_NEAR(kt_n0_for_unit_life(1.0), std::numbers::e / (std::numbers::e - 1.0), 1e-14);
-  EXPECT_NEAR(kt_consumed_life(1.0, 9.0, kt_n0_for_unit_life(9.0)), 1.0, 1e-12);
-  EXPECT_NEAR(kt_consumed_life(1.0, 0.5, kt_n0_for_unit_life(0.5)), 1.0, 1e-12);
+  EXPECT_NEAR(fatigue::kt_n0_for_unit_life(9.0), 1.771, 5e-4);
+  EXPECT_NEAR(fatigue::kt_n0_for_unit_life(1.0), std::numbers::e / (std::numbers::e - 1.0), 1e-14);
+  EXPECT_NEAR(fatigue::kt_consumed_life(1.0, 9.0, fatigue::kt_n0_for_unit_life(9.0)), 1.0, 1e-12);
+  EXPECT_NEAR(fatigue::kt_consumed_life(1.0, 0.5, fatigue::kt_n0_for_unit_life(0.5)), 1.0, 1e-12);
 }
 
 TEST(KineticLaw, B4ClosedFormEq15MatchesRk4OfEq12) {
   // B4 "KTF single bond": n(N) of Eq. (15) against RK4 of Eq. (12) with 400 steps per cycle.
   // Tolerance 1e-9 absolute on n (RK4 error here is ~1e-12; see the step-halving check).
-  const double theta = kt_thermal_energy(293.0);
-  const KineticParams p = test_kinetic_params(theta);
-  ASSERT_EQ(message_of(validate(p)), "");
+  const double theta = fatigue::kt_thermal_energy(293.0);
+  const fatigue::KineticParams p = test_kinetic_params(theta);
+  ASSERT_EQ(core::message_of(validate(p)), "");
   for (double r : {-1.0, 0.1}) {
-    const double dose = kt_cycle_dose(200e6, r, p.frequency, p.U, p.gamma, theta);
-    const double n_life = kt_remaining_life(0.0, p.lambda, p.n0) / dose;  // real cycles to n = 1
+    const double dose = fatigue::kt_cycle_dose(200e6, r, p.frequency, p.U, p.gamma, theta);
+    const double n_life =
+        fatigue::kt_remaining_life(0.0, p.lambda, p.n0) / dose;  // real cycles to n = 1
     const int cycles = static_cast<int>(n_life) + 1;
     ASSERT_LT(cycles, 3000);
     const std::vector<double> n_rk = rk4_ktf(200e6, r, p, theta, cycles, 400);
     for (int c : {1, 10, cycles / 2, cycles - 1, cycles}) {
-      EXPECT_NEAR(kt_damage_after_cycles(0.0, c, dose, p.lambda, p.n0), n_rk[c], 1e-9)
+      EXPECT_NEAR(fatigue::kt_damage_after_cycles(0.0, c, dose, p.lambda, p.n0), n_rk[c], 1e-9)
           << "R=" << r << " N=" << c;
     }
     // Failure (n >= 1, Eq. 16 q <= 0) in the same cycle.
     EXPECT_LT(n_rk[cycles - 1], 1.0);
     EXPECT_GE(n_rk[cycles], 1.0);
     // Restarting Eq. (15) from n_I at cycle 10 equals running from 0 (n_I semantics).
-    const double n10 = kt_damage_after_cycles(0.0, 10, dose, p.lambda, p.n0);
-    EXPECT_NEAR(kt_damage_after_cycles(n10, cycles - 10, dose, p.lambda, p.n0), n_rk[cycles], 1e-9);
-    EXPECT_NEAR(n10 + kt_damage_increment(n10, dose, p.lambda, p.n0), n_rk[11], 1e-9);
+    const double n10 = fatigue::kt_damage_after_cycles(0.0, 10, dose, p.lambda, p.n0);
+    EXPECT_NEAR(fatigue::kt_damage_after_cycles(n10, cycles - 10, dose, p.lambda, p.n0),
+                n_rk[cycles], 1e-9);
+    EXPECT_NEAR(n10 + fatigue::kt_damage_increment(n10, dose, p.lambda, p.n0), n_rk[11], 1e-9);
   }
   // Step-halving: 200 vs 400 steps per cycle differ by ~1.2e-10, so the 400-step error is about
   // 1.2e-10/15 ≈ 1e-11 (fourth order), well inside the 1e-9 tolerance above.
-  const double dose = kt_cycle_dose(200e6, -1.0, p.frequency, p.U, p.gamma, theta);
+  const double dose = fatigue::kt_cycle_dose(200e6, -1.0, p.frequency, p.U, p.gamma, theta);
   EXPECT_NEAR(rk4_ktf(200e6, -1.0, p, theta, 50, 200)[50],
               rk4_ktf(200e6, -1.0, p, theta, 50, 400)[50], 1e-9);
   EXPECT_GT(dose, 0.0);
@@ -523,18 +538,18 @@ TEST(KineticLaw, B4ClosedFormEq15MatchesRk4OfEq12) {
 
 TEST(KineticLaw, DoseAtAnotherThermalEnergyMatchesRk4) {
   // The dose holds for any thermal energy θ (e.g. 004 Eq. 26's kT + ψA): the same RK4 with θ.
-  const double kt = kt_thermal_energy(293.0);
-  const KineticParams p = test_kinetic_params(kt);
+  const double kt = fatigue::kt_thermal_energy(293.0);
+  const fatigue::KineticParams p = test_kinetic_params(kt);
   const double theta = kt + 2e-22;
-  const double dose = kt_cycle_dose(200e6, -0.7, p.frequency, p.U, p.gamma, theta);
+  const double dose = fatigue::kt_cycle_dose(200e6, -0.7, p.frequency, p.U, p.gamma, theta);
   const std::vector<double> n_rk = rk4_ktf(200e6, -0.7, p, theta, 40, 400);
-  EXPECT_NEAR(kt_damage_after_cycles(0.0, 40, dose, p.lambda, p.n0), n_rk[40], 1e-9);
+  EXPECT_NEAR(fatigue::kt_damage_after_cycles(0.0, 40, dose, p.lambda, p.n0), n_rk[40], 1e-9);
 }
 
 TEST(KineticLaw, DoseMatchesQuadratureAndEq15Bracket) {
   // Φ = ∫ K_b dt over one ramp: Simpson quadrature of Eq. (14) and the literal Eq. (15) bracket.
-  const double theta = kt_thermal_energy(293.0);
-  const KineticParams p = test_kinetic_params(theta);
+  const double theta = fatigue::kt_thermal_energy(293.0);
+  const fatigue::KineticParams p = test_kinetic_params(theta);
   const double sm = 200e6, r = 0.1, f = p.frequency;
   const int n = 20000;
   double sum = 0.0;
@@ -544,58 +559,60 @@ TEST(KineticLaw, DoseMatchesQuadratureAndEq15Bracket) {
            kt_breakage_rate(sigma, p.U, p.gamma, theta);
   }
   const double quad = sum / (3.0 * n * f);
-  const double eq15 = theta * theta / kPlanck / (p.gamma * f * sm * (1.0 - r)) *
+  const double eq15 = theta * theta / fatigue::kPlanck / (p.gamma * f * sm * (1.0 - r)) *
                       std::exp(-p.U / theta) *
                       (std::exp(p.gamma * sm / theta) - std::exp(p.gamma * r * sm / theta));
-  const double dose = kt_cycle_dose(sm, r, f, p.U, p.gamma, theta);
+  const double dose = fatigue::kt_cycle_dose(sm, r, f, p.U, p.gamma, theta);
   EXPECT_NEAR(dose, quad, 1e-10 * quad);
   EXPECT_NEAR(dose, eq15, 1e-12 * eq15);
   // R → 1: limit (θ/(h f)) e^((γσ − U)/θ), continuous.
-  const double lim = theta / (kPlanck * f) * std::exp((p.gamma * sm - p.U) / theta);
-  EXPECT_NEAR(kt_cycle_dose(sm, 1.0, f, p.U, p.gamma, theta), lim, 1e-14 * lim);
-  EXPECT_NEAR(kt_cycle_dose(sm, 1.0 - 1e-9, f, p.U, p.gamma, theta), lim, 1e-8 * lim);
+  const double lim = theta / (fatigue::kPlanck * f) * std::exp((p.gamma * sm - p.U) / theta);
+  EXPECT_NEAR(fatigue::kt_cycle_dose(sm, 1.0, f, p.U, p.gamma, theta), lim, 1e-14 * lim);
+  EXPECT_NEAR(fatigue::kt_cycle_dose(sm, 1.0 - 1e-9, f, p.U, p.gamma, theta), lim, 1e-8 * lim);
 }
 
 TEST(KineticLaw, RemainingLifeIsLinearInCycles) {
   // z(n(N)) − z(n_I) = N Φ exactly (Eq. 12 separated), so r = z(1) − z(n) is a remaining life with
   // constant decrement Φ: cycles_to_failure(r, Φ) reproduces the real-arithmetic life 1/Φ (n0 from
   // the unit-life condition) to within one cycle and matches the per-cycle loop.
-  const double theta = kt_thermal_energy(293.0);
-  const KineticParams p = test_kinetic_params(theta);
-  const double dose = kt_cycle_dose(200e6, 0.1, p.frequency, p.U, p.gamma, theta);
+  const double theta = fatigue::kt_thermal_energy(293.0);
+  const fatigue::KineticParams p = test_kinetic_params(theta);
+  const double dose = fatigue::kt_cycle_dose(200e6, 0.1, p.frequency, p.U, p.gamma, theta);
   for (double cycles : {1.0, 37.0, 250.0}) {
-    const double n = kt_damage_after_cycles(0.05, cycles, dose, p.lambda, p.n0);
-    EXPECT_NEAR(kt_remaining_life(0.05, p.lambda, p.n0) - kt_remaining_life(n, p.lambda, p.n0),
+    const double n = fatigue::kt_damage_after_cycles(0.05, cycles, dose, p.lambda, p.n0);
+    EXPECT_NEAR(fatigue::kt_remaining_life(0.05, p.lambda, p.n0) -
+                    fatigue::kt_remaining_life(n, p.lambda, p.n0),
                 cycles * dose, 1e-12);
-    EXPECT_NEAR(kt_damage_from_remaining_life(kt_remaining_life(n, p.lambda, p.n0), p.lambda, p.n0),
+    EXPECT_NEAR(fatigue::kt_damage_from_remaining_life(
+                    fatigue::kt_remaining_life(n, p.lambda, p.n0), p.lambda, p.n0),
                 n, 1e-12);
   }
-  const double r0 = kt_remaining_life(0.0, p.lambda, p.n0);
+  const double r0 = fatigue::kt_remaining_life(0.0, p.lambda, p.n0);
   EXPECT_NEAR(r0, 1.0, 1e-12);
-  const std::int64_t n_fail = cycles_to_failure(r0, dose);
+  const std::int64_t n_fail = fatigue::cycles_to_failure(r0, dose);
   EXPECT_EQ(n_fail, loop_cycles(r0, dose, 100000));
   EXPECT_NEAR(static_cast<double>(n_fail), std::ceil(1.0 / dose), 1.0);
-  EXPECT_GE(kt_damage_after_cycles(0.0, static_cast<double>(n_fail), dose, p.lambda, p.n0),
+  EXPECT_GE(fatigue::kt_damage_after_cycles(0.0, static_cast<double>(n_fail), dose, p.lambda, p.n0),
             1.0 - 1e-9);
 }
 
 TEST(KineticLaw, Validation) {
-  KineticParams p;
-  const std::string msg = message_of(validate(p));  // U and γ have no defaults
+  fatigue::KineticParams p;
+  const std::string msg = core::message_of(validate(p));  // U and γ have no defaults
   EXPECT_NE(msg.find("U must"), std::string::npos);
   EXPECT_NE(msg.find("gamma must"), std::string::npos);
   p.U = 1e-19;
   p.gamma = 1e-28;
-  EXPECT_EQ(message_of(validate(p)), "");
+  EXPECT_EQ(core::message_of(validate(p)), "");
   p.n0 = 1.0;
-  EXPECT_NE(message_of(validate(p)).find("n0"), std::string::npos);
+  EXPECT_NE(core::message_of(validate(p)).find("n0"), std::string::npos);
 }
 
-// ---- config readers through ParamReader (solver/core/param_reader.h), without toml++
+// ---- config readers through ParamReader (core/param_reader.h), without toml++
 // -------------
 
 /// A ParamReader over a map of numbers that collects its errors as Error{key, reason}.
-class MapReader final : public ParamReader {
+class MapReader final : public core::ParamReader {
  public:
   explicit MapReader(std::map<std::string, double> values) : values_(std::move(values)) {}
   [[nodiscard]] bool has(std::string_view key) const override {
@@ -615,8 +632,8 @@ class MapReader final : public ParamReader {
   bool boolean(std::string_view key, bool fallback) override {
     return has(key) ? values_.at(std::string(key)) != 0.0 : fallback;
   }
-  void report(Error error) override { errors.push_back(std::move(error)); }
-  std::vector<Error> errors;
+  void report(core::Error error) override { errors.push_back(std::move(error)); }
+  std::vector<core::Error> errors;
 
  private:
   std::map<std::string, double> values_;
@@ -624,14 +641,15 @@ class MapReader final : public ParamReader {
 
 TEST(LawReaders, ReadEveryRegisteredLawThroughTheAbstractReader) {
   // Every law of the registry reads its keys; the energy law shares the strain law's reader.
-  ASSERT_EQ(fatigue_laws().size(), 4U);
-  EXPECT_EQ(law_name(FatigueLaw::kinetic), "kinetic");
-  EXPECT_EQ(law_entry(FatigueLaw::energy).read, law_entry(FatigueLaw::strain_range).read);
-  EXPECT_FALSE(law_entry(FatigueLaw::bilinear).static_failure);
+  ASSERT_EQ(fatigue::fatigue_laws().size(), 4U);
+  EXPECT_EQ(fatigue::law_name(fatigue::FatigueLaw::kinetic), "kinetic");
+  EXPECT_EQ(fatigue::law_entry(fatigue::FatigueLaw::energy).read,
+            fatigue::law_entry(fatigue::FatigueLaw::strain_range).read);
+  EXPECT_FALSE(fatigue::law_entry(fatigue::FatigueLaw::bilinear).static_failure);
 
-  FatigueSettings f;
+  fatigue::FatigueSettings f;
   MapReader strain({{"A1", 2.0}, {"m1", 3.0}, {"A2", 4.0}, {"m2", 5.0}, {"eps_inf", 1e-3}});
-  law_entry(FatigueLaw::strain_range).read(strain, f);
+  fatigue::law_entry(fatigue::FatigueLaw::strain_range).read(strain, f);
   EXPECT_TRUE(strain.errors.empty());
   EXPECT_EQ(f.strain.A1, 2.0);
   EXPECT_EQ(f.strain.m2, 5.0);
@@ -640,14 +658,14 @@ TEST(LawReaders, ReadEveryRegisteredLawThroughTheAbstractReader) {
 
   // Bounds and missing keys are reported by key, in reading order, and reading goes on.
   MapReader kinetic({{"U", -1.0}, {"n0", 0.5}});
-  law_entry(FatigueLaw::kinetic).read(kinetic, f);
+  fatigue::law_entry(fatigue::FatigueLaw::kinetic).read(kinetic, f);
   ASSERT_EQ(kinetic.errors.size(), 3U);
   EXPECT_EQ(kinetic.errors[0].message(), "U: must be > 0 (got -1)");
   EXPECT_EQ(kinetic.errors[1].message(), "gamma: missing");
   EXPECT_EQ(kinetic.errors[2].message(), "n0: must be > 1 (got 0.5)");
 
   MapReader bilinear({{"s0", 2e-3}, {"sc", 1e-3}, {"A", 1.0}, {"cycle_increment", 0.0}});
-  law_entry(FatigueLaw::bilinear).read(bilinear, f);
+  fatigue::law_entry(fatigue::FatigueLaw::bilinear).read(bilinear, f);
   ASSERT_EQ(bilinear.errors.size(), 2U);
   EXPECT_EQ(bilinear.errors[0].message(), "sc: must be > s0");
   EXPECT_EQ(bilinear.errors[1].message(), "cycle_increment: must be >= 1");

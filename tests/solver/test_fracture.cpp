@@ -8,7 +8,7 @@
 #include "solver/crack/crack_tracker.h"
 #include "solver/mesh/discretization.h"
 #include "solver/model/pd_model.h"
-#include "solver/static/static_solver.h"
+#include "solver/statics/static_solver.h"
 #include "validation/specimens.h"
 
 namespace peritwin {
@@ -20,27 +20,30 @@ constexpr double pi = std::numbers::pi;
 
 /// Center-cracked plate of width W and height 2W, crack 2a along y = 0 (between two node rows),
 /// uniform tension σ on the top and bottom edge layers; bond-based plane stress (ν = 1/3).
-using CenterCrack = Specimen;  // geometry, discretization, model, supports, loads
+using CenterCrack = statics::Specimen;  // geometry, discretization, model, supports, loads
 
-CenterCrack make_center_crack(double width, double a, double dx, double horizon, Kernel kernel) {
+CenterCrack make_center_crack(double width, double a, double dx, double horizon,
+                              model::Kernel kernel) {
   CenterCrack p;
   p.geometry.thickness = 0.001;
-  p.geometry.outline = {Rectangle{-0.5 * width, -width, 0.5 * width, width}};
+  p.geometry.outline = {mesh::Rectangle{-0.5 * width, -width, 0.5 * width, width}};
   p.geometry.notches = {{"crack", {{-a, 0.0}, {a, 0.0}}}};
   p.disc = discretize(p.geometry, dx, horizon);
-  ModelOptions o;
-  o.kind = ModelKind::bond_based;
+  model::ModelOptions o;
+  o.kind = model::ModelKind::bond_based;
   o.kernel = kernel;
-  p.model = build_model(p.disc, Material{70e9, 1.0 / 3.0, 0.0}, o, 200.0);
+  p.model = model::build_model(p.disc, model::Material{70e9, 1.0 / 3.0, 0.0}, o, 200.0);
   const double force = 1.0 * width * p.geometry.thickness;  // σ = 1 Pa per unit P
-  p.loads.push_back({p.disc.nodes_in(Region::of(Rectangle{-width, width - dx, width, 2 * width})),
-                     {0, force},
-                     {},
-                     {}});
-  p.loads.push_back({p.disc.nodes_in(Region::of(Rectangle{-width, -2 * width, width, -width + dx})),
-                     {0, -force},
-                     {},
-                     {}});
+  p.loads.push_back(
+      {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{-width, width - dx, width, 2 * width})),
+       {0, force},
+       {},
+       {}});
+  p.loads.push_back(
+      {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{-width, -2 * width, width, -width + dx})),
+       {0, -force},
+       {},
+       {}});
   // Minimal supports away from the crack: the left-edge node at y = +Δx/2 pinned, the right-edge
   // node at y = +Δx/2 fixed in y (the loads are self-balanced).
   p.supports.push_back({{p.disc.nearest_node({-0.5 * width, 0.5 * dx})}, true, true});
@@ -72,24 +75,25 @@ double k_i_by_extrapolation(const CenterCrack& p, const std::vector<double>& u, 
 TEST(CenterCrackedPlate, StressIntensityByExtrapolationMatchesFeddersen) {
   // B4: K_I within 5 % of σ√(πa)·√(sec(πa/W)) at a/W = 0.2 (Feddersen's finite-width correction).
   const double width = 0.03, a = 0.006, dx = 0.00025;
-  for (const Kernel kernel : {Kernel::constant, Kernel::gaussian}) {
+  for (const model::Kernel kernel : {model::Kernel::constant, model::Kernel::gaussian}) {
     const auto p = make_center_crack(width, a, dx, 3.015 * dx, kernel);
-    StaticSolver solver(p.disc, p.model, p.supports, p.loads);
+    statics::StaticSolver solver(p.disc, p.model, p.supports, p.loads);
     ASSERT_TRUE(solver.solve().ok());
-    const double k = k_i_by_extrapolation(p, solver.basis_displacement(basis_constant), a,
+    const double k = k_i_by_extrapolation(p, solver.basis_displacement(statics::basis_constant), a,
                                           3 * p.disc.horizon, 6 * p.disc.horizon);
     const double expected = std::sqrt(pi * a) * std::sqrt(1 / std::cos(pi * a / width));
-    EXPECT_NEAR(k / expected, 1.0, 0.05) << (kernel == Kernel::constant ? "constant" : "gaussian");
+    EXPECT_NEAR(k / expected, 1.0, 0.05)
+        << (kernel == model::Kernel::constant ? "constant" : "gaussian");
   }
 }
 
 /// Crack-mouth opening (at the crack centre) per unit σ of the center-cracked plate.
 double crack_centre_opening(double dx, double horizon) {
   const double width = 0.024, a = 0.0048;
-  const auto p = make_center_crack(width, a, dx, horizon, Kernel::constant);
-  StaticSolver solver(p.disc, p.model, p.supports, p.loads);
+  const auto p = make_center_crack(width, a, dx, horizon, model::Kernel::constant);
+  statics::StaticSolver solver(p.disc, p.model, p.supports, p.loads);
   EXPECT_TRUE(solver.solve().ok());
-  const auto& u = solver.basis_displacement(basis_constant);
+  const auto& u = solver.basis_displacement(statics::basis_constant);
   const auto up = static_cast<std::size_t>(p.disc.nearest_node({0.5 * dx, 0.5 * dx}));
   const auto low = static_cast<std::size_t>(p.disc.nearest_node({0.5 * dx, -0.5 * dx}));
   return u[2 * up + 1] - u[2 * low + 1];
@@ -116,30 +120,30 @@ TEST(KFieldPlate, ExtrapolationAndWilliamsFitRecoverTheAppliedKIKIIAndT) {
   // while the two-point ratio stayed within 0.458-0.475 over r from 2-9 to 9-24 mm: B2 keeps it.
   KFieldPlateSpec spec;
   spec.t_over_ki = 3.0;
-  ModelOptions o;
-  o.kind = ModelKind::state_based;
-  const Specimen p = make_k_field_plate(spec, o, 0.0005);
-  StaticSolver solver(p.disc, p.model, p.supports, p.loads);
+  model::ModelOptions o;
+  o.kind = model::ModelKind::state_based;
+  const statics::Specimen p = make_k_field_plate(spec, o, 0.0005);
+  statics::StaticSolver solver(p.disc, p.model, p.supports, p.loads);
   ASSERT_TRUE(solver.solve().ok());
   const double nu = p.material.poisson_ratio;
   const double mu = p.material.youngs_modulus / (2 * (1 + nu));
-  const double kappa = kolosov_kappa(nu, PlaneCondition::plane_stress);
+  const double kappa = crack::kolosov_kappa(nu, model::PlaneCondition::plane_stress);
   const double r1 = 3 * p.disc.horizon, r2 = 6 * p.disc.horizon;
-  const auto& u_i = solver.basis_displacement(basis_cos);
-  const auto k_i = stress_intensity_by_extrapolation(p.disc, u_i, p.initial_crack_tip, {1, 0}, r1,
-                                                     r2, mu, kappa);
+  const auto& u_i = solver.basis_displacement(statics::basis_cos);
+  const auto k_i = crack::stress_intensity_by_extrapolation(p.disc, u_i, p.initial_crack_tip,
+                                                            {1, 0}, r1, r2, mu, kappa);
   EXPECT_NEAR(k_i.k_i, 1.0, 0.05);
   EXPECT_NEAR(k_i.k_ii, 0.0, 0.05);
-  EXPECT_NEAR(t_stress_from_crack_faces(p.disc, u_i, p.initial_crack_tip, r1, r2,
-                                        p.material.youngs_modulus),
+  EXPECT_NEAR(crack::t_stress_from_crack_faces(p.disc, u_i, p.initial_crack_tip, r1, r2,
+                                               p.material.youngs_modulus),
               3.0, 0.3);
-  const auto& u_ii = solver.basis_displacement(basis_sin);
-  const auto k_ii = stress_intensity_by_extrapolation(p.disc, u_ii, p.initial_crack_tip, {1, 0}, r1,
-                                                      r2, mu, kappa);
+  const auto& u_ii = solver.basis_displacement(statics::basis_sin);
+  const auto k_ii = crack::stress_intensity_by_extrapolation(p.disc, u_ii, p.initial_crack_tip,
+                                                             {1, 0}, r1, r2, mu, kappa);
   EXPECT_NEAR(k_ii.k_ii, -1.0, 0.10);
   EXPECT_NEAR(k_ii.k_i, 0.0, 0.05);
-  EXPECT_NEAR(t_stress_from_crack_faces(p.disc, u_ii, p.initial_crack_tip, r1, r2,
-                                        p.material.youngs_modulus),
+  EXPECT_NEAR(crack::t_stress_from_crack_faces(p.disc, u_ii, p.initial_crack_tip, r1, r2,
+                                               p.material.youngs_modulus),
               0.0, 0.3);
 
   // The second method: a least-squares fit of the Williams series (7 terms per mode) to every
@@ -147,15 +151,15 @@ TEST(KFieldPlate, ExtrapolationAndWilliamsFitRecoverTheAppliedKIKIIAndT) {
   // 2δ-8δ to 4δ-16δ with 4-10 terms K_I 1.025-1.032, K_II −1.046 to −1.063, T 2.99-3.04 (the PD
   // plate is a few per cent more compliant than the elastic field its edges carry; the fit takes
   // the rigid turn as the mode II r¹ term). Tolerances: K_I 5 %, K_II 8 %, T 0.1/√m.
-  const auto mode_i =
-      williams_series_fit(p.disc, u_i, p.initial_crack_tip, {1, 0}, r1, 4 * r1, 7, mu, kappa);
+  const auto mode_i = crack::williams_series_fit(p.disc, u_i, p.initial_crack_tip, {1, 0}, r1,
+                                                 4 * r1, 7, mu, kappa);
   EXPECT_GT(mode_i.nodes, 1000);
   EXPECT_TRUE(mode_i.fitted);
   EXPECT_NEAR(mode_i.k_i, 1.0, 0.05);
   EXPECT_NEAR(mode_i.k_ii, 0.0, 0.05);
   EXPECT_NEAR(mode_i.t_stress, 3.0, 0.1);
-  const auto mode_ii =
-      williams_series_fit(p.disc, u_ii, p.initial_crack_tip, {1, 0}, r1, 4 * r1, 7, mu, kappa);
+  const auto mode_ii = crack::williams_series_fit(p.disc, u_ii, p.initial_crack_tip, {1, 0}, r1,
+                                                  4 * r1, 7, mu, kappa);
   EXPECT_NEAR(mode_ii.k_ii, -1.0, 0.08);
   EXPECT_NEAR(mode_ii.k_i, 0.0, 0.05);
   EXPECT_NEAR(mode_ii.t_stress, 0.0, 0.1);
@@ -174,36 +178,38 @@ TEST(CompactTensionShear, RigidFixturesGiveRichardsStressIntensity) {
   // Richard in K_I (asserted > 10 %).
   CompactTensionShearSpec spec;
   spec.lower_holes_fixed = false;
-  ModelOptions o;
-  o.kind = ModelKind::state_based;
+  model::ModelOptions o;
+  o.kind = model::ModelKind::state_based;
   const double dx = 0.001;
   const double nu = spec.material.poisson_ratio;
   const double mu = spec.material.youngs_modulus / (2 * (1 + nu));
-  const double kappa = kolosov_kappa(nu, PlaneCondition::plane_stress);
-  auto solved = [](const Specimen& s) {
-    auto solver = std::make_unique<StaticSolver>(s.disc, s.model, s.supports, s.loads, s.ties);
+  const double kappa = crack::kolosov_kappa(nu, model::PlaneCondition::plane_stress);
+  auto solved = [](const statics::Specimen& s) {
+    auto solver =
+        std::make_unique<statics::StaticSolver>(s.disc, s.model, s.supports, s.loads, s.ties);
     EXPECT_TRUE(solver->solve().ok());
     return solver;
   };
-  auto fitted_k = [&](const Specimen& s, const StaticSolver& solver, double alpha) {
+  auto fitted_k = [&](const statics::Specimen& s, const statics::StaticSolver& solver,
+                      double alpha) {
     std::vector<double> u;
     solver.displacement(1.0, alpha, u);
-    return williams_series_fit(s.disc, u, s.initial_crack_tip, {1, 0}, 3 * s.disc.horizon, 0.015, 7,
-                               mu, kappa);
+    return crack::williams_series_fit(s.disc, u, s.initial_crack_tip, {1, 0}, 3 * s.disc.horizon,
+                                      0.015, 7, mu, kappa);
   };
-  const Specimen pins = make_compact_tension_shear(spec, o, dx);
-  Specimen oracle = pins;
+  const statics::Specimen pins = make_compact_tension_shear(spec, o, dx);
+  statics::Specimen oracle = pins;
   oracle.loads = rigid_fixture_loads_by_flexibility(pins);
   // The oracle's upper pins carry Eq. (51)'s resultant (0, P) for cos α and (−P, 0) for sin α,
   // with no moment about the crack tip (45 mm, 0): the load line of the device runs through it.
-  Point sum_cos, sum_sin;
+  mesh::Point sum_cos, sum_sin;
   double moment_cos = 0.0, moment_sin = 0.0;
   for (std::size_t h = 0; h < 3; ++h) {
     const auto& load = oracle.loads[h];
-    const Point centre = oracle.disc.centroid(load.nodes);
+    const mesh::Point centre = oracle.disc.centroid(load.nodes);
     sum_cos = {sum_cos.x + load.per_cos.x, sum_cos.y + load.per_cos.y};
     sum_sin = {sum_sin.x + load.per_sin.x, sum_sin.y + load.per_sin.y};
-    const Point arm{centre.x - spec.crack_length, centre.y};
+    const mesh::Point arm{centre.x - spec.crack_length, centre.y};
     moment_cos += arm.x * load.per_cos.y - arm.y * load.per_cos.x;
     moment_sin += arm.x * load.per_sin.y - arm.y * load.per_sin.x;
   }
@@ -215,25 +221,27 @@ TEST(CompactTensionShear, RigidFixturesGiveRichardsStressIntensity) {
   EXPECT_NEAR(moment_sin, 0.0, 1e-4);
 
   spec.rigid_fixtures = true;
-  const Specimen fixture = make_compact_tension_shear(spec, o, dx);
+  const statics::Specimen fixture = make_compact_tension_shear(spec, o, dx);
   ASSERT_EQ(fixture.ties.size(), 2u * 3u);  // 2·3 − 3 per fixture
   const auto fixture_solver = solved(fixture);
   const auto oracle_solver = solved(oracle);
   // Force each pin passes to the specimen: its applied load minus what the ties take, −k·c_i·(gᵀu)
   // on each DOF i of the pin's nodes.
-  for (const Basis basis : {basis_cos, basis_sin}) {
+  for (const statics::Basis basis : {statics::basis_cos, statics::basis_sin}) {
     const auto& u = fixture_solver->basis_displacement(basis);
     for (std::size_t h = 0; h < fixture.loads.size(); ++h) {
       const auto& nodes = fixture.loads[h].nodes;
-      Point f = basis == basis_cos ? fixture.loads[h].per_cos : fixture.loads[h].per_sin;
-      for (const Tie& tie : fixture.ties) {
-        const double violation = tie_violation(tie, u);
-        for (const TieTerm& term : tie.terms) {
+      mesh::Point f =
+          basis == statics::basis_cos ? fixture.loads[h].per_cos : fixture.loads[h].per_sin;
+      for (const statics::Tie& tie : fixture.ties) {
+        const double violation = statics::tie_violation(tie, u);
+        for (const statics::TieTerm& term : tie.terms) {
           if (std::find(nodes.begin(), nodes.end(), term.node) == nodes.end()) continue;
           (term.component == 0 ? f.x : f.y) -= tie.stiffness * term.coefficient * violation;
         }
       }
-      const Point want = basis == basis_cos ? oracle.loads[h].per_cos : oracle.loads[h].per_sin;
+      const mesh::Point want =
+          basis == statics::basis_cos ? oracle.loads[h].per_cos : oracle.loads[h].per_sin;
       EXPECT_NEAR(f.x, want.x, 0.002) << "pin " << h << " basis " << basis;
       EXPECT_NEAR(f.y, want.y, 0.002) << "pin " << h << " basis " << basis;
     }
@@ -264,11 +272,11 @@ TEST(CompactTensionShear, GridSpacingKeepsNodeRowsOffTheCrackLine) {
   EXPECT_EQ(compact_tension_shear_grid_spacing(spec, 0.00025), 0.00025);
   const double dx = compact_tension_shear_grid_spacing(spec, 0.002);
   EXPECT_DOUBLE_EQ(dx, 0.090 / 46);
-  ModelOptions o;
-  o.kind = ModelKind::bond_based;
+  model::ModelOptions o;
+  o.kind = model::ModelKind::bond_based;
   for (const double spacing : {0.002, dx}) {
-    const Specimen s = make_compact_tension_shear(spec, o, spacing);
-    StaticSolver solver(s.disc, s.model, s.supports, s.loads);
+    const statics::Specimen s = make_compact_tension_shear(spec, o, spacing);
+    statics::StaticSolver solver(s.disc, s.model, s.supports, s.loads);
     EXPECT_EQ(solver.solve().ok(), spacing == dx) << "dx " << spacing;
   }
 }

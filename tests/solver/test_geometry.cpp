@@ -13,15 +13,15 @@
 namespace peritwin {
 namespace {
 
-using Kind = SurfacePlace::Kind;
+using Kind = mesh::SurfacePlace::Kind;
 
 TEST(GeometryNearestSurface, RectangleEdgeHoleAndNotch) {
-  DetailGeometry g;
-  g.outline = {Rectangle{0.0, 0.0, 0.1, 0.04}};
-  g.holes = {Circle{{0.05, 0.02}, 0.005}};
+  mesh::DetailGeometry g;
+  g.outline = {mesh::Rectangle{0.0, 0.0, 0.1, 0.04}};
+  g.holes = {mesh::Circle{{0.05, 0.02}, 0.005}};
   g.notches = {{"notch 0", {{0.0, 0.01}, {0.02, 0.01}}}};
   // 1 cm above the bottom edge, far from the rest.
-  SurfacePlace s = g.nearest_surface({0.08, 0.01});
+  mesh::SurfacePlace s = g.nearest_surface({0.08, 0.01});
   EXPECT_EQ(s.kind, Kind::outline);
   EXPECT_EQ(s.index, 0);
   EXPECT_DOUBLE_EQ(s.distance, 0.01);
@@ -41,10 +41,10 @@ TEST(GeometryNearestSurface, RectangleEdgeHoleAndNotch) {
 
 TEST(GeometryNearestSurface, SharedEdgeOfTwoRectanglesIsNotSurface) {
   // Two rectangles side by side make one 200 x 40 mm strip: the edge x = 0.1 they share is inside.
-  DetailGeometry g;
-  g.outline = {Rectangle{0.0, 0.0, 0.1, 0.04}, Rectangle{0.1, 0.0, 0.2, 0.04}};
+  mesh::DetailGeometry g;
+  g.outline = {mesh::Rectangle{0.0, 0.0, 0.1, 0.04}, mesh::Rectangle{0.1, 0.0, 0.2, 0.04}};
   // 1 mm from the shared edge, 20 mm from the top and bottom.
-  const SurfacePlace s = g.nearest_surface({0.099, 0.02});
+  const mesh::SurfacePlace s = g.nearest_surface({0.099, 0.02});
   EXPECT_EQ(s.kind, Kind::outline);
   EXPECT_DOUBLE_EQ(s.distance, 0.02);
   // On the shared edge itself: still 20 mm.
@@ -56,16 +56,16 @@ TEST(GeometryNearestSurface, ReEntrantCornerOfAnLShape) {
   // (15, 15) mm lies in the overlap; the foot's top edge is covered above it for x < 20 mm and the
   // leg's right edge for y < 20 mm, so the nearest surface is the re-entrant corner (20, 20) mm at
   // hypot(5, 5) = 7.071 mm (the covered edges, 5 mm away, are not surface).
-  DetailGeometry g;
-  g.outline = {Rectangle{0.0, 0.0, 0.1, 0.02}, Rectangle{0.0, 0.0, 0.02, 0.1}};
-  const SurfacePlace s = g.nearest_surface({0.015, 0.015});
+  mesh::DetailGeometry g;
+  g.outline = {mesh::Rectangle{0.0, 0.0, 0.1, 0.02}, mesh::Rectangle{0.0, 0.0, 0.02, 0.1}};
+  const mesh::SurfacePlace s = g.nearest_surface({0.015, 0.015});
   EXPECT_EQ(s.kind, Kind::outline);
   EXPECT_EQ(s.index, 0);  // the foot's top edge and the leg's right edge tie: the lower index
   EXPECT_NEAR(s.distance, std::hypot(0.005, 0.005), 1e-15);
 }
 
 TEST(GeometryNearestSurface, NoSurfaceGivesInfinity) {
-  const SurfacePlace s = DetailGeometry{}.nearest_surface({0.0, 0.0});
+  const mesh::SurfacePlace s = mesh::DetailGeometry{}.nearest_surface({0.0, 0.0});
   EXPECT_EQ(s.index, -1);
   EXPECT_TRUE(std::isinf(s.distance));
 }
@@ -76,24 +76,24 @@ TEST(GeometryNearestSurface, NoSurfaceGivesInfinity) {
 namespace peritwin {
 namespace {
 
-using Edge = PolygonVertex::Edge;
+using Edge = mesh::PolygonVertex::Edge;
 
-PolygonVertex corner(double x, double y, double fillet = 0.0) {
+mesh::PolygonVertex corner(double x, double y, double fillet = 0.0) {
   return {{x, y}, Edge::straight, {}, fillet};
 }
-PolygonVertex arc_to(double x, double y, Point centre, Edge edge) {
+mesh::PolygonVertex arc_to(double x, double y, mesh::Point centre, Edge edge) {
   return {{x, y}, edge, centre, 0.0};
 }
 
-Polygon make(std::vector<PolygonVertex> v) {
-  auto p = Polygon::make(std::move(v));
+mesh::Polygon make(std::vector<mesh::PolygonVertex> v) {
+  auto p = mesh::Polygon::make(std::move(v));
   EXPECT_TRUE(p.ok()) << (p ? "" : p.error().message());
-  return p ? std::move(p).value() : Polygon{};
+  return p ? std::move(p).value() : mesh::Polygon{};
 }
 
 TEST(GeometryPolygon, InsideTestOfAConcaveLShapeIsClosed) {
   // L of three unit squares; the re-entrant corner at (1, 1).
-  const Polygon l =
+  const mesh::Polygon l =
       make({corner(0, 0), corner(2, 0), corner(2, 1), corner(1, 1), corner(1, 2), corner(0, 2)});
   EXPECT_TRUE(l.contains({0.5, 0.5}));
   EXPECT_TRUE(l.contains({1.5, 0.5}));
@@ -115,7 +115,7 @@ TEST(GeometryPolygon, InsideTestOfAConcaveLShapeIsClosed) {
 
 TEST(GeometryPolygon, SemicircularHeadBulgesOutCounterclockwiseAndInClockwise) {
   // A 2 x 2 shank with a semicircular end of radius 1 about (2, 0).
-  const Polygon lug =
+  const mesh::Polygon lug =
       make({corner(0, -1), corner(2, -1), arc_to(2, 1, {2, 0}, Edge::arc_ccw), corner(0, 1)});
   EXPECT_TRUE(lug.contains({2.9, 0.0}));
   EXPECT_TRUE(lug.contains({3.0, 0.0}));  // on the arc: x = 2 + √(1 − 0) exactly
@@ -125,12 +125,12 @@ TEST(GeometryPolygon, SemicircularHeadBulgesOutCounterclockwiseAndInClockwise) {
   EXPECT_TRUE(lug.contains({2.0, 1.0}));     // the arc's end
   EXPECT_NEAR(lug.area(), 4.0 + std::numbers::pi / 2, 1e-15);
   EXPECT_NEAR(lug.perimeter(), 6.0 + std::numbers::pi, 1e-15);
-  const Rectangle box = lug.bounding_box();
+  const mesh::Rectangle box = lug.bounding_box();
   EXPECT_DOUBLE_EQ(box.x_max, 3.0);
   EXPECT_DOUBLE_EQ(box.y_max, 1.0);
   EXPECT_NEAR(lug.distance({3.5, 0.0}), 0.5, 1e-15);
   // The same arc clockwise bites into the square instead.
-  const Polygon bitten =
+  const mesh::Polygon bitten =
       make({corner(0, -1), corner(2, -1), arc_to(2, 1, {2, 0}, Edge::arc_cw), corner(0, 1)});
   EXPECT_TRUE(bitten.contains({0.5, 0.0}));
   EXPECT_FALSE(bitten.contains({1.5, 0.0}));
@@ -141,7 +141,7 @@ TEST(GeometryPolygon, SemicircularHeadBulgesOutCounterclockwiseAndInClockwise) {
 TEST(GeometryPolygon, FilletRoundsACorner) {
   // Unit square, corner (1, 1) rounded with r = 0.2: the arc about (0.8, 0.8) from (1, 0.8) to
   // (0.8, 1) removes (1 − π/4)·r² = 0.008584 of area.
-  const Polygon p = make({corner(0, 0), corner(1, 0), corner(1, 1, 0.2), corner(0, 1)});
+  const mesh::Polygon p = make({corner(0, 0), corner(1, 0), corner(1, 1, 0.2), corner(0, 1)});
   EXPECT_NEAR(p.area(), 1.0 - (1.0 - std::numbers::pi / 4) * 0.04, 1e-15);
   EXPECT_NEAR(p.perimeter(), 4.0 - 0.4 + std::numbers::pi * 0.1, 1e-15);
   EXPECT_FALSE(p.contains({0.99, 0.99}));
@@ -155,12 +155,12 @@ TEST(GeometryPolygon, GridNodeCountGivesTheAnalyticArea) {
   // polygon hole; 0.1 mm grid. Area = 800 − 4·(1 − π/4)·25 − (8·6 + π·9) = 723.27 mm². The lattice
   // count differs from it only through the cells cut by the boundary (perimeter 160 mm ≈ 1600
   // cells of which the misses largely cancel); tolerance 0.1 % = 7 cells·10.
-  DetailGeometry g;
+  mesh::DetailGeometry g;
   g.outline = {make({corner(0, 0, 0.005), corner(0.04, 0, 0.005), corner(0.04, 0.02, 0.005),
                      corner(0, 0.02, 0.005)})};
   g.holes = {make({arc_to(0.016, 0.007, {0.016, 0.010}, Edge::arc_ccw), corner(0.024, 0.007),
                    arc_to(0.024, 0.013, {0.024, 0.010}, Edge::arc_ccw), corner(0.016, 0.013)})};
-  ASSERT_TRUE(g.validate().ok()) << message_of(g.validate());
+  ASSERT_TRUE(g.validate().ok()) << core::message_of(g.validate());
   const double dx = 1e-4;
   long nodes = 0;
   for (int j = 0; j < 200; ++j) {
@@ -171,16 +171,16 @@ TEST(GeometryPolygon, GridNodeCountGivesTheAnalyticArea) {
   EXPECT_NEAR(g.outline[0].area() - g.holes[0].area(), area, 1e-18);
   EXPECT_NEAR(static_cast<double>(nodes) * dx * dx, area, 1e-3 * area);
   // Nearest surface: 1 mm right of the slot's right end (27 mm, 10 mm) -> the hole at 1 mm.
-  const SurfacePlace s = g.nearest_surface({0.028, 0.010});
-  EXPECT_EQ(s.kind, SurfacePlace::Kind::hole);
+  const mesh::SurfacePlace s = g.nearest_surface({0.028, 0.010});
+  EXPECT_EQ(s.kind, mesh::SurfacePlace::Kind::hole);
   EXPECT_NEAR(s.distance, 0.001, 1e-15);
   // The filleted corner: from (0, 0) to the arc about (5, 5) mm is 5√2 − 5 mm = 2.071 mm.
   EXPECT_NEAR(g.nearest_surface({0.0, 0.0}).distance, 0.005 * std::sqrt(2.0) - 0.005, 1e-15);
 }
 
 TEST(GeometryPolygon, InvalidPolygonsNameTheVertex) {
-  const auto error = [](std::vector<PolygonVertex> v) {
-    const auto p = Polygon::make(std::move(v));
+  const auto error = [](std::vector<mesh::PolygonVertex> v) {
+    const auto p = mesh::Polygon::make(std::move(v));
     return p ? std::string("ok") : p.error().message();
   };
   EXPECT_EQ(error({corner(0, 0), corner(1, 0)}), "a polygon needs at least 3 vertices (got 2)");

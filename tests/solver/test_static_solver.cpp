@@ -6,7 +6,7 @@
 #include <cstring>
 #include <random>
 
-#include "solver/static/static_solver.h"
+#include "solver/statics/static_solver.h"
 #include "tests/support/plates.h"
 #include "validation/specimens.h"
 
@@ -15,10 +15,10 @@ namespace {
 
 using namespace peritwin::validation;  // the benchmark specimens
 
-const Material aluminium{68e9, 0.33, 48.7e6};
+const model::Material aluminium{68e9, 0.33, 48.7e6};
 
-ModelOptions options_for(ModelKind kind) {
-  ModelOptions o;
+model::ModelOptions options_for(model::ModelKind kind) {
+  model::ModelOptions o;
   o.kind = kind;
   return o;
 }
@@ -29,18 +29,18 @@ double max_abs(const std::vector<double>& v) {
   return m;
 }
 
-class SolverModels : public ::testing::TestWithParam<ModelKind> {};
+class SolverModels : public ::testing::TestWithParam<model::ModelKind> {};
 
 TEST_P(SolverModels, InternalForcesBalanceAppliedLoads) {
   // Equilibrium: at every free DOF the bond-by-bond internal force equals the applied load, and
   // the reactions at the supports balance the total applied load (to solver precision).
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.02, 0.01, 0.0005, 80e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  const auto& u = solver.basis_displacement(basis_constant);
+  const auto& u = solver.basis_displacement(statics::basis_constant);
   const auto f_int = solver.internal_force(u);
-  const auto f_ext = solver.basis_force(basis_constant);
+  const auto f_ext = solver.basis_force(statics::basis_constant);
   const double scale = max_abs(f_ext);
   double reaction_x = 0, reaction_y = 0;
   for (std::size_t dof = 0; dof < u.size(); ++dof) {
@@ -59,7 +59,7 @@ TEST_P(SolverModels, InternalForcesBalanceAppliedLoads) {
 TEST_P(SolverModels, StiffnessIsSymmetricAndRigidMotionIsForceFree) {
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> uni(-1e-6, 1e-6);
@@ -80,8 +80,8 @@ TEST_P(SolverModels, StiffnessIsSymmetricAndRigidMotionIsForceFree) {
   // Rigid translation plus a small (linearized) rotation: zero force everywhere.
   std::vector<double> rigid(u1.size());
   const double tx = 1e-4, ty = -2e-4, theta = 3e-4;
-  for (NodeIndex k = 0; k < plate.disc.num_nodes(); ++k) {
-    const Point p = plate.disc.position[k];
+  for (mesh::NodeIndex k = 0; k < plate.disc.num_nodes(); ++k) {
+    const mesh::Point p = plate.disc.position[k];
     rigid[2 * static_cast<std::size_t>(k)] = tx - theta * p.y;
     rigid[2 * static_cast<std::size_t>(k) + 1] = ty + theta * p.x;
   }
@@ -95,21 +95,21 @@ TEST_P(SolverModels, CholmodAgreesWithUmfpackOracle) {
   // (for the state-based model with ν < 1/3 the mixed form: displacements then w' = α·θ/s).
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  SparseMatrix full = solver.stiffness_upper().selfadjointView<Eigen::Upper>();
-  Eigen::UmfPackLU<SparseMatrix> lu(full);
+  linalg::SparseMatrix full = solver.stiffness_upper().selfadjointView<Eigen::Upper>();
+  Eigen::UmfPackLU<linalg::SparseMatrix> lu(full);
   ASSERT_EQ(lu.info(), Eigen::Success);
-  if (GetParam() == ModelKind::state_based) {
+  if (GetParam() == model::ModelKind::state_based) {
     EXPECT_TRUE(solver.mixed_form());
   }
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(solver.num_unknowns());
-  const auto f = solver.basis_force(basis_constant);
+  const auto f = solver.basis_force(statics::basis_constant);
   for (std::size_t dof = 0; dof < f.size(); ++dof) {
     if (solver.free_index()[dof] >= 0) rhs[solver.free_index()[dof]] = f[dof];
   }
   const Eigen::VectorXd x = lu.solve(rhs);
-  const auto& u = solver.basis_displacement(basis_constant);
+  const auto& u = solver.basis_displacement(statics::basis_constant);
   for (std::size_t dof = 0; dof < u.size(); ++dof) {
     if (solver.free_index()[dof] >= 0) {
       EXPECT_NEAR(u[dof], x[solver.free_index()[dof]], 1e-9 * x.cwiseAbs().maxCoeff());
@@ -123,14 +123,14 @@ TEST(MixedForm, StiffPinsAtCoarseSpacingAreNotReportedSingular) {
   // model was refused as "singular". With w scaled it solves, and the condensed internal force
   // (bond by bond, not from the mixed matrix) balances the load within 1e-9 of its scale.
   const CompactTensionSpec spec;
-  const Specimen s =
-      make_compact_tension(spec, ModelOptions{}, compact_tension_spacing(spec, 3000));
-  StaticSolver solver(s.disc, s.model, s.supports, s.loads);
+  const statics::Specimen s =
+      make_compact_tension(spec, model::ModelOptions{}, compact_tension_spacing(spec, 3000));
+  statics::StaticSolver solver(s.disc, s.model, s.supports, s.loads);
   const auto report = solver.solve();
-  ASSERT_TRUE(report.ok()) << message_of(report);
+  ASSERT_TRUE(report.ok()) << core::message_of(report);
   EXPECT_TRUE(solver.mixed_form());
-  const auto f = solver.basis_force(basis_constant);
-  const auto r = solver.internal_force(solver.basis_displacement(basis_constant));
+  const auto f = solver.basis_force(statics::basis_constant);
+  const auto r = solver.internal_force(solver.basis_displacement(statics::basis_constant));
   double worst = 0.0;
   for (std::size_t dof = 0; dof < f.size(); ++dof) {
     if (solver.free_index()[dof] >= 0) worst = std::max(worst, std::abs(r[dof] - f[dof]));
@@ -141,10 +141,10 @@ TEST(MixedForm, StiffPinsAtCoarseSpacingAreNotReportedSingular) {
 TEST_P(SolverModels, UnsupportedModelIsATypedFailure) {
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, {}, plate.loads);
-  const Status r = solver.solve();
+  statics::StaticSolver solver(plate.disc, plate.model, {}, plate.loads);
+  const core::Status r = solver.solve();
   EXPECT_FALSE(r.ok());
-  EXPECT_NE(message_of(r).find("loose"), std::string::npos);
+  EXPECT_NE(core::message_of(r).find("loose"), std::string::npos);
 }
 
 TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
@@ -152,20 +152,20 @@ TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   // fresh solver whose discretization had those bonds cut from the start.
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  std::vector<BondIndex> cut;
+  std::vector<mesh::BondIndex> cut;
   auto disc2 = plate.disc;
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
-    const Point a = plate.disc.position[plate.disc.bond_i[b]];
-    const Point c = plate.disc.position[plate.disc.bond_j[b]];
-    if (segments_cross(a, c, {0.005, -0.001}, {0.005, 0.0015})) {
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    const mesh::Point a = plate.disc.position[plate.disc.bond_i[b]];
+    const mesh::Point c = plate.disc.position[plate.disc.bond_j[b]];
+    if (mesh::segments_cross(a, c, {0.005, -0.001}, {0.005, 0.0015})) {
       cut.push_back(b);
       disc2.bond_precut[b] = 1;
     }
   }
   ASSERT_GT(cut.size(), 10u);
-  StaticSolver updated(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver updated(plate.disc, plate.model, plate.supports, plate.loads);
   updated.set_incremental(true);
   ASSERT_TRUE(updated.solve().ok());
   // Incremental path: break in three groups by rank updates of the factor.
@@ -176,11 +176,11 @@ TEST_P(SolverModels, BreakingBondsEqualsBuildingWithoutThem) {
   EXPECT_EQ(updated.factorizations(), 1);
   EXPECT_EQ(updated.updates(), 3);
   ASSERT_TRUE(solver.break_bonds(cut).ok());
-  StaticSolver fresh(disc2, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver fresh(disc2, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(fresh.solve().ok());
-  const auto& u1 = solver.basis_displacement(basis_constant);
-  const auto& u2 = fresh.basis_displacement(basis_constant);
-  const auto& u3 = updated.basis_displacement(basis_constant);
+  const auto& u1 = solver.basis_displacement(statics::basis_constant);
+  const auto& u2 = fresh.basis_displacement(statics::basis_constant);
+  const auto& u3 = updated.basis_displacement(statics::basis_constant);
   for (std::size_t i = 0; i < u1.size(); ++i) {
     EXPECT_NEAR(u1[i], u2[i], 1e-10 * max_abs(u2));
     EXPECT_NEAR(u3[i], u2[i], 1e-9 * max_abs(u2));
@@ -196,24 +196,24 @@ TEST_P(SolverModels, TiesHoldTheirConstraintInEquilibriumAndUnderUpdates) {
   // bond-based: multiply() (the PCG path's matrix-free product) equals the assembled matrix.
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  const NodeIndex top = plate.disc.nearest_node({0.01, 0.003});
-  const NodeIndex bottom = plate.disc.nearest_node({0.01, -0.003});
+  const mesh::NodeIndex top = plate.disc.nearest_node({0.01, 0.003});
+  const mesh::NodeIndex bottom = plate.disc.nearest_node({0.01, -0.003});
   const double k = 200.0 * aluminium.youngs_modulus * plate.geometry.thickness;
-  const std::vector<Tie> ties = {{{{top, 1, 1.0}, {bottom, 1, -1.0}}, k}};
-  StaticSolver free_plate(plate.disc, plate.model, plate.supports, plate.loads);
+  const std::vector<statics::Tie> ties = {{{{top, 1, 1.0}, {bottom, 1, -1.0}}, k}};
+  statics::StaticSolver free_plate(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(free_plate.solve().ok());
-  StaticSolver tied(plate.disc, plate.model, plate.supports, plate.loads, ties);
+  statics::StaticSolver tied(plate.disc, plate.model, plate.supports, plate.loads, ties);
   tied.set_incremental(true);
   ASSERT_TRUE(tied.solve().ok());
   auto gap = [&](const std::vector<double>& u) {
     return u[2 * static_cast<std::size_t>(top) + 1] - u[2 * static_cast<std::size_t>(bottom) + 1];
   };
-  const double contraction = gap(free_plate.basis_displacement(basis_constant));
+  const double contraction = gap(free_plate.basis_displacement(statics::basis_constant));
   ASSERT_LT(contraction, 0.0);  // the free plate narrows
-  const auto& u = tied.basis_displacement(basis_constant);
+  const auto& u = tied.basis_displacement(statics::basis_constant);
   EXPECT_LT(std::abs(gap(u)), 1e-3 * std::abs(contraction));
   const auto f_int = tied.internal_force(u);
-  const auto f_ext = tied.basis_force(basis_constant);
+  const auto f_ext = tied.basis_force(statics::basis_constant);
   for (std::size_t dof = 0; dof < u.size(); ++dof) {
     if (tied.free_index()[dof] >= 0) {
       EXPECT_NEAR(f_int[dof], f_ext[dof], 1e-9 * max_abs(f_ext)) << "dof " << dof;
@@ -223,26 +223,26 @@ TEST_P(SolverModels, TiesHoldTheirConstraintInEquilibriumAndUnderUpdates) {
   const double tie_force = k * gap(u);
   EXPECT_GT(std::abs(tie_force), 1e-3 * max_abs(f_ext));
 
-  std::vector<BondIndex> cut;
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
-    if (segments_cross(plate.disc.position[plate.disc.bond_i[b]],
-                       plate.disc.position[plate.disc.bond_j[b]], {0.005, -0.001},
-                       {0.005, 0.0015})) {
+  std::vector<mesh::BondIndex> cut;
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    if (mesh::segments_cross(plate.disc.position[plate.disc.bond_i[b]],
+                             plate.disc.position[plate.disc.bond_j[b]], {0.005, -0.001},
+                             {0.005, 0.0015})) {
       cut.push_back(b);
     }
   }
   ASSERT_GT(cut.size(), 10u);
-  StaticSolver refactored(plate.disc, plate.model, plate.supports, plate.loads, ties);
+  statics::StaticSolver refactored(plate.disc, plate.model, plate.supports, plate.loads, ties);
   ASSERT_TRUE(refactored.solve().ok());
   ASSERT_TRUE(refactored.break_bonds(cut).ok());
   ASSERT_TRUE(tied.break_bonds(cut).ok());
   EXPECT_EQ(tied.factorizations(), 1);
-  const auto& u_updated = tied.basis_displacement(basis_constant);
-  const auto& u_refactored = refactored.basis_displacement(basis_constant);
+  const auto& u_updated = tied.basis_displacement(statics::basis_constant);
+  const auto& u_refactored = refactored.basis_displacement(statics::basis_constant);
   for (std::size_t i = 0; i < u_updated.size(); ++i) {
     EXPECT_NEAR(u_updated[i], u_refactored[i], 1e-9 * max_abs(u_refactored));
   }
-  if (GetParam() == ModelKind::bond_based) {
+  if (GetParam() == model::ModelKind::bond_based) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     const auto n = static_cast<std::size_t>(refactored.num_unknowns());
@@ -260,7 +260,7 @@ TEST_P(SolverModels, TiesHoldTheirConstraintInEquilibriumAndUnderUpdates) {
 }
 
 /// Pattern and values of two upper triangles, bit for bit (signed zeros included).
-void expect_same_bits(const SparseMatrix& a, const SparseMatrix& b) {
+void expect_same_bits(const linalg::SparseMatrix& a, const linalg::SparseMatrix& b) {
   ASSERT_EQ(a.rows(), b.rows());
   ASSERT_EQ(a.cols(), b.cols());
   ASSERT_EQ(a.nonZeros(), b.nonZeros());
@@ -279,20 +279,20 @@ TEST_P(SolverModels, ScatterAssemblyIsBitForBitTheProductsAssembly) {
   // after breaking a node's whole family by refactorization (a ground spring) and a notch band;
   // and on a plate with a tie.
   const CompactTensionSpec spec;
-  const Specimen s =
+  const statics::Specimen s =
       make_compact_tension(spec, options_for(GetParam()), compact_tension_spacing(spec, 900));
-  StaticSolver solver(s.disc, s.model, s.supports, s.loads);
+  statics::StaticSolver solver(s.disc, s.model, s.supports, s.loads);
   ASSERT_TRUE(solver.solve().ok());
   expect_same_bits(solver.stiffness_upper(), solver.stiffness_upper_by_products());
-  const NodeIndex lone = s.disc.nearest_node({0.5 * spec.width, 0.3 * spec.width});
-  std::vector<BondIndex> cut;
+  const mesh::NodeIndex lone = s.disc.nearest_node({0.5 * spec.width, 0.3 * spec.width});
+  std::vector<mesh::BondIndex> cut;
   for (auto f = s.disc.family_offset[static_cast<std::size_t>(lone)];
        f < s.disc.family_offset[static_cast<std::size_t>(lone) + 1]; ++f) {
     cut.push_back(s.disc.family_bonds[static_cast<std::size_t>(f)]);
   }
-  for (BondIndex b = 0; b < s.disc.num_bonds(); b += 7) {
-    if (segments_cross(s.disc.position[s.disc.bond_i[b]], s.disc.position[s.disc.bond_j[b]],
-                       {0.5 * spec.width, -0.002}, {0.6 * spec.width, 0.002})) {
+  for (mesh::BondIndex b = 0; b < s.disc.num_bonds(); b += 7) {
+    if (mesh::segments_cross(s.disc.position[s.disc.bond_i[b]], s.disc.position[s.disc.bond_j[b]],
+                             {0.5 * spec.width, -0.002}, {0.6 * spec.width, 0.002})) {
       cut.push_back(b);
     }
   }
@@ -302,39 +302,43 @@ TEST_P(SolverModels, ScatterAssemblyIsBitForBitTheProductsAssembly) {
 
   auto plate =
       testing::make_tension_plate(aluminium, options_for(GetParam()), 0.01, 0.006, 0.0005, 1e6);
-  const NodeIndex top = plate.disc.nearest_node({0.01, 0.003});
-  const NodeIndex bottom = plate.disc.nearest_node({0.01, -0.003});
-  const NodeIndex middle = plate.disc.nearest_node({0.005, 0.0});
+  const mesh::NodeIndex top = plate.disc.nearest_node({0.01, 0.003});
+  const mesh::NodeIndex bottom = plate.disc.nearest_node({0.01, -0.003});
+  const mesh::NodeIndex middle = plate.disc.nearest_node({0.005, 0.0});
   const double k = 200.0 * aluminium.youngs_modulus * plate.geometry.thickness;
-  const std::vector<Tie> ties = {{{{top, 1, 1.0}, {bottom, 1, -1.0}, {middle, 0, 0.5}}, k}};
-  StaticSolver tied(plate.disc, plate.model, plate.supports, plate.loads, ties);
+  const std::vector<statics::Tie> ties = {
+      {{{top, 1, 1.0}, {bottom, 1, -1.0}, {middle, 0, 0.5}}, k}};
+  statics::StaticSolver tied(plate.disc, plate.model, plate.supports, plate.loads, ties);
   ASSERT_TRUE(tied.solve().ok());
   expect_same_bits(tied.stiffness_upper(), tied.stiffness_upper_by_products());
 }
 
 TEST(Ties, MalformedTiesAreRejected) {
-  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::bond_based), 0.01,
-                                           0.006, 0.0005, 1e6);
-  const NodeIndex outside = plate.disc.num_nodes();
-  for (const Tie& bad : {Tie{{}, 1.0}, Tie{{{0, 1, 1.0}}, 0.0}, Tie{{{outside, 0, 1.0}}, 1.0},
-                         Tie{{{0, 2, 1.0}}, 1.0}, Tie{{{0, 0, std::nan("")}}, 1.0}}) {
-    EXPECT_THROW(StaticSolver(plate.disc, plate.model, plate.supports, plate.loads, {bad}),
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::bond_based),
+                                           0.01, 0.006, 0.0005, 1e6);
+  const mesh::NodeIndex outside = plate.disc.num_nodes();
+  for (const statics::Tie& bad :
+       {statics::Tie{{}, 1.0}, statics::Tie{{{0, 1, 1.0}}, 0.0},
+        statics::Tie{{{outside, 0, 1.0}}, 1.0}, statics::Tie{{{0, 2, 1.0}}, 1.0},
+        statics::Tie{{{0, 0, std::nan("")}}, 1.0}}) {
+    EXPECT_THROW(statics::StaticSolver(plate.disc, plate.model, plate.supports, plate.loads, {bad}),
                  std::invalid_argument);
   }
 }
 
 /// Rank-one update columns shaped like bonds: every `stride`-th bond's free DOFs at both ends,
 /// with random values of order 0.3·√K_ff (seeded), so that an update stays in the pattern.
-std::vector<SparseCholesky::Column> random_bond_columns(const testing::TensionPlate& plate,
-                                                        const StaticSolver& solver,
-                                                        BondIndex stride, unsigned seed) {
-  const SparseMatrix& upper = solver.stiffness_upper();
+std::vector<linalg::SparseCholesky::Column> random_bond_columns(const testing::TensionPlate& plate,
+                                                                const statics::StaticSolver& solver,
+                                                                mesh::BondIndex stride,
+                                                                unsigned seed) {
+  const linalg::SparseMatrix& upper = solver.stiffness_upper();
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::vector<SparseCholesky::Column> columns;
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); b += stride) {
-    SparseCholesky::Column col;
-    for (const NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
+  std::vector<linalg::SparseCholesky::Column> columns;
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); b += stride) {
+    linalg::SparseCholesky::Column col;
+    for (const mesh::NodeIndex k : {plate.disc.bond_i[b], plate.disc.bond_j[b]}) {
       for (std::size_t c = 0; c < 2; ++c) {
         const int f = solver.free_index()[2 * static_cast<std::size_t>(k) + c];
         if (f < 0) continue;
@@ -350,21 +354,21 @@ std::vector<SparseCholesky::Column> random_bond_columns(const testing::TensionPl
 TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
   // The simplicial LDLᵀ solve after modify() is peritwin's own (two elimination subtrees on two
   // threads): equal to CHOLMOD's solve to round-off, and bit-identical on one or two threads.
-  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
-                                           0.01, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                           0.02, 0.01, 0.0005, 1e6);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  const SparseMatrix& upper = solver.stiffness_upper();
-  SparseCholesky cholesky;
+  const linalg::SparseMatrix& upper = solver.stiffness_upper();
+  linalg::SparseCholesky cholesky;
   ASSERT_TRUE(cholesky.factorize(upper).ok());
   // Columns within the matrix's pattern (no fill): scaled copies of some of its columns.
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
-  std::vector<SparseCholesky::Column> columns;
+  std::vector<linalg::SparseCholesky::Column> columns;
   for (int c = 0; c < upper.cols(); c += 97) {
-    SparseCholesky::Column col;
+    linalg::SparseCholesky::Column col;
     const double d = std::sqrt(std::abs(upper.coeff(c, c)));
-    for (SparseMatrix::InnerIterator it(upper, c); it; ++it) {
+    for (linalg::SparseMatrix::InnerIterator it(upper, c); it; ++it) {
       col.rows.push_back(static_cast<int>(it.row()));
       col.values.push_back(0.3 * d * uni(rng));
     }
@@ -390,24 +394,25 @@ TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
 TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   // modify_fused(added, removed): peritwin's one-sweep multiple-rank update equals CHOLMOD's update
   // then downdate to round-off, and is bit-identical on one or two threads.
-  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
-                                           0.01, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                           0.02, 0.01, 0.0005, 1e6);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  const SparseMatrix& upper = solver.stiffness_upper();
+  const linalg::SparseMatrix& upper = solver.stiffness_upper();
   // Bond vectors (pairs in the pattern: no fill).
-  const std::vector<SparseCholesky::Column> added = random_bond_columns(plate, solver, 37, 5);
+  const std::vector<linalg::SparseCholesky::Column> added =
+      random_bond_columns(plate, solver, 37, 5);
   ASSERT_GT(added.size(), 40u);  // more than one sweep of 16 ranks
-  const std::vector<SparseCholesky::Column> removed(added.begin(),
-                                                    added.begin() + added.size() / 2);
-  SparseCholesky reference, one, two;
-  for (SparseCholesky* c : {&reference, &one, &two}) ASSERT_TRUE(c->factorize(upper).ok());
+  const std::vector<linalg::SparseCholesky::Column> removed(added.begin(),
+                                                            added.begin() + added.size() / 2);
+  linalg::SparseCholesky reference, one, two;
+  for (linalg::SparseCholesky* c : {&reference, &one, &two}) ASSERT_TRUE(c->factorize(upper).ok());
   // A first small update, then a solve: its forward half is kept up to date by the next update.
-  const std::vector<SparseCholesky::Column> first(added.begin(), added.begin() + 3);
+  const std::vector<linalg::SparseCholesky::Column> first(added.begin(), added.begin() + 3);
   const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
   one.set_solve_threads(1);
   two.set_solve_threads(2);
-  for (SparseCholesky* c : {&one, &two}) {
+  for (linalg::SparseCholesky* c : {&one, &two}) {
     ASSERT_TRUE(c->modify_fused(first, {}).ok());
     Eigen::MatrixXd x = b;
     c->solve(x);
@@ -424,10 +429,10 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   EXPECT_TRUE(x_one == x_two);
   EXPECT_LT((x_one - x_ref).cwiseAbs().maxCoeff(), 1e-10 * x_ref.cwiseAbs().maxCoeff());
   // Removing what is left returns to the original matrix.
-  std::vector<SparseCholesky::Column> rest(added.begin() + added.size() / 2, added.end());
+  std::vector<linalg::SparseCholesky::Column> rest(added.begin() + added.size() / 2, added.end());
   rest.insert(rest.end(), first.begin(), first.end());  // `first` was added twice
   ASSERT_TRUE(two.modify_fused({}, rest).ok());
-  SparseCholesky fresh;
+  linalg::SparseCholesky fresh;
   ASSERT_TRUE(fresh.factorize(upper).ok());
   Eigen::MatrixXd x_fresh = b, x_back = b;
   fresh.solve_with_cholmod(x_fresh);
@@ -441,20 +446,21 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
   // be CHOLMOD's conversion bit for bit: a factor converted by CHOLMOD (cholmod_change_factor,
   // through modify() with a zero column on the last row, which changes no value) and one by
   // modify_fused(), then the same fused update on both, must solve to identical bits.
-  auto plate = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.02,
-                                           0.01, 0.0005, 1e6);
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                           0.02, 0.01, 0.0005, 1e6);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(solver.solve().ok());
-  const SparseMatrix& upper = solver.stiffness_upper();
+  const linalg::SparseMatrix& upper = solver.stiffness_upper();
   const int n = static_cast<int>(upper.rows());
   // Bond vectors: in the pattern, no fill.
-  const std::vector<SparseCholesky::Column> bonds = random_bond_columns(plate, solver, 53, 7);
+  const std::vector<linalg::SparseCholesky::Column> bonds =
+      random_bond_columns(plate, solver, 53, 7);
   ASSERT_GT(bonds.size(), 20u);
-  SparseCholesky by_cholmod, packed;
+  linalg::SparseCholesky by_cholmod, packed;
   ASSERT_TRUE(by_cholmod.factorize(upper).ok());
   ASSERT_TRUE(packed.factorize(upper).ok());
   const double supernodal_entries = packed.factor_nonzeros();
-  const SparseCholesky::Column zero{{n - 1}, {0.0}};
+  const linalg::SparseCholesky::Column zero{{n - 1}, {0.0}};
   ASSERT_TRUE(by_cholmod.modify({zero}, true).ok());
   const double simplicial_entries = by_cholmod.factor_nonzeros();
   ASSERT_TRUE(by_cholmod.modify_fused(bonds, {}).ok());
@@ -481,7 +487,7 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
   // factorize() after an update refactorizes with the kept supernodal analysis: the factor of
   // a fresh analysis and factorization, bit for bit.
   {
-    SparseCholesky again, fresh;
+    linalg::SparseCholesky again, fresh;
     ASSERT_TRUE(again.factorize(upper).ok());
     ASSERT_TRUE(again.modify_fused(bonds, {}).ok());
     ASSERT_TRUE(again.factorize(upper).ok());
@@ -500,7 +506,7 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
   // falls back to CHOLMOD's updown: the packed factor becomes CHOLMOD's simplicial one with the
   // same values, so both factors take the same path to the same bits; the result is the
   // matrix with the column added, checked against a fresh factorization of it.
-  const SparseCholesky::Column fill{
+  const linalg::SparseCholesky::Column fill{
       {0, n - 1}, {0.5 * std::sqrt(upper.coeff(0, 0)), 0.5 * std::sqrt(upper.coeff(n - 1, n - 1))}};
   ASSERT_TRUE(by_cholmod.modify_fused({fill}, {}).ok());
   ASSERT_TRUE(packed.modify_fused({fill}, {}).ok());
@@ -512,12 +518,12 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
   ASSERT_TRUE(by_cholmod.modify_fused({}, bonds).ok());
   by_cholmod.solve_with_cholmod(x_cholmod);
   EXPECT_TRUE(x_cholmod == x_packed);
-  SparseMatrix with_fill = upper;
+  linalg::SparseMatrix with_fill = upper;
   with_fill.coeffRef(0, 0) += fill.values[0] * fill.values[0];
   with_fill.coeffRef(n - 1, n - 1) += fill.values[1] * fill.values[1];
   with_fill.coeffRef(0, n - 1) += fill.values[0] * fill.values[1];
   with_fill.makeCompressed();
-  SparseCholesky fresh;
+  linalg::SparseCholesky fresh;
   ASSERT_TRUE(fresh.factorize(with_fill).ok());
   fresh.solve_with_cholmod(x_fresh);
   EXPECT_LT((x_packed - x_fresh).cwiseAbs().maxCoeff(), 1e-10 * x_fresh.cwiseAbs().maxCoeff());
@@ -527,14 +533,14 @@ TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStora
 class BondFactors : public ::testing::Test {
  protected:
   testing::TensionPlate plate = testing::make_tension_plate(
-      aluminium, options_for(ModelKind::bond_based), 0.01, 0.006, 0.0005, 1e6);
+      aluminium, options_for(model::ModelKind::bond_based), 0.01, 0.006, 0.0005, 1e6);
   /// Bonds crossing a vertical line at x (a band across the plate's middle).
-  std::vector<BondIndex> band(double x) const {
-    std::vector<BondIndex> out;
-    for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
-      const Point a = plate.disc.position[plate.disc.bond_i[b]];
-      const Point c = plate.disc.position[plate.disc.bond_j[b]];
-      if (segments_cross(a, c, {x, -0.001}, {x, 0.0015})) out.push_back(b);
+  std::vector<mesh::BondIndex> band(double x) const {
+    std::vector<mesh::BondIndex> out;
+    for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+      const mesh::Point a = plate.disc.position[plate.disc.bond_i[b]];
+      const mesh::Point c = plate.disc.position[plate.disc.bond_j[b]];
+      if (mesh::segments_cross(a, c, {x, -0.001}, {x, 0.0015})) out.push_back(b);
     }
     return out;
   }
@@ -549,22 +555,22 @@ class BondFactors : public ::testing::Test {
 TEST_F(BondFactors, IncrementalSofteningEqualsRefactorization) {
   // Random factors on two overlapping sets of bonds, in two steps (the second one softens some
   // bonds further, stiffens none, and breaks a few via factor 0): rank updates vs refactoring.
-  StaticSolver incremental(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver incremental(plate.disc, plate.model, plate.supports, plate.loads);
   incremental.set_incremental(true);
-  StaticSolver refactor(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver refactor(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(incremental.solve().ok());
   ASSERT_TRUE(refactor.solve().ok());
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> uni(0.05, 1.0);
-  std::vector<BondIndex> first = band(0.004);
+  std::vector<mesh::BondIndex> first = band(0.004);
   std::vector<double> f1(first.size());
   for (auto& f : f1) f = uni(rng);
   ASSERT_GT(first.size(), 10u);
   ASSERT_TRUE(incremental.set_bond_factors(first, f1).ok());
   ASSERT_TRUE(refactor.set_bond_factors(first, f1).ok());
-  expect_same(incremental.basis_displacement(basis_constant),
-              refactor.basis_displacement(basis_constant), 1e-9);
-  std::vector<BondIndex> second = band(0.006);
+  expect_same(incremental.basis_displacement(statics::basis_constant),
+              refactor.basis_displacement(statics::basis_constant), 1e-9);
+  std::vector<mesh::BondIndex> second = band(0.006);
   second.insert(second.end(), first.begin(), first.begin() + 5);
   std::vector<double> f2(second.size());
   for (std::size_t n = 0; n < second.size(); ++n) {
@@ -581,24 +587,24 @@ TEST_F(BondFactors, IncrementalSofteningEqualsRefactorization) {
   EXPECT_EQ(incremental.bond_factor(second[0]), 0.0);
   EXPECT_FALSE(incremental.intact()[static_cast<std::size_t>(second[0])]);
   for (int basis = 0; basis < 3; ++basis) {
-    expect_same(incremental.basis_displacement(static_cast<Basis>(basis)),
-                refactor.basis_displacement(static_cast<Basis>(basis)), 1e-9);
+    expect_same(incremental.basis_displacement(static_cast<statics::Basis>(basis)),
+                refactor.basis_displacement(static_cast<statics::Basis>(basis)), 1e-9);
   }
   // Breaking a softened bond removes only its remaining stiffness.
-  const std::vector<BondIndex> broken(second.begin() + 1, second.begin() + 4);
+  const std::vector<mesh::BondIndex> broken(second.begin() + 1, second.begin() + 4);
   ASSERT_TRUE(incremental.break_bonds(broken).ok());
   ASSERT_TRUE(refactor.break_bonds(broken).ok());
-  expect_same(incremental.basis_displacement(basis_constant),
-              refactor.basis_displacement(basis_constant), 1e-9);
-  for (BondIndex b : broken) EXPECT_EQ(incremental.bond_factor(b), 0.0);
+  expect_same(incremental.basis_displacement(statics::basis_constant),
+              refactor.basis_displacement(statics::basis_constant), 1e-9);
+  for (mesh::BondIndex b : broken) EXPECT_EQ(incremental.bond_factor(b), 0.0);
 }
 
 TEST_F(BondFactors, SofteningToZeroEqualsBreaking) {
-  const std::vector<BondIndex> cut = band(0.005);
+  const std::vector<mesh::BondIndex> cut = band(0.005);
   const std::vector<double> zeros(cut.size(), 0.0);
   for (bool incremental : {true, false}) {
-    StaticSolver softened(plate.disc, plate.model, plate.supports, plate.loads);
-    StaticSolver broken(plate.disc, plate.model, plate.supports, plate.loads);
+    statics::StaticSolver softened(plate.disc, plate.model, plate.supports, plate.loads);
+    statics::StaticSolver broken(plate.disc, plate.model, plate.supports, plate.loads);
     softened.set_incremental(incremental);
     broken.set_incremental(incremental);
     ASSERT_TRUE(softened.solve().ok());
@@ -607,23 +613,23 @@ TEST_F(BondFactors, SofteningToZeroEqualsBreaking) {
     ASSERT_TRUE(broken.break_bonds(cut).ok());
     EXPECT_EQ(softened.intact(), broken.intact());
     EXPECT_EQ(softened.bond_factors(), broken.bond_factors());
-    expect_same(softened.basis_displacement(basis_constant),
-                broken.basis_displacement(basis_constant), 1e-12);
+    expect_same(softened.basis_displacement(statics::basis_constant),
+                broken.basis_displacement(statics::basis_constant), 1e-12);
   }
 }
 
 TEST_F(BondFactors, SoftenedModelIsInEquilibrium) {
-  StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
   solver.set_incremental(true);
   ASSERT_TRUE(solver.solve().ok());
-  const std::vector<BondIndex> bonds = band(0.005);
+  const std::vector<mesh::BondIndex> bonds = band(0.005);
   std::vector<double> factors(bonds.size());
   for (std::size_t n = 0; n < bonds.size(); ++n)
     factors[n] = 0.1 + 0.2 * static_cast<double>(n % 5);
   ASSERT_TRUE(solver.set_bond_factors(bonds, factors).ok());
-  const auto& u = solver.basis_displacement(basis_constant);
+  const auto& u = solver.basis_displacement(statics::basis_constant);
   const auto f_int = solver.internal_force(u);
-  const auto f_ext = solver.basis_force(basis_constant);
+  const auto f_ext = solver.basis_force(statics::basis_constant);
   const double scale = max_abs(f_ext);
   for (std::size_t dof = 0; dof < u.size(); ++dof) {
     if (solver.free_index()[dof] >= 0) {
@@ -634,36 +640,36 @@ TEST_F(BondFactors, SoftenedModelIsInEquilibrium) {
 
 TEST_F(BondFactors, UniformFactorScalesDisplacementByItsInverse) {
   // Every bond at factor f: K becomes f·K, so u = u_intact / f (uniform tension).
-  StaticSolver intact(plate.disc, plate.model, plate.supports, plate.loads);
+  statics::StaticSolver intact(plate.disc, plate.model, plate.supports, plate.loads);
   ASSERT_TRUE(intact.solve().ok());
-  std::vector<BondIndex> all;
-  for (BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+  std::vector<mesh::BondIndex> all;
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
     if (intact.intact()[static_cast<std::size_t>(b)]) all.push_back(b);
   }
   const double f = 0.37;
   const std::vector<double> factors(all.size(), f);
   for (bool incremental : {false, true}) {
-    StaticSolver soft(plate.disc, plate.model, plate.supports, plate.loads);
+    statics::StaticSolver soft(plate.disc, plate.model, plate.supports, plate.loads);
     soft.set_incremental(incremental);
     ASSERT_TRUE(soft.solve().ok());
     ASSERT_TRUE(soft.set_bond_factors(all, factors).ok());
-    std::vector<double> expected = intact.basis_displacement(basis_constant);
+    std::vector<double> expected = intact.basis_displacement(statics::basis_constant);
     for (auto& x : expected) x /= f;
-    expect_same(soft.basis_displacement(basis_constant), expected, 1e-9);
+    expect_same(soft.basis_displacement(statics::basis_constant), expected, 1e-9);
   }
 }
 
 TEST(BondFactorsErrors, StateBasedAndInvalidFactorsAreRejected) {
-  auto osb = testing::make_tension_plate(aluminium, options_for(ModelKind::state_based), 0.004,
-                                         0.003, 0.0005, 1e6);
-  StaticSolver s(osb.disc, osb.model, osb.supports, osb.loads);
+  auto osb = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                         0.004, 0.003, 0.0005, 1e6);
+  statics::StaticSolver s(osb.disc, osb.model, osb.supports, osb.loads);
   ASSERT_TRUE(s.solve().ok());
-  const std::vector<BondIndex> one{0};
+  const std::vector<mesh::BondIndex> one{0};
   const std::vector<double> half{0.5};
   EXPECT_THROW((void)s.set_bond_factors(one, half), std::logic_error);
-  auto bb = testing::make_tension_plate(aluminium, options_for(ModelKind::bond_based), 0.004, 0.003,
-                                        0.0005, 1e6);
-  StaticSolver b(bb.disc, bb.model, bb.supports, bb.loads);
+  auto bb = testing::make_tension_plate(aluminium, options_for(model::ModelKind::bond_based), 0.004,
+                                        0.003, 0.0005, 1e6);
+  statics::StaticSolver b(bb.disc, bb.model, bb.supports, bb.loads);
   ASSERT_TRUE(b.solve().ok());
   EXPECT_EQ(b.bond_factor(0), 1.0);
   const std::vector<double> bad{1.5};
@@ -675,7 +681,8 @@ TEST(BondFactorsErrors, StateBasedAndInvalidFactorsAreRejected) {
 }
 
 INSTANTIATE_TEST_SUITE_P(BothModels, SolverModels,
-                         ::testing::Values(ModelKind::bond_based, ModelKind::state_based),
+                         ::testing::Values(model::ModelKind::bond_based,
+                                           model::ModelKind::state_based),
                          testing::model_kind_param_name);
 
 }  // namespace

@@ -20,11 +20,11 @@
 #include <sstream>
 #include <thread>
 
+#include "core/loopback_port.h"
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "tests/support/lcm_hub.h"
-#include "tests/support/loopback_port.h"
 #include "tests/support/process.h"
 
 namespace peritwin::stream {
@@ -128,10 +128,10 @@ TEST_F(Stream, FifoInRandomPiecesEqualsTheReplay) {
 
 TEST_F(Stream, TcpConnectionEqualsTheReplayAfterSigterm) {
   const std::string reference = replay_summary(kSeries);
-  const int port = peritwin::testing::free_loopback_port();
+  const int port = peritwin::core::free_loopback_port();
   auto s =
       stream({"--input", "tcp://127.0.0.1:" + std::to_string(port), "--in-process"}, "stream.log");
-  ASSERT_TRUE(peritwin::testing::wait_for_loopback_port(port, kWaitS))
+  ASSERT_TRUE(peritwin::core::wait_for_loopback_port(port, kWaitS))
       << read_file(dir_ / "stream.log");
   const std::string text = read_file(kSeries);
   const std::size_t half = text.find('\n', text.size() / 2) + 1;

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "config/config.h"
 #include "stream/stream_tool.h"
-#include "twin/config/config.h"
 
 namespace peritwin::stream {
 namespace {
@@ -22,7 +22,7 @@ class StreamState : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto loaded =
-        twin::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+        config::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
     ASSERT_TRUE(loaded.ok()) << loaded.error_text();
     detail_ = loaded.config->details.at(0);
     file_ = fs::temp_directory_path() / ("peritwin_stream_state_" + std::to_string(::getpid()));
@@ -38,24 +38,24 @@ class StreamState : public ::testing::Test {
     return s.str();
   }
   /// A pipeline that has taken a few cycles (an open batch and an open residue).
-  Pipeline fed() const {
-    Pipeline p(detail_, "stream", batching_, 1);
-    std::vector<twin::Batch> closed;
+  stream::Pipeline fed() const {
+    stream::Pipeline p(detail_, "stream", batching_, 1);
+    std::vector<messages::Batch> closed;
     const double loads[] = {400, 4000, 400, 4000, 400, 3000, 1000, 3500};
     double t = 0;
     for (const double load : loads) p.sample(t += 0.01, load, 0.0, closed);
     return p;
   }
-  twin::DetailConfig detail_;
-  replay::BatchingOptions batching_{};
+  config::DetailConfig detail_;
+  loads::BatchingOptions batching_{};
   fs::path file_;
 };
 
 TEST_F(StreamState, SamplesTakenPerSourceSurviveTheStateFile) {
-  Pipeline p = fed();
+  stream::Pipeline p = fed();
   p.samples_taken = {{"gauge", 57}, {"gauge 2\n\"x\"", 1}, {"g", (std::int64_t{1} << 62) + 3}};
-  ASSERT_TRUE(save_state(file_, p, {})) << "save";
-  const auto back = load_state(file_, detail_, "stream", batching_);
+  ASSERT_TRUE(stream::save_state(file_, p, {})) << "save";
+  const auto back = stream::load_state(file_, detail_, "stream", batching_);
   ASSERT_TRUE(back) << back.error();
   EXPECT_EQ(back->pipeline.samples_taken, p.samples_taken);
   EXPECT_EQ(back->pipeline.save(), p.save());  // everything else bit-identical too
@@ -77,8 +77,8 @@ std::string fnv1a_hex(std::string_view text, std::uint64_t basis = 0xcbf29ce4842
 constexpr std::uint64_t kVersionOneBasis = 1469598103934665603ULL;
 
 TEST_F(StreamState, VersionOneFileReadsAsHavingTakenNoSamples) {
-  const Pipeline p = fed();
-  ASSERT_TRUE(save_state(file_, p, {}));
+  const stream::Pipeline p = fed();
+  ASSERT_TRUE(stream::save_state(file_, p, {}));
   // The same state as version 1 wrote it: version 1, no samples_taken line, its own checksum.
   const std::string text = read(file_);
   std::string body = text.substr(0, text.rfind("checksum "));
@@ -91,10 +91,10 @@ TEST_F(StreamState, VersionOneFileReadsAsHavingTakenNoSamples) {
   ASSERT_NE(at, std::string::npos) << body;
   body.erase(at, taken.size());
   std::ofstream(file_, std::ios::trunc) << body << "checksum " << fnv1a_hex(body) << "\n";
-  EXPECT_FALSE(load_state(file_, detail_, "stream", batching_));  // v1 had its own checksum
+  EXPECT_FALSE(stream::load_state(file_, detail_, "stream", batching_));  // v1 had its own checksum
   std::ofstream(file_, std::ios::trunc)
       << body << "checksum " << fnv1a_hex(body, kVersionOneBasis) << "\n";
-  const auto back = load_state(file_, detail_, "stream", batching_);
+  const auto back = stream::load_state(file_, detail_, "stream", batching_);
   ASSERT_TRUE(back) << back.error();
   EXPECT_TRUE(back->pipeline.samples_taken.empty());
   EXPECT_EQ(back->pipeline.save(), p.save());
@@ -104,7 +104,7 @@ TEST_F(StreamState, VersionOneFileReadsAsHavingTakenNoSamples) {
   const auto zero = twice.find(taken);
   twice.replace(zero, taken.size(), "\nsamples_taken 2 6761 1 6761 2");  // "ga" twice
   std::ofstream(file_, std::ios::trunc) << twice << "checksum " << fnv1a_hex(twice) << "\n";
-  const auto refused = load_state(file_, detail_, "stream", batching_);
+  const auto refused = stream::load_state(file_, detail_, "stream", batching_);
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.error().find("samples_taken: bad or repeated source \"6761\""),
             std::string::npos)

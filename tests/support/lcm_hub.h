@@ -48,7 +48,7 @@ inline std::unique_ptr<Process> start_lcm_hub(const std::string& java, int port,
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
-  return wait_for_loopback_port(port, timeout_s) ? std::move(hub) : nullptr;
+  return core::wait_for_loopback_port(port, timeout_s) ? std::move(hub) : nullptr;
 }
 
 inline std::string read_file(const std::filesystem::path& file) {
@@ -96,7 +96,7 @@ class LcmHub {
       return;
     }
     for (int attempt = 0; attempt < 5 && !hub_; ++attempt) {
-      port_ = free_loopback_port();
+      port_ = core::free_loopback_port();
       hub_ = std::make_unique<Process>(
           std::vector<std::string>{java, "-cp", kLcmJar, "lcm.lcm.TCPService",
                                    std::to_string(port_)},
@@ -114,7 +114,7 @@ class LcmHub {
       }
       if (!ours) hub_.reset();
     }
-    if (hub_ && !wait_for_loopback_port(port_, timeout_s)) hub_.reset();
+    if (hub_ && !core::wait_for_loopback_port(port_, timeout_s)) hub_.reset();
   }
 
   /// Why there is no hub to test with (java or lcm.jar missing: skip), or "".

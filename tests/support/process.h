@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "tests/support/loopback_port.h"
+#include "core/loopback_port.h"
 
 extern char** environ;
 
@@ -147,7 +147,7 @@ inline bool listens_on(pid_t pid, int port) {
   return false;
 }
 
-using twin::free_loopback_port;
-using twin::wait_for_loopback_port;
+using core::free_loopback_port;
+using core::wait_for_loopback_port;
 
 }  // namespace peritwin::testing

@@ -7,9 +7,9 @@
 #include <sstream>
 #include <string>
 
-#include "twin/config/config.h"
-#include "twin/model/detail_model.h"
-#include "twin/model/twin.h"
+#include "config/config.h"
+#include "twin/detail_model.h"
+#include "twin/twin.h"
 
 namespace peritwin::twin::testing {
 
@@ -38,10 +38,10 @@ inline std::string b1_text(const std::string& life_extra = "every_batches = 0",
   return text;
 }
 
-inline DetailConfig b1_config(const std::string& life_extra = "every_batches = 0",
-                              const Edits& edits = {}) {
+inline config::DetailConfig b1_config(const std::string& life_extra = "every_batches = 0",
+                                      const Edits& edits = {}) {
   const std::string text = b1_text(life_extra, edits);
-  auto result = parse_config(text, "b1-test.toml");
+  auto result = config::parse_config(text, "b1-test.toml");
   EXPECT_TRUE(result.ok()) << result.error_text();
   return result.config->details.at(0);
 }
@@ -60,21 +60,21 @@ inline void write_cross_process_inputs(const std::string& config, const std::str
   for (int i = 0; i < 24; ++i) h << (i % 4 == 3 ? "4200" : "4000") << ",0.1,0,1000\n";
 }
 
-inline std::shared_ptr<const DetailModel> b1_model(const DetailConfig& config) {
-  auto model = DetailModel::build(config);
+inline std::shared_ptr<const twin::DetailModel> b1_model(const config::DetailConfig& config) {
+  auto model = twin::DetailModel::build(config);
   EXPECT_TRUE(model.ok()) << model.error().message();
   return model ? *model : nullptr;
 }
 
-inline std::unique_ptr<Twin> make_twin(const std::shared_ptr<const DetailModel>& model,
-                                       LifeMode mode = LifeMode::synchronous) {
-  auto twin = Twin::create(model, {mode, true});
+inline std::unique_ptr<twin::Twin> make_twin(const std::shared_ptr<const twin::DetailModel>& model,
+                                             twin::LifeMode mode = twin::LifeMode::synchronous) {
+  auto twin = twin::Twin::create(model, {mode, true});
   EXPECT_TRUE(twin.ok()) << twin.error().message();
   return twin ? std::move(*twin) : nullptr;
 }
 
-inline Batch batch(std::int64_t seq, std::vector<LoadBlock> blocks,
-                   const std::string& source = "test") {
+inline messages::Batch batch(std::int64_t seq, std::vector<core::LoadBlock> blocks,
+                             const std::string& source = "test") {
   return {"b1-ct", source, seq, std::move(blocks)};
 }
 

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "twin/config/config.h"
+#include "config/config.h"
 #include "validation/specimens.h"
 
 namespace peritwin::twin {
@@ -84,16 +84,18 @@ Doc plate() {
 }
 
 using XY = std::pair<double, double>;
-XY xy(Point p) { return {p.x, p.y}; }
+XY xy(mesh::Point p) { return {p.x, p.y}; }
 
-ConfigResult parse(const Doc& doc) { return parse_config(doc.text(), "plate.toml"); }
+config::ConfigResult parse(const Doc& doc) {
+  return config::parse_config(doc.text(), "plate.toml");
+}
 
 /// Exactly one error, at (line, path), whose reason contains `reason`.
-void expect_one_error(const ConfigResult& r, std::uint32_t line, std::string_view path,
+void expect_one_error(const config::ConfigResult& r, std::uint32_t line, std::string_view path,
                       std::string_view reason) {
   ASSERT_FALSE(r.ok());
   ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
-  const ConfigError& e = r.errors[0];
+  const config::ConfigError& e = r.errors[0];
   EXPECT_EQ(e.file, "plate.toml");
   EXPECT_EQ(e.line, line) << e.message();
   EXPECT_EQ(e.path, path) << e.message();
@@ -103,18 +105,18 @@ void expect_one_error(const ConfigResult& r, std::uint32_t line, std::string_vie
 TEST(Config, PlateParsesWithDefaults) {
   Doc doc = plate();
   doc.erase("horizon_ratio");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_TRUE(r.ok()) << r.error_text();
   ASSERT_EQ(r.config->details.size(), 1u);
-  const DetailConfig& d = r.config->details[0];
+  const config::DetailConfig& d = r.config->details[0];
   EXPECT_EQ(d.id, "plate");
   EXPECT_EQ(d.token, "PLATE");
   EXPECT_EQ(d.horizon_ratio, 3.015);
   EXPECT_EQ(d.geometry.rigid_factor, 200.0);
   EXPECT_EQ(d.material.fracture_toughness, 0.0);
-  EXPECT_EQ(d.model.kind, ModelKind::state_based);
-  EXPECT_EQ(d.model.kernel, Kernel::constant);
-  EXPECT_EQ(d.model.plane, PlaneCondition::plane_stress);
+  EXPECT_EQ(d.model.kind, model::ModelKind::state_based);
+  EXPECT_EQ(d.model.kernel, model::Kernel::constant);
+  EXPECT_EQ(d.model.plane, model::PlaneCondition::plane_stress);
   EXPECT_TRUE(d.model.surface_correction);
   EXPECT_EQ(d.fatigue.phase_switch_damage, 0.398);
   EXPECT_EQ(d.fatigue.strain.eps_inf, 0.0);
@@ -127,9 +129,9 @@ TEST(Config, PlateParsesWithDefaults) {
   EXPECT_EQ(d.output.directory, "results/plate");
   EXPECT_EQ(d.output.field_every_batches, 10);
   EXPECT_FALSE(d.output.png);
-  EXPECT_EQ(d.life.criterion, LifeCriterion::phase3);
+  EXPECT_EQ(d.life.criterion, config::LifeCriterion::phase3);
   EXPECT_TRUE(d.life.empirical_spectrum());
-  EXPECT_EQ(d.life.band, BandSource::none);
+  EXPECT_EQ(d.life.band, config::BandSource::none);
   EXPECT_EQ(d.checkpoint.every_batches, 100);
   EXPECT_EQ(d.checkpoint.every_seconds, 300.0);
 }
@@ -140,7 +142,7 @@ TEST(Config, PhiZeroDefaultsToTheSplitDamageOfTheHorizon) {
   Doc doc = plate();
   doc.erase("horizon_ratio");
   doc.insert_after("dx = ", "horizon_ratio = 2.0");
-  ConfigResult r = parse(doc);
+  config::ConfigResult r = parse(doc);
   ASSERT_TRUE(r.ok()) << r.error_text();
   EXPECT_EQ(r.config->details[0].fatigue.phase_switch_damage, 0.35);
   doc.insert_after("law = ", "phi0 = 0.3");
@@ -150,16 +152,16 @@ TEST(Config, PhiZeroDefaultsToTheSplitDamageOfTheHorizon) {
 }
 
 TEST(Config, B1Example) {
-  const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
+  const config::ConfigResult r = config::load_config(examples_dir() + "/b1-ct-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   ASSERT_EQ(r.config->details.size(), 1u);
-  const DetailConfig& d = r.config->details[0];
+  const config::DetailConfig& d = r.config->details[0];
   EXPECT_EQ(d.id, "b1-ct");
   EXPECT_EQ(d.token, "B1_CT");
-  const DetailGeometry& g = d.geometry;
+  const mesh::DetailGeometry& g = d.geometry;
   ASSERT_EQ(g.outline.size(), 1u);
-  ASSERT_EQ(g.outline[0].shape, Region::Shape::rectangle);
-  const Rectangle& o = g.outline[0].rectangle;
+  ASSERT_EQ(g.outline[0].shape, mesh::Region::Shape::rectangle);
+  const mesh::Rectangle& o = g.outline[0].rectangle;
   EXPECT_EQ(xy({o.x_min, o.y_min}), XY(0.0, -0.030));
   EXPECT_EQ(xy({o.x_max, o.y_max}), XY(0.0625, 0.030));
   EXPECT_EQ(g.thickness, 0.010);
@@ -170,13 +172,13 @@ TEST(Config, B1Example) {
   EXPECT_EQ(g.notches[0].name, "notch 0");
   EXPECT_EQ(xy(g.notches[0].path[0]), XY(-0.001, 0.0));
   EXPECT_EQ(xy(g.notches[0].tip()), XY(0.0275, 0.0));
-  EXPECT_EQ(d.stress_intensity.method, StressIntensityMethod::compact_tension);
+  EXPECT_EQ(d.stress_intensity.method, config::StressIntensityMethod::compact_tension);
   EXPECT_EQ(d.stress_intensity.width, 0.050);
   EXPECT_EQ(xy(d.stress_intensity.load_line), XY(0.0125, 0.0));
   ASSERT_EQ(g.rigid_regions.size(), 2u);
   for (int k = 0; k < 2; ++k) {
-    const Region& pin = g.rigid_regions[k];
-    ASSERT_EQ(pin.shape, Region::Shape::circle);
+    const mesh::Region& pin = g.rigid_regions[k];
+    ASSERT_EQ(pin.shape, mesh::Region::Shape::circle);
     EXPECT_EQ(xy(pin.circle.centre), XY(0.0125, k == 0 ? 0.275 * 0.050 : -0.275 * 0.050));
     EXPECT_EQ(pin.circle.radius, 0.00625);
   }
@@ -185,8 +187,8 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.material.youngs_modulus, 68e9);
   EXPECT_EQ(d.material.poisson_ratio, 0.33);
   EXPECT_EQ(d.material.fracture_toughness, 48.7e6);
-  EXPECT_EQ(d.model.kind, ModelKind::state_based);
-  EXPECT_EQ(d.fatigue.law, FatigueLaw::strain_range);
+  EXPECT_EQ(d.model.kind, model::ModelKind::state_based);
+  EXPECT_EQ(d.fatigue.law, fatigue::FatigueLaw::strain_range);
   EXPECT_EQ(d.fatigue.phase_switch_damage, 0.398);
   EXPECT_EQ(d.fatigue.strain.A1, 103.7465);
   EXPECT_EQ(d.fatigue.strain.m1, 2.29153);
@@ -194,8 +196,8 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.fatigue.strain.m2, 2.6183);
   ASSERT_EQ(d.loads.size(), 2u);
   for (int k = 0; k < 2; ++k) {
-    const LoadSpec& l = d.loads[k];
-    ASSERT_EQ(l.target.kind, NodeSelector::Kind::region);
+    const config::LoadSpec& l = d.loads[k];
+    ASSERT_EQ(l.target.kind, config::NodeSelector::Kind::region);
     EXPECT_EQ(xy(l.target.region.circle.centre), xy(g.rigid_regions[k].circle.centre));
     EXPECT_EQ(l.target.region.circle.radius, 0.00625);
     EXPECT_EQ(xy(l.constant), XY(0.0, k == 0 ? 1.0 : -1.0));
@@ -205,29 +207,30 @@ TEST(Config, B1Example) {
   EXPECT_EQ(d.loads[0].name, "upper pin");
   ASSERT_EQ(d.supports.size(), 2u);
   for (int k = 0; k < 2; ++k) {
-    const SupportSpec& s = d.supports[k];
-    ASSERT_EQ(s.target.kind, NodeSelector::Kind::point);
+    const config::SupportSpec& s = d.supports[k];
+    ASSERT_EQ(s.target.kind, config::NodeSelector::Kind::point);
     EXPECT_EQ(xy(s.target.point), XY(0.0625, k == 0 ? 0.0005 : -0.0005));
     EXPECT_TRUE(s.fix_x && s.fix_y);
   }
   EXPECT_EQ(d.output.directory, "results/b1-ct");
   EXPECT_TRUE(d.output.png);
-  EXPECT_EQ(d.life.criterion, LifeCriterion::crack_length);
+  EXPECT_EQ(d.life.criterion, config::LifeCriterion::crack_length);
   EXPECT_EQ(d.life.critical_crack_length, 0.008);
   EXPECT_EQ(d.life.every_batches, 10);
   ASSERT_EQ(d.life.reference_spectrum.size(), 1u);
-  EXPECT_EQ(d.life.reference_spectrum[0], (LoadBlock{4000.0, 0.1, 0.0, 1000}));
-  EXPECT_EQ(d.life.band, BandSource::a2_scatter);
+  EXPECT_EQ(d.life.reference_spectrum[0], (core::LoadBlock{4000.0, 0.1, 0.0, 1000}));
+  EXPECT_EQ(d.life.band, config::BandSource::a2_scatter);
   EXPECT_EQ(d.life.a2_relative_scatter, 0.2);
   EXPECT_EQ(d.checkpoint.every_batches, 100);
   EXPECT_EQ(d.checkpoint.every_seconds, 300.0);
 }
 
 TEST(Config, B1ExampleIsTheSpecimen) {
-  const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
+  const config::ConfigResult r = config::load_config(examples_dir() + "/b1-ct-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const DetailConfig& d = r.config->details[0];
-  const Specimen s = make_compact_tension(CompactTensionSpec{}, d.model, d.dx, d.horizon_ratio);
+  const config::DetailConfig& d = r.config->details[0];
+  const statics::Specimen s =
+      make_compact_tension(CompactTensionSpec{}, d.model, d.dx, d.horizon_ratio);
   EXPECT_EQ(d.material.youngs_modulus, s.material.youngs_modulus);
   EXPECT_EQ(d.material.poisson_ratio, s.material.poisson_ratio);
   EXPECT_EQ(d.material.fracture_toughness, s.material.fracture_toughness);
@@ -236,7 +239,7 @@ TEST(Config, B1ExampleIsTheSpecimen) {
 
   // Same nodes, bonds, rigid nodes and pre-cut bonds (the pin boundary passes exactly through
   // lattice points, so this also checks the pin centres to the last bit).
-  const Discretization disc = discretize(d);
+  const mesh::Discretization disc = discretize(d);
   ASSERT_EQ(disc.num_nodes(), 62 * 60);  // no holes: node (i, j) has index 62j + i
   EXPECT_EQ(disc.num_nodes(), s.disc.num_nodes());
   EXPECT_EQ(disc.bond_i, s.disc.bond_i);
@@ -244,11 +247,11 @@ TEST(Config, B1ExampleIsTheSpecimen) {
   EXPECT_EQ(disc.rigid, s.disc.rigid);
   EXPECT_EQ(disc.bond_precut, s.disc.bond_precut);
 
-  const ResolvedBoundary b = resolve(d, disc);
+  const config::ResolvedBoundary b = config::resolve(d, disc);
   ASSERT_TRUE(b.ok());
   ASSERT_EQ(b.supports.size(), 2u);
-  EXPECT_EQ(b.supports[0].nodes, std::vector<NodeIndex>{30 * 62 + 61});  // (61.5, 0.5) mm
-  EXPECT_EQ(b.supports[1].nodes, std::vector<NodeIndex>{29 * 62 + 61});  // (61.5, -0.5) mm
+  EXPECT_EQ(b.supports[0].nodes, std::vector<mesh::NodeIndex>{30 * 62 + 61});  // (61.5, 0.5) mm
+  EXPECT_EQ(b.supports[1].nodes, std::vector<mesh::NodeIndex>{29 * 62 + 61});  // (61.5, -0.5) mm
   ASSERT_EQ(s.supports.size(), 2u);
   ASSERT_EQ(b.loads.size(), 2u);
   ASSERT_EQ(s.loads.size(), 2u);
@@ -264,12 +267,12 @@ TEST(Config, B1ExampleIsTheSpecimen) {
 }
 
 TEST(Config, B2Example) {
-  const ConfigResult r = load_config(examples_dir() + "/b2-cts-al6061.toml");
+  const config::ConfigResult r = config::load_config(examples_dir() + "/b2-cts-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const DetailConfig& d = r.config->details[0];
+  const config::DetailConfig& d = r.config->details[0];
   EXPECT_EQ(d.id, "b2-cts");
   EXPECT_EQ(d.token, "B2_CTS");
-  const Rectangle& o = d.geometry.outline.at(0).rectangle;
+  const mesh::Rectangle& o = d.geometry.outline.at(0).rectangle;
   EXPECT_EQ(xy({o.x_min, o.y_min}), XY(0.0, -0.045));
   EXPECT_EQ(xy({o.x_max, o.y_max}), XY(0.090, 0.045));
   EXPECT_EQ(d.geometry.thickness, 0.010);
@@ -279,7 +282,7 @@ TEST(Config, B2Example) {
   const double xs[] = {0.010, 0.045, 0.080};
   ASSERT_EQ(d.geometry.rigid_regions.size(), 6u);
   for (int k = 0; k < 6; ++k) {
-    const Circle& c = d.geometry.rigid_regions[k].circle;
+    const mesh::Circle& c = d.geometry.rigid_regions[k].circle;
     EXPECT_EQ(xy(c.centre), XY(xs[k % 3], k < 3 ? 0.030 : -0.030));
     EXPECT_EQ(c.radius, 0.004);  // Ø 8 mm
   }
@@ -289,7 +292,7 @@ TEST(Config, B2Example) {
   const double e_over_f = 3.0 / 7.0;
   ASSERT_EQ(d.loads.size(), 3u);
   for (int k = 0; k < 3; ++k) {
-    const LoadSpec& l = d.loads[k];
+    const config::LoadSpec& l = d.loads[k];
     EXPECT_EQ(xy(l.target.region.circle.centre), XY(xs[k], 0.030));
     EXPECT_EQ(xy(l.constant), XY(0.0, 0.0));
   }
@@ -304,13 +307,13 @@ TEST(Config, B2Example) {
     EXPECT_EQ(xy(d.supports[k].target.region.circle.centre), XY(xs[k], -0.030));
     EXPECT_TRUE(d.supports[k].fix_x && d.supports[k].fix_y);
   }
-  EXPECT_EQ(d.life.criterion, LifeCriterion::connectivity);
+  EXPECT_EQ(d.life.criterion, config::LifeCriterion::connectivity);
   EXPECT_TRUE(d.life.empirical_spectrum());
-  EXPECT_EQ(d.life.band, BandSource::none);
+  EXPECT_EQ(d.life.band, config::BandSource::none);
 
-  const Discretization disc = discretize(d);
+  const mesh::Discretization disc = discretize(d);
   EXPECT_EQ(disc.num_nodes(), 90 * 90);
-  const ResolvedBoundary b = resolve(d, disc);
+  const config::ResolvedBoundary b = config::resolve(d, disc);
   ASSERT_TRUE(b.ok());
   for (const auto& l : b.loads) EXPECT_EQ(l.nodes.size(), 52u);  // lattice points in Ø 8 mm
 }
@@ -329,33 +332,33 @@ TEST(Config, ResolveSelectsNodesOnASmallGrid) {
        "region = { centre = [0.0015, 0.0015], radius = 0.0011 }", "constant = [0.0, 1.0]",
        "[[detail.support]]", "point = [0.0, 0.0]", "[[detail.support]]", "point = [0.004, 0.0011]",
        "fix_x = false"});
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const DetailConfig& d = r.config->details[0];
-  const Discretization disc = discretize(d);
+  const config::DetailConfig& d = r.config->details[0];
+  const mesh::Discretization disc = discretize(d);
   ASSERT_EQ(disc.num_nodes(), 12);
-  ResolvedBoundary b = resolve(d, disc);
+  config::ResolvedBoundary b = config::resolve(d, disc);
   ASSERT_TRUE(b.ok());
   ASSERT_EQ(b.supports.size(), 2u);
-  EXPECT_EQ(b.supports[0].nodes, std::vector<NodeIndex>{0});
+  EXPECT_EQ(b.supports[0].nodes, std::vector<mesh::NodeIndex>{0});
   EXPECT_TRUE(b.supports[0].fix_x && b.supports[0].fix_y);
-  EXPECT_EQ(b.supports[1].nodes, std::vector<NodeIndex>{7});  // (3.5, 1.5) mm
+  EXPECT_EQ(b.supports[1].nodes, std::vector<mesh::NodeIndex>{7});  // (3.5, 1.5) mm
   EXPECT_FALSE(b.supports[1].fix_x);
   EXPECT_TRUE(b.supports[1].fix_y);
   ASSERT_EQ(b.loads.size(), 2u);
-  EXPECT_EQ(b.loads[0].nodes, (std::vector<NodeIndex>{5, 6, 9, 10}));
+  EXPECT_EQ(b.loads[0].nodes, (std::vector<mesh::NodeIndex>{5, 6, 9, 10}));
   EXPECT_EQ(xy(b.loads[0].constant), XY(1.0, 2.0));
   EXPECT_EQ(xy(b.loads[0].per_cos), XY(3.0, 4.0));
   EXPECT_EQ(xy(b.loads[0].per_sin), XY(5.0, 6.0));
-  EXPECT_EQ(b.loads[1].nodes, (std::vector<NodeIndex>{1, 4, 5, 6, 9}));
+  EXPECT_EQ(b.loads[1].nodes, (std::vector<mesh::NodeIndex>{1, 4, 5, 6, 9}));
 
   // A region between the nodes selects none: an error naming the load, the rest is resolved.
   doc.lines.insert(doc.lines.end(),
                    {"[[detail.load]]", "region = { centre = [0.002, 0.002], radius = 0.0001 }",
                     "constant = [0.0, 1.0]"});
-  const ConfigResult r2 = parse(doc);
+  const config::ConfigResult r2 = parse(doc);
   ASSERT_TRUE(r2.ok()) << r2.error_text();
-  b = resolve(r2.config->details[0], disc);
+  b = config::resolve(r2.config->details[0], disc);
   ASSERT_EQ(b.errors.size(), 1u);
   EXPECT_EQ(b.errors[0].line, 31u);  // its [[detail.load]] header
   EXPECT_EQ(b.errors[0].path, "detail[0].load[2]");
@@ -374,19 +377,19 @@ TEST(Config, ModelOptionsAndSeveralDetails) {
   Doc second = plate();
   second.replace("id = ", R"(id = "Plate_2")");
   doc.lines.insert(doc.lines.end(), second.lines.begin(), second.lines.end());
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_TRUE(r.ok()) << r.error_text();
   ASSERT_EQ(r.config->details.size(), 2u);
-  const ModelOptions& m = r.config->details[0].model;
-  EXPECT_EQ(m.kind, ModelKind::bond_based);
-  EXPECT_EQ(m.kernel, Kernel::conical);
-  EXPECT_EQ(m.plane, PlaneCondition::plane_strain);
+  const model::ModelOptions& m = r.config->details[0].model;
+  EXPECT_EQ(m.kind, model::ModelKind::bond_based);
+  EXPECT_EQ(m.kernel, model::Kernel::conical);
+  EXPECT_EQ(m.plane, model::PlaneCondition::plane_strain);
   EXPECT_FALSE(m.surface_correction);
   EXPECT_EQ(r.config->details[1].id, "Plate_2");
   EXPECT_EQ(r.config->details[1].token, "PLATE_2");
   EXPECT_EQ(r.config->details[1].where.line, 29u);
   EXPECT_EQ(r.config->details[1].where.path, "detail[1]");
-  EXPECT_EQ(r.config->details[1].model.kind, ModelKind::state_based);
+  EXPECT_EQ(r.config->details[1].model.kind, model::ModelKind::state_based);
 }
 
 TEST(Config, FatigueLawsMapEveryField) {
@@ -399,14 +402,14 @@ TEST(Config, FatigueLawsMapEveryField) {
     const std::uint32_t at = doc.line_of("[detail.fatigue]");
     doc.lines.erase(doc.lines.begin() + at, doc.lines.begin() + at + 5);  // law, A1, m1, A2, m2
     doc.lines.insert(doc.lines.begin() + at, keys.begin(), keys.end());
-    const ConfigResult r = parse(doc);
+    const config::ConfigResult r = parse(doc);
     EXPECT_TRUE(r.ok()) << r.error_text();
-    return r.ok() ? r.config->details[0].fatigue : FatigueSettings{};
+    return r.ok() ? r.config->details[0].fatigue : fatigue::FatigueSettings{};
   };
-  const FatigueSettings e =
+  const fatigue::FatigueSettings e =
       fatigue({R"(law = "energy")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
                "eps_inf = 1e-4", "eps_inf_prop = 2e-5", "phi0 = 0.5"});
-  EXPECT_EQ(e.law, FatigueLaw::energy);
+  EXPECT_EQ(e.law, fatigue::FatigueLaw::energy);
   EXPECT_EQ(e.strain.A1, 1.5);
   EXPECT_EQ(e.strain.m1, 2.5);
   EXPECT_EQ(e.strain.A2, 3.5);
@@ -416,23 +419,23 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(e.phase_switch_damage, 0.5);
   EXPECT_TRUE(e.compressed_bonds_fatigue);  // 000 Eq. (15)'s absolute range
 
-  EXPECT_EQ(e.static_failure, StaticFailure::critical_stretch);
-  const FatigueSettings g =
+  EXPECT_EQ(e.static_failure, fatigue::StaticFailure::critical_stretch);
+  const fatigue::FatigueSettings g =
       fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
                R"(static_failure = "critical_bond_energy")", "compressed_bonds_fatigue = false"});
-  EXPECT_EQ(g.static_failure, StaticFailure::critical_bond_energy);
+  EXPECT_EQ(g.static_failure, fatigue::StaticFailure::critical_bond_energy);
   EXPECT_FALSE(g.compressed_bonds_fatigue);
 
-  const FatigueSettings b =
+  const fatigue::FatigueSettings b =
       fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"}, true);
-  EXPECT_EQ(b.law, FatigueLaw::bilinear);
+  EXPECT_EQ(b.law, fatigue::FatigueLaw::bilinear);
   EXPECT_EQ(b.bilinear.s0, 1e-3);
   EXPECT_EQ(b.bilinear.sc, 3e-3);
   EXPECT_EQ(b.bilinear.A, 2e8);
   EXPECT_EQ(b.bilinear.m, 4.0);
   EXPECT_EQ(b.phase_switch_damage, 0.398);
   EXPECT_EQ(b.cycle_increment, 1000);
-  const FatigueSettings b2 = fatigue(
+  const fatigue::FatigueSettings b2 = fatigue(
       {R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8", "m = 3.0",
        "cycle_increment = 250", "softening_tolerance = 1e-8", "softening_max_iterations = 7"},
       true);
@@ -441,15 +444,15 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(b2.softening_tolerance, 1e-8);
   EXPECT_EQ(b2.softening_max_iterations, 7);
 
-  const FatigueSettings k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
-  EXPECT_EQ(k0.law, FatigueLaw::kinetic);
+  const fatigue::FatigueSettings k0 = fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28"});
+  EXPECT_EQ(k0.law, fatigue::FatigueLaw::kinetic);
   EXPECT_EQ(k0.kinetic.U, 2e-19);
   EXPECT_EQ(k0.kinetic.gamma, 1e-28);
   EXPECT_EQ(k0.kinetic.lambda, 9.0);
   EXPECT_EQ(k0.kinetic.n0, 1.771);
   EXPECT_EQ(k0.kinetic.temperature, 293.0);
   EXPECT_EQ(k0.kinetic.frequency, 0.56);
-  const FatigueSettings k =
+  const fatigue::FatigueSettings k =
       fatigue({R"(law = "kinetic")", "U = 2e-19", "gamma = 1e-28", "lambda = 5", "n0 = 1.5",
                "temperature = 300", "frequency = 10"});
   EXPECT_EQ(k.kinetic.lambda, 5.0);
@@ -461,7 +464,7 @@ TEST(Config, FatigueLawsMapEveryField) {
 TEST(ConfigErrors, UnknownKey) {
   Doc doc = plate();
   doc.insert_after("nu = ", "Nu = 0.3");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   expect_one_error(r, 13, "detail[0].material.Nu", "unknown key \"Nu\"");
   EXPECT_EQ(r.errors[0].column, 1u);
   EXPECT_EQ(r.errors[0].message(),
@@ -471,7 +474,7 @@ TEST(ConfigErrors, UnknownKey) {
 TEST(ConfigErrors, UnknownKeyInAnInlineTable) {
   Doc doc = plate();
   doc.replace("holes", R"(holes = [{ center = [0.005, 0.0025], radius = 0.001 }])");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 2u) << r.error_text();
   EXPECT_EQ(r.errors[0].line, 6u);
   EXPECT_EQ(r.errors[0].path, "detail[0].geometry.holes[0].centre");
@@ -524,7 +527,7 @@ TEST(ConfigErrors, MissingField) {
   doc.erase("[detail.material]");
   doc.erase("E = ");
   doc.erase("nu = ");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   expect_one_error(r, 1, "detail[0].material", "missing required key \"material\"");
 }
 
@@ -536,7 +539,7 @@ TEST(ConfigErrors, ParameterOfAnotherLaw) {
                    "eps_inf, eps_inf_prop, compressed_bonds_fatigue)");
   doc = plate();
   doc.replace("law = ", R"(law = "bilinear")");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   // s0, sc, A missing; A1, m1, A2, m2 unknown; the plate is state-based
   ASSERT_EQ(r.errors.size(), 8u) << r.error_text();
   const auto law = std::find_if(r.errors.begin(), r.errors.end(),
@@ -626,7 +629,7 @@ TEST(ConfigErrors, DuplicateDetailIds) {
   second.lines.push_back("[detail.output]");
   second.lines.push_back(R"(directory = "results/plate-2")");
   doc.lines.insert(doc.lines.end(), second.lines.begin(), second.lines.end());
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   expect_one_error(r, 25, "detail[1].id", "same channel token PLATE as detail[0]");
   EXPECT_EQ(r.errors[0].message(),
             "plate.toml:25:6: detail[1].id: \"PLATE\" has the same channel token PLATE as "
@@ -646,9 +649,9 @@ TEST(ConfigErrors, DuplicateOutputDirectories) {
 TEST(ConfigErrors, TomlSyntaxError) {
   Doc doc = plate();
   doc.replace("nu = ", "nu = = 0.3");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 1u);
-  const ConfigError& e = r.errors[0];
+  const config::ConfigError& e = r.errors[0];
   EXPECT_EQ(e.line, 12u);
   EXPECT_EQ(e.column, 6u);
   EXPECT_EQ(e.path, "");
@@ -685,7 +688,7 @@ TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
   };
   for (const auto& [text, line, column, where] : cases) {
     SCOPED_TRACE(text);
-    const ConfigResult r = parse_config(text, "u.toml");
+    const config::ConfigResult r = config::parse_config(text, "u.toml");
     ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
     EXPECT_EQ(r.errors[0].message(), "u.toml:" + std::to_string(line) + ":" +
                                          std::to_string(column) +
@@ -698,7 +701,7 @@ TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
   doc.insert_after("id = ", R"('δ' = 1)");
   doc.insert_after("id = ", R"("ключ" = 'ü' # [x])");
   doc.insert_after("id = ", R"(notes = { "ä" = "ö", b = ["ü", 'é'] })");
-  const ConfigResult ok = parse(doc);
+  const config::ConfigResult ok = parse(doc);
   ASSERT_EQ(ok.errors.size(), 3u) << ok.error_text();  // three unknown keys, none refused
   EXPECT_EQ(ok.errors[0].path, "detail[0].notes");
   EXPECT_EQ(ok.errors[1].path, "detail[0].ключ");
@@ -708,14 +711,14 @@ TEST(ConfigErrors, NonAsciiWhereTomlppCannotClassifyIt) {
 // Found by fuzz_config: toml++ echoes the input in its errors ("saw 'tr<newline>'"), and a quoted
 // key may hold any character; every message is one line all the same.
 TEST(ConfigErrors, MessagesAreOneLine) {
-  const ConfigResult echo = parse_config("[[detail]]\nid = tr\n", "e.toml");
+  const config::ConfigResult echo = config::parse_config("[[detail]]\nid = tr\n", "e.toml");
   ASSERT_EQ(echo.errors.size(), 1u);
   EXPECT_EQ(echo.errors[0].message(),
             "e.toml:2:8: TOML syntax error: Error while parsing boolean: expected 'true', saw "
             "'tr\\n'");
   Doc doc = plate();
   doc.insert_after("id = ", R"("a\nb\u0001" = 1)");
-  const ConfigResult key = parse(doc);
+  const config::ConfigResult key = parse(doc);
   ASSERT_EQ(key.errors.size(), 1u) << key.error_text();
   EXPECT_EQ(key.errors[0].path, "detail[0].a\nb\x01");
   EXPECT_TRUE(key.errors[0].message().starts_with(
@@ -730,7 +733,7 @@ TEST(ConfigErrors, AllErrorsAreReportedInLineOrder) {
   doc.replace("E = ", "E = -1.0");
   doc.replace("nu = ", "nu = true");
   doc.insert_after("m2 = ", "bogus = 1");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 5u) << r.error_text();
   const std::vector<std::pair<std::uint32_t, std::string>> expected = {
       {4, "detail[0].geometry.thickness"},
@@ -752,7 +755,7 @@ TEST(ConfigErrors, LifeSettings) {
   doc.lines.push_back(  // 27: each block breaks one rule of check_load_block
       R"(reference_spectrum = [{ p_max = 4000.0, r = 1.0, count = 1 }, { p_max = 4000.0, r = 0.1, count = 0 }])");
   doc.lines.push_back(R"(band = "a2_scatter")");  // 28
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 4u) << r.error_text();
   EXPECT_EQ(r.errors[0].path, "detail[0].life.a2_relative_scatter");  // missing: table line
   EXPECT_EQ(r.errors[0].line, 24u);
@@ -769,7 +772,7 @@ TEST(ConfigErrors, LifeCoarseGridSpacing) {
   Doc doc = plate();
   doc.lines.push_back("[detail.life]");  // 24
   doc.lines.push_back("dx = 0.001");     // 25
-  ConfigResult ok = parse(doc);
+  config::ConfigResult ok = parse(doc);
   ASSERT_TRUE(ok.ok()) << ok.error_text();
   EXPECT_EQ(ok.config->details[0].life.dx, 0.001);
   EXPECT_EQ(parse(plate()).config->details[0].life.dx, 0.0);  // default: none
@@ -791,7 +794,7 @@ TEST(ConfigErrors, LifeCoarseGridSpacing) {
   doc.erase("m2 = ");
   doc.lines.push_back("[detail.life]");
   doc.lines.push_back("dx = 0.001");
-  const ConfigResult kinetic = parse(doc);
+  const config::ConfigResult kinetic = parse(doc);
   ASSERT_FALSE(kinetic.ok());
   ASSERT_EQ(kinetic.errors.size(), 1u) << kinetic.error_text();
   EXPECT_EQ(kinetic.errors[0].path, "detail[0].life.dx");
@@ -803,7 +806,7 @@ TEST(ConfigErrors, StressIntensitySettings) {
   doc.lines.push_back("[detail.stress_intensity]");      // 24
   doc.lines.push_back(R"(method = "compact_tension")");  // 25
   doc.lines.push_back("load_line = [0.0, 0.0]");         // 26
-  ConfigResult r = parse(doc);
+  config::ConfigResult r = parse(doc);
   ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
   EXPECT_EQ(r.errors[0].path, "detail[0].stress_intensity.width");  // missing: table line
   EXPECT_EQ(r.errors[0].line, 24u);
@@ -815,22 +818,23 @@ TEST(ConfigErrors, StressIntensitySettings) {
 }
 
 TEST(ConfigErrors, FileAndDocumentLevel) {
-  const ConfigResult missing = load_config("/nonexistent/peritwin.toml");
+  const config::ConfigResult missing = config::load_config("/nonexistent/peritwin.toml");
   ASSERT_EQ(missing.errors.size(), 1u);
   EXPECT_EQ(missing.errors[0].message(),
             "/nonexistent/peritwin.toml: cannot read the file: No such file or directory");
-  const ConfigResult directory = load_config(examples_dir());
+  const config::ConfigResult directory = config::load_config(examples_dir());
   ASSERT_EQ(directory.errors.size(), 1u);
   EXPECT_EQ(directory.errors[0].reason, "cannot read the file: it is a directory");
 
-  const ConfigResult empty = parse_config("", "empty.toml");
+  const config::ConfigResult empty = config::parse_config("", "empty.toml");
   ASSERT_EQ(empty.errors.size(), 1u);
   EXPECT_EQ(empty.errors[0].path, "detail");
 
-  const ConfigResult stray = parse_config("title = \"x\"\n", "stray.toml");
+  const config::ConfigResult stray = config::parse_config("title = \"x\"\n", "stray.toml");
   ASSERT_EQ(stray.errors.size(), 2u) << stray.error_text();
 
-  const ConfigResult binary = parse_config(std::string("\0\xff\xfe[[", 5), "bin.toml");
+  const config::ConfigResult binary =
+      config::parse_config(std::string("\0\xff\xfe[[", 5), "bin.toml");
   EXPECT_FALSE(binary.ok());
   EXPECT_EQ(binary.errors.size(), 1u);
 }
@@ -851,11 +855,11 @@ TEST(ConfigGeometry, PolygonOutlineWithArcAndFilletAndNotchPolyline) {
   doc.insert_after("holes", R"(notches = [{ path = [[0.0, 0.001], [0.001, 0.001], )"
                             R"([0.002, 0.0015]], name = "weld toe" }, )"
                             R"({ from = [0.0, 0.004], to = [0.001, 0.004] }])");
-  const ConfigResult r = parse(doc);
+  const config::ConfigResult r = parse(doc);
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const DetailGeometry& g = r.config->details[0].geometry;
+  const mesh::DetailGeometry& g = r.config->details[0].geometry;
   ASSERT_EQ(g.outline.size(), 1u);
-  ASSERT_EQ(g.outline[0].shape, Region::Shape::polygon);
+  ASSERT_EQ(g.outline[0].shape, mesh::Region::Shape::polygon);
   // 50 mm² + the half disc π·2.5²/2 − the fillet's (1 − π/4)·1² = 59.6029 mm².
   EXPECT_NEAR(g.outline[0].area(),
               50e-6 + std::numbers::pi * 6.25e-6 / 2 - (1 - std::numbers::pi / 4) * 1e-6, 1e-18);
@@ -864,7 +868,7 @@ TEST(ConfigGeometry, PolygonOutlineWithArcAndFilletAndNotchPolyline) {
   EXPECT_EQ(g.notches[0].name, "weld toe");
   ASSERT_EQ(g.notches[0].path.size(), 3u);
   EXPECT_EQ(xy(g.notches[0].tip()), XY(0.002, 0.0015));
-  const Point d = g.notches[0].direction();  // (1, 0.5)/√1.25
+  const mesh::Point d = g.notches[0].direction();  // (1, 0.5)/√1.25
   EXPECT_NEAR(d.x, 1 / std::sqrt(1.25), 1e-15);
   EXPECT_NEAR(d.y, 0.5 / std::sqrt(1.25), 1e-15);
   EXPECT_EQ(g.notches[1].name, "notch 1");

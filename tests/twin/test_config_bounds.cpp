@@ -13,8 +13,8 @@
 #include <string_view>
 #include <vector>
 
-#include "twin/config/config.h"
-#include "twin/config/resources.h"
+#include "config/config.h"
+#include "config/resources.h"
 
 namespace peritwin::twin {
 namespace {
@@ -94,11 +94,11 @@ std::uint32_t line_of(const std::string& text, std::string_view prefix) {
 }
 
 /// Exactly one error, at (line, path), whose reason contains every part of `reasons`.
-void expect_one_error(const ConfigResult& r, std::uint32_t line, std::string_view path,
+void expect_one_error(const config::ConfigResult& r, std::uint32_t line, std::string_view path,
                       std::initializer_list<std::string_view> reasons) {
   ASSERT_FALSE(r.ok());
   ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
-  const ConfigError& e = r.errors[0];
+  const config::ConfigError& e = r.errors[0];
   EXPECT_EQ(e.line, line) << e.message();
   EXPECT_EQ(e.path, path) << e.message();
   for (const auto reason : reasons) {
@@ -109,9 +109,9 @@ void expect_one_error(const ConfigResult& r, std::uint32_t line, std::string_vie
 // [detail.limits] -----------------------------------------------------------------------------
 
 TEST(ConfigLimitsTable, DefaultsWithoutTheTable) {
-  const ConfigResult r = parse_config(plate(), "plate.toml");
+  const config::ConfigResult r = config::parse_config(plate(), "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const LimitsConfig& l = r.config->details[0].limits;
+  const config::LimitsConfig& l = r.config->details[0].limits;
   EXPECT_FALSE(l.max_p.has_value());  // the daemon derives it from the model
   EXPECT_EQ(l.max_batch_seconds, 60.0);
   EXPECT_EQ(l.max_sources, 16);
@@ -120,15 +120,16 @@ TEST(ConfigLimitsTable, DefaultsWithoutTheTable) {
 }
 
 TEST(ConfigLimitsTable, EveryKeyParsed) {
-  const ConfigResult r = parse_config(plate("[detail.limits]\n"
-                                            "max_p = 5000\n"  // an integer where a real goes
-                                            "max_batch_seconds = 2.5\n"
-                                            "max_sources = 3\n"
-                                            "max_rejects_per_second = 0.5\n"
-                                            "release_idle_factor = true\n"),
-                                      "plate.toml");
+  const config::ConfigResult r =
+      config::parse_config(plate("[detail.limits]\n"
+                                 "max_p = 5000\n"  // an integer where a real goes
+                                 "max_batch_seconds = 2.5\n"
+                                 "max_sources = 3\n"
+                                 "max_rejects_per_second = 0.5\n"
+                                 "release_idle_factor = true\n"),
+                           "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const LimitsConfig& l = r.config->details[0].limits;
+  const config::LimitsConfig& l = r.config->details[0].limits;
   ASSERT_TRUE(l.max_p.has_value());
   EXPECT_EQ(*l.max_p, 5000.0);
   EXPECT_EQ(l.max_batch_seconds, 2.5);
@@ -156,7 +157,7 @@ TEST(ConfigLimitsTable, BadValuesNamedWithTheirKeyPaths) {
   };
   for (const Case& c : cases) {
     const std::string text = plate("[detail.limits]\n" + c.line + "\n");
-    const ConfigResult r = parse_config(text, "plate.toml");
+    const config::ConfigResult r = config::parse_config(text, "plate.toml");
     SCOPED_TRACE(c.line);
     expect_one_error(r, line_of(text, c.line), c.path, {c.reason});
   }
@@ -165,21 +166,21 @@ TEST(ConfigLimitsTable, BadValuesNamedWithTheirKeyPaths) {
 // [detail.sensor] -----------------------------------------------------------------------------
 
 TEST(ConfigSensorTable, DefaultsAndEveryKey) {
-  const ConfigResult none = parse_config(plate(), "plate.toml");
+  const config::ConfigResult none = config::parse_config(plate(), "plate.toml");
   ASSERT_TRUE(none.ok()) << none.error_text();
-  const SensorConfig& d = none.config->details[0].sensor;
+  const config::SensorConfig& d = none.config->details[0].sensor;
   EXPECT_EQ(d.scale, 1.0);
   EXPECT_EQ(d.offset, 0.0);
   EXPECT_EQ(d.gate, 0.0);
   EXPECT_EQ(d.alpha_bin, 0.0);
-  const ConfigResult r = parse_config(plate("[detail.sensor]\n"
-                                            "scale = -2.5e4\n"
-                                            "offset = 120\n"
-                                            "gate = 50.0\n"
-                                            "alpha_bin = 0.05\n"),
-                                      "plate.toml");
+  const config::ConfigResult r = config::parse_config(plate("[detail.sensor]\n"
+                                                            "scale = -2.5e4\n"
+                                                            "offset = 120\n"
+                                                            "gate = 50.0\n"
+                                                            "alpha_bin = 0.05\n"),
+                                                      "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  const SensorConfig& s = r.config->details[0].sensor;
+  const config::SensorConfig& s = r.config->details[0].sensor;
   EXPECT_EQ(s.scale, -2.5e4);
   EXPECT_EQ(s.offset, 120.0);
   EXPECT_EQ(s.gate, 50.0);
@@ -203,7 +204,7 @@ TEST(ConfigSensorTable, BadValuesNamedWithTheirKeyPaths) {
   };
   for (const Case& c : cases) {
     const std::string text = plate("[detail.sensor]\n" + c.line + "\n");
-    const ConfigResult r = parse_config(text, "plate.toml");
+    const config::ConfigResult r = config::parse_config(text, "plate.toml");
     SCOPED_TRACE(c.line);
     expect_one_error(r, line_of(text, c.line), c.path, {c.reason});
   }
@@ -212,14 +213,14 @@ TEST(ConfigSensorTable, BadValuesNamedWithTheirKeyPaths) {
 // [auth] -----------------------------------------------------------------------------------------
 
 TEST(ConfigAuth, AbsentMeansUnauthenticated) {
-  const ConfigResult r = parse_config(plate(), "plate.toml");
+  const config::ConfigResult r = config::parse_config(plate(), "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   EXPECT_FALSE(r.config->auth.has_value());
 }
 
 TEST(ConfigAuth, RelativeKeyFileResolvedAgainstTheConfigDirectory) {
-  const ConfigResult r = parse_config(plate("[auth]\nkey_file = \"keys/../keys/twin.keys\"\n"),
-                                      "/etc/peritwin/twin.toml");
+  const config::ConfigResult r = config::parse_config(
+      plate("[auth]\nkey_file = \"keys/../keys/twin.keys\"\n"), "/etc/peritwin/twin.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   ASSERT_TRUE(r.config->auth.has_value());
   EXPECT_EQ(r.config->auth->key_file, "/etc/peritwin/keys/twin.keys");
@@ -227,8 +228,8 @@ TEST(ConfigAuth, RelativeKeyFileResolvedAgainstTheConfigDirectory) {
   EXPECT_EQ(r.config->auth->daemon_key, "peritwin");
   EXPECT_EQ(r.config->auth->where.path, "auth");
 
-  const ConfigResult absolute =
-      parse_config(plate("[auth]\nkey_file = \"/var/lib/peritwin/k\"\n"), "/etc/peritwin/t.toml");
+  const config::ConfigResult absolute = config::parse_config(
+      plate("[auth]\nkey_file = \"/var/lib/peritwin/k\"\n"), "/etc/peritwin/t.toml");
   ASSERT_TRUE(absolute.ok()) << absolute.error_text();
   EXPECT_EQ(absolute.config->auth->key_file, "/var/lib/peritwin/k");
 }
@@ -246,7 +247,7 @@ TEST(ConfigAuth, LoadConfigResolvesAgainstTheFilesOwnDirectory) {
         "sources = [\"replay\", \"gauge-7\"]\n"
         "daemon_key = \"twin-1\"\n");
   }
-  const ConfigResult r = load_config(file.string());
+  const config::ConfigResult r = config::load_config(file.string());
   ASSERT_TRUE(r.ok()) << r.error_text();
   ASSERT_TRUE(r.config->auth.has_value());
   EXPECT_EQ(r.config->auth->key_file,
@@ -261,7 +262,7 @@ TEST(ConfigAuth, BadSourceIdsNamedOneByOne) {
   const std::string text =
       plate("[auth]\nkey_file = \"k\"\nsources = [\n\"replay\",\n\"two words\",\n\"\",\n\"" +
             long_id + "\",\n\"replay\",\n3,\n\"" + std::string(64, 'b') + "\",\n]\n");
-  const ConfigResult r = parse_config(text, "twin.toml");
+  const config::ConfigResult r = config::parse_config(text, "twin.toml");
   ASSERT_FALSE(r.ok());
   ASSERT_EQ(r.errors.size(), 5u) << r.error_text();
   const std::uint32_t first = line_of(text, "\"replay\",");
@@ -283,7 +284,7 @@ TEST(ConfigAuth, BadSourceIdsNamedOneByOne) {
 TEST(ConfigAuth, MissingKeyFileBadDaemonKeyAndUnknownKey) {
   const std::string text =
       plate("[auth]\nsources = []\ndaemon_key = \"my key\"\nkeyfile = \"k\"\n");
-  const ConfigResult r = parse_config(text, "twin.toml");
+  const config::ConfigResult r = config::parse_config(text, "twin.toml");
   ASSERT_EQ(r.errors.size(), 3u) << r.error_text();
   EXPECT_EQ(r.errors[0].path, "auth.key_file");
   EXPECT_EQ(r.errors[0].line, line_of(text, "[auth]"));
@@ -295,33 +296,33 @@ TEST(ConfigAuth, MissingKeyFileBadDaemonKeyAndUnknownKey) {
   EXPECT_NE(r.errors[2].reason.find("unknown key \"keyfile\""), std::string::npos);
 
   const std::string empty = plate("[auth]\nkey_file = \"\"\n");
-  expect_one_error(parse_config(empty, "twin.toml"), line_of(empty, "key_file"), "auth.key_file",
-                   {"must not be empty"});
+  expect_one_error(config::parse_config(empty, "twin.toml"), line_of(empty, "key_file"),
+                   "auth.key_file", {"must not be empty"});
   // [auth] is top level: inside a detail it is an unknown key of the detail.
   const std::string nested = plate("[detail.auth]\nkey_file = \"k\"\n");
-  expect_one_error(parse_config(nested, "twin.toml"), line_of(nested, "[detail.auth]"),
+  expect_one_error(config::parse_config(nested, "twin.toml"), line_of(nested, "[detail.auth]"),
                    "detail[0].auth", {"unknown key \"auth\""});
 }
 
 TEST(ConfigAuth, SourceIdRuleIsTheBatchRule) {
   // messages/batch.cpp: 1 to 64 characters from 0x21 to 0x7e.
-  EXPECT_TRUE(is_valid_source_id("replay"));
-  EXPECT_TRUE(is_valid_source_id("!~"));
-  EXPECT_TRUE(is_valid_source_id(std::string(64, 'x')));
-  EXPECT_FALSE(is_valid_source_id(""));
-  EXPECT_FALSE(is_valid_source_id(std::string(65, 'x')));
-  EXPECT_FALSE(is_valid_source_id("a b"));
-  EXPECT_FALSE(is_valid_source_id("tab\there"));
-  EXPECT_FALSE(is_valid_source_id("\x7f"));
-  EXPECT_FALSE(is_valid_source_id("caf\xc3\xa9"));
+  EXPECT_TRUE(config::is_valid_source_id("replay"));
+  EXPECT_TRUE(config::is_valid_source_id("!~"));
+  EXPECT_TRUE(config::is_valid_source_id(std::string(64, 'x')));
+  EXPECT_FALSE(config::is_valid_source_id(""));
+  EXPECT_FALSE(config::is_valid_source_id(std::string(65, 'x')));
+  EXPECT_FALSE(config::is_valid_source_id("a b"));
+  EXPECT_FALSE(config::is_valid_source_id("tab\there"));
+  EXPECT_FALSE(config::is_valid_source_id("\x7f"));
+  EXPECT_FALSE(config::is_valid_source_id("caf\xc3\xa9"));
 }
 
 // Resource estimate against the real discretization and factor ----------------------------------
 
-DetailConfig parsed(const std::string& text) {
-  const ConfigResult r = parse_config(text, "plate.toml");
+config::DetailConfig parsed(const std::string& text) {
+  const config::ConfigResult r = config::parse_config(text, "plate.toml");
   EXPECT_TRUE(r.ok()) << r.error_text();
-  return r.ok() ? r.config->details[0] : DetailConfig{};
+  return r.ok() ? r.config->details[0] : config::DetailConfig{};
 }
 
 TEST(ResourceEstimate, NodesAndBondsWithinOnePercentOfTheDiscretization) {
@@ -347,9 +348,9 @@ TEST(ResourceEstimate, NodesAndBondsWithinOnePercentOfTheDiscretization) {
   }
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    const DetailConfig d = parsed(c.text);
-    const ResourceEstimate e = estimate_resources(d);
-    const Discretization disc = discretize(d);
+    const config::DetailConfig d = parsed(c.text);
+    const config::ResourceEstimate e = config::estimate_resources(d);
+    const mesh::Discretization disc = discretize(d);
     ASSERT_GT(disc.num_nodes(), 0);
     EXPECT_NEAR(e.nodes, disc.num_nodes(), 0.01 * disc.num_nodes());
     EXPECT_NEAR(e.bonds, disc.num_bonds(), 0.01 * disc.num_bonds());
@@ -362,7 +363,7 @@ TEST(ResourceEstimate, NodesAndBondsWithinOnePercentOfTheDiscretization) {
 TEST(ResourceEstimate, FamilySizeIsTheLatticeCount) {
   // 000's δ = 3.015Δx: 28 neighbours (docs/solver.md, "Families"); δ = 2Δx: 12; δ = 4Δx: 48.
   const auto family = [](const char* ratio) {
-    return estimate_resources(
+    return config::estimate_resources(
                parsed(detail_toml("p", 0.010, 0.005,
                                   "dx = 0.0005\nhorizon_ratio = " + std::string(ratio) + "\n")))
         .family_size;
@@ -378,23 +379,25 @@ TEST(ResourceEstimate, ExampleCountsAndTheFactorBoundAgainstTheRealFactor) {
   // factor entries bound CHOLMOD's supernodal factor from above by at most 2x (measured 1.78x and
   // 1.77x since the precut bonds left the pattern; 1.24-1.25x at 60k nodes, where a lower bound
   // matters; docs/limits.md).
-  const ConfigResult r = load_config(examples_dir() + "/b1-ct-al6061.toml");
+  const config::ConfigResult r = config::load_config(examples_dir() + "/b1-ct-al6061.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
-  for (const ModelKind kind : {ModelKind::state_based, ModelKind::bond_based}) {
-    SCOPED_TRACE(kind == ModelKind::state_based ? "state_based" : "bond_based");
-    DetailConfig d = r.config->details[0];
+  for (const model::ModelKind kind :
+       {model::ModelKind::state_based, model::ModelKind::bond_based}) {
+    SCOPED_TRACE(kind == model::ModelKind::state_based ? "state_based" : "bond_based");
+    config::DetailConfig d = r.config->details[0];
     d.model.kind = kind;
-    const ResourceEstimate e = estimate_resources(d);
-    const Discretization disc = discretize(d);
+    const config::ResourceEstimate e = config::estimate_resources(d);
+    const mesh::Discretization disc = discretize(d);
     EXPECT_EQ(e.nodes, disc.num_nodes());
     EXPECT_EQ(disc.num_nodes(), 3720);
     EXPECT_NEAR(e.bonds, disc.num_bonds(), 0.01 * disc.num_bonds());
-    const ResolvedBoundary boundary = resolve(d, disc);
+    const config::ResolvedBoundary boundary = config::resolve(d, disc);
     ASSERT_TRUE(boundary.ok());
-    const PdModel model = build_model(disc, d.material, d.model, d.geometry.rigid_factor);
-    StaticSolver solver(disc, model, boundary.supports, boundary.loads);
+    const model::PdModel model =
+        model::build_model(disc, d.material, d.model, d.geometry.rigid_factor);
+    statics::StaticSolver solver(disc, model, boundary.supports, boundary.loads);
     ASSERT_TRUE(solver.solve().ok());
-    EXPECT_EQ(solver.mixed_form(), kind == ModelKind::state_based);
+    EXPECT_EQ(solver.mixed_form(), kind == model::ModelKind::state_based);
     EXPECT_NEAR(e.unknowns, solver.num_unknowns(), 0.01 * solver.num_unknowns());
     const auto matrix = static_cast<double>(solver.stiffness_upper().nonZeros());
     EXPECT_NEAR(e.matrix_nonzeros, matrix, 0.01 * matrix);
@@ -408,11 +411,11 @@ TEST(ResourceEstimate, ExampleCountsAndTheFactorBoundAgainstTheRealFactor) {
 }
 
 TEST(ResourceEstimate, DegenerateInputsGiveNumbersNotNaN) {
-  DetailConfig d;  // no outline, dx = 0: nothing
-  EXPECT_EQ(estimate_resources(d).bytes, 0.0);
+  config::DetailConfig d;  // no outline, dx = 0: nothing
+  EXPECT_EQ(config::estimate_resources(d).bytes, 0.0);
   d = parsed(detail_toml("p", 0.010, 0.005, "dx = 0.0005\n"));
   d.dx = 1e-300;  // 10^596 nodes: clamped, not inf - inf
-  const ResourceEstimate e = estimate_resources(d);
+  const config::ResourceEstimate e = config::estimate_resources(d);
   EXPECT_FALSE(std::isnan(e.bonds));
   EXPECT_FALSE(std::isnan(e.bytes));
   EXPECT_GT(e.bytes, 1e29);
@@ -425,24 +428,25 @@ TEST(ConfigResourceBounds, MicrometreGridRefusedAtGridDxWithoutBuilding) {
   // need more than 10^14 bytes. That parse_config returns at all (the test process has nowhere
   // near that memory) shows nothing was discretized; the estimate says what building would take.
   const std::string text = detail_toml("huge", 0.1, 0.1, "dx = 1e-6\n");
-  DetailConfig d = parsed(detail_toml("huge", 0.1, 0.1, "dx = 1e-3\n"));
+  config::DetailConfig d = parsed(detail_toml("huge", 0.1, 0.1, "dx = 1e-3\n"));
   d.dx = 1e-6;  // what the refused config holds
-  const ResourceEstimate e = estimate_resources(d);
+  const config::ResourceEstimate e = config::estimate_resources(d);
   EXPECT_NEAR(e.nodes, 1e10, 1e-9 * 1e10);
   EXPECT_NEAR(e.bonds, 14e10, 0.01 * 14e10);
   EXPECT_GT(e.bytes, 1e14);
 
   for (const std::uint64_t limit : {std::uint64_t{0}, 8 * kGiB}) {  // default, 8 GiB
     SCOPED_TRACE(limit);
-    const ConfigResult r = parse_config(text, "huge.toml", ConfigLimits{limit});
+    const config::ConfigResult r =
+        config::parse_config(text, "huge.toml", config::ConfigLimits{limit});
     expect_one_error(r, line_of(text, "dx = 1e-6"), "detail[0].grid.dx",
                      {"2.24 PiB", "1e+10 nodes", "1.4e+11 bonds", "use a larger dx"});
     const std::string named = limit > 0 ? "memory limit 8 GiB (--max-memory)"
                                         : "(the default, 75 % of physical memory; --max-memory";
     EXPECT_NE(r.errors[0].reason.find(named), std::string::npos) << r.errors[0].message();
   }
-  const ConfigResult unlimited =
-      parse_config(text, "huge.toml", ConfigLimits{std::numeric_limits<std::uint64_t>::max()});
+  const config::ConfigResult unlimited = config::parse_config(
+      text, "huge.toml", config::ConfigLimits{std::numeric_limits<std::uint64_t>::max()});
   expect_one_error(unlimited, line_of(text, "dx = 1e-6"), "detail[0].grid.dx",
                    {"too large for the solver's 32-bit indices (at most 2.15e+09 entries)"});
 }
@@ -451,29 +455,29 @@ TEST(ConfigResourceBounds, HorizonRatioAboveTenRefusedWithItsKeyPath) {
   // horizon_ratio = 1000 used to discretize a 2004 x 2004 square for the default φ0 inside
   // config checking (3.4 GB, 43 s): now it is one error, and φ0 is not computed.
   const std::string text = detail_toml("p", 0.010, 0.005, "dx = 0.0005\nhorizon_ratio = 1000\n");
-  expect_one_error(parse_config(text, "plate.toml"), line_of(text, "horizon_ratio"),
+  expect_one_error(config::parse_config(text, "plate.toml"), line_of(text, "horizon_ratio"),
                    "detail[0].grid.horizon_ratio",
                    {"must be <= 10", "calibrations use 3 to 4", "(got 1000)"});
   const std::string ten = detail_toml("p", 0.010, 0.005, "dx = 0.0005\nhorizon_ratio = 10\n");
-  const ConfigResult r = parse_config(ten, "plate.toml");
+  const config::ConfigResult r = config::parse_config(ten, "plate.toml");
   ASSERT_TRUE(r.ok()) << r.error_text();
   EXPECT_EQ(r.config->details[0].fatigue.phase_switch_damage,
-            phase_switch_damage_for_horizon(10.0));
+            fatigue::phase_switch_damage_for_horizon(10.0));
 }
 
 TEST(ConfigResourceBounds, MemoryLimitNamesTheEstimateAndTheLimit) {
   // The B1 example needs an estimated ~540 MiB (4 engines with a 6.6e6-entry factor each):
   // refused under 64 MiB at detail[0].grid.dx, accepted under 4 GiB.
   const std::string file = examples_dir() + "/b1-ct-al6061.toml";
-  const ConfigResult accepted = load_config(file, ConfigLimits{4 * kGiB});
+  const config::ConfigResult accepted = config::load_config(file, config::ConfigLimits{4 * kGiB});
   ASSERT_TRUE(accepted.ok()) << accepted.error_text();
-  const ResourceEstimate e = estimate_resources(accepted.config->details[0]);
+  const config::ResourceEstimate e = config::estimate_resources(accepted.config->details[0]);
   EXPECT_GT(e.bytes, 64.0 * 1024 * 1024);
   EXPECT_LT(e.bytes, 4.0 * kGiB);
 
-  const ConfigResult refused = load_config(file, ConfigLimits{64 << 20});
+  const config::ConfigResult refused = config::load_config(file, config::ConfigLimits{64 << 20});
   ASSERT_EQ(refused.errors.size(), 1u) << refused.error_text();
-  const ConfigError& err = refused.errors[0];
+  const config::ConfigError& err = refused.errors[0];
   EXPECT_EQ(err.file, file);
   EXPECT_EQ(err.path, "detail[0].grid.dx");
   std::ifstream in(file);
@@ -494,13 +498,15 @@ TEST(ConfigResourceBounds, AllDetailsTogetherRefusedAtTheLargest) {
   const std::string grid = "dx = 0.00025\n";
   const std::string text =
       detail_toml("small", 0.010, 0.005, grid) + detail_toml("large", 0.020, 0.010, grid);
-  const ConfigResult unlimited = parse_config(text, "two.toml", ConfigLimits{1024 * kGiB});
+  const config::ConfigResult unlimited =
+      config::parse_config(text, "two.toml", config::ConfigLimits{1024 * kGiB});
   ASSERT_TRUE(unlimited.ok()) << unlimited.error_text();
-  const double small = estimate_resources(unlimited.config->details[0]).bytes;
-  const double large = estimate_resources(unlimited.config->details[1]).bytes;
+  const double small = config::estimate_resources(unlimited.config->details[0]).bytes;
+  const double large = config::estimate_resources(unlimited.config->details[1]).bytes;
   ASSERT_LT(small, large);
   const auto limit = static_cast<std::uint64_t>(large + 0.5 * small);
-  const ConfigResult r = parse_config(text, "two.toml", ConfigLimits{limit});
+  const config::ConfigResult r =
+      config::parse_config(text, "two.toml", config::ConfigLimits{limit});
   ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
   EXPECT_EQ(r.errors[0].path, "detail[1].grid.dx");
   EXPECT_NE(r.errors[0].reason.find("the 2 details would need an estimated"), std::string::npos)
@@ -526,22 +532,26 @@ TEST(ConfigResourceBounds, AllDetailsTogetherCountTheLifeEnginesOfTheConcurrentE
     }
     text += copy + "\n";
   }
-  const ConfigResult unlimited = parse_config(text, "three.toml", ConfigLimits{1024 * kGiB});
+  const config::ConfigResult unlimited =
+      config::parse_config(text, "three.toml", config::ConfigLimits{1024 * kGiB});
   ASSERT_TRUE(unlimited.ok()) << unlimited.error_text();
-  const ResourceEstimate e = estimate_resources(unlimited.config->details[0]);
+  const config::ResourceEstimate e = config::estimate_resources(unlimited.config->details[0]);
   ASSERT_EQ(e.engines, 4);
   const double one_at_a_time = 3 * (e.model_bytes + e.engine_bytes) + 3 * e.engine_bytes;
   const double all_at_once = 3 * e.bytes;
   const auto limit = static_cast<std::uint64_t>(0.5 * (one_at_a_time + all_at_once));
 
-  const ConfigResult every = parse_config(text, "three.toml", ConfigLimits{limit, {}, 0});
+  const config::ConfigResult every =
+      config::parse_config(text, "three.toml", config::ConfigLimits{limit, {}, 0});
   ASSERT_EQ(every.errors.size(), 1u) << every.error_text();
   EXPECT_NE(every.errors[0].reason.find("the 3 details would need an estimated"), std::string::npos)
       << every.errors[0].message();
-  const ConfigResult one = parse_config(text, "three.toml", ConfigLimits{limit, {}, 1});
+  const config::ConfigResult one =
+      config::parse_config(text, "three.toml", config::ConfigLimits{limit, {}, 1});
   EXPECT_TRUE(one.ok()) << one.error_text();
-  const ConfigResult smaller = parse_config(
-      text, "three.toml", ConfigLimits{static_cast<std::uint64_t>(0.9 * one_at_a_time), {}, 1});
+  const config::ConfigResult smaller = config::parse_config(
+      text, "three.toml",
+      config::ConfigLimits{static_cast<std::uint64_t>(0.9 * one_at_a_time), {}, 1});
   ASSERT_EQ(smaller.errors.size(), 1u) << smaller.error_text();
   EXPECT_NE(smaller.errors[0].reason.find(
                 "together (remaining-life simulations of at most 1 detail(s) at once)"),
@@ -556,23 +566,26 @@ TEST(ConfigServedDetails, OnlyTheServedDetailsAreReturnedAndCountedAgainstTheLim
   const std::string grid = "dx = 0.00025\n";
   const std::string text =
       detail_toml("small", 0.010, 0.005, grid) + detail_toml("large", 0.020, 0.010, grid);
-  const ConfigResult unlimited = parse_config(text, "two.toml", ConfigLimits{1024 * kGiB});
+  const config::ConfigResult unlimited =
+      config::parse_config(text, "two.toml", config::ConfigLimits{1024 * kGiB});
   ASSERT_TRUE(unlimited.ok()) << unlimited.error_text();
-  const double small = estimate_resources(unlimited.config->details[0]).bytes;
-  const double large = estimate_resources(unlimited.config->details[1]).bytes;
+  const double small = config::estimate_resources(unlimited.config->details[0]).bytes;
+  const double large = config::estimate_resources(unlimited.config->details[1]).bytes;
   const auto limit = static_cast<std::uint64_t>(large + 0.5 * small);
 
-  const ConfigResult one = parse_config(text, "two.toml", ConfigLimits{limit, {"large"}});
+  const config::ConfigResult one =
+      config::parse_config(text, "two.toml", config::ConfigLimits{limit, {"large"}});
   ASSERT_TRUE(one.ok()) << one.error_text();
   ASSERT_EQ(one.config->details.size(), 1u);
   EXPECT_EQ(one.config->details[0].id, "large");
 
-  const ConfigResult both = parse_config(text, "two.toml", ConfigLimits{limit, {"small", "large"}});
+  const config::ConfigResult both =
+      config::parse_config(text, "two.toml", config::ConfigLimits{limit, {"small", "large"}});
   ASSERT_EQ(both.errors.size(), 1u) << both.error_text();
   EXPECT_EQ(both.errors[0].path, "detail[1].grid.dx");
 
-  const ConfigResult unknown =
-      parse_config(text, "two.toml", ConfigLimits{1024 * kGiB, {"small", "nope"}});
+  const config::ConfigResult unknown =
+      config::parse_config(text, "two.toml", config::ConfigLimits{1024 * kGiB, {"small", "nope"}});
   ASSERT_EQ(unknown.errors.size(), 1u) << unknown.error_text();
   EXPECT_EQ(unknown.errors[0].path, "--details");
   EXPECT_EQ(unknown.errors[0].reason, "no detail \"nope\" in the file (its details: small, large)");
@@ -595,7 +608,8 @@ TEST(ConfigResourceBounds, HostileGeometryEndsInErrorsNotExceptions) {
   holes += "]\n";
   for (const std::string& geometry : {many, many + holes}) {
     const std::string text = detail_toml("many", 1500.0, 1.0, "dx = 1e-4\n", geometry);
-    const ConfigResult r = parse_config(text, "many.toml", ConfigLimits{8 * kGiB});
+    const config::ConfigResult r =
+        config::parse_config(text, "many.toml", config::ConfigLimits{8 * kGiB});
     ASSERT_EQ(r.errors.size(), 1u) << r.error_text();
     EXPECT_EQ(r.errors[0].path, "detail[0].grid.dx");
     EXPECT_NE(r.errors[0].reason.find("(1.5e+11 nodes,"), std::string::npos)
@@ -603,7 +617,8 @@ TEST(ConfigResourceBounds, HostileGeometryEndsInErrorsNotExceptions) {
   }
 
   const std::string vast = detail_toml("vast", 1e300, 1e300, "dx = 1.0\n");
-  const ConfigResult v = parse_config(vast, "vast.toml", ConfigLimits{8 * kGiB});
+  const config::ConfigResult v =
+      config::parse_config(vast, "vast.toml", config::ConfigLimits{8 * kGiB});
   ASSERT_FALSE(v.ok());
   EXPECT_EQ(v.errors.back().path, "detail[0].grid.dx") << v.error_text();
 }
@@ -611,32 +626,33 @@ TEST(ConfigResourceBounds, HostileGeometryEndsInErrorsNotExceptions) {
 // Sizes on the command line and in messages ------------------------------------------------------
 
 TEST(ByteSizes, ParsedWithBinarySuffixes) {
-  EXPECT_EQ(parse_byte_size("8G"), 8 * kGiB);
-  EXPECT_EQ(parse_byte_size("8g"), 8 * kGiB);
-  EXPECT_EQ(parse_byte_size("8GiB"), 8 * kGiB);
-  EXPECT_EQ(parse_byte_size("512M"), std::uint64_t{512} << 20U);
-  EXPECT_EQ(parse_byte_size("64K"), std::uint64_t{64} << 10U);
-  EXPECT_EQ(parse_byte_size("2T"), std::uint64_t{2} << 40U);
-  EXPECT_EQ(parse_byte_size("1048576"), std::uint64_t{1048576});
-  EXPECT_EQ(parse_byte_size("100B"), std::uint64_t{100});
+  EXPECT_EQ(config::parse_byte_size("8G"), 8 * kGiB);
+  EXPECT_EQ(config::parse_byte_size("8g"), 8 * kGiB);
+  EXPECT_EQ(config::parse_byte_size("8GiB"), 8 * kGiB);
+  EXPECT_EQ(config::parse_byte_size("512M"), std::uint64_t{512} << 20U);
+  EXPECT_EQ(config::parse_byte_size("64K"), std::uint64_t{64} << 10U);
+  EXPECT_EQ(config::parse_byte_size("2T"), std::uint64_t{2} << 40U);
+  EXPECT_EQ(config::parse_byte_size("1048576"), std::uint64_t{1048576});
+  EXPECT_EQ(config::parse_byte_size("100B"), std::uint64_t{100});
   for (const char* bad : {"", "G", "0", "0G", "-1", "1.5G", "8X", "8 G", "8GB2", " 8G",
                           "99999999999999999999", "17179869184G"}) {
-    EXPECT_FALSE(parse_byte_size(bad).has_value()) << bad;
+    EXPECT_FALSE(config::parse_byte_size(bad).has_value()) << bad;
   }
 }
 
 TEST(ByteSizes, FormattedInBinaryUnits) {
-  EXPECT_EQ(format_bytes(512), "512 B");
-  EXPECT_EQ(format_bytes(1536), "1.5 KiB");
-  EXPECT_EQ(format_bytes(3.4e9), "3.17 GiB");
-  EXPECT_EQ(format_bytes(2.5e15), "2.22 PiB");
-  EXPECT_EQ(format_bytes(1e30), "8.67e+11 EiB");
+  EXPECT_EQ(config::format_bytes(512), "512 B");
+  EXPECT_EQ(config::format_bytes(1536), "1.5 KiB");
+  EXPECT_EQ(config::format_bytes(3.4e9), "3.17 GiB");
+  EXPECT_EQ(config::format_bytes(2.5e15), "2.22 PiB");
+  EXPECT_EQ(config::format_bytes(1e30), "8.67e+11 EiB");
 }
 
 TEST(ByteSizes, DefaultLimitIsThreeQuartersOfPhysicalMemory) {
-  const std::uint64_t limit = default_memory_limit();
+  const std::uint64_t limit = config::default_memory_limit();
   EXPECT_GT(limit, 0u);
-  const ConfigResult r = parse_config(plate(), "plate.toml");  // the default applies
+  const config::ConfigResult r =
+      config::parse_config(plate(), "plate.toml");  // the default applies
   EXPECT_TRUE(r.ok()) << r.error_text();
 }
 

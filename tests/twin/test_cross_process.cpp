@@ -24,9 +24,9 @@ namespace peritwin::twin {
 namespace {
 
 namespace fs = std::filesystem;
-using peritwin::testing::free_loopback_port;
+using peritwin::core::free_loopback_port;
+using peritwin::core::wait_for_loopback_port;
 using peritwin::testing::Process;
-using peritwin::testing::wait_for_loopback_port;
 
 constexpr const char* kLcmJar = "/usr/share/java/lcm.jar";
 /// Deadline of every wait on the hub, a daemon or a replay (and the replay's no-progress limit).
@@ -88,7 +88,7 @@ class CrossProcess : public ::testing::Test {
     // A port free a moment ago; the hub there must be ours (it may lose the port to another
     // process, e.g. a test running in parallel, between the check and the JVM's bind): retry.
     for (int attempt = 0; attempt < 5 && !hub_; ++attempt) {
-      port_ = free_loopback_port();
+      port_ = core::free_loopback_port();
       hub_ = std::make_unique<Process>(
           std::vector<std::string>{java_, "-cp", kLcmJar, "lcm.lcm.TCPService",
                                    std::to_string(port_)},
@@ -105,7 +105,8 @@ class CrossProcess : public ::testing::Test {
     }
     ASSERT_TRUE(hub_) << "no LCM hub of this test listening (see " << (dir_ / "hub.log") << ")";
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
-    ASSERT_TRUE(wait_for_loopback_port(port_, kWaitS)) << "the LCM hub did not come up on " << url_;
+    ASSERT_TRUE(core::wait_for_loopback_port(port_, kWaitS))
+        << "the LCM hub did not come up on " << url_;
     // B1, 3 mm life criterion, 24 batches (testing::write_cross_process_inputs).
     config_ = (dir_ / "b1.toml").string();
     history_ = (dir_ / "history.csv").string();

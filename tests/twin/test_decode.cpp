@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "twin/lcm/messages_io.h"
+#include "twin/messages_io.h"
 
 namespace peritwin::twin {
 namespace {
@@ -21,14 +21,14 @@ std::vector<std::uint8_t> encode(const peritwin_msgs::load_batch_t& m) {
 }
 
 peritwin_msgs::load_batch_t sample(int blocks = 3) {
-  Batch b{"b1-ct", "replay", 7, {}};
+  messages::Batch b{"b1-ct", "replay", 7, {}};
   for (int i = 0; i < blocks; ++i) b.blocks.push_back({4000.0 + i, 0.1, 0.25, 10 + i});
-  return batch_message(b, 123);
+  return messages::batch_message(b, 123);
 }
 
 TEST(DecodeBatch, RoundTrip) {
   const auto bytes = encode(sample());
-  const Decoded d = decode_batch(bytes.data(), bytes.size());
+  const messages::Decoded d = messages::decode_batch(bytes.data(), bytes.size());
   ASSERT_TRUE(d.batch.has_value()) << d.error.why;
   EXPECT_EQ(d.batch->detail_id, "b1-ct");
   EXPECT_EQ(d.batch->source_id, "replay");
@@ -41,9 +41,9 @@ TEST(DecodeBatch, RoundTrip) {
 TEST(DecodeBatch, EveryTruncationIsRejected) {
   const auto bytes = encode(sample());
   for (std::size_t n = 0; n < bytes.size(); ++n) {
-    const Decoded d = decode_batch(bytes.data(), n);
+    const messages::Decoded d = messages::decode_batch(bytes.data(), n);
     EXPECT_FALSE(d.batch.has_value()) << n;
-    EXPECT_EQ(d.error.verdict, Verdict::decode);
+    EXPECT_EQ(d.error.verdict, messages::Verdict::decode);
     EXPECT_EQ(d.error.what, "message");
     EXPECT_FALSE(d.error.why.empty());
   }
@@ -52,7 +52,7 @@ TEST(DecodeBatch, EveryTruncationIsRejected) {
 TEST(DecodeBatch, WrongFingerprint) {
   auto bytes = encode(sample());
   bytes[3] ^= 0x40;
-  const Decoded d = decode_batch(bytes.data(), bytes.size());
+  const messages::Decoded d = messages::decode_batch(bytes.data(), bytes.size());
   EXPECT_FALSE(d.batch.has_value());
   EXPECT_NE(d.error.why.find("fingerprint"), std::string::npos) << d.error.why;
   // Another type's bytes.
@@ -60,17 +60,17 @@ TEST(DecodeBatch, WrongFingerprint) {
   r.detail_id = "b1-ct";
   std::vector<std::uint8_t> other(static_cast<std::size_t>(r.getEncodedSize()));
   r.encode(other.data(), 0, static_cast<int>(other.size()));
-  EXPECT_FALSE(decode_batch(other.data(), other.size()).batch.has_value());
+  EXPECT_FALSE(messages::decode_batch(other.data(), other.size()).batch.has_value());
 }
 
 TEST(DecodeBatch, OversizedPayloads) {
   auto bytes = encode(sample());
   bytes.push_back(0);
-  Decoded d = decode_batch(bytes.data(), bytes.size());
+  messages::Decoded d = messages::decode_batch(bytes.data(), bytes.size());
   EXPECT_FALSE(d.batch.has_value());
   EXPECT_NE(d.error.why.find("oversized"), std::string::npos) << d.error.why;
-  std::vector<std::uint8_t> huge(kMaxBatchPayload + 1, 0);
-  d = decode_batch(huge.data(), huge.size());
+  std::vector<std::uint8_t> huge(messages::kMaxBatchPayload + 1, 0);
+  d = messages::decode_batch(huge.data(), huge.size());
   EXPECT_FALSE(d.batch.has_value());
   EXPECT_NE(d.error.why.find("oversized"), std::string::npos) << d.error.why;
 }
@@ -83,25 +83,26 @@ TEST(DecodeBatch, MalformedLengthsDoNotAllocate) {
   for (const std::uint32_t n : {0x7fffffffu, 0x80000000u, 2u}) {
     auto bytes = good;
     for (int i = 0; i < 4; ++i) bytes[at + i] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
-    const Decoded d = decode_batch(bytes.data(), bytes.size());
+    const messages::Decoded d = messages::decode_batch(bytes.data(), bytes.size());
     EXPECT_FALSE(d.batch.has_value()) << n;
   }
   // detail_id length (after fingerprint and utime): negative, zero, past the end.
   for (const std::uint32_t n : {0xffffffffu, 0u, 0x10000u}) {
     auto bytes = good;
     for (int i = 0; i < 4; ++i) bytes[16 + i] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
-    EXPECT_FALSE(decode_batch(bytes.data(), bytes.size()).batch.has_value()) << n;
+    EXPECT_FALSE(messages::decode_batch(bytes.data(), bytes.size()).batch.has_value()) << n;
   }
   // A string without its NUL.
   auto bytes = good;
   bytes[16 + 4 + 5] = 'x';  // "b1-ct" + NUL: the NUL is at offset 5
-  EXPECT_FALSE(decode_batch(bytes.data(), bytes.size()).batch.has_value());
+  EXPECT_FALSE(messages::decode_batch(bytes.data(), bytes.size()).batch.has_value());
 }
 
 TEST(DecodeBatch, AuthTagIsCarriedAndItsCoverageIsEverythingBeforeTagLength) {
   auto msg = sample(2);
   const auto unsigned_bytes = encode(msg);
-  const Decoded plain = decode_batch(unsigned_bytes.data(), unsigned_bytes.size());
+  const messages::Decoded plain =
+      messages::decode_batch(unsigned_bytes.data(), unsigned_bytes.size());
   ASSERT_TRUE(plain.batch.has_value()) << plain.error.why;
   EXPECT_TRUE(plain.auth_tag.empty());
   EXPECT_EQ(plain.signed_size, unsigned_bytes.size() - 4);
@@ -109,7 +110,7 @@ TEST(DecodeBatch, AuthTagIsCarriedAndItsCoverageIsEverythingBeforeTagLength) {
   msg.auth_tag.assign(messages::kAuthTagBytes, 0xC3);
   msg.tag_length = static_cast<std::int32_t>(messages::kAuthTagBytes);
   const auto signed_bytes = encode(msg);
-  const Decoded tagged = decode_batch(signed_bytes.data(), signed_bytes.size());
+  const messages::Decoded tagged = messages::decode_batch(signed_bytes.data(), signed_bytes.size());
   ASSERT_TRUE(tagged.batch.has_value()) << tagged.error.why;
   EXPECT_EQ(tagged.auth_tag, msg.auth_tag);
   // The covered bytes are the same whether the message carries a tag or not.
@@ -122,7 +123,7 @@ TEST(DecodeBatch, AuthTagIsCarriedAndItsCoverageIsEverythingBeforeTagLength) {
   msg.auth_tag.assign(5, 0x01);
   msg.tag_length = 5;
   const auto odd = encode(msg);
-  const Decoded refused = decode_batch(odd.data(), odd.size());
+  const messages::Decoded refused = messages::decode_batch(odd.data(), odd.size());
   EXPECT_FALSE(refused.batch.has_value());
   EXPECT_NE(refused.error.why.find("tag_length 5"), std::string::npos) << refused.error.why;
 }
@@ -136,7 +137,7 @@ TEST(Json, NonFiniteIsNull) {
   s.end_of_life_cycle = -1;
   s.state_hash = "00ff";
   s.engine_hash = "11ee";
-  const std::string j = summary_json(s);
+  const std::string j = messages::summary_json(s);
   EXPECT_EQ(j,
             "{\"detail\":\"d\\\"x\",\"cycles\":0,\"broken_bonds\":0,\"crack_length_m\":0.0,"
             "\"remaining_cycles\":null,\"end_of_life_cycle\":-1,\"state_hash\":\"00ff\","
@@ -166,7 +167,7 @@ TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
   s.end_of_life_cycle = 34000;
   s.state_hash = "0123abcd";
   s.engine_hash = "4567ef";
-  const std::string text = state_json(s);
+  const std::string text = messages::state_json(s);
   EXPECT_EQ(text,
             "{\"detail\":\"b1-ct\",\"state_seq\":12,\"cycles\":34567,\"broken_bonds\":89,"
             "\"crack_length_m\":0.0125,\"crack_count\":3,\"max_damage\":0.25,\"k_i\":null,"
@@ -175,10 +176,10 @@ TEST(Json, StateJsonKeysInDocumentedOrderAndNaNIsNull) {
             "\"state_hash\":\"0123abcd\",\"engine_hash\":\"4567ef\"}");
   const auto j = nlohmann::ordered_json::parse(text);
   const std::vector<std::string> documented = {
-      "detail",         "state_seq",          "cycles",  "broken_bonds",     "crack_length_m",
-      "crack_count",    "max_damage",         "k_i",     "remaining_cycles", "remaining_low",
-      "remaining_high", "remaining_life_seq", "failure", "end_of_life_cycle", "state_hash",
-      "engine_hash"};
+      "detail",           "state_seq",         "cycles",         "broken_bonds",
+      "crack_length_m",   "crack_count",       "max_damage",     "k_i",
+      "remaining_cycles", "remaining_low",     "remaining_high", "remaining_life_seq",
+      "failure",          "end_of_life_cycle", "state_hash",     "engine_hash"};
   std::vector<std::string> keys;
   for (const auto& item : j.items()) keys.push_back(item.key());
   EXPECT_EQ(keys, documented);

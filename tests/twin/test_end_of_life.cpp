@@ -1,4 +1,4 @@
-// End of life at the exact cycle, whatever the batching (twin/model/twin.h, "End of life").
+// End of life at the exact cycle, whatever the batching (twin/twin.h, "End of life").
 //
 // The reference is the 1-cycle batching: the twin then looks at the criterion after every cycle,
 // which is the definition of "the first cycle at which the criterion is met". Every other batching
@@ -39,7 +39,7 @@ struct EndOfLife {
 
 /// Feeds the history in batches of `blocks_per_batch` blocks of `cycles_per_block` cycles (after
 /// the common prefix unless `one_block`) until the twin reports its end of life.
-EndOfLife run(const std::shared_ptr<const DetailModel>& model, std::int64_t cycles_per_block,
+EndOfLife run(const std::shared_ptr<const twin::DetailModel>& model, std::int64_t cycles_per_block,
               std::int64_t blocks_per_batch = 1, bool one_block = false) {
   auto twin = make_twin(model);
   EndOfLife out;
@@ -52,14 +52,14 @@ EndOfLife run(const std::shared_ptr<const DetailModel>& model, std::int64_t cycl
     EXPECT_TRUE(twin->apply(batch(seq++, {{kPMax, kR, 0, kCommonPrefix}})).applied());
     fed = kCommonPrefix;
   }
-  while (twin->failure() == Failure::none && fed < kHistory) {
-    std::vector<LoadBlock> blocks;
+  while (twin->failure() == twin::Failure::none && fed < kHistory) {
+    std::vector<core::LoadBlock> blocks;
     for (std::int64_t b = 0; b < blocks_per_batch && fed < kHistory; ++b) {
       const std::int64_t n = std::min(cycles_per_block, kHistory - fed);
       blocks.push_back({kPMax, kR, 0, n});
       fed += n;
     }
-    const Outcome o = twin->apply(batch(seq++, blocks));
+    const messages::Outcome o = twin->apply(batch(seq++, blocks));
     EXPECT_TRUE(o.applied()) << o.what << ": " << o.why;
     if (!o.applied()) break;
   }
@@ -67,11 +67,11 @@ EndOfLife run(const std::shared_ptr<const DetailModel>& model, std::int64_t cycl
   out.total_cycles = twin->engine().total_cycles();
   out.engine_hash = twin->engine_hash();
   out.intact = twin->engine().solver().intact();
-  out.crack_length = criterion_crack_length(*model, twin->engine().node_damage(), out.intact);
+  out.crack_length = twin::criterion_crack_length(*model, twin->engine().node_damage(), out.intact);
   out.batches = static_cast<std::size_t>(seq - 1);
   // A batch after the end of life is refused and changes nothing.
-  const Outcome after = twin->apply(batch(seq, {{kPMax, kR, 0, 1000}}));
-  EXPECT_EQ(after.verdict, Verdict::failed);
+  const messages::Outcome after = twin->apply(batch(seq, {{kPMax, kR, 0, 1000}}));
+  EXPECT_EQ(after.verdict, messages::Verdict::failed);
   EXPECT_EQ(twin->engine_hash(), out.engine_hash);
   return out;
 }
@@ -91,9 +91,9 @@ TEST(EndOfLife, TheSameCycleBondsAndEngineStateForEveryBatching) {
   {
     auto twin = make_twin(model);
     ASSERT_TRUE(twin->apply(batch(1, {{kPMax, kR, 0, reference.cycle - 1}})).applied());
-    EXPECT_EQ(twin->failure(), Failure::none);
-    EXPECT_LT(criterion_crack_length(*model, twin->engine().node_damage(),
-                                     twin->engine().solver().intact()),
+    EXPECT_EQ(twin->failure(), twin::Failure::none);
+    EXPECT_LT(twin::criterion_crack_length(*model, twin->engine().node_damage(),
+                                           twin->engine().solver().intact()),
               critical);
     // ... and one more cycle reaches it.
     ASSERT_TRUE(twin->apply(batch(2, {{kPMax, kR, 0, 1}})).applied());

@@ -20,41 +20,41 @@ namespace peritwin::twin {
 namespace {
 
 struct LifeRun {
-  Failure failure = Failure::none;
+  twin::Failure failure = twin::Failure::none;
   std::int64_t cycles = 0;
-  Point first_break;  ///< midpoint of the first bond broken by fatigue
+  mesh::Point first_break;  ///< midpoint of the first bond broken by fatigue
   int fatigue_breaks = 0;
   int net_section_breaks = 0;  ///< fatigue breaks within 45° of ±y about the hole centre
   /// The cracks of every state before the end of life (CrackReport after each batch).
-  std::vector<CrackReport> reports;
+  std::vector<twin::CrackReport> reports;
   std::vector<std::int64_t> report_cycles;
 };
 
 /// Batches of 5000 cycles at p_max, R = 0.1, until the twin fails (at most 1000 batches).
-LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_centre,
+LifeRun run_to_end_of_life(const std::string& example, double p_max, mesh::Point hole_centre,
                            std::int64_t batch_cycles = 5000) {
-  auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/" + example);
+  auto parsed = config::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/" + example);
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
   LifeRun run;
   if (!parsed.ok()) return run;
-  const DetailConfig config = parsed.config->details.at(0);
+  const config::DetailConfig config = parsed.config->details.at(0);
   const auto model = testing::b1_model(config);
   auto twin = testing::make_twin(model);
-  for (std::int64_t seq = 1; seq <= 1000 && twin->failure() == Failure::none; ++seq) {
+  for (std::int64_t seq = 1; seq <= 1000 && twin->failure() == twin::Failure::none; ++seq) {
     EXPECT_TRUE(twin->apply({config.id, "test", seq, {{p_max, 0.1, 0.0, batch_cycles}}}).applied());
-    if (twin->failure() == Failure::none) {
+    if (twin->failure() == twin::Failure::none) {
       run.reports.push_back(twin->cracks());
       run.report_cycles.push_back(twin->engine().total_cycles());
     }
   }
   run.failure = twin->failure();
   run.cycles = twin->engine().total_cycles();
-  const Discretization& disc = model->disc();
-  for (const BreakEvent& e : twin->engine().break_events()) {
-    if (e.cause != BreakCause::fatigue) continue;
-    const Point a = disc.position[static_cast<std::size_t>(disc.bond_i[e.bond])];
-    const Point b = disc.position[static_cast<std::size_t>(disc.bond_j[e.bond])];
-    const Point mid{0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
+  const mesh::Discretization& disc = model->disc();
+  for (const fatigue::BreakEvent& e : twin->engine().break_events()) {
+    if (e.cause != fatigue::BreakCause::fatigue) continue;
+    const mesh::Point a = disc.position[static_cast<std::size_t>(disc.bond_i[e.bond])];
+    const mesh::Point b = disc.position[static_cast<std::size_t>(disc.bond_j[e.bond])];
+    const mesh::Point mid{0.5 * (a.x + b.x), 0.5 * (a.y + b.y)};
     if (run.fatigue_breaks++ == 0) run.first_break = mid;
     if (std::abs(mid.x - hole_centre.x) <= std::abs(mid.y - hole_centre.y)) {
       ++run.net_section_breaks;
@@ -66,9 +66,9 @@ LifeRun run_to_end_of_life(const std::string& example, double p_max, Point hole_
 /// The run ended in final failure; its first fatigue break lies at the hole's rim (radius within
 /// [radius − inside, radius + outside] of the centre), above or below the centre; most breaks lie
 /// in the net section.
-void expect_failed_from_the_rim(const LifeRun& run, Point centre, double radius, double inside,
-                                double outside) {
-  EXPECT_NE(run.failure, Failure::none);
+void expect_failed_from_the_rim(const LifeRun& run, mesh::Point centre, double radius,
+                                double inside, double outside) {
+  EXPECT_NE(run.failure, twin::Failure::none);
   ASSERT_GT(run.fatigue_breaks, 0);
   const double r = std::hypot(run.first_break.x - centre.x, run.first_break.y - centre.y);
   EXPECT_GE(r, radius - inside);
@@ -78,7 +78,7 @@ void expect_failed_from_the_rim(const LifeRun& run, Point centre, double radius,
 }
 
 TEST(DetailExamples, StripWithHoleCracksAtTheHoleTopAndBottom) {
-  const Point centre{0.100, 0.030};
+  const mesh::Point centre{0.100, 0.030};
   const LifeRun run = run_to_end_of_life("strip-with-hole.toml", 20000.0, centre);
   // The first break: at the rim (radius 5 mm) within a horizon (6 mm), above or below the centre.
   expect_failed_from_the_rim(run, centre, 0.005, 0.002, 0.006);
@@ -86,7 +86,7 @@ TEST(DetailExamples, StripWithHoleCracksAtTheHoleTopAndBottom) {
   // each growing monotonically under its id from state to state.
   bool both = false;
   std::map<std::int32_t, double> last_length;
-  for (const CrackReport& report : run.reports) {
+  for (const twin::CrackReport& report : run.reports) {
     int above = 0, below = 0;
     for (const auto& rc : report.cracks) {
       if (rc.origin != "hole 0") continue;
@@ -107,7 +107,7 @@ TEST(DetailExamples, StripWithHoleCracksAtTheHoleTopAndBottom) {
 }
 
 TEST(DetailExamples, LugCracksAtTheHoleInTheNetSection) {
-  const Point centre{0.060, 0.0};
+  const mesh::Point centre{0.060, 0.0};
   const LifeRun run = run_to_end_of_life("lug.toml", 8000.0, centre);
   // The first break: at the rim (radius 8 mm) within a horizon (3 mm), above or below the centre.
   expect_failed_from_the_rim(run, centre, 0.008, 0.001, 0.003);
@@ -150,29 +150,29 @@ TEST(DetailExamples, CrackLengthCriterionFiresOnTheLongestCrackFromTheHole) {
   // twin ends the life at the first state whose longest hole crack reaches 8 mm, and not before.
   // Batches of 1000 cycles: on this grid the hole's cracks grow from 5 to 8.7 mm in about 10 000
   // cycles and then run through the ligament within 4000 (measured).
-  auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/strip-with-hole.toml");
+  auto parsed = config::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/strip-with-hole.toml");
   ASSERT_TRUE(parsed.ok()) << parsed.error_text();
-  DetailConfig config = parsed.config->details.at(0);
-  config.life.criterion = LifeCriterion::crack_length;
+  config::DetailConfig config = parsed.config->details.at(0);
+  config.life.criterion = config::LifeCriterion::crack_length;
   config.life.critical_crack_length = 0.008;
   config.life.crack_origin = "hole 0";
   const auto model = testing::b1_model(config);
   auto twin = testing::make_twin(model);
   double before = 0.0;
-  for (std::int64_t seq = 1; seq <= 2000 && twin->failure() == Failure::none; ++seq) {
+  for (std::int64_t seq = 1; seq <= 2000 && twin->failure() == twin::Failure::none; ++seq) {
     ASSERT_TRUE(twin->apply({config.id, "test", seq, {{20000.0, 0.1, 0.0, 1000}}}).applied());
-    const ReportedCrack* c = twin->cracks().criterion_crack("hole 0");
-    if (twin->failure() == Failure::none) {
+    const twin::ReportedCrack* c = twin->cracks().criterion_crack("hole 0");
+    if (twin->failure() == twin::Failure::none) {
       before = c == nullptr ? 0.0 : c->crack.length;
       EXPECT_LT(before, 0.008);
     } else {
-      EXPECT_EQ(twin->failure(), Failure::end_criterion);
+      EXPECT_EQ(twin->failure(), twin::Failure::end_criterion);
       ASSERT_NE(c, nullptr);
       EXPECT_GE(c->crack.length, 0.008);
       EXPECT_EQ(c, &twin->cracks().cracks.front());  // the longest crack is the hole's
     }
   }
-  EXPECT_EQ(twin->failure(), Failure::end_criterion);
+  EXPECT_EQ(twin->failure(), twin::Failure::end_criterion);
   EXPECT_GT(before, 0.0);  // a crack grew before the state that ended the life
 }
 

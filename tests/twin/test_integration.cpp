@@ -21,11 +21,11 @@
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/mesh.h"
+#include "outputs/checkpoint_io.h"
 #include "replay/replay_tool.h"
+#include "service/daemon.h"
 #include "tests/support/twin_fixtures.h"
-#include "twin/io/checkpoint_io.h"
-#include "twin/lcm/messages_io.h"
-#include "twin/service/daemon.h"
+#include "twin/messages_io.h"
 
 namespace peritwin::twin {
 namespace {
@@ -36,16 +36,16 @@ using testing::b1_text;
 /// No progress for this long fails a replay or a wait; generous for a loaded 2-core machine.
 constexpr double kGiveUpS = 600.0;
 
-TwinConfig config_of(const std::string& text) {
-  auto r = parse_config(text, "b1-memq.toml");
+config::TwinConfig config_of(const std::string& text) {
+  auto r = config::parse_config(text, "b1-memq.toml");
   EXPECT_TRUE(r.ok()) << r.error_text();
   return *r.config;
 }
 
-std::vector<Batch> history(int n, std::int64_t cycles = 1500) {
-  std::vector<LoadBlock> blocks;
+std::vector<messages::Batch> history(int n, std::int64_t cycles = 1500) {
+  std::vector<core::LoadBlock> blocks;
   for (int i = 0; i < n; ++i) blocks.push_back({4000.0 + 25.0 * (i % 3), 0.1, 0.0, cycles});
-  return replay::make_twin_batches(blocks, "b1-ct", "replay", {4, 1000});
+  return loads::make_twin_batches(blocks, "b1-ct", "replay", {4, 1000});
 }
 
 class MemqTest : public ::testing::Test {
@@ -63,27 +63,27 @@ class MemqTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path dir_;
-  DaemonOptions options_;
+  service::DaemonOptions options_;
 };
 
-std::map<std::int64_t, std::string> in_process_hashes(const TwinConfig& config,
-                                                      const std::vector<Batch>& batches) {
+std::map<std::int64_t, std::string> in_process_hashes(const config::TwinConfig& config,
+                                                      const std::vector<messages::Batch>& batches) {
   std::map<std::int64_t, std::string> hashes;
-  const auto r = replay::run_in_process(config.details[0], batches,
-                                        [&](const auto& s) { hashes[s.state_seq] = s.state_hash; });
+  const auto r = twin::run_in_process(config.details[0], batches,
+                                      [&](const auto& s) { hashes[s.state_seq] = s.state_hash; });
   EXPECT_TRUE(r.error.empty()) << r.error;
   return hashes;
 }
 
 TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   const auto batches = history(12);  // 12 x 1500 cycles in batches of 4 blocks / 1000 cycles
   ASSERT_EQ(batches.size(), 12u);
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   std::map<std::int64_t, std::string> seen;
   replay::LcmReplayer replayer(lcm, batches, {false, 5, 3.0, kGiveUpS});
   const auto result = replayer.run([&](const auto& s) { seen[s.state_seq] = s.state_hash; },
@@ -109,11 +109,11 @@ TEST_F(MemqTest, EveryStateThroughLcmEqualsTheInProcessRun) {
 }
 
 TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   std::vector<peritwin_msgs::reject_t> rejects;
   std::vector<peritwin_msgs::damage_state_t> states;
   struct Sink {
@@ -130,11 +130,11 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Sink::reject, &sink);
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::state, &sink);
   const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
-  auto send = [&](const Batch& b) {
-    const auto m = batch_message(b, 0);
+  auto send = [&](const messages::Batch& b) {
+    const auto m = messages::batch_message(b, 0);
     lcm.publish(load, &m);
   };
-  const LoadBlock ok{4000, 0.1, 0, 100};
+  const core::LoadBlock ok{4000, 0.1, 0, 100};
   const std::uint8_t garbage[] = {1, 2, 3, 4, 5, 6, 7, 8, 9};
   lcm.publish(load, garbage, sizeof garbage);        // decode
   send({"b1-ct", "p", 1, {ok, {4000, 2.0, 0, 1}}});  // invalid
@@ -166,21 +166,21 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   // went out before this test subscribed).
   ASSERT_EQ(states.size(), 3u);
   EXPECT_EQ(states.back().state_seq, 1);
-  EXPECT_EQ(applied_seq(states.back(), "p"), 1);
+  EXPECT_EQ(messages::applied_seq(states.back(), "p"), 1);
   EXPECT_EQ(daemon.twin(0).state_seq(), 1);
   daemon.stop();
 }
 
 TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   const auto batches = history(16);
   const auto expected = in_process_hashes(config, batches);
   lcm::LCM lcm("memq://");
   {
-    Daemon first(lcm, config, options_);
-    const Status started = first.start();
-    ASSERT_TRUE(started.ok()) << message_of(started);
-    const std::vector<Batch> half(batches.begin(), batches.begin() + 7);
+    service::Daemon first(lcm, config, options_);
+    const core::Status started = first.start();
+    ASSERT_TRUE(started.ok()) << core::message_of(started);
+    const std::vector<messages::Batch> half(batches.begin(), batches.begin() + 7);
     replay::LcmReplayer replayer(lcm, half, {true, 1, 3.0, kGiveUpS});
     ASSERT_TRUE(replayer
                     .run({},
@@ -192,9 +192,9 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
     first.stop();
     EXPECT_EQ(first.twin(0).state_hash_hex(), expected.at(7));
   }
-  Daemon second(lcm, config, options_);
-  const Status started = second.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon second(lcm, config, options_);
+  const core::Status started = second.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   EXPECT_EQ(second.twin(0).state_seq(), 7);
   EXPECT_EQ(second.twin(0).state_hash_hex(), expected.at(7));
   // The whole history again: 1..7 are duplicates, 8..16 are applied.
@@ -216,16 +216,16 @@ TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
 TEST_F(MemqTest, OneTwinPerDetailEachOnItsOwnChannels) {
   // B1 and B2 (examples) in one config: batches go to the twin of their channel only.
   const std::string b2 =
-      testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
-  const TwinConfig config = config_of(b1_text() + "\n" + b2);
+      twin::testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
+  const config::TwinConfig config = config_of(b1_text() + "\n" + b2);
   ASSERT_EQ(config.details.size(), 2u);
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   ASSERT_EQ(daemon.num_details(), 2u);
-  auto send = [&](const Batch& b) {
-    const auto m = batch_message(b, 0);
+  auto send = [&](const messages::Batch& b) {
+    const auto m = messages::batch_message(b, 0);
     lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
   };
   send({"b1-ct", "a", 1, {{4000, 0.1, 0, 1000}}});
@@ -258,17 +258,17 @@ TEST_F(MemqTest, AnyNumberOfWorkerThreadsGivesEachDetailItsSingleDetailRun) {
                                           {"\"results/b1-ct\"", "\"results/" + id + "\""}}) +
             "\n";
   }
-  const TwinConfig config = config_of(text);
+  const config::TwinConfig config = config_of(text);
   ASSERT_EQ(config.details.size(), details.size());
-  std::vector<std::vector<Batch>> batches;
+  std::vector<std::vector<messages::Batch>> batches;
   std::vector<std::string> expected_hash;
   for (std::size_t i = 0; i < details.size(); ++i) {
-    std::vector<LoadBlock> blocks;
+    std::vector<core::LoadBlock> blocks;
     for (int k = 0; k < 8; ++k) blocks.push_back({details[i].second, 0.1, 0.0, 1500});
-    batches.push_back(replay::make_twin_batches(blocks, details[i].first, "replay", {4, 1000}));
+    batches.push_back(loads::make_twin_batches(blocks, details[i].first, "replay", {4, 1000}));
     std::string last;
-    const auto r = replay::run_in_process(config.details[i], batches.back(),
-                                          [&](const auto& s) { last = s.state_hash; });
+    const auto r = twin::run_in_process(config.details[i], batches.back(),
+                                        [&](const auto& s) { last = s.state_hash; });
     ASSERT_TRUE(r.error.empty()) << r.error;
     expected_hash.push_back(last);
   }
@@ -277,12 +277,12 @@ TEST_F(MemqTest, AnyNumberOfWorkerThreadsGivesEachDetailItsSingleDetailRun) {
     fs::remove_all(options_.state_dir);
     options_.worker_threads = threads;
     lcm::LCM lcm("memq://");
-    Daemon daemon(lcm, config, options_);
-    const Status started = daemon.start();
-    ASSERT_TRUE(started.ok()) << message_of(started);
+    service::Daemon daemon(lcm, config, options_);
+    const core::Status started = daemon.start();
+    ASSERT_TRUE(started.ok()) << core::message_of(started);
     for (std::size_t k = 0; k < batches[0].size(); ++k) {
       for (const auto& detail_batches : batches) {
-        const auto m = batch_message(detail_batches[k], 0);
+        const auto m = messages::batch_message(detail_batches[k], 0);
         lcm.publish(messages::channel(detail_batches[k].detail_id, messages::Kind::kLoad), &m);
       }
     }
@@ -300,16 +300,16 @@ TEST_F(MemqTest, AnyNumberOfWorkerThreadsGivesEachDetailItsSingleDetailRun) {
 TEST_F(MemqTest, AsynchronousLifeEstimatesArriveLabelledWithTheirState) {
   // Not deterministic: a worker thread estimates; ingest goes on meanwhile. Every estimate is a
   // pure function of the state it names, so it equals the synchronous one for that state.
-  const TwinConfig config = config_of(b1_text(
+  const config::TwinConfig config = config_of(b1_text(
       "every_batches = 10", {{"critical_crack_length = 0.008", "critical_crack_length = 0.003"},
                              {"band = \"a2_scatter\"", "band = \"none\""},
                              {"a2_relative_scatter = 0.2", ""}}));
   options_.deterministic = false;
   const auto batches = history(6);
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   std::vector<peritwin_msgs::damage_state_t> states;
   replay::LcmReplayer replayer(lcm, batches, {false, 6, 3.0, kGiveUpS});
   const auto t0 = std::chrono::steady_clock::now();
@@ -368,15 +368,15 @@ TEST_F(MemqTest, OneSharedLifeThreadEstimatesEveryDetailsFinalState) {
                      {"\"results/b1-ct\"", "\"results/" + id + "\""}}) +
             "\n";
   }
-  const TwinConfig config = config_of(text);
+  const config::TwinConfig config = config_of(text);
   ASSERT_EQ(config.details.size(), ids.size());
   options_.deterministic = false;
   options_.life_threads = 1;
   const auto batches = history(4);
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   struct Sink {
     std::map<std::string, peritwin_msgs::damage_state_t> last;
     void on(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::damage_state_t* m) {
@@ -384,11 +384,11 @@ TEST_F(MemqTest, OneSharedLifeThreadEstimatesEveryDetailsFinalState) {
     }
   } sink;
   lcm.subscribe("PERITWIN_.*_STATE", &Sink::on, &sink);
-  for (const Batch& b : batches) {
+  for (const messages::Batch& b : batches) {
     for (const auto& id : ids) {
-      Batch copy = b;
+      messages::Batch copy = b;
       copy.detail_id = id;
-      const auto m = batch_message(copy, 0);
+      const auto m = messages::batch_message(copy, 0);
       lcm.publish(messages::channel(id, messages::Kind::kLoad), &m);
     }
   }
@@ -405,7 +405,7 @@ TEST_F(MemqTest, OneSharedLifeThreadEstimatesEveryDetailsFinalState) {
   auto twin = testing::make_twin(testing::b1_model(config.details[0]));
   ASSERT_NE(twin, nullptr);
   for (const auto& b : batches) {
-    Batch copy = b;
+    messages::Batch copy = b;
     copy.detail_id = ids[0];
     ASSERT_TRUE(twin->apply(copy).applied());
   }
@@ -424,9 +424,9 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   // publishes its states, and STATUS keeps coming for both: b1-ct's says how long it has been
   // busy and how many batches wait behind it.
   const std::string b2 =
-      testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
+      twin::testing::read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b2-cts-al6061.toml");
   // b1-ct turns "degraded" once its batch has run for 0.2 s ([detail.limits] max_batch_seconds).
-  const TwinConfig config = config_of(
+  const config::TwinConfig config = config_of(
       b1_text("every_batches = 0", {{"max_batch_seconds = 60.0", "max_batch_seconds = 0.2"}}) +
       "\n" + b2);
   std::mutex hold_mutex;
@@ -441,9 +441,9 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
     hold_cv.wait(lock, [&] { return release; });
   };
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   struct Sink {
     std::map<std::string, std::vector<peritwin_msgs::status_t>> statuses;
     std::map<std::string, std::vector<peritwin_msgs::damage_state_t>> states;
@@ -457,8 +457,8 @@ TEST_F(MemqTest, ALongBatchOnOneDetailStallsNeitherTheOtherDetailNorAnyHeartbeat
   } sink;
   lcm.subscribe(messages::channel_regex(messages::Kind::kStatus), &Sink::status, &sink);
   lcm.subscribe(messages::channel_regex(messages::Kind::kState), &Sink::state, &sink);
-  auto send = [&](const Batch& b) {
-    const auto m = batch_message(b, 0);
+  auto send = [&](const messages::Batch& b) {
+    const auto m = messages::batch_message(b, 0);
     lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
   };
   for (std::int64_t seq = 1; seq <= 3; ++seq) send({"b1-ct", "p", seq, {{4000, 0.1, 0, 10}}});
@@ -535,7 +535,8 @@ struct Observer {
 };
 
 /// Publishes, lets the daemon apply everything, and delivers what it published.
-void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::load_batch_t>& sent) {
+void exchange(lcm::LCM& lcm, service::Daemon& daemon,
+              const std::vector<peritwin_msgs::load_batch_t>& sent) {
   for (const auto& m : sent) lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
   while (lcm.handleTimeout(0) > 0) {
   }
@@ -545,14 +546,14 @@ void exchange(lcm::LCM& lcm, Daemon& daemon, const std::vector<peritwin_msgs::lo
 }
 
 /// Runs a daemon over `batches` (in-process LCM) and stops it: one checkpoint, at stop.
-void run_and_stop(const TwinConfig& config, const DaemonOptions& options,
-                  const std::vector<Batch>& batches) {
+void run_and_stop(const config::TwinConfig& config, const service::DaemonOptions& options,
+                  const std::vector<messages::Batch>& batches) {
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   for (const auto& b : batches) {
-    const auto m = batch_message(b, 0);
+    const auto m = messages::batch_message(b, 0);
     lcm.publish(messages::channel(b.detail_id, messages::Kind::kLoad), &m);
   }
   while (lcm.handleTimeout(0) > 0) {
@@ -563,11 +564,11 @@ void run_and_stop(const TwinConfig& config, const DaemonOptions& options,
 }
 
 fs::path checkpoint_file(const fs::path& state_dir, std::uint64_t seq) {
-  return checkpoint_path(state_dir / "b1-ct", "checkpoint", seq);
+  return outputs::checkpoint_path(state_dir / "b1-ct", "checkpoint", seq);
 }
 
 TEST_F(MemqTest, CheckpointsThatAllFailRefuseTheStartUnlessFreshStart) {
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   run_and_stop(config, options_, history(3));
   const fs::path good = checkpoint_file(options_.state_dir, 3);
   ASSERT_TRUE(fs::exists(good));
@@ -582,8 +583,8 @@ TEST_F(MemqTest, CheckpointsThatAllFailRefuseTheStartUnlessFreshStart) {
   }
   lcm::LCM lcm("memq://");
   {
-    Daemon daemon(lcm, config, options_);
-    const Status started = daemon.start();
+    service::Daemon daemon(lcm, config, options_);
+    const core::Status started = daemon.start();
     ASSERT_FALSE(started.ok());
     const std::string why = started.error().message();
     EXPECT_NE(why.find("none of the 3 checkpoint(s)"), std::string::npos) << why;
@@ -594,9 +595,9 @@ TEST_F(MemqTest, CheckpointsThatAllFailRefuseTheStartUnlessFreshStart) {
     EXPECT_NE(why.find("--fresh-start"), std::string::npos) << why;
   }
   options_.fresh_start = true;
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   EXPECT_EQ(daemon.twin(0).state_seq(), 0);
   daemon.stop();
 }
@@ -604,7 +605,7 @@ TEST_F(MemqTest, CheckpointsThatAllFailRefuseTheStartUnlessFreshStart) {
 TEST_F(MemqTest, ACheckpointWhoseContentDisagreesWithItsNameIsNotResumed) {
   // A valid checkpoint of another history (2 batches) renamed to a newer seq (9): skipped, the
   // daemon resumes from the newest one whose name and content agree; alone, it stops the start.
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   const auto batches = history(4);
   run_and_stop(config, options_, {batches.begin(), batches.begin() + 2});
   const fs::path other = dir_ / "other-history.h5";
@@ -614,15 +615,15 @@ TEST_F(MemqTest, ACheckpointWhoseContentDisagreesWithItsNameIsNotResumed) {
   fs::copy_file(other, checkpoint_file(options_.state_dir, 9));
   lcm::LCM lcm("memq://");
   {
-    Daemon daemon(lcm, config, options_);
-    const Status started = daemon.start();
-    ASSERT_TRUE(started.ok()) << message_of(started);
+    service::Daemon daemon(lcm, config, options_);
+    const core::Status started = daemon.start();
+    ASSERT_TRUE(started.ok()) << core::message_of(started);
     EXPECT_EQ(daemon.twin(0).state_seq(), 3);
     daemon.stop();
   }
   fs::remove(checkpoint_file(options_.state_dir, 3));
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
   ASSERT_FALSE(started.ok());
   EXPECT_NE(started.error().message().find("holds state_seq 2 but its file name says 9"),
             std::string::npos)
@@ -632,7 +633,7 @@ TEST_F(MemqTest, ACheckpointWhoseContentDisagreesWithItsNameIsNotResumed) {
 TEST_F(MemqTest, AStateDirThatCannotBeWrittenStopsTheStartBeforeAnyState) {
   // Root may write to a mode-0555 directory, so the state dir of the detail is made a regular
   // file: nothing can be created in it, for root or anyone.
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   fs::create_directories(options_.state_dir);
   std::ofstream(options_.state_dir / "b1-ct") << "in the way";
   lcm::LCM lcm("memq://");
@@ -642,8 +643,8 @@ TEST_F(MemqTest, AStateDirThatCannotBeWrittenStopsTheStartBeforeAnyState) {
     void on(const lcm::ReceiveBuffer*, const std::string&) { ++*states; }
   } sink{&states};
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::on, &sink);
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
   ASSERT_FALSE(started.ok());
   EXPECT_NE(started.error().message().find("is not writable"), std::string::npos)
       << started.error().message();
@@ -654,16 +655,16 @@ TEST_F(MemqTest, AStateDirThatCannotBeWrittenStopsTheStartBeforeAnyState) {
 
 TEST_F(MemqTest, StatesSayWhichSeqIsDurable) {
   // checkpointed_seq follows the checkpoints: 0 before the first, then the seq of the newest.
-  const TwinConfig config =
+  const config::TwinConfig config =
       config_of(b1_text("every_batches = 0", {{"every_batches = 100", "every_batches = 2"}}));
   ASSERT_EQ(config.details[0].checkpoint.every_batches, 2);
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
+  service::Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
   Observer seen;
   seen.subscribe(lcm);
   std::vector<peritwin_msgs::load_batch_t> sent;
-  for (const auto& b : history(3)) sent.push_back(batch_message(b, 0));
+  for (const auto& b : history(3)) sent.push_back(messages::batch_message(b, 0));
   exchange(lcm, daemon, sent);
   const auto& states = seen.states;
   ASSERT_EQ(states.size(), 3u);
@@ -689,7 +690,7 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   const fs::path key_file = dir_ / "keys.toml";
   const std::vector<std::string> ids = {"replay", "peritwin"};
   ASSERT_TRUE(messages::write_key_file(key_file, ids).ok());
-  const TwinConfig config =
+  const config::TwinConfig config =
       config_of(b1_text() + "\n[auth]\nkey_file = \"" + key_file.string() + "\"\n");
   ASSERT_TRUE(config.auth.has_value());
   const auto keys = messages::KeyRing::load(key_file);
@@ -697,18 +698,18 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   const messages::AuthKey& replay_key = *keys->find("replay");
   const messages::AuthKey& daemon_key = *keys->find("peritwin");
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
+  service::Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
   Observer seen;
   seen.subscribe(lcm);
-  const Batch real = history(1).front();
-  auto unsigned_hijack = batch_message(real, 0);
+  const messages::Batch real = history(1).front();
+  auto unsigned_hijack = messages::batch_message(real, 0);
   unsigned_hijack.blocks[0].p_max *= 1.5;  // a different load under the real (source, seq)
   auto forged = unsigned_hijack;
   messages::AuthKey wrong;
   wrong.bytes.fill(0x42);
   messages::sign(forged, wrong);
-  auto intruder = batch_message({"b1-ct", "intruder", 1, real.blocks}, 0);
+  auto intruder = messages::batch_message({"b1-ct", "intruder", 1, real.blocks}, 0);
   messages::sign(intruder, replay_key);  // a stolen key does not make another source
   exchange(lcm, daemon, {unsigned_hijack, forged, intruder});
   ASSERT_EQ(seen.rejects.size(), 3u);
@@ -723,13 +724,13 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   EXPECT_EQ(daemon.twin(0).state_seq(), 0);
   EXPECT_EQ(daemon.twin(0).applied_seq("replay"), 0);
 
-  auto genuine = batch_message(real, 0);
+  auto genuine = messages::batch_message(real, 0);
   messages::sign(genuine, replay_key);
   exchange(lcm, daemon, {genuine});
   ASSERT_FALSE(seen.states.empty());
   const auto& state = seen.states.back();
   EXPECT_EQ(state.state_seq, 1);
-  EXPECT_EQ(applied_seq(state, "replay"), 1);
+  EXPECT_EQ(messages::applied_seq(state, "replay"), 1);
   EXPECT_TRUE(messages::verify(state, daemon_key).ok());
   EXPECT_EQ(state.state_hash, in_process_hashes(config, {real}).at(1));
   for (int i = 0; i < 200 && (seen.statuses.empty() || seen.statuses.back().auth_rejects < 3);
@@ -748,17 +749,17 @@ TEST_F(MemqTest, WithoutAuthTheFirstToPublishASeqOwnsIt) {
   // The documented behaviour without [auth] (messages/README.md, Authentication): exactly-once
   // trusts (source, seq), so a hijacker's seq 1 is applied and the real seq 1 is then a
   // duplicate. Unsigned STATE.
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   ASSERT_FALSE(config.auth.has_value());
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
+  service::Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
   Observer seen;
   seen.subscribe(lcm);
-  const Batch real = history(1).front();
-  auto hijack = batch_message(real, 0);
+  const messages::Batch real = history(1).front();
+  auto hijack = messages::batch_message(real, 0);
   hijack.blocks[0].p_max *= 1.5;
-  exchange(lcm, daemon, {hijack, batch_message(real, 0)});
+  exchange(lcm, daemon, {hijack, messages::batch_message(real, 0)});
   ASSERT_EQ(seen.rejects.size(), 1u);
   EXPECT_EQ(seen.rejects[0].code, peritwin_msgs::reject_t::CODE_DUPLICATE);
   EXPECT_EQ(daemon.twin(0).state_seq(), 1);
@@ -771,18 +772,19 @@ TEST_F(MemqTest, OverflowingCountsAndAbsurdLoadsAreInvalidOverLcm) {
   // Issue 14's hostile cases over the bus: count INT64_MAX (wrapped total_cycles), 2^50 + 1
   // (final failure in one batch) and p_max = 1e308 (210 s in one batch): INVALID with the field,
   // nothing applied.
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
+  service::Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
   Observer seen;
   seen.subscribe(lcm);
   const auto hash = daemon.twin(0).state_hash_hex();
-  exchange(lcm, daemon,
-           {batch_message(
-                {"b1-ct", "p", 1, {{4000, 0.1, 0, std::numeric_limits<std::int64_t>::max()}}}, 0),
-            batch_message({"b1-ct", "p", 1, {{4000, 0.1, 0, kMaxBatchCycles + 1}}}, 0),
-            batch_message({"b1-ct", "p", 1, {{1e308, 0.1, 0, 1}}}, 0)});
+  exchange(
+      lcm, daemon,
+      {messages::batch_message(
+           {"b1-ct", "p", 1, {{4000, 0.1, 0, std::numeric_limits<std::int64_t>::max()}}}, 0),
+       messages::batch_message({"b1-ct", "p", 1, {{4000, 0.1, 0, core::kMaxBatchCycles + 1}}}, 0),
+       messages::batch_message({"b1-ct", "p", 1, {{1e308, 0.1, 0, 1}}}, 0)});
   ASSERT_EQ(seen.rejects.size(), 3u);
   const std::vector<std::string> what = {"blocks[0].count", "blocks[0].count", "blocks[0].p_max"};
   for (std::size_t k = 0; k < 3; ++k) {
@@ -798,17 +800,17 @@ TEST_F(MemqTest, OverflowingCountsAndAbsurdLoadsAreInvalidOverLcm) {
 TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch) {
   // 40 invalid batches at once against max_rejects_per_second = 1 (over 10 s): STATUS counts
   // them all, reports the rate and says "degraded"; the model is untouched.
-  const TwinConfig config = config_of(b1_text(
+  const config::TwinConfig config = config_of(b1_text(
       "every_batches = 0", {{"max_rejects_per_second = 10.0", "max_rejects_per_second = 1.0"}}));
   options_.status_period_s = 0.0;
   lcm::LCM lcm("memq://");
-  Daemon daemon(lcm, config, options_);
+  service::Daemon daemon(lcm, config, options_);
   ASSERT_TRUE(daemon.start().ok());
   Observer seen;
   seen.subscribe(lcm);
   std::vector<peritwin_msgs::load_batch_t> flood;
   for (int k = 0; k < 40; ++k)
-    flood.push_back(batch_message({"b1-ct", "p", 1, {{4000, 2.0, 0, 1}}}, 0));
+    flood.push_back(messages::batch_message({"b1-ct", "p", 1, {{4000, 2.0, 0, 1}}}, 0));
   exchange(lcm, daemon, flood);
   daemon.poll(0);  // a heartbeat after the flood
   while (lcm.handleTimeout(0) > 0) {
@@ -828,7 +830,7 @@ TEST_F(MemqTest, AFloodOfRejectsTurnsHealthDegradedAndIsCountedNotLoggedPerBatch
 // The last state a dashboard's damage map should show is the end of life: its FIELD goes out
 // even when the state is not on the field_every_batches period.
 TEST_F(MemqTest, TheEndOfLifeStatePublishesItsField) {
-  const TwinConfig config = config_of(
+  const config::TwinConfig config = config_of(
       b1_text("every_batches = 0", {{"field_every_batches = 10", "field_every_batches = 1000"}}));
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
@@ -840,13 +842,13 @@ TEST_F(MemqTest, TheEndOfLifeStatePublishesItsField) {
     }
   } sink;
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kField), &Sink::field, &sink);
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   // Seq 1: 1000 cycles, no end of life; seq 2: enough cycles at 4 kN to reach the 8 mm criterion.
-  for (const Batch& b : {Batch{"b1-ct", "p", 1, {{4000, 0.1, 0, 1000}}},
-                         Batch{"b1-ct", "p", 2, {{4000, 0.1, 0, 1'000'000}}}}) {
-    const auto m = batch_message(b, 0);
+  for (const messages::Batch& b : {messages::Batch{"b1-ct", "p", 1, {{4000, 0.1, 0, 1000}}},
+                                   messages::Batch{"b1-ct", "p", 2, {{4000, 0.1, 0, 1'000'000}}}}) {
+    const auto m = messages::batch_message(b, 0);
     lcm.publish(messages::channel("b1-ct", messages::Kind::kLoad), &m);
   }
   for (int i = 0; i < 20; ++i) daemon.poll(10);
@@ -854,7 +856,7 @@ TEST_F(MemqTest, TheEndOfLifeStatePublishesItsField) {
   while (lcm.handleTimeout(0) > 0) {
   }
   ASSERT_EQ(daemon.twin(0).state_seq(), 2);
-  ASSERT_NE(daemon.twin(0).failure(), Failure::none);
+  ASSERT_NE(daemon.twin(0).failure(), twin::Failure::none);
   EXPECT_EQ(sink.field_states, (std::set<std::int64_t>{0, 2}));  // start and end of life only
   daemon.stop();
 }
@@ -863,7 +865,7 @@ TEST_F(MemqTest, TheEndOfLifeStatePublishesItsField) {
 // start names its hash, and a mesh_request_t has the mesh published again; a request that does not
 // decode or names another detail is ignored.
 TEST_F(MemqTest, TheMeshIsPublishedAtStartAndOnRequest) {
-  const TwinConfig config = config_of(b1_text());
+  const config::TwinConfig config = config_of(b1_text());
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   struct Sink {
@@ -888,14 +890,14 @@ TEST_F(MemqTest, TheMeshIsPublishedAtStartAndOnRequest) {
   } sink;
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kMesh), &Sink::mesh, &sink);
   lcm.subscribe(messages::channel("b1-ct", messages::Kind::kField), &Sink::field, &sink);
-  Daemon daemon(lcm, config, options_);
-  const Status started = daemon.start();
-  ASSERT_TRUE(started.ok()) << message_of(started);
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
   while (lcm.handleTimeout(0) > 0) {
   }
   ASSERT_EQ(sink.meshes.size(), 1u);
   EXPECT_TRUE(sink.errors.empty()) << sink.errors.front();
-  const messages::Mesh expected = detail_mesh(daemon.twin(0).model());
+  const messages::Mesh expected = twin::detail_mesh(daemon.twin(0).model());
   EXPECT_EQ(sink.meshes[0], expected);
   EXPECT_EQ(sink.meshes[0].x.size(),
             static_cast<std::size_t>(daemon.twin(0).model().disc().num_nodes()));

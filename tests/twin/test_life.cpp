@@ -2,8 +2,8 @@
 #include <cmath>
 
 #include "tests/support/twin_fixtures.h"
-#include "twin/model/coarse_life.h"
-#include "twin/model/life.h"
+#include "twin/coarse_life.h"
+#include "twin/life.h"
 #include "validation/b1_compact_tension.h"
 
 namespace peritwin::twin {
@@ -24,7 +24,7 @@ using testing::batch;
 using testing::make_twin;
 
 TEST(RollingSpectrum, MergesConsecutiveAndRolls) {
-  RollingSpectrum s;
+  twin::RollingSpectrum s;
   s.add({4000, 0.1, 0, 10});
   s.add({4000, 0.1, 0, 5});
   s.add({3000, 0.1, 0, 1});
@@ -37,15 +37,15 @@ TEST(RollingSpectrum, MergesConsecutiveAndRolls) {
   EXPECT_EQ(ref[0].count, 17);
   EXPECT_EQ(ref[1].count, 1);
   for (int i = 0; i < 5000; ++i) s.add({1000.0 + i, 0.1, 0, 1});
-  EXPECT_EQ(s.blocks().size(), RollingSpectrum::kCapacity);
-  EXPECT_EQ(s.blocks().front().p_max, 1000.0 + 5000 - RollingSpectrum::kCapacity);
+  EXPECT_EQ(s.blocks().size(), twin::RollingSpectrum::kCapacity);
+  EXPECT_EQ(s.blocks().front().p_max, 1000.0 + 5000 - twin::RollingSpectrum::kCapacity);
 }
 
 TEST(RollingSpectrum, ManyLevelsAreGroupedConservatively) {
-  RollingSpectrum s;
+  twin::RollingSpectrum s;
   for (int i = 0; i < 100; ++i) s.add({1000.0 + 10 * i, 0.0, 0, 3});
   const auto ref = s.reference();
-  EXPECT_LE(ref.size(), RollingSpectrum::kMaxLevels);
+  EXPECT_LE(ref.size(), twin::RollingSpectrum::kMaxLevels);
   std::int64_t total = 0;
   for (const auto& b : ref) total += b.count;
   EXPECT_EQ(total, 300);
@@ -55,7 +55,7 @@ TEST(RollingSpectrum, ManyLevelsAreGroupedConservatively) {
 
 class LifeTest : public ::testing::Test {
  public:
-  static std::shared_ptr<const DetailModel> no_band_model() {
+  static std::shared_ptr<const twin::DetailModel> no_band_model() {
     return b1_model(b1_config("every_batches = 2",
                               {{"critical_crack_length = 0.008", "critical_crack_length = 0.002"},
                                {"band = \"a2_scatter\"", "band = \"none\""},
@@ -69,43 +69,43 @@ class LifeTest : public ::testing::Test {
         "every_batches = 2", {{"critical_crack_length = 0.008", "critical_crack_length = 0.002"}}));
   }
   static void TearDownTestSuite() { model_.reset(); }
-  static std::shared_ptr<const DetailModel> model_;
+  static std::shared_ptr<const twin::DetailModel> model_;
 };
-std::shared_ptr<const DetailModel> LifeTest::model_;
+std::shared_ptr<const twin::DetailModel> LifeTest::model_;
 
 TEST_F(LifeTest, ForwardSimulationIsExactAndDeterministic) {
-  auto twin = make_twin(model_, LifeMode::external);
-  const LifeJob job = twin->life_job();
+  auto twin = make_twin(model_, twin::LifeMode::external);
+  const twin::LifeJob job = twin->life_job();
   ASSERT_EQ(job.spectrum.size(), 1u);  // the configured reference spectrum
-  const double a = simulate_life(*model_, job.state, job.spectrum, 1.0);
-  const double b = simulate_life(*model_, job.state, job.spectrum, 1.0);
+  const double a = twin::simulate_life(*model_, job.state, job.spectrum, 1.0);
+  const double b = twin::simulate_life(*model_, job.state, job.spectrum, 1.0);
   ASSERT_TRUE(std::isfinite(a));
   EXPECT_GT(a, 0.0);
   EXPECT_EQ(a, b);
   // Applying exactly that many cycles of the reference reaches the criterion; one fewer does not.
   const auto& ref = job.spectrum.front();
   const auto n = static_cast<std::int64_t>(a);
-  auto before = make_twin(model_, LifeMode::external);
+  auto before = make_twin(model_, twin::LifeMode::external);
   ASSERT_TRUE(before->apply(batch(1, {{ref.p_max, ref.r, ref.alpha, n - 1}})).applied());
-  EXPECT_EQ(before->failure(), Failure::none);
+  EXPECT_EQ(before->failure(), twin::Failure::none);
   ASSERT_TRUE(before->apply(batch(2, {{ref.p_max, ref.r, ref.alpha, 1}})).applied());
-  EXPECT_EQ(before->failure(), Failure::end_criterion);
-  EXPECT_EQ(simulate_life(*model_, before->engine().export_state(), job.spectrum, 1.0), 0.0);
+  EXPECT_EQ(before->failure(), twin::Failure::end_criterion);
+  EXPECT_EQ(twin::simulate_life(*model_, before->engine().export_state(), job.spectrum, 1.0), 0.0);
   // An empty spectrum gives no estimate.
-  EXPECT_TRUE(std::isnan(simulate_life(*model_, job.state, {}, 1.0)));
+  EXPECT_TRUE(std::isnan(twin::simulate_life(*model_, job.state, {}, 1.0)));
 }
 
 TEST_F(LifeTest, BandFromA2Scatter) {
-  auto twin = make_twin(model_, LifeMode::external);
-  const LifeJob job = twin->life_job();
-  const LifeEstimate e = estimate_life(*model_, job.state, job.spectrum, true);
+  auto twin = make_twin(model_, twin::LifeMode::external);
+  const twin::LifeJob job = twin->life_job();
+  const twin::LifeEstimate e = twin::estimate_life(*model_, job.state, job.spectrum, true);
   EXPECT_LE(e.low, e.central);
   EXPECT_LE(e.central, e.high);
   EXPECT_LT(e.low, e.high);
   // The band is the range of the runs with A2·(1 ± 0.2) and A2 itself. At a 2 mm crack on the
   // 1 mm grid the order of the three need not follow A2 (which bonds break first may change).
-  const double plus = simulate_life(*model_, job.state, job.spectrum, 1.2);
-  const double minus = simulate_life(*model_, job.state, job.spectrum, 0.8);
+  const double plus = twin::simulate_life(*model_, job.state, job.spectrum, 1.2);
+  const double minus = twin::simulate_life(*model_, job.state, job.spectrum, 0.8);
   EXPECT_EQ(e.low, std::min({plus, minus, e.central}));
   EXPECT_EQ(e.high, std::max({plus, minus, e.central}));
 }
@@ -115,22 +115,22 @@ TEST_F(LifeTest, EstimatesForkedFromTheLiveEngineEqualRebuiltOnesBitForBit) {
   // recorded): the estimate from forks of the live engine (the synchronous twin's path), from
   // the job's snapshot fork (the worker's path) and from fresh engines that import the state (the
   // path before FatigueEngine::fork) are the same three numbers, bit for bit.
-  auto twin = make_twin(model_, LifeMode::external);
+  auto twin = make_twin(model_, twin::LifeMode::external);
   ASSERT_TRUE(twin->apply(batch(1, {{4000, 0.1, 0, 12000}})).applied());
-  const LifeJob job = twin->life_job();
+  const twin::LifeJob job = twin->life_job();
   ASSERT_GT(job.state.resolve_groups.size(), 0u);
   ASSERT_NE(job.engine, nullptr);
   EXPECT_EQ(job.engine->state_hash(), twin->engine_hash());
-  std::vector<SimulationStats> forked_stats, rebuilt_stats;
-  const LifeEstimate rebuilt =
-      estimate_life(*model_, job.state, job.spectrum, true, nullptr, nullptr, &rebuilt_stats);
-  const LifeEstimate forked = estimate_life(*model_, job.state, job.spectrum, true, nullptr,
-                                            &twin->engine(), &forked_stats);
-  const LifeEstimate snapshot =
-      estimate_life(*model_, job.state, job.spectrum, false, nullptr, job.engine.get());
+  std::vector<twin::SimulationStats> forked_stats, rebuilt_stats;
+  const twin::LifeEstimate rebuilt =
+      twin::estimate_life(*model_, job.state, job.spectrum, true, nullptr, nullptr, &rebuilt_stats);
+  const twin::LifeEstimate forked = twin::estimate_life(*model_, job.state, job.spectrum, true,
+                                                        nullptr, &twin->engine(), &forked_stats);
+  const twin::LifeEstimate snapshot =
+      twin::estimate_life(*model_, job.state, job.spectrum, false, nullptr, job.engine.get());
   ASSERT_TRUE(std::isfinite(rebuilt.central));
   EXPECT_GT(rebuilt.central, 0.0);
-  for (const LifeEstimate* e : {&forked, &snapshot}) {
+  for (const twin::LifeEstimate* e : {&forked, &snapshot}) {
     EXPECT_EQ(e->central, rebuilt.central);
     EXPECT_EQ(e->low, rebuilt.low);
     EXPECT_EQ(e->high, rebuilt.high);
@@ -156,7 +156,7 @@ TEST_F(LifeTest, EstimatesForkedFromTheLiveEngineEqualRebuiltOnesBitForBit) {
 }
 
 TEST_F(LifeTest, SynchronousEstimatesAtFixedPointsFall) {
-  auto twin = make_twin(no_band_model(), LifeMode::synchronous);
+  auto twin = make_twin(no_band_model(), twin::LifeMode::synchronous);
   twin->catch_up_life();  // state 0 is a fixed point
   EXPECT_EQ(twin->life().state_seq, 0);
   EXPECT_EQ(twin->life().seq, -1);
@@ -183,7 +183,7 @@ TEST_F(LifeTest, EveryCyclesEstimatesWhereABatchPassesAMultipleOfItsCycles) {
                           {"a2_relative_scatter = 0.2", ""}}));
   ASSERT_TRUE(model);
   ASSERT_EQ(model->config().life.every_cycles, 5000);
-  auto twin = make_twin(model, LifeMode::synchronous);
+  auto twin = make_twin(model, twin::LifeMode::synchronous);
   twin->catch_up_life();
   EXPECT_EQ(twin->life().state_seq, 0);
   std::vector<std::int64_t> estimated_at;
@@ -194,26 +194,26 @@ TEST_F(LifeTest, EveryCyclesEstimatesWhereABatchPassesAMultipleOfItsCycles) {
   EXPECT_EQ(estimated_at, (std::vector<std::int64_t>{8, 15, 22}));
 }
 
-// The coarser estimate model ([detail.life] dx, twin/model/coarse_life.h) on B1: the fine model is
+// The coarser estimate model ([detail.life] dx, twin/coarse_life.h) on B1: the fine model is
 // the demo grid (1 mm), the state 28 000 cycles in (the crack has grown several mm of its 8).
 class CoarseLifeTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     fine_ = b1_model(b1_config("every_batches = 0", {{"band = \"a2_scatter\"", "band = \"none\""},
                                                      {"a2_relative_scatter = 0.2", ""}}));
-    twin_ = make_twin(fine_, LifeMode::external).release();
+    twin_ = make_twin(fine_, twin::LifeMode::external).release();
     ASSERT_TRUE(twin_->apply(batch(1, {{4000, 0.1, 0, 28000}})).applied());
-    ASSERT_EQ(twin_->failure(), Failure::none);
+    ASSERT_EQ(twin_->failure(), twin::Failure::none);
   }
   static void TearDownTestSuite() {
     delete twin_;
     fine_.reset();
   }
-  static std::shared_ptr<const DetailModel> fine_;
-  static Twin* twin_;
+  static std::shared_ptr<const twin::DetailModel> fine_;
+  static twin::Twin* twin_;
 };
-std::shared_ptr<const DetailModel> CoarseLifeTest::fine_;
-Twin* CoarseLifeTest::twin_ = nullptr;
+std::shared_ptr<const twin::DetailModel> CoarseLifeTest::fine_;
+twin::Twin* CoarseLifeTest::twin_ = nullptr;
 
 TEST_F(CoarseLifeTest, MappedCrackCutsTheCoarseBondsAcrossTheFinePath) {
   // B1's crack grows along y = 0 from the notch tip at x = 27.5 mm (mode I), locally stepping to
@@ -223,11 +223,11 @@ TEST_F(CoarseLifeTest, MappedCrackCutsTheCoarseBondsAcrossTheFinePath) {
   // row off y = 0 for a few mm, neither row's facets are open (the longer fine bonds across them
   // are intact) and the coarse bonds there stay (measured: 8 of 26 at 28 000 cycles). An
   // independent geometric check of the facet rule.
-  const EngineState state = twin_->engine().export_state();
-  auto coarse = coarse_model(*fine_, 0.002);
+  const fatigue::EngineState state = twin_->engine().export_state();
+  auto coarse = twin::coarse_model(*fine_, 0.002);
   ASSERT_TRUE(coarse.ok());
-  const Discretization& c = (*coarse)->disc();
-  const Discretization& f = fine_->disc();
+  const mesh::Discretization& c = (*coarse)->disc();
+  const mesh::Discretization& f = fine_->disc();
   double tip = 0.0;  // the fine crack's farthest broken nearest-neighbour bond's x
   for (std::size_t b = 0; b < state.intact.size(); ++b) {
     if (state.intact[b] || f.bond_precut[b] || f.bond_length[b] > 1.2 * f.dx) continue;
@@ -235,13 +235,13 @@ TEST_F(CoarseLifeTest, MappedCrackCutsTheCoarseBondsAcrossTheFinePath) {
                                f.position[static_cast<std::size_t>(f.bond_j[b])].x));
   }
   ASSERT_GT(tip, 0.0275 + 2 * c.dx);  // a crack several coarse spacings long
-  const auto mapped = map_crack(f, state.intact, c);
+  const auto mapped = twin::map_crack(f, state.intact, c);
   std::vector<std::uint8_t> is_mapped(static_cast<std::size_t>(c.num_bonds()), 0);
-  for (BondIndex b : mapped) is_mapped[static_cast<std::size_t>(b)] = 1;
+  for (mesh::BondIndex b : mapped) is_mapped[static_cast<std::size_t>(b)] = 1;
   int crossing = 0, unmapped = 0;
   for (std::size_t b = 0; b < is_mapped.size(); ++b) {
-    const Point p = c.position[static_cast<std::size_t>(c.bond_i[b])];
-    const Point q = c.position[static_cast<std::size_t>(c.bond_j[b])];
+    const mesh::Point p = c.position[static_cast<std::size_t>(c.bond_i[b])];
+    const mesh::Point q = c.position[static_cast<std::size_t>(c.bond_j[b])];
     const bool across = (p.y < 0) != (q.y < 0);
     const double x = across ? p.x + (q.x - p.x) * (0 - p.y) / (q.y - p.y) : 0.0;  // at y = 0
     if (is_mapped[b]) {
@@ -259,12 +259,13 @@ TEST_F(CoarseLifeTest, MappedCrackCutsTheCoarseBondsAcrossTheFinePath) {
 }
 
 TEST_F(CoarseLifeTest, CalibratedCoarseEstimateMatchesTheFineOneAndParis) {
-  const EngineState state = twin_->engine().export_state();
-  const std::vector<LoadBlock> spectrum = fine_->config().life.reference_spectrum;
-  const LifeEstimate fine = estimate_life(*fine_, state, spectrum, true, nullptr, &twin_->engine());
-  CoarseLifeReport rep;
-  const LifeEstimate coarse =
-      estimate_life_coarse(*fine_, 0.0015, state, spectrum, true, nullptr, &rep);
+  const fatigue::EngineState state = twin_->engine().export_state();
+  const std::vector<core::LoadBlock> spectrum = fine_->config().life.reference_spectrum;
+  const twin::LifeEstimate fine =
+      twin::estimate_life(*fine_, state, spectrum, true, nullptr, &twin_->engine());
+  twin::CoarseLifeReport rep;
+  const twin::LifeEstimate coarse =
+      twin::estimate_life_coarse(*fine_, 0.0015, state, spectrum, true, nullptr, &rep);
   ASSERT_TRUE(std::isfinite(fine.central));
   ASSERT_TRUE(std::isfinite(coarse.central));
   EXPECT_TRUE(coarse.coarse);

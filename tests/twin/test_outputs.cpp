@@ -15,10 +15,10 @@
 #include <limits>
 #include <sstream>
 
-#include "twin/io/checkpoint_io.h"
-#include "twin/io/damage_png.h"
-#include "twin/io/h5_file.h"
-#include "twin/io/results_writer.h"
+#include "outputs/checkpoint_io.h"
+#include "outputs/damage_png.h"
+#include "outputs/h5_file.h"
+#include "outputs/results_writer.h"
 
 namespace peritwin::twin {
 namespace {
@@ -92,37 +92,37 @@ std::pair<H5T_class_t, std::size_t> raw_type(hid_t file, const char* path) {
   return out;
 }
 
-std::vector<TimeSeriesRow> sample_rows() {
-  TimeSeriesRow a;  // default NaNs for what is not computed yet
+std::vector<outputs::TimeSeriesRow> sample_rows() {
+  outputs::TimeSeriesRow a;  // default NaNs for what is not computed yet
   a.state_seq = 1;
   a.total_cycles = 1000;
-  TimeSeriesRow b{2,   250000, 17,     2,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
-                  0.1, 12.5e6, -0.3e6, 4.5e6, 3.9e6,   5.1e6,    1,      {}};
+  outputs::TimeSeriesRow b{2,   250000, 17,     2,     1.25e-3, 1.125e-3, 0.0315, -0.0021,
+                           0.1, 12.5e6, -0.3e6, 4.5e6, 3.9e6,   5.1e6,    1,      {}};
   // Two cracks: a notch crack and an interior one with two tips (three crack rows).
   b.cracks = {{0, 1, 1, 0, 1.25e-3, 1.125e-3, 0.0315, -0.0021, 0.1, 12.5e6, -0.3e6},
               {0, 2, 3, 2, 2e-3, 1.9e-3, 0.01, 0.02, 3.0, kNaN, kNaN},
               {0, 2, 3, 0, 2e-3, 1.9e-3, 0.008, 0.02, -0.1, 1e6, 2e5}};
-  TimeSeriesRow c{3,
-                  9007199254740993LL,
-                  123456789,
-                  1,
-                  0.1 + 0.2,
-                  1.0 / 3.0,
-                  -0.0,
-                  1e-300,
-                  -3.14159,
-                  kNaN,
-                  std::numeric_limits<double>::infinity(),
-                  0.0,
-                  -1.0,
-                  2.5,
-                  3,
-                  {}};
+  outputs::TimeSeriesRow c{3,
+                           9007199254740993LL,
+                           123456789,
+                           1,
+                           0.1 + 0.2,
+                           1.0 / 3.0,
+                           -0.0,
+                           1e-300,
+                           -3.14159,
+                           kNaN,
+                           std::numeric_limits<double>::infinity(),
+                           0.0,
+                           -1.0,
+                           2.5,
+                           3,
+                           {}};
   return {a, b, c};
 }
 
-void expect_rows_equal(const std::vector<TimeSeriesRow>& got,
-                       const std::vector<TimeSeriesRow>& want) {
+void expect_rows_equal(const std::vector<outputs::TimeSeriesRow>& got,
+                       const std::vector<outputs::TimeSeriesRow>& want) {
   ASSERT_EQ(got.size(), want.size());
   for (std::size_t r = 0; r < want.size(); ++r) {
     EXPECT_EQ(got[r].state_seq, want[r].state_seq);
@@ -130,12 +130,12 @@ void expect_rows_equal(const std::vector<TimeSeriesRow>& got,
     EXPECT_EQ(got[r].broken_bonds, want[r].broken_bonds);
     EXPECT_EQ(got[r].crack_count, want[r].crack_count);
     EXPECT_EQ(got[r].remaining_state_seq, want[r].remaining_state_seq);
-    const double TimeSeriesRow::*members[] = {
-        &TimeSeriesRow::crack_length_m, &TimeSeriesRow::crack_projected_length_m,
-        &TimeSeriesRow::tip_x,          &TimeSeriesRow::tip_y,
-        &TimeSeriesRow::kink_angle_rad, &TimeSeriesRow::k_i,
-        &TimeSeriesRow::k_ii,           &TimeSeriesRow::remaining_cycles,
-        &TimeSeriesRow::remaining_low,  &TimeSeriesRow::remaining_high};
+    const double outputs::TimeSeriesRow::*members[] = {
+        &outputs::TimeSeriesRow::crack_length_m, &outputs::TimeSeriesRow::crack_projected_length_m,
+        &outputs::TimeSeriesRow::tip_x,          &outputs::TimeSeriesRow::tip_y,
+        &outputs::TimeSeriesRow::kink_angle_rad, &outputs::TimeSeriesRow::k_i,
+        &outputs::TimeSeriesRow::k_ii,           &outputs::TimeSeriesRow::remaining_cycles,
+        &outputs::TimeSeriesRow::remaining_low,  &outputs::TimeSeriesRow::remaining_high};
     for (auto m : members) EXPECT_TRUE(same_bits(got[r].*m, want[r].*m)) << "row " << r;
   }
 }
@@ -163,7 +163,7 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   d1[5] = 1.0f;
   d1[6] = 0.123456789f;
   {
-    ResultsWriter w(h5, {.detail = "ct-1"});
+    outputs::ResultsWriter w(h5, {.detail = "ct-1"});
     w.write_mesh(mesh.x, mesh.y);
     w.append(rows[0]);
     w.write_snapshot(1, 1000, std::span<const float>(d0));
@@ -181,7 +181,7 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   const auto cc = raw_read<std::int64_t>(f, "/timeseries/crack_count", H5T_NATIVE_INT64);
   const auto rs = raw_read<std::int64_t>(f, "/timeseries/remaining_state_seq", H5T_NATIVE_INT64);
   ASSERT_EQ(seq.size(), 3u);
-  std::vector<TimeSeriesRow> got(3);
+  std::vector<outputs::TimeSeriesRow> got(3);
   for (std::size_t r = 0; r < 3; ++r) {
     got[r].state_seq = seq[r];
     got[r].total_cycles = cyc[r];
@@ -189,17 +189,17 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
     got[r].crack_count = cc[r];
     got[r].remaining_state_seq = rs[r];
   }
-  const std::pair<const char*, double TimeSeriesRow::*> cols[] = {
-      {"crack_length_m", &TimeSeriesRow::crack_length_m},
-      {"crack_projected_length_m", &TimeSeriesRow::crack_projected_length_m},
-      {"tip_x", &TimeSeriesRow::tip_x},
-      {"tip_y", &TimeSeriesRow::tip_y},
-      {"kink_angle_rad", &TimeSeriesRow::kink_angle_rad},
-      {"k_i", &TimeSeriesRow::k_i},
-      {"k_ii", &TimeSeriesRow::k_ii},
-      {"remaining_cycles", &TimeSeriesRow::remaining_cycles},
-      {"remaining_low", &TimeSeriesRow::remaining_low},
-      {"remaining_high", &TimeSeriesRow::remaining_high}};
+  const std::pair<const char*, double outputs::TimeSeriesRow::*> cols[] = {
+      {"crack_length_m", &outputs::TimeSeriesRow::crack_length_m},
+      {"crack_projected_length_m", &outputs::TimeSeriesRow::crack_projected_length_m},
+      {"tip_x", &outputs::TimeSeriesRow::tip_x},
+      {"tip_y", &outputs::TimeSeriesRow::tip_y},
+      {"kink_angle_rad", &outputs::TimeSeriesRow::kink_angle_rad},
+      {"k_i", &outputs::TimeSeriesRow::k_i},
+      {"k_ii", &outputs::TimeSeriesRow::k_ii},
+      {"remaining_cycles", &outputs::TimeSeriesRow::remaining_cycles},
+      {"remaining_low", &outputs::TimeSeriesRow::remaining_low},
+      {"remaining_high", &outputs::TimeSeriesRow::remaining_high}};
   for (const auto& [name, member] : cols) {
     const auto v =
         raw_read<double>(f, ("/timeseries/" + std::string(name)).c_str(), H5T_NATIVE_DOUBLE);
@@ -222,24 +222,26 @@ TEST_F(OutputsTest, ResultsFileHoldsEveryNumberWritten) {
   H5Fclose(f);
 
   // The library's own reader agrees.
-  expect_rows_equal(read_time_series(h5), rows);
+  expect_rows_equal(outputs::read_time_series(h5), rows);
   // The crack rows of every row, with its state_seq, bit for bit.
-  const auto cracks = read_crack_rows(h5);
+  const auto cracks = outputs::read_crack_rows(h5);
   ASSERT_EQ(cracks.size(), rows[1].cracks.size());
   for (std::size_t i = 0; i < cracks.size(); ++i) {
-    const CrackRow& want = rows[1].cracks[i];
+    const outputs::CrackRow& want = rows[1].cracks[i];
     EXPECT_EQ(cracks[i].state_seq, 2);
     EXPECT_EQ(cracks[i].crack_id, want.crack_id);
     EXPECT_EQ(cracks[i].origin_kind, want.origin_kind);
     EXPECT_EQ(cracks[i].k_status, want.k_status);
-    for (auto m : {&CrackRow::length_m, &CrackRow::projected_length_m, &CrackRow::tip_x,
-                   &CrackRow::tip_y, &CrackRow::tip_angle_rad, &CrackRow::k_i, &CrackRow::k_ii}) {
+    for (auto m :
+         {&outputs::CrackRow::length_m, &outputs::CrackRow::projected_length_m,
+          &outputs::CrackRow::tip_x, &outputs::CrackRow::tip_y, &outputs::CrackRow::tip_angle_rad,
+          &outputs::CrackRow::k_i, &outputs::CrackRow::k_ii}) {
       EXPECT_TRUE(same_bits(cracks[i].*m, want.*m)) << i;
     }
   }
-  const auto snaps = read_snapshot_list(h5);
+  const auto snaps = outputs::read_snapshot_list(h5);
   ASSERT_EQ(snaps.size(), 2u);
-  EXPECT_EQ(read_snapshot_damage(h5, snaps[1]), d1);
+  EXPECT_EQ(outputs::read_snapshot_damage(h5, snaps[1]), d1);
 
   // XDMF: both steps, their times, the dataset paths, and no temp file left behind.
   const std::string xdmf = slurp(dir_ / "ct-1.xdmf");
@@ -266,17 +268,17 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   const Mesh mesh = sample_mesh();
   const auto rows = sample_rows();
   {
-    ResultsWriter w(h5, {.detail = "d"});
+    outputs::ResultsWriter w(h5, {.detail = "d"});
     w.write_mesh(mesh.x, mesh.y);
     for (const auto& r : rows) w.append(r);
     w.write_snapshot(1, 10, std::vector<double>(12, 0.5));
     w.write_snapshot(3, 30, std::vector<double>(12, 0.75));
   }
   {  // A crash between the column appends of a row: one column one element longer.
-    h5::File f(h5, h5::File::Mode::read_write);
+    outputs::h5::File f(h5, outputs::h5::File::Mode::read_write);
     f.open_dataset("timeseries/state_seq").append<std::int64_t>(99);
   }
-  ResultsWriter w(h5, {.detail = "d"});
+  outputs::ResultsWriter w(h5, {.detail = "d"});
   EXPECT_FALSE(w.recovered_from().has_value());
   EXPECT_EQ(w.rows(), 3u);
   ASSERT_EQ(w.snapshots().size(), 2u);
@@ -284,14 +286,14 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   w.write_mesh(mesh.x, mesh.y);  // same mesh: no-op
   std::vector<double> other = mesh.x;
   other[0] += 1e-9;
-  EXPECT_THROW(w.write_mesh(other, mesh.y), ResultsError);
-  EXPECT_THROW(w.write_snapshot(4, 40, std::vector<double>(11, 0.0)), ResultsError);
+  EXPECT_THROW(w.write_mesh(other, mesh.y), outputs::ResultsError);
+  EXPECT_THROW(w.write_snapshot(4, 40, std::vector<double>(11, 0.0)), outputs::ResultsError);
 
   w.rewind_to(1);  // resume from a checkpoint at state 1: the crack rows of state 2 go too
   EXPECT_EQ(w.rows(), 1u);
-  EXPECT_EQ(read_crack_rows(h5).size(), 0u);
+  EXPECT_EQ(outputs::read_crack_rows(h5).size(), 0u);
   w.append(rows[1]);
-  EXPECT_EQ(read_crack_rows(h5).size(), 3u);
+  EXPECT_EQ(outputs::read_crack_rows(h5).size(), 3u);
   w.rewind_to(2);  // resume from a checkpoint at state 2
   EXPECT_EQ(w.rows(), 2u);
   ASSERT_EQ(w.snapshots().size(), 1u);
@@ -299,12 +301,12 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   w.write_snapshot(3, 31, std::vector<double>(12, 1.0));
   EXPECT_EQ(w.snapshots().back().index, 1);
   w.close();
-  const auto back = read_time_series(h5);
+  const auto back = outputs::read_time_series(h5);
   expect_rows_equal(back, {rows[0], rows[1]});
-  const auto snaps = read_snapshot_list(h5);
+  const auto snaps = outputs::read_snapshot_list(h5);
   ASSERT_EQ(snaps.size(), 2u);
   EXPECT_EQ(snaps[1].total_cycles, 31);
-  EXPECT_EQ(read_snapshot_damage(h5, snaps[1]), std::vector<float>(12, 1.0f));
+  EXPECT_EQ(outputs::read_snapshot_damage(h5, snaps[1]), std::vector<float>(12, 1.0f));
   const std::string xdmf = slurp(dir_ / "d.xdmf");
   EXPECT_NE(xdmf.find("<Time Value=\"31\"/>"), std::string::npos);
   EXPECT_EQ(xdmf.find("<Time Value=\"30\"/>"), std::string::npos);
@@ -315,33 +317,35 @@ TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
   const fs::path h5 = dir_ / "old.h5";
   const auto rows = sample_rows();
   {
-    ResultsWriter w(h5, {.detail = "old"});
+    outputs::ResultsWriter w(h5, {.detail = "old"});
     w.append(rows[0]);
   }
   {
-    h5::File f(h5, h5::File::Mode::read_write);
+    outputs::h5::File f(h5, outputs::h5::File::Mode::read_write);
     f.remove("timeseries/crack_count");
     f.remove("cracks");
     f.set_attribute("layout_version", std::int64_t{1});
   }
   // Readable as it is: its rows' crack_count reads -1 (unknown), no crack rows.
-  const auto before = read_time_series(h5);
+  const auto before = outputs::read_time_series(h5);
   ASSERT_EQ(before.size(), 1u);
   EXPECT_EQ(before[0].crack_count, -1);
-  EXPECT_TRUE(read_crack_rows(h5).empty());
+  EXPECT_TRUE(outputs::read_crack_rows(h5).empty());
   // Continued by a writer: upgraded to layout 3, the old row kept (crack_count -1), new rows whole.
   {
-    ResultsWriter w(h5, {.detail = "old"});
+    outputs::ResultsWriter w(h5, {.detail = "old"});
     EXPECT_EQ(w.rows(), 1u);
     w.append(rows[1]);
   }
-  const auto after = read_time_series(h5);
+  const auto after = outputs::read_time_series(h5);
   ASSERT_EQ(after.size(), 2u);
   EXPECT_EQ(after[0].crack_count, -1);
   EXPECT_EQ(after[0].total_cycles, rows[0].total_cycles);
   EXPECT_EQ(after[1].crack_count, rows[1].crack_count);
-  EXPECT_EQ(read_crack_rows(h5).size(), rows[1].cracks.size());
-  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 3);
+  EXPECT_EQ(outputs::read_crack_rows(h5).size(), rows[1].cracks.size());
+  EXPECT_EQ(
+      outputs::h5::File(h5, outputs::h5::File::Mode::read_only).attribute_int64("layout_version"),
+      3);
 }
 
 TEST_F(OutputsTest, LayoutVersionTwoFileGetsTheXdmf3MeshAndEstimateColumn) {
@@ -351,23 +355,23 @@ TEST_F(OutputsTest, LayoutVersionTwoFileGetsTheXdmf3MeshAndEstimateColumn) {
   const Mesh mesh = sample_mesh();
   const auto rows = sample_rows();
   {
-    ResultsWriter w(h5, {.detail = "v2"});
+    outputs::ResultsWriter w(h5, {.detail = "v2"});
     w.write_mesh(mesh.x, mesh.y);
     w.append(rows[1]);
   }
   {
-    h5::File f(h5, h5::File::Mode::read_write);
+    outputs::h5::File f(h5, outputs::h5::File::Mode::read_write);
     f.remove("mesh/xyz");
     f.remove("mesh/vertices");
     f.remove("timeseries/remaining_state_seq");
     f.set_attribute("layout_version", std::int64_t{2});
   }
-  EXPECT_EQ(read_time_series(h5).at(0).remaining_state_seq, -1);
+  EXPECT_EQ(outputs::read_time_series(h5).at(0).remaining_state_seq, -1);
   {
-    ResultsWriter w(h5, {.detail = "v2"});
+    outputs::ResultsWriter w(h5, {.detail = "v2"});
     w.append(rows[2]);
   }
-  const auto after = read_time_series(h5);
+  const auto after = outputs::read_time_series(h5);
   ASSERT_EQ(after.size(), 2u);
   EXPECT_EQ(after[0].remaining_state_seq, -1);
   EXPECT_EQ(after[1].remaining_state_seq, rows[2].remaining_state_seq);
@@ -384,16 +388,18 @@ TEST_F(OutputsTest, LayoutVersionTwoFileGetsTheXdmf3MeshAndEstimateColumn) {
     EXPECT_EQ(xyz[3 * k + 2], 0.0);
     EXPECT_EQ(vertices[k], static_cast<std::int64_t>(k));
   }
-  EXPECT_EQ(h5::File(h5, h5::File::Mode::read_only).attribute_int64("layout_version"), 3);
+  EXPECT_EQ(
+      outputs::h5::File(h5, outputs::h5::File::Mode::read_only).attribute_int64("layout_version"),
+      3);
 }
 
 TEST_F(OutputsTest, SnapshotNodeFieldsAreStoredWithTheirShapes) {
   const fs::path h5 = dir_ / "fields.h5";
   const Mesh mesh = sample_mesh();
-  SnapshotFields extra;
-  NodeField disp{"displacement", NodeField::Kind::vector, "m", {}};
-  NodeField strain{"strain", NodeField::Kind::tensor6, "1", {}};
-  NodeField dil{"dilatation", NodeField::Kind::scalar, "1", {}};
+  outputs::SnapshotFields extra;
+  outputs::NodeField disp{"displacement", outputs::NodeField::Kind::vector, "m", {}};
+  outputs::NodeField strain{"strain", outputs::NodeField::Kind::tensor6, "1", {}};
+  outputs::NodeField dil{"dilatation", outputs::NodeField::Kind::scalar, "1", {}};
   for (std::size_t k = 0; k < 12; ++k) {
     for (int c = 0; c < 3; ++c) disp.values.push_back(1e-6 * static_cast<double>(10 * k + c));
     for (int c = 0; c < 6; ++c) strain.values.push_back(1e-4 * static_cast<double>(10 * k + c));
@@ -402,26 +408,26 @@ TEST_F(OutputsTest, SnapshotNodeFieldsAreStoredWithTheirShapes) {
   extra.fields = {disp, strain, dil};
   extra.attributes = {{"load_p_max_n", 4000.0}};
   {
-    ResultsWriter w(h5, {.detail = "f"});
+    outputs::ResultsWriter w(h5, {.detail = "f"});
     w.write_mesh(mesh.x, mesh.y);
     w.write_snapshot(1, 10, std::vector<double>(12, 0.5), extra);
     // Sizes that do not match the nodes, a name twice or a bad name are refused.
-    SnapshotFields bad;
-    bad.fields = {{"displacement", NodeField::Kind::vector, "m", std::vector<double>(12)}};
-    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
+    outputs::SnapshotFields bad;
+    bad.fields = {{"displacement", outputs::NodeField::Kind::vector, "m", std::vector<double>(12)}};
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), outputs::ResultsError);
     bad.fields = {dil, dil};
-    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
-    bad.fields = {{"a b", NodeField::Kind::scalar, "1", std::vector<double>(12)}};
-    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), ResultsError);
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), outputs::ResultsError);
+    bad.fields = {{"a b", outputs::NodeField::Kind::scalar, "1", std::vector<double>(12)}};
+    EXPECT_THROW(w.write_snapshot(2, 20, std::vector<double>(12, 0.5), bad), outputs::ResultsError);
     EXPECT_EQ(w.snapshots().size(), 1u);
   }
-  const auto snaps = read_snapshot_list(h5);
+  const auto snaps = outputs::read_snapshot_list(h5);
   ASSERT_EQ(snaps.size(), 1u);
   EXPECT_EQ(snaps[0].fields.size(), 3u);  // found again on reading, with their kinds
-  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "displacement"), disp.values);
-  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "strain"), strain.values);
-  EXPECT_EQ(read_snapshot_field(h5, snaps[0], "dilatation"), dil.values);
-  EXPECT_TRUE(read_snapshot_field(h5, snaps[0], "nothing").empty());
+  EXPECT_EQ(outputs::read_snapshot_field(h5, snaps[0], "displacement"), disp.values);
+  EXPECT_EQ(outputs::read_snapshot_field(h5, snaps[0], "strain"), strain.values);
+  EXPECT_EQ(outputs::read_snapshot_field(h5, snaps[0], "dilatation"), dil.values);
+  EXPECT_TRUE(outputs::read_snapshot_field(h5, snaps[0], "nothing").empty());
   const std::string xdmf = slurp(dir_ / "fields.xdmf");
   for (const char* s :
        {"<Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">",
@@ -455,7 +461,7 @@ TEST_F(OutputsTest, SnapshotNodeFieldsAreStoredWithTheirShapes) {
 TEST_F(OutputsTest, UnreadableResultsFileIsMovedAside) {
   const fs::path h5 = dir_ / "x.h5";
   spit(h5, "not an HDF5 file at all");
-  ResultsWriter w(h5, {.detail = "x"});
+  outputs::ResultsWriter w(h5, {.detail = "x"});
   ASSERT_TRUE(w.recovered_from().has_value());
   EXPECT_EQ(slurp(*w.recovered_from()), "not an HDF5 file at all");
   EXPECT_EQ(w.rows(), 0u);
@@ -464,29 +470,30 @@ TEST_F(OutputsTest, UnreadableResultsFileIsMovedAside) {
 TEST_F(OutputsTest, H5ErrorsNameFileAndObject) {
   const fs::path missing = dir_ / "missing.h5";
   try {
-    h5::File f(missing, h5::File::Mode::read_only);
+    outputs::h5::File f(missing, outputs::h5::File::Mode::read_only);
     FAIL() << "opened a missing file";
-  } catch (const h5::Error& e) {
+  } catch (const outputs::h5::Error& e) {
     EXPECT_EQ(e.file(), missing.string());
     EXPECT_NE(std::string(e.what()).find("missing.h5"), std::string::npos) << e.what();
   }
-  h5::File f(dir_ / "a.h5", h5::File::Mode::create_exclusive);
+  outputs::h5::File f(dir_ / "a.h5", outputs::h5::File::Mode::create_exclusive);
   f.write<double>("g/values", std::vector<double>{1.0, 2.0});
   try {
     (void)f.read<double>("g/nothing");
     FAIL() << "read a missing dataset";
-  } catch (const h5::Error& e) {
+  } catch (const outputs::h5::Error& e) {
     EXPECT_EQ(e.object(), "/g/nothing");
     EXPECT_NE(std::string(e.what()).find("a.h5"), std::string::npos) << e.what();
   }
-  EXPECT_THROW((void)f.read_string("g/values"), h5::Error);
-  EXPECT_THROW(h5::File(dir_ / "a.h5", h5::File::Mode::create_exclusive), h5::Error);
+  EXPECT_THROW((void)f.read_string("g/values"), outputs::h5::Error);
+  EXPECT_THROW(outputs::h5::File(dir_ / "a.h5", outputs::h5::File::Mode::create_exclusive),
+               outputs::h5::Error);
 }
 
 // --- checkpoints -------------------------------------------------------------------------------
 
-CheckpointData sample_checkpoint(std::int64_t salt) {
-  CheckpointData d;
+twin::CheckpointData sample_checkpoint(std::int64_t salt) {
+  twin::CheckpointData d;
   d.format_version = 7;
   d.f64_arrays["remaining_life"] = {1.0,    -0.0,
                                     kNaN,   std::numeric_limits<double>::infinity(),
@@ -523,7 +530,7 @@ void expect_arrays_equal(const std::map<std::string, std::vector<T>>& got,
   }
 }
 
-void expect_checkpoints_equal(const CheckpointData& got, const CheckpointData& want) {
+void expect_checkpoints_equal(const twin::CheckpointData& got, const twin::CheckpointData& want) {
   EXPECT_EQ(got.format_version, want.format_version);
   expect_arrays_equal(got.f64_arrays, want.f64_arrays);
   expect_arrays_equal(got.i64_arrays, want.i64_arrays);
@@ -535,7 +542,7 @@ void expect_checkpoints_equal(const CheckpointData& got, const CheckpointData& w
     EXPECT_TRUE(same_bits(got.f64_scalars.at(name), v)) << name;
   }
   EXPECT_EQ(got.strings, want.strings);
-  EXPECT_EQ(checkpoint_checksum(got), checkpoint_checksum(want));
+  EXPECT_EQ(outputs::checkpoint_checksum(got), outputs::checkpoint_checksum(want));
 }
 
 /// File offset of a contiguous dataset's first byte (raw HDF5).
@@ -562,32 +569,32 @@ void truncate_by(const fs::path& file, std::size_t cut) {
 
 TEST_F(OutputsTest, CheckpointRoundTripIsExact) {
   const fs::path p = dir_ / "cp-000000000001.h5";
-  const CheckpointData d = sample_checkpoint(1);
-  write_checkpoint(p, d);
+  const twin::CheckpointData d = sample_checkpoint(1);
+  outputs::write_checkpoint(p, d);
   EXPECT_FALSE(fs::exists(dir_ / "cp-000000000001.h5.tmp"));
-  expect_checkpoints_equal(read_checkpoint(p), d);
+  expect_checkpoints_equal(outputs::read_checkpoint(p), d);
   // Rewriting the same path replaces it atomically.
-  const CheckpointData d2 = sample_checkpoint(2);
-  write_checkpoint(p, d2);
-  expect_checkpoints_equal(read_checkpoint(p), d2);
-  EXPECT_NE(checkpoint_checksum(d), checkpoint_checksum(d2));
+  const twin::CheckpointData d2 = sample_checkpoint(2);
+  outputs::write_checkpoint(p, d2);
+  expect_checkpoints_equal(outputs::read_checkpoint(p), d2);
+  EXPECT_NE(outputs::checkpoint_checksum(d), outputs::checkpoint_checksum(d2));
 
-  CheckpointData bad;
+  twin::CheckpointData bad;
   bad.f64_arrays["a/b"] = {1.0};
-  EXPECT_THROW(write_checkpoint(dir_ / "bad.h5", bad), std::invalid_argument);
+  EXPECT_THROW(outputs::write_checkpoint(dir_ / "bad.h5", bad), std::invalid_argument);
 }
 
 TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
-  const CheckpointData d = sample_checkpoint(3);
+  const twin::CheckpointData d = sample_checkpoint(3);
   const fs::path good = dir_ / "good.h5";
-  write_checkpoint(good, d);
+  outputs::write_checkpoint(good, d);
   const std::size_t size = fs::file_size(good);
 
   for (const std::size_t cut : {std::size_t{1}, std::size_t{100}, size / 2, size - 8}) {
     const fs::path t = dir_ / ("truncated-" + std::to_string(cut) + ".h5");
     fs::copy_file(good, t);
     truncate_by(t, cut);
-    EXPECT_THROW((void)read_checkpoint(t), CheckpointError) << "cut " << cut;
+    EXPECT_THROW((void)outputs::read_checkpoint(t), outputs::CheckpointError) << "cut " << cut;
   }
 
   const fs::path c = dir_ / "corrupt.h5";
@@ -596,9 +603,9 @@ TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
   ASSERT_NE(off, HADDR_UNDEF);
   flip_byte(c, static_cast<std::size_t>(off) + 8 * 1234 + 3);
   try {
-    (void)read_checkpoint(c);
+    (void)outputs::read_checkpoint(c);
     FAIL() << "a flipped byte went unnoticed";
-  } catch (const CheckpointError& e) {
+  } catch (const outputs::CheckpointError& e) {
     EXPECT_EQ(e.path(), c);
     EXPECT_NE(std::string(e.what()).find("checksum mismatch"), std::string::npos) << e.what();
   }
@@ -606,8 +613,8 @@ TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
   const fs::path u = dir_ / "corrupt-u8.h5";
   fs::copy_file(good, u);
   flip_byte(u, static_cast<std::size_t>(data_offset(u, "/arrays/u8/broken")) + 2);
-  EXPECT_THROW((void)read_checkpoint(u), CheckpointError);
-  EXPECT_THROW((void)read_checkpoint(dir_ / "nope.h5"), CheckpointError);
+  EXPECT_THROW((void)outputs::read_checkpoint(u), outputs::CheckpointError);
+  EXPECT_THROW((void)outputs::read_checkpoint(dir_ / "nope.h5"), outputs::CheckpointError);
 }
 
 // A corrupt checkpoint may declare arrays and strings far larger than the file (HDF5 reads storage
@@ -616,12 +623,12 @@ TEST_F(OutputsTest, TruncatedAndCorruptedCheckpointsAreRejected) {
 // std::string.
 TEST_F(OutputsTest, CheckpointEntriesLargerThanTheFileAreRefused) {
   const fs::path good = dir_ / "good.h5";
-  write_checkpoint(good, sample_checkpoint(4));
+  outputs::write_checkpoint(good, sample_checkpoint(4));
   auto expect_refused = [](const fs::path& p, const std::string& what) {
     try {
-      (void)read_checkpoint(p);
+      (void)outputs::read_checkpoint(p);
       FAIL() << "read " << p;
-    } catch (const CheckpointError& e) {
+    } catch (const outputs::CheckpointError& e) {
       EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     }
   };
@@ -674,24 +681,24 @@ TEST_F(OutputsTest, CheckpointEntriesLargerThanTheFileAreRefused) {
 
 TEST_F(OutputsTest, NewestValidCheckpointSkipsBrokenOnes) {
   for (std::uint64_t seq : {1u, 2u, 3u, 10u}) {
-    write_checkpoint(checkpoint_path(dir_, "ct", seq),
-                     sample_checkpoint(static_cast<std::int64_t>(seq)));
+    outputs::write_checkpoint(outputs::checkpoint_path(dir_, "ct", seq),
+                              sample_checkpoint(static_cast<std::int64_t>(seq)));
   }
-  EXPECT_EQ(checkpoint_path(dir_, "ct", 10).filename(), "ct-000000000010.h5");
+  EXPECT_EQ(outputs::checkpoint_path(dir_, "ct", 10).filename(), "ct-000000000010.h5");
   spit(dir_ / "ct-2-000000000099.h5", "other detail");  // prefix "ct-2", not ours
   spit(dir_ / "ct-abc.h5", "not a checkpoint name");
   spit(dir_ / "ct-000000000011.h5.tmp", "in flight");
-  truncate_by(checkpoint_path(dir_, "ct", 10), 200);
-  const fs::path three = checkpoint_path(dir_, "ct", 3);
+  truncate_by(outputs::checkpoint_path(dir_, "ct", 10), 200);
+  const fs::path three = outputs::checkpoint_path(dir_, "ct", 3);
   flip_byte(three, static_cast<std::size_t>(data_offset(three, "/arrays/i64/seq")) + 1);
 
-  const auto listed = list_checkpoints(dir_, "ct");
+  const auto listed = outputs::list_checkpoints(dir_, "ct");
   ASSERT_EQ(listed.size(), 4u);
   EXPECT_EQ(listed[0].seq, 10u);
   EXPECT_EQ(listed[3].seq, 1u);
 
   std::vector<std::string> skipped;
-  const auto found = newest_valid_checkpoint(dir_, "ct", &skipped);
+  const auto found = outputs::newest_valid_checkpoint(dir_, "ct", &skipped);
   ASSERT_TRUE(found.has_value());
   EXPECT_EQ(found->file.seq, 2u);
   expect_checkpoints_equal(found->data, sample_checkpoint(2));
@@ -699,28 +706,28 @@ TEST_F(OutputsTest, NewestValidCheckpointSkipsBrokenOnes) {
   EXPECT_NE(skipped[0].find("ct-000000000010.h5"), std::string::npos) << skipped[0];
   EXPECT_NE(skipped[1].find("checksum"), std::string::npos) << skipped[1];
 
-  EXPECT_FALSE(newest_valid_checkpoint(dir_, "nothing").has_value());
-  EXPECT_FALSE(newest_valid_checkpoint(dir_ / "no-such-dir", "ct").has_value());
+  EXPECT_FALSE(outputs::newest_valid_checkpoint(dir_, "nothing").has_value());
+  EXPECT_FALSE(outputs::newest_valid_checkpoint(dir_ / "no-such-dir", "ct").has_value());
 }
 
 TEST_F(OutputsTest, PruneKeepsTheNewestK) {
   for (std::uint64_t seq = 1; seq <= 5; ++seq) {
-    write_checkpoint(checkpoint_path(dir_, "ct", seq), sample_checkpoint(1));
+    outputs::write_checkpoint(outputs::checkpoint_path(dir_, "ct", seq), sample_checkpoint(1));
   }
   spit(dir_ / "ct-000000000002.h5.tmp", "stale");
   spit(dir_ / "ct-000000000009.h5.tmp", "in flight");
   spit(dir_ / "ctx-000000000001.h5", "another prefix");
-  const auto removed = prune_checkpoints(dir_, "ct", 2);
+  const auto removed = outputs::prune_checkpoints(dir_, "ct", 2);
   EXPECT_EQ(removed.size(), 4u);  // seq 3, 2, 1 and the stale tmp of 2
-  const auto left = list_checkpoints(dir_, "ct");
+  const auto left = outputs::list_checkpoints(dir_, "ct");
   ASSERT_EQ(left.size(), 2u);
   EXPECT_EQ(left[0].seq, 5u);
   EXPECT_EQ(left[1].seq, 4u);
   EXPECT_FALSE(fs::exists(dir_ / "ct-000000000002.h5.tmp"));
   EXPECT_TRUE(fs::exists(dir_ / "ct-000000000009.h5.tmp"));
   EXPECT_TRUE(fs::exists(dir_ / "ctx-000000000001.h5"));
-  EXPECT_TRUE(prune_checkpoints(dir_, "ct", 2).empty());
-  EXPECT_THROW(prune_checkpoints(dir_, "ct", 0), std::invalid_argument);
+  EXPECT_TRUE(outputs::prune_checkpoints(dir_, "ct", 2).empty());
+  EXPECT_THROW(outputs::prune_checkpoints(dir_, "ct", 0), std::invalid_argument);
 }
 
 // --- PNG ---------------------------------------------------------------------------------------
@@ -770,7 +777,7 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
     }
   }
   const fs::path p = dir_ / "damage.png";
-  const DamageImageLayout layout = write_damage_png(p, x, y, d, dx);
+  const outputs::DamageImageLayout layout = outputs::write_damage_png(p, x, y, d, dx);
   // 800 / max(20, 10) = 40 pixels per node.
   EXPECT_EQ(layout.node_pixels, 40);
   EXPECT_EQ(png_header(p), std::make_pair(800u, 400u));
@@ -780,20 +787,21 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
   ASSERT_EQ(w, 800u);
   auto at = [&](int col, int row) {  // centre pixel of grid cell (col, row from the top)
     const std::size_t i = 3 * (std::size_t(row * 40 + 20) * w + std::size_t(col * 40 + 20));
-    return Rgb{px[i], px[i + 1], px[i + 2]};
+    return outputs::Rgb{px[i], px[i + 1], px[i + 2]};
   };
-  const Rgb red = at(5, 9 - 2);
-  EXPECT_EQ(red, damage_color(1.0));
+  const outputs::Rgb red = at(5, 9 - 2);
+  EXPECT_EQ(red, outputs::damage_color(1.0));
   EXPECT_GT(red.r, 150);
   EXPECT_LT(red.g, 80);
   EXPECT_LT(red.b, 80);
-  EXPECT_EQ(at(0, 0), damage_color(0.0));
-  EXPECT_GT(damage_color(0.0).b, damage_color(0.0).r);
-  EXPECT_EQ(at(13, 9 - 4), (Rgb{255, 255, 255}));  // inside the hole: no material
-  EXPECT_EQ(damage_color(0.5), (Rgb{250, 220, 40}));
+  EXPECT_EQ(at(0, 0), outputs::damage_color(0.0));
+  EXPECT_GT(outputs::damage_color(0.0).b, outputs::damage_color(0.0).r);
+  EXPECT_EQ(at(13, 9 - 4), (outputs::Rgb{255, 255, 255}));  // inside the hole: no material
+  EXPECT_EQ(outputs::damage_color(0.5), (outputs::Rgb{250, 220, 40}));
 
-  EXPECT_THROW(write_damage_png(p, x, y, std::vector<double>(3, 0.0), dx), PngError);
-  EXPECT_THROW(write_damage_png(p, x, y, d, 1e-9), PngError);
+  EXPECT_THROW(outputs::write_damage_png(p, x, y, std::vector<double>(3, 0.0), dx),
+               outputs::PngError);
+  EXPECT_THROW(outputs::write_damage_png(p, x, y, d, 1e-9), outputs::PngError);
 }
 
 TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
@@ -801,7 +809,7 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   // (6, 4) the same notch damage plus a broken fatigue bond (φ = 0.48): grey and colour.
   const double dx = 1e-3;
   std::vector<double> x, y, d;
-  DamageMap map;
+  outputs::DamageMap map;
   map.title = "ct-1   N = 12000 cycles";
   for (int j = 0; j < 10; ++j) {
     for (int i = 0; i < 20; ++i) {
@@ -815,7 +823,7 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   map.notches = {{{0.0, 4.5e-3}, {5.5e-3, 4.5e-3}}};
   map.crack_paths = {{{6.5e-3, 4.5e-3}, {12.5e-3, 2.5e-3}}};
   const fs::path p = dir_ / "map.png";
-  const DamageMapLayout layout = write_damage_map_png(p, x, y, d, dx, map);
+  const outputs::DamageMapLayout layout = outputs::write_damage_map_png(p, x, y, d, dx, map);
   EXPECT_EQ(layout.grid.node_pixels, 40);
   EXPECT_GT(layout.left, 0);  // room for the y axis, its ticks and labels
   EXPECT_GT(layout.top, 0);   // and the title
@@ -827,12 +835,13 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   auto at = [&](int col, int row_from_top, int dy = 20) {
     const auto i = 3 * (std::size_t(layout.top + row_from_top * 40 + dy) * w +
                         std::size_t(layout.left + col * 40 + 20));
-    return Rgb{px[i], px[i + 1], px[i + 2]};
+    return outputs::Rgb{px[i], px[i + 1], px[i + 2]};
   };
-  EXPECT_EQ(at(5, 9 - 4, 5), notch_color(0.42));        // off the notch line drawn through the row
-  EXPECT_EQ(notch_color(0.42).r, notch_color(0.42).b);  // a grey
-  EXPECT_EQ(at(6, 9 - 4, 5), damage_color(0.48));
-  EXPECT_EQ(at(15, 0), damage_color(0.0));
+  EXPECT_EQ(at(5, 9 - 4, 5),
+            outputs::notch_color(0.42));  // off the notch line drawn through the row
+  EXPECT_EQ(outputs::notch_color(0.42).r, outputs::notch_color(0.42).b);  // a grey
+  EXPECT_EQ(at(6, 9 - 4, 5), outputs::damage_color(0.48));
+  EXPECT_EQ(at(15, 0), outputs::damage_color(0.0));
   std::size_t magenta = 0, dark = 0;
   for (std::size_t i = 0; i < px.size(); i += 3) {
     magenta += px[i] == 200 && px[i + 1] == 0 && px[i + 2] == 200;
@@ -841,11 +850,11 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   EXPECT_GT(magenta, 300u);  // the crack path (6 mm at 3 px) and its legend
   EXPECT_GT(dark, 1000u);    // text, ticks, frame, the notch line
   map.notch_damage = {0.1};  // not one per node
-  EXPECT_THROW(write_damage_map_png(p, x, y, d, dx, map), PngError);
+  EXPECT_THROW(outputs::write_damage_map_png(p, x, y, d, dx, map), outputs::PngError);
 }
 
 TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
-  CrackGrowthPlot plot;
+  outputs::CrackGrowthPlot plot;
   plot.title = "ct-1";
   for (int k = 0; k <= 20; ++k) {
     plot.cycles.push_back(1e3 * k);
@@ -854,7 +863,7 @@ TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
   plot.predictions = {{5e3, 5e-4, 2e4, 1.5e4, 2.5e4}, {1e4, 1e-3, 1.6e4, kNaN, kNaN}};
   plot.critical_length_m = 3e-3;
   const fs::path p = dir_ / "an.png";
-  write_crack_growth_png(p, plot);
+  outputs::write_crack_growth_png(p, plot);
   std::uint32_t w = 0, h = 0;
   const auto px = png_pixels(p, w, h);
   std::size_t orange = 0;
@@ -863,20 +872,20 @@ TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
   }
   EXPECT_GT(orange, 200u);  // diamonds, the band bar, the dashed latest prediction, the legend
   plot.lengths_m.pop_back();
-  EXPECT_THROW(write_crack_growth_png(p, plot), PngError);
+  EXPECT_THROW(outputs::write_crack_growth_png(p, plot), outputs::PngError);
 }
 
 TEST_F(OutputsTest, LinePlotDrawsEverySeries) {
   // Two curves in their own colours (a solid sine, a dashed line), the image the size asked for;
   // a horizontal line at y = 0 over a fixed range [-1, 1] lands on the frame's middle row.
-  LinePlot plot;
+  outputs::LinePlot plot;
   plot.title = "k(t)";
   plot.x_title = "t";
   plot.y_title = "k";
   plot.y_lo = -1.0;
   plot.y_hi = 1.0;
-  PlotSeries sine{"sine", {}, {}, Rgb{200, 40, 40}, false};
-  PlotSeries zero{"zero", {}, {}, Rgb{30, 150, 60}, true};
+  outputs::PlotSeries sine{"sine", {}, {}, outputs::Rgb{200, 40, 40}, false};
+  outputs::PlotSeries zero{"zero", {}, {}, outputs::Rgb{30, 150, 60}, true};
   for (int k = 0; k <= 200; ++k) {
     sine.x.push_back(0.05 * k);
     sine.y.push_back(std::sin(0.05 * k));
@@ -885,7 +894,7 @@ TEST_F(OutputsTest, LinePlotDrawsEverySeries) {
   }
   plot.series = {sine, zero};
   const fs::path p = dir_ / "lines.png";
-  write_line_plot_png(p, plot, PlotOptions{640, 400});
+  outputs::write_line_plot_png(p, plot, outputs::PlotOptions{640, 400});
   std::uint32_t w = 0, h = 0;
   const auto px = png_pixels(p, w, h);
   ASSERT_EQ(w, 640u);
@@ -907,7 +916,7 @@ TEST_F(OutputsTest, LinePlotDrawsEverySeries) {
   EXPECT_GT(row, h / 4);
   EXPECT_LT(row, 3 * h / 4);
   plot.series[0].y.pop_back();
-  EXPECT_THROW(write_line_plot_png(p, plot), PngError);
+  EXPECT_THROW(outputs::write_line_plot_png(p, plot), outputs::PngError);
 }
 
 TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
@@ -918,14 +927,14 @@ TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
   }
   a[20] = kNaN;  // breaks the line, must not break the plot
   const fs::path p = dir_ / "crack.png";
-  write_crack_length_png(p, n, a);
+  outputs::write_crack_length_png(p, n, a);
   EXPECT_EQ(png_header(p), std::make_pair(800u, 500u));
   std::uint32_t w = 0, h = 0;
   const auto px = png_pixels(p, w, h);
   std::size_t dark = 0;
   for (std::size_t i = 0; i < px.size(); i += 3) dark += px[i] < 100 && px[i + 2] > 150;
   EXPECT_GT(dark, 500u);  // the blue curve is there
-  write_crack_length_png(dir_ / "empty.png", {}, {}, {.width = 400, .height = 300});
+  outputs::write_crack_length_png(dir_ / "empty.png", {}, {}, {.width = 400, .height = 300});
   EXPECT_EQ(png_header(dir_ / "empty.png"), std::make_pair(400u, 300u));
 }
 

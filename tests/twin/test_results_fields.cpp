@@ -19,10 +19,10 @@
 #include <sstream>
 #include <string>
 
-#include "solver/static/pd_strain.h"
+#include "config/config.h"
+#include "outputs/detail_outputs.h"
+#include "solver/statics/pd_strain.h"
 #include "tests/support/twin_fixtures.h"
-#include "twin/config/config.h"
-#include "twin/io/detail_outputs.h"
 
 namespace peritwin::twin {
 namespace {
@@ -35,19 +35,19 @@ using testing::make_twin;
 
 /// E = ½(H + Hᵀ + HᵀH) of a constant displacement gradient H (the closed form of 004 Eq. 7 for
 /// u = H·x, whose F = I + H by 004 Eq. 6 whatever the family).
-PlaneStrain lagrange_of(const std::array<std::array<double, 2>, 2>& h) {
-  PlaneStrain e;
+statics::PlaneStrain lagrange_of(const std::array<std::array<double, 2>, 2>& h) {
+  statics::PlaneStrain e;
   e.xx = h[0][0] + 0.5 * (h[0][0] * h[0][0] + h[1][0] * h[1][0]);
   e.yy = h[1][1] + 0.5 * (h[0][1] * h[0][1] + h[1][1] * h[1][1]);
   e.xy = 0.5 * (h[0][1] + h[1][0]) + 0.5 * (h[0][0] * h[0][1] + h[1][0] * h[1][1]);
   return e;
 }
 
-std::vector<double> affine_field(const Discretization& disc,
+std::vector<double> affine_field(const mesh::Discretization& disc,
                                  const std::array<std::array<double, 2>, 2>& h) {
   std::vector<double> u(2 * disc.position.size());
   for (std::size_t k = 0; k < disc.position.size(); ++k) {
-    const Point p = disc.position[k];
+    const mesh::Point p = disc.position[k];
     u[2 * k] = h[0][0] * p.x + h[0][1] * p.y + 1e-5;  // plus a rigid translation
     u[2 * k + 1] = h[1][0] * p.x + h[1][1] * p.y - 2e-5;
   }
@@ -65,20 +65,20 @@ class ResultsFieldsTest : public ::testing::Test {
     fs::remove_all(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
-  static std::shared_ptr<const DetailModel> model_;
+  static std::shared_ptr<const twin::DetailModel> model_;
   fs::path dir_;
 };
-std::shared_ptr<const DetailModel> ResultsFieldsTest::model_;
+std::shared_ptr<const twin::DetailModel> ResultsFieldsTest::model_;
 
 TEST_F(ResultsFieldsTest, AffineDisplacementGivesItsLagrangeStrainAtEveryNode) {
   // B1's grid: free edges, a notch (cut bonds) and partial volumes; 004 Eq. (6) is exact for an
   // affine field on any family that spans the plane, so every node must give the closed form.
-  const Discretization& disc = model_->disc();
+  const mesh::Discretization& disc = model_->disc();
   std::vector<std::uint8_t> intact(disc.bond_precut.size());
   for (std::size_t b = 0; b < intact.size(); ++b) intact[b] = disc.bond_precut[b] == 0;
   const std::array<std::array<double, 2>, 2> h{{{2e-3, 5e-4}, {-3e-4, -1e-3}}};
-  const PlaneStrain want = lagrange_of(h);
-  const auto got = pd_lagrange_strain(disc, intact, affine_field(disc, h));
+  const statics::PlaneStrain want = lagrange_of(h);
+  const auto got = statics::pd_lagrange_strain(disc, intact, affine_field(disc, h));
   ASSERT_EQ(got.size(), disc.position.size());
   for (std::size_t k = 0; k < got.size(); ++k) {
     // Round-off of sums of ~30 bonds of length ~δ: 1e-12 absolute on strains of 1e-3.
@@ -88,13 +88,15 @@ TEST_F(ResultsFieldsTest, AffineDisplacementGivesItsLagrangeStrainAtEveryNode) {
   }
   // A uniform stretch ε: E_xx = E_yy = ε + ε²/2, dilatation 2ε + ε², principal ε + ε²/2.
   const double eps = 1e-3;
-  const auto stretch = pd_lagrange_strain(disc, intact, affine_field(disc, {{{eps, 0}, {0, eps}}}));
+  const auto stretch =
+      statics::pd_lagrange_strain(disc, intact, affine_field(disc, {{{eps, 0}, {0, eps}}}));
   EXPECT_NEAR(stretch[100].dilatation(), 2 * eps + eps * eps, 1e-12);
   EXPECT_NEAR(stretch[100].max_principal(), eps + 0.5 * eps * eps, 1e-12);
   EXPECT_NEAR(stretch[100].xy, 0.0, 1e-12);
   // A rigid rotation strains nothing: the HᵀH term of Eq. (7) cancels the linear one.
   const double c = std::cos(0.02) - 1.0, s = std::sin(0.02);
-  for (const auto& e : pd_lagrange_strain(disc, intact, affine_field(disc, {{{c, -s}, {s, c}}}))) {
+  for (const auto& e :
+       statics::pd_lagrange_strain(disc, intact, affine_field(disc, {{{c, -s}, {s, c}}}))) {
     ASSERT_NEAR(e.xx, 0.0, 1e-12);
     ASSERT_NEAR(e.yy, 0.0, 1e-12);
     ASSERT_NEAR(e.xy, 0.0, 1e-12);
@@ -102,17 +104,19 @@ TEST_F(ResultsFieldsTest, AffineDisplacementGivesItsLagrangeStrainAtEveryNode) {
 }
 
 TEST_F(ResultsFieldsTest, ANodeWithoutBondsAcrossTheLineHasNoStrain) {
-  const Discretization& disc = model_->disc();
+  const mesh::Discretization& disc = model_->disc();
   // Keep only node 0's bonds along x: K of Eq. (6) is singular, the strain is NaN, not a guess.
   std::vector<std::uint8_t> intact(disc.bond_precut.size(), 1);
   for (auto f = disc.family_offset[0]; f < disc.family_offset[1]; ++f) {
     const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
     if (std::abs(disc.bond_sin[b]) > 1e-12) intact[b] = 0;
   }
-  const auto e = pd_lagrange_strain(disc, intact, std::vector<double>(2 * disc.position.size()));
+  const auto e =
+      statics::pd_lagrange_strain(disc, intact, std::vector<double>(2 * disc.position.size()));
   EXPECT_TRUE(std::isnan(e[0].xx));
   EXPECT_TRUE(std::isfinite(e[1].xx));
-  EXPECT_THROW(pd_lagrange_strain(disc, intact, std::vector<double>(3)), std::invalid_argument);
+  EXPECT_THROW(statics::pd_lagrange_strain(disc, intact, std::vector<double>(3)),
+               std::invalid_argument);
 }
 
 TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
@@ -122,9 +126,9 @@ TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
   for (const auto& b : model_->config().life.reference_spectrum) {
     reference = b.p_max > reference ? b.p_max : reference;
   }
-  EXPECT_EQ(snapshot_load(*twin).p_max, reference);
-  ASSERT_EQ(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 1000}})).verdict, Verdict::applied);
-  const SnapshotFields fields = snapshot_fields(*twin);
+  EXPECT_EQ(outputs::snapshot_load(*twin).p_max, reference);
+  ASSERT_EQ(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 1000}})).verdict, messages::Verdict::applied);
+  const outputs::SnapshotFields fields = outputs::snapshot_fields(*twin);
   ASSERT_EQ(fields.attributes.size(), 2u);
   EXPECT_EQ(fields.attributes[0], std::make_pair(std::string("load_p_max_n"), 4000.0));
   EXPECT_EQ(fields.attributes[1], std::make_pair(std::string("load_alpha_rad"), 0.0));
@@ -136,18 +140,19 @@ TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
   std::vector<double> u;
   twin->engine().solver().displacement(4000.0, 0.0, u);
   const auto& disp = fields.fields[0];
-  ASSERT_EQ(disp.kind, NodeField::Kind::vector);
+  ASSERT_EQ(disp.kind, outputs::NodeField::Kind::vector);
   ASSERT_EQ(disp.values.size(), 3 * model_->disc().position.size());
-  const auto& u_const = twin->engine().solver().basis_displacement(basis_constant);
+  const auto& u_const = twin->engine().solver().basis_displacement(statics::basis_constant);
   for (std::size_t k = 0; k < model_->disc().position.size(); ++k) {
     ASSERT_EQ(disp.values[3 * k], u[2 * k]) << k;
     ASSERT_EQ(disp.values[3 * k + 1], u[2 * k + 1]) << k;
     ASSERT_EQ(disp.values[3 * k + 2], 0.0);
     ASSERT_DOUBLE_EQ(disp.values[3 * k + 1], 4000.0 * u_const[2 * k + 1]);  // P·U_const, α = 0
   }
-  const auto strain = pd_lagrange_strain(model_->disc(), twin->engine().solver().intact(), u);
+  const auto strain =
+      statics::pd_lagrange_strain(model_->disc(), twin->engine().solver().intact(), u);
   const auto& tensor = fields.fields[1];
-  ASSERT_EQ(tensor.kind, NodeField::Kind::tensor6);
+  ASSERT_EQ(tensor.kind, outputs::NodeField::Kind::tensor6);
   double largest_principal = 0.0;
   std::size_t at = 0;
   for (std::size_t k = 0; k < strain.size(); ++k) {
@@ -163,8 +168,8 @@ TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
   }
   // The strain concentrates at the notch tip ((28 mm, 0) in B1's frame): the largest principal
   // strain sits within a horizon of it.
-  const Point tip = model_->config().geometry.notches.at(0).tip();
-  const Point p = model_->disc().position[at];
+  const mesh::Point tip = model_->config().geometry.notches.at(0).tip();
+  const mesh::Point p = model_->disc().position[at];
   EXPECT_LT(std::hypot(p.x - tip.x, p.y - tip.y), 2.0 * model_->disc().horizon)
       << "largest principal strain " << largest_principal << " at (" << p.x << ", " << p.y << ")";
 }
@@ -172,18 +177,19 @@ TEST_F(ResultsFieldsTest, SnapshotFieldsAreTheModelsSolutionAtTheLastLoad) {
 TEST(ResultsFieldsStrip, FarFieldStrainIsTheUniaxialOneAndPeaksAtTheHoleRim) {
   // examples/strip-with-hole.toml at P = 20 kN along x: W = 60 mm, h = 5 mm, E = 68 GPa, so away
   // from the hole and the grips E_xx = P/(W·h·E) = 9.804e-4 (plane stress, small strain).
-  auto parsed = load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/strip-with-hole.toml");
+  auto parsed = config::load_config(std::string(PERITWIN_EXAMPLES_DIR) + "/strip-with-hole.toml");
   ASSERT_TRUE(parsed.ok()) << parsed.error_text();
   const auto model = b1_model(parsed.config->details.at(0));
   auto twin = make_twin(model);
   const double p = 20000.0;
-  ASSERT_EQ(twin->apply({"strip-hole", "test", 1, {{p, 0.1, 0.0, 1}}}).verdict, Verdict::applied);
-  const SnapshotFields fields = snapshot_fields(*twin);
+  ASSERT_EQ(twin->apply({"strip-hole", "test", 1, {{p, 0.1, 0.0, 1}}}).verdict,
+            messages::Verdict::applied);
+  const outputs::SnapshotFields fields = outputs::snapshot_fields(*twin);
   const auto& strain = fields.fields.at(1);
   const auto& principal = fields.fields.at(3);
   ASSERT_EQ(strain.name, "strain");
   ASSERT_EQ(principal.name, "max_principal_strain");
-  const Discretization& disc = model->disc();
+  const mesh::Discretization& disc = model->disc();
   std::vector<double> far;
   std::size_t peak = 0;
   for (std::size_t k = 0; k < disc.position.size(); ++k) {
@@ -195,7 +201,7 @@ TEST(ResultsFieldsStrip, FarFieldStrainIsTheUniaxialOneAndPeaksAtTheHoleRim) {
   const double want = p / (0.060 * 0.005 * 68e9);
   EXPECT_NEAR(far[far.size() / 2], want, 0.01 * want);  // measured 9.799e-4: 0.05 % off
   // The concentration: at the rim of the hole (r = 5 mm), at its top or bottom (x ≈ 0.1).
-  const Point at = disc.position[peak];
+  const mesh::Point at = disc.position[peak];
   EXPECT_NEAR(std::hypot(at.x - 0.100, at.y - 0.030), 0.005, disc.dx);
   EXPECT_NEAR(at.x, 0.100, disc.dx);
   EXPECT_GT(principal.values[peak], 1.4 * want);  // measured 1.64 on the 1 mm grid (δ = 3 mm)
@@ -305,20 +311,20 @@ std::pair<png_uint_32, png_uint_32> png_size(const fs::path& p) {
 }
 
 TEST_F(ResultsFieldsTest, ResultsDirectoryIsWhatParaViewAndPeopleRead) {
-  DetailConfig config = b1_config("every_batches = 2");
+  config::DetailConfig config = b1_config("every_batches = 2");
   config.output.directory = dir_.string();
   config.output.field_every_batches = 2;
   config.output.png = true;
   auto twin = make_twin(b1_model(config));
   twin->catch_up_life();  // the estimate of state 0, as the daemon and the replay tool make it
-  DetailOutputs outputs(*twin);
+  outputs::DetailOutputs outputs(*twin);
   const fs::path damage_png = dir_ / "b1-ct-damage.png";
   EXPECT_TRUE(fs::exists(damage_png)) << "state 0 is a snapshot: its picture is written";
   fs::remove(damage_png);
-  ASSERT_EQ(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 6000}})).verdict, Verdict::applied);
+  ASSERT_EQ(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 6000}})).verdict, messages::Verdict::applied);
   outputs.record(*twin);
   EXPECT_FALSE(fs::exists(damage_png)) << "state 1 is not a snapshot";
-  ASSERT_EQ(twin->apply(batch(2, {{4000.0, 0.1, 0.0, 6000}})).verdict, Verdict::applied);
+  ASSERT_EQ(twin->apply(batch(2, {{4000.0, 0.1, 0.0, 6000}})).verdict, messages::Verdict::applied);
   outputs.record(*twin);
   // field_every_batches = 2: the pictures of state 2 are there before the twin stops.
   ASSERT_TRUE(fs::exists(damage_png));
@@ -356,7 +362,7 @@ TEST_F(ResultsFieldsTest, ResultsDirectoryIsWhatParaViewAndPeopleRead) {
     ASSERT_EQ(disp[3 * k], u[2 * k]);
     ASSERT_EQ(disp[3 * k + 1], u[2 * k + 1]);
   }
-  const auto rows = read_time_series(h5);
+  const auto rows = outputs::read_time_series(h5);
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows[2].remaining_state_seq, 2);  // estimated at states 0 and 2 (every_batches = 2)
   EXPECT_EQ(rows[1].remaining_state_seq, 0);

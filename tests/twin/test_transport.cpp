@@ -34,7 +34,7 @@ class Transport : public ::testing::Test {
            (std::string("peritwin_transport_") + info->name() + "_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    port_ = free_loopback_port();  // nothing listens here until a test starts a hub
+    port_ = core::free_loopback_port();  // nothing listens here until a test starts a hub
     url_ = "tcpq://127.0.0.1:" + std::to_string(port_);
     // B1, 3 mm life criterion, 24 batches (testing::write_cross_process_inputs).
     config_ = (dir_ / "b1.toml").string();

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "twin/config/config.h"
+#include "config/config.h"
 #include "validation/ct_calibration.h"
 
 namespace {
@@ -74,16 +74,16 @@ TEST(Calibration, B1InputsReproduceB1sA2AndTheSnippetParses) {
 
   const std::string config = b1_example_with(line["fatigue_toml"].get<std::string>());
   ASSERT_FALSE(config.empty());
-  const auto parsed = peritwin::twin::parse_config(config, "b1-calibrated.toml");
+  const auto parsed = peritwin::config::parse_config(config, "b1-calibrated.toml");
   ASSERT_TRUE(parsed.ok()) << parsed.error_text() << "\n" << config;
   const auto& fatigue = parsed.config->details.at(0).fatigue;
-  EXPECT_EQ(fatigue.law, peritwin::FatigueLaw::strain_range);
+  EXPECT_EQ(fatigue.law, peritwin::fatigue::FatigueLaw::strain_range);
   EXPECT_NEAR(fatigue.strain.A2, a2, 1e-6 * a2);  // printed with 7 significant digits
   EXPECT_DOUBLE_EQ(fatigue.strain.A1, 103.7465);  // B1's, no strain-life data given
   EXPECT_DOUBLE_EQ(fatigue.strain.m1, 2.29153);
   EXPECT_DOUBLE_EQ(fatigue.strain.m2, 2.6183);
   EXPECT_DOUBLE_EQ(fatigue.phase_switch_damage, 0.398);
-  EXPECT_EQ(fatigue.static_failure, peritwin::StaticFailure::critical_stretch);
+  EXPECT_EQ(fatigue.static_failure, peritwin::fatigue::StaticFailure::critical_stretch);
 }
 
 // The step rule on B1's measured runs from the trial 1055 (docs/validation.md): Eq. (26b) gives

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <string>
 
-#include "solver/core/param_reader.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
@@ -21,13 +21,13 @@ using detail::require;
 
 // ============================ law 3: bilinear bond with damage ==================================
 
-Status validate(const BilinearParams& p) {
+core::Status validate(const BilinearParams& p) {
   std::string msg;
   require(msg, positive(p.s0), "s0 must be finite and > 0 (003 Eq. 43)");
   require(msg, std::isfinite(p.sc) && p.sc > p.s0, "sc must be finite and > s0 (003 Eq. 44)");
   require(msg, positive(p.A), "A must be finite and > 0 (003 Eq. 27)");
   require(msg, positive(p.m), "m must be finite and > 0 (003 Eq. 27)");
-  return msg.empty() ? Status{} : Status{failure(msg)};
+  return msg.empty() ? core::Status{} : core::Status{core::failure(msg)};
 }
 
 double bilinear_s0_plane_stress(double g0, double youngs_modulus, double horizon) {
@@ -125,20 +125,21 @@ double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const Bi
 }
 
 // 003 Eq. (27), (43)-(44): the bond's parameters; 003 Sec. 5.1: the increments.
-void read_bilinear(ParamReader& r, FatigueSettings& f) {
+void read_bilinear(core::ParamReader& r, FatigueSettings& f) {
   const auto set = [&r](double& field, std::string_view key) {
-    if (const auto v = r.required(key, Bound::positive)) field = *v;
+    if (const auto v = r.required(key, core::Bound::positive)) field = *v;
   };
   set(f.bilinear.s0, "s0");
   set(f.bilinear.sc, "sc");
   set(f.bilinear.A, "A");
-  f.bilinear.m = r.optional("m", f.bilinear.m, Bound::positive);
+  f.bilinear.m = r.optional("m", f.bilinear.m, core::Bound::positive);
   if (f.bilinear.s0 > 0 && r.has("sc")) {
     r.check("sc", f.bilinear.sc > f.bilinear.s0, "must be > s0");
   }
   f.cycle_increment = r.integer("cycle_increment", f.cycle_increment);
   r.check("cycle_increment", f.cycle_increment >= 1, "must be >= 1");
-  f.softening_tolerance = r.optional("softening_tolerance", f.softening_tolerance, Bound::positive);
+  f.softening_tolerance =
+      r.optional("softening_tolerance", f.softening_tolerance, core::Bound::positive);
   f.softening_max_iterations =
       static_cast<int>(r.integer("softening_max_iterations", f.softening_max_iterations));
   r.check("softening_max_iterations", f.softening_max_iterations >= 1, "must be >= 1");

@@ -2,12 +2,12 @@
 // (Eq. 13-18, 42-46) and the third fatigue degradation law (Eq. 27-30, 50).
 #pragma once
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
+#include "core/param_reader.h"
 
-namespace peritwin {
-class ParamReader;
+namespace peritwin::fatigue {
 struct FatigueSettings;
-}  // namespace peritwin
+}  // namespace peritwin::fatigue
 
 namespace peritwin::fatigue {
 
@@ -22,7 +22,7 @@ struct BilinearParams {
   double A = 0.0;
   double m = 4.0;  ///< third-law exponent, 003 Eq. (27); 4.0 in 003 Sec. 6.6-6.7
 };
-Status validate(const BilinearParams& p);
+core::Status validate(const BilinearParams& p);
 
 /// 003 Eq. (43), plane stress: s0 = sqrt(4π G0 / (9 E δ)).
 double bilinear_s0_plane_stress(double g0, double youngs_modulus, double horizon);
@@ -73,6 +73,6 @@ double third_law_bar_cycles_numerical(double s_elastic, double delta_n, const Bi
 /// Config reader of the law bilinear: s0, sc > s0 (003 Eq. 43-44) and A (003 Eq. 27) required,
 /// m > 0 (003 Eq. 27), and the increment settings cycle_increment >= 1 (ΔN, 003 Sec. 5.1),
 /// softening_tolerance > 0, softening_max_iterations >= 1 (FatigueSettings).
-void read_bilinear(ParamReader& r, FatigueSettings& f);
+void read_bilinear(core::ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue

@@ -6,7 +6,7 @@
 #include <limits>
 #include <string>
 
-#include "solver/core/param_reader.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
@@ -21,7 +21,7 @@ using detail::require;
 
 // ============================ law 4: kinetic theory of fracture =================================
 
-Status validate(const KineticParams& p) {
+core::Status validate(const KineticParams& p) {
   std::string msg;
   require(msg, positive(p.U), "U must be finite and > 0 (004 Eq. 14)");
   require(msg, positive(p.gamma), "gamma must be finite and > 0 (004 Eq. 14)");
@@ -29,7 +29,7 @@ Status validate(const KineticParams& p) {
   require(msg, std::isfinite(p.n0) && p.n0 > 1.0, "n0 must be finite and > 1 (004 Eq. 12)");
   require(msg, positive(p.temperature), "temperature must be finite and > 0 K (004 Eq. 14)");
   require(msg, positive(p.frequency), "frequency must be finite and > 0 Hz (004 Eq. 15)");
-  return msg.empty() ? Status{} : Status{failure(msg)};
+  return msg.empty() ? core::Status{} : core::Status{core::failure(msg)};
 }
 
 double kt_thermal_energy(double temperature) { return kBoltzmann * temperature; }
@@ -101,17 +101,17 @@ double kt_n0_for_unit_life(double lambda) {
 }
 
 // 004 Eq. (12)-(15): the activation parameters, the shape λ, n0, and the test conditions.
-void read_kinetic(ParamReader& r, FatigueSettings& f) {
+void read_kinetic(core::ParamReader& r, FatigueSettings& f) {
   const auto set = [&r](double& field, std::string_view key) {
-    if (const auto v = r.required(key, Bound::positive)) field = *v;
+    if (const auto v = r.required(key, core::Bound::positive)) field = *v;
   };
   set(f.kinetic.U, "U");
   set(f.kinetic.gamma, "gamma");
-  f.kinetic.lambda = r.optional("lambda", f.kinetic.lambda, Bound::positive);
+  f.kinetic.lambda = r.optional("lambda", f.kinetic.lambda, core::Bound::positive);
   f.kinetic.n0 = r.number("n0", f.kinetic.n0);
-  r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + format_number(f.kinetic.n0) + ")");
-  f.kinetic.temperature = r.optional("temperature", f.kinetic.temperature, Bound::positive);
-  f.kinetic.frequency = r.optional("frequency", f.kinetic.frequency, Bound::positive);
+  r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + core::format_number(f.kinetic.n0) + ")");
+  f.kinetic.temperature = r.optional("temperature", f.kinetic.temperature, core::Bound::positive);
+  f.kinetic.frequency = r.optional("frequency", f.kinetic.frequency, core::Bound::positive);
 }
 
 }  // namespace peritwin::fatigue

@@ -2,12 +2,12 @@
 // grows at the thermally activated breakage rate K_b (Eq. 14), integrated per cycle (Eq. 15).
 #pragma once
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
+#include "core/param_reader.h"
 
-namespace peritwin {
-class ParamReader;
+namespace peritwin::fatigue {
 struct FatigueSettings;
-}  // namespace peritwin
+}  // namespace peritwin::fatigue
 
 namespace peritwin::fatigue {
 
@@ -24,7 +24,7 @@ struct KineticParams {
   double temperature = 293.0;  ///< T (K), 004 test temperature 20 °C
   double frequency = 0.56;     ///< f (Hz), 004 test frequency
 };
-Status validate(const KineticParams& p);
+core::Status validate(const KineticParams& p);
 
 /// k T (J): the thermal energy of 004 Eq. (14)-(15).
 double kt_thermal_energy(double temperature);
@@ -59,6 +59,6 @@ double kt_damage_from_remaining_life(double remaining, double lambda, double n0)
 
 /// Config reader of the law kinetic: U, gamma > 0 required (004 Eq. 13-14), lambda > 0 and n0 > 1
 /// (004 Eq. 12), temperature, frequency > 0 (004 Eq. 14-15).
-void read_kinetic(ParamReader& r, FatigueSettings& f);
+void read_kinetic(core::ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue

@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <string>
 
-#include "solver/core/param_reader.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/fatigue_settings.h"
 #include "solver/fatigue/laws/law_math.h"
 
@@ -33,7 +33,7 @@ StrainLawParams sae1020_strain_params() {
   return p;
 }
 
-Status validate(const StrainLawParams& p) {
+core::Status validate(const StrainLawParams& p) {
   std::string msg;
   require(msg, positive(p.A1), "A1 must be finite and > 0 (000 Eq. 14a)");
   require(msg, positive(p.m1), "m1 must be finite and > 0 (000 Eq. 14a)");
@@ -41,7 +41,7 @@ Status validate(const StrainLawParams& p) {
   require(msg, positive(p.A2), "A2 must be finite and > 0 (000 Eq. 14b)");
   require(msg, positive(p.m2), "m2 must be finite and > 0 (000 Eq. 14b)");
   require(msg, non_negative(p.eps_inf_prop), "eps_inf_prop must be finite and >= 0 (002 Eq. 12)");
-  return msg.empty() ? Status{} : Status{failure(msg)};
+  return msg.empty() ? core::Status{} : core::Status{core::failure(msg)};
 }
 
 double strain_range(double s_max_load, double s_min_load) {
@@ -133,16 +133,16 @@ double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th
 }
 
 // 000 Eq. (14), (17)-(19), 002 Eq. (12): the parameters; 000 Eq. (15): compressed bonds.
-void read_strain_range(ParamReader& r, FatigueSettings& f) {
+void read_strain_range(core::ParamReader& r, FatigueSettings& f) {
   const auto set = [&r](double& field, std::string_view key) {
-    if (const auto v = r.required(key, Bound::positive)) field = *v;
+    if (const auto v = r.required(key, core::Bound::positive)) field = *v;
   };
   set(f.strain.A1, "A1");
   set(f.strain.m1, "m1");
   set(f.strain.A2, "A2");
   set(f.strain.m2, "m2");
-  f.strain.eps_inf = r.optional("eps_inf", 0.0, Bound::non_negative);
-  f.strain.eps_inf_prop = r.optional("eps_inf_prop", 0.0, Bound::non_negative);
+  f.strain.eps_inf = r.optional("eps_inf", 0.0, core::Bound::non_negative);
+  f.strain.eps_inf_prop = r.optional("eps_inf_prop", 0.0, core::Bound::non_negative);
   f.compressed_bonds_fatigue = r.boolean("compressed_bonds_fatigue", f.compressed_bonds_fatigue);
 }
 

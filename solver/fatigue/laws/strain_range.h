@@ -5,13 +5,13 @@
 
 #include <span>
 
-#include "solver/core/expected.h"
+#include "core/expected.h"
+#include "core/param_reader.h"
 #include "solver/fatigue/laws/remaining_life.h"
 
-namespace peritwin {
-class ParamReader;
+namespace peritwin::fatigue {
 struct FatigueSettings;
-}  // namespace peritwin
+}  // namespace peritwin::fatigue
 
 namespace peritwin::fatigue {
 
@@ -34,7 +34,7 @@ StrainLawParams al6061_t6_strain_params();
 /// B3: SAE 1020 steel (002 Table 2): A1 1.32e15, p1 9, ε∞ 1e-3, A2 7.76e6, p2 2.1, ε̃∞ 1e-4.
 StrainLawParams sae1020_strain_params();
 /// OK, or a message naming every bad field (A_i, m_i > 0, limits >= 0, finite).
-Status validate(const StrainLawParams& p);
+core::Status validate(const StrainLawParams& p);
 
 /// 000 Eq. (15): ε = |s⁺ − s⁻| from the stretches at P_max and P_min (002 Eq. 6 likewise).
 double strain_range(double s_max_load, double s_min_load);
@@ -87,6 +87,6 @@ double propagation_fatigue_limit(double mean_tip_strain_range, double delta_k_th
 /// Config reader of the laws strain_range and energy: A1, m1, A2, m2 > 0 (required; 000 Eq. 14,
 /// 17-19, 44-46), eps_inf >= 0 (000 Eq. 17), eps_inf_prop >= 0 (002 Eq. 12), and
 /// compressed_bonds_fatigue (000 Eq. 15, FatigueSettings::compressed_bonds_fatigue).
-void read_strain_range(ParamReader& r, FatigueSettings& f);
+void read_strain_range(core::ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue

@@ -1,0 +1,132 @@
+// The producer side of the batch protocol, shared by peritwin-replay and peritwin-stream: batches
+// of one (detail, source) to a daemon over LCM, exactly once per (source, seq).
+//
+// Batches are given incrementally (add(), consecutive seqs) and published on PERITWIN_<DETAIL>_LOAD
+// with at most `window` batches beyond the last applied one (lockstep: window 1, i.e. wait for the
+// daemon's STATE to show seq k applied before sending k + 1). The daemon's applied seq comes from
+// PERITWIN_<DETAIL>_STATE. When it goes backwards (the daemon restarted from an older checkpoint)
+// or nothing progresses for `resend_after_s`, sending restarts at applied + 1. After finish() the
+// sender is done when a STATE shows the last seq applied (or the detail failed); it fails after
+// `give_up_after_s` without progress while batches are outstanding. Batches are kept until the
+// daemon reports them durable (damage_state_t.checkpointed_seq), at most kMaxRetained beyond it,
+// so that a daemon that restarts from its checkpoint gets them again.
+//
+// Authentication (ReplayAuth, messages/README.md "Authentication"): with a batch key every batch
+// is signed before it is published; with a daemon key every STATE and REJECT on the detail's
+// channels is checked on its bytes before it is decoded, and the first one that is unsigned or
+// wrongly signed ends the run with an error naming the channel, the message and why. A CODE_AUTH
+// reject of one of our batches ends it too (signed or not: the daemon refuses what we send).
+// Without keys nothing is signed or checked, and anyone on the bus can forge the states reported.
+//
+// probe_applied(): what the daemon has applied of this source before anything is sent. It
+// publishes a probe batch (one 1-cycle block) with seq 2^63 - 1, which no daemon applies (it
+// skips ahead: the daemon answers with a GAP reject and its STATE), until the first STATE arrives
+// (every STATE carries the applied seq of every source, so the daemon's start-up STATE does too).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <lcm/lcm-cpp.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/expected.h"
+#include "messages/auth.h"
+#include "messages/codec.h"
+
+namespace peritwin::loads {
+
+struct ReplayOptions {
+  bool lockstep = false;
+  std::size_t window = 256;        ///< batches in flight beyond the last applied (not lockstep)
+  double resend_after_s = 3.0;     ///< no progress for this long: resend from applied + 1
+  double give_up_after_s = 120.0;  ///< no progress for this long: fail
+};
+
+/// Keys of an authenticated run (see the top of this file).
+struct ReplayAuth {
+  std::optional<messages::AuthKey> batch_key;   ///< the key of the batches' source id
+  std::optional<messages::AuthKey> daemon_key;  ///< the daemon's key, for its STATE and REJECT
+  std::string daemon_key_id;                    ///< named in errors
+};
+
+class BatchSender {
+ public:
+  enum class Progress { running, done, failed };
+  using StateFn = std::function<void(const peritwin_msgs::damage_state_t&)>;
+  /// Batches held beyond the daemon's checkpointed seq after they are applied.
+  static constexpr std::size_t kMaxRetained = 4096;
+
+  BatchSender(lcm::LCM& lcm, std::string detail_id, std::string source_id, ReplayOptions options,
+              ReplayAuth auth = {});
+  ~BatchSender();
+  BatchSender(const BatchSender&) = delete;
+  BatchSender& operator=(const BatchSender&) = delete;
+
+  /// Called with every STATE of the detail (verified when a daemon key is set).
+  void on_state(StateFn fn) { on_state_ = std::move(fn); }
+
+  /// The daemon's applied seq of this source before anything is sent (see the top of the file);
+  /// an error after give_up_after_s without a STATE, on a lost transport or an auth failure.
+  /// `idle` as for pump callers: false aborts ("interrupted").
+  core::Expected<std::int64_t> probe_applied(const std::function<bool()>& idle = {});
+
+  /// Queues a batch of this detail and source; its seq is the previous batch's + 1 (the first
+  /// one may start anywhere >= 1).
+  void add(messages::Batch batch);
+  /// No more batches: done once the last is applied.
+  void finish();
+  /// Publishes what the window allows, processes LCM for up to timeout_ms, takes the STATEs.
+  Progress pump(int timeout_ms);
+
+  /// The daemon's applied seq of the source, -1 until the first STATE.
+  [[nodiscard]] std::int64_t acked_seq() const { return applied_; }
+  /// Batches added and not yet applied (seq > acked_seq()), in seq order.
+  [[nodiscard]] std::vector<messages::Batch> unacknowledged() const;
+  /// Seq of the last batch added (0 before any).
+  [[nodiscard]] std::int64_t last_seq() const { return last_seq_; }
+  [[nodiscard]] const std::string& error() const { return error_; }
+  [[nodiscard]] const std::optional<peritwin_msgs::damage_state_t>& last_state() const {
+    return last_state_;
+  }
+  [[nodiscard]] std::int64_t published() const { return published_; }
+  [[nodiscard]] std::int64_t rewinds() const { return rewinds_; }
+
+ private:
+  // Raw handlers: the bytes are checked (tag, then layout) before anything is decoded.
+  void on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
+  void publish(const messages::Batch& batch);
+  /// LCM for up to timeout_ms; false (error_ set) on a failure of LCM, the transport or auth.
+  bool receive(int timeout_ms);
+  void take_states();
+  [[nodiscard]] bool outstanding() const { return last_seq_ > std::max<std::int64_t>(applied_, 0); }
+
+  lcm::LCM& lcm_;
+  std::string detail_id_, source_id_, load_channel_;
+  ReplayOptions options_;
+  ReplayAuth auth_;
+  StateFn on_state_;
+  std::string fatal_;  ///< set by a handler: a message that must end the run (auth)
+  std::string error_;
+  lcm::Subscription* state_sub_ = nullptr;
+  lcm::Subscription* reject_sub_ = nullptr;
+  std::vector<peritwin_msgs::damage_state_t> inbox_;
+  std::optional<peritwin_msgs::damage_state_t> last_state_;
+  std::deque<messages::Batch> batches_;  ///< seqs front_seq .. last_seq_, consecutive
+  std::int64_t last_seq_ = 0;
+  std::int64_t applied_ = -1;  ///< unknown until the first STATE
+  std::int64_t durable_ = 0;   ///< the daemon's checkpointed seq of the source
+  std::int64_t next_ = 1;      ///< next seq to publish
+  bool finished_ = false;
+  std::int64_t rejected_failed_ = 0;
+  std::int64_t published_ = 0;
+  std::int64_t rewinds_ = 0;
+  std::chrono::steady_clock::time_point last_progress_, last_send_;
+  double resend_after_;
+};
+
+}  // namespace peritwin::loads

@@ -1,0 +1,193 @@
+// Results of one detail for people to look at: an HDF5 file with a time series appended row by
+// row and damage-field snapshots, plus an XDMF file next to it so ParaView opens it directly.
+// The HDF5 file is flushed after every row and snapshot; the XDMF file is rewritten atomically
+// (temp file + rename) after every snapshot, so both are usable at any moment.
+// Units: SI (m, rad, Pa·√m for K); cycles are counts.
+//
+// File layout (layout_version 3; a version-1 or -2 file is upgraded in place when opened for
+// writing: version-1 rows get crack_count = -1, unknown, and no crack rows; the mesh gets
+// /mesh/xyz and /mesh/vertices):
+//   /                     attributes: format = "peritwin-results", layout_version = 2, detail
+//   /timeseries/<column>  extendible 1-D, one element per row; attribute "units". Columns:
+//                         state_seq, total_cycles, broken_bonds, crack_count,
+//                         remaining_state_seq (the state the remaining-life estimate was
+//                         computed on, -1 none; rows of a version-1 or -2 file: -1) (int64);
+//                         crack_length_m, crack_projected_length_m, tip_x, tip_y, kink_angle_rad,
+//                         k_i, k_ii (the main crack: the longest, first tip), remaining_cycles,
+//                         remaining_low, remaining_high (float64)
+//   /cracks/<column>      extendible 1-D, one element per crack tip per row (every crack of the
+//                         state, in the STATE order); attribute "units". Columns: state_seq,
+//                         crack_id, origin_kind (1 notch, 2 surface, 3 interior), k_status
+//                         (crack_tip_t.K_*) (int64); length_m, projected_length_m, tip_x, tip_y,
+//                         tip_angle_rad, k_i, k_ii (float64)
+//   /mesh/x, /mesh/y      float64[node_count] node coordinates (m); /mesh attribute node_count
+//   /mesh/xyz             float64[node_count][3] the same with z = 0: the XDMF geometry. ParaView
+//                         5.11's default XDMF reader (Xdmf3ReaderS/T) crashes in
+//                         vtkXdmf3DataSet::CopyShape on an X_Y geometry (two DataItems, what
+//                         layouts 1-2 wrote; only the legacy XDMFReader read it) and reads XYZ.
+//   /mesh/vertices        int64[node_count] 0, 1, ..., node_count − 1: the Polyvertex
+//                         connectivity, given explicitly rather than left to each reader
+//   /fields/step_<n>/damage  float32[node_count], n = 0, 1, 2, ... zero-padded to 6 digits;
+//                         attributes state_seq, total_cycles (int64) on the dataset and its group
+//   /fields/step_<n>/<field>  float64[node_count] or [node_count][components]: the snapshot's
+//                         NodeFields (displacement, strain, ...); attribute "units"; the group
+//                         carries the NodeFields' scalar attributes (the load they belong to)
+//   <name>.xdmf           XDMF 3: a temporal collection (Time = total_cycles) of Polyvertex grids
+//                         (connectivity /mesh/vertices), Geometry XYZ from /mesh/xyz, node
+//                         attributes "damage" and every NodeField (Scalar, Vector, Tensor6)
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace peritwin::outputs {
+
+/// One crack tip of one state (the /cracks table). NaN means "not valid" (see k_status).
+struct CrackRow {
+  std::int64_t state_seq = 0;
+  std::int64_t crack_id = 0;
+  std::int64_t origin_kind = 0;  ///< 1 notch, 2 surface, 3 interior
+  std::int64_t k_status = 0;     ///< crack_tip_t.K_*
+  double length_m = 0.0;         ///< the crack's, along its path
+  double projected_length_m = 0.0;
+  double tip_x = 0.0;
+  double tip_y = 0.0;
+  double tip_angle_rad = 0.0;  ///< direction of growth at the tip
+  double k_i = std::numeric_limits<double>::quiet_NaN();
+  double k_ii = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One row of the time series. NaN means "not computed (yet)".
+struct TimeSeriesRow {
+  std::int64_t state_seq = 0;     ///< state sequence number the row belongs to
+  std::int64_t total_cycles = 0;  ///< cycles applied since the start
+  std::int64_t broken_bonds = 0;
+  std::int64_t crack_count = 0;           ///< cracks found; -1 = unknown (rows of a version-1 file)
+  double crack_length_m = 0.0;            ///< along the crack path
+  double crack_projected_length_m = 0.0;  ///< projected, as the papers measure it
+  double tip_x = std::numeric_limits<double>::quiet_NaN();  ///< crack tip (m)
+  double tip_y = std::numeric_limits<double>::quiet_NaN();
+  double kink_angle_rad = std::numeric_limits<double>::quiet_NaN();
+  double k_i = std::numeric_limits<double>::quiet_NaN();   ///< Pa·√m
+  double k_ii = std::numeric_limits<double>::quiet_NaN();  ///< Pa·√m
+  double remaining_cycles = std::numeric_limits<double>::quiet_NaN();
+  double remaining_low = std::numeric_limits<double>::quiet_NaN();
+  double remaining_high = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t remaining_state_seq = -1;  ///< the state the estimate belongs to (-1: none)
+  /// Every crack tip of the state (written to /cracks with this row's state_seq; not read back
+  /// by read_time_series: see read_crack_rows).
+  std::vector<CrackRow> cracks;
+};
+
+/// One more per-node array of a snapshot, beside the damage.
+struct NodeField {
+  enum class Kind {
+    scalar,   ///< 1 value per node
+    vector,   ///< 3 per node: x, y, z
+    tensor6,  ///< 6 per node, a symmetric tensor: xx, xy, xz, yy, yz, zz (XDMF's Tensor6 order)
+  };
+  std::string name;  ///< dataset and attribute name: letters, digits, '_'
+  Kind kind = Kind::scalar;
+  std::string units;
+  std::vector<double> values;  ///< node-major: components() per node
+  [[nodiscard]] std::size_t components() const;
+};
+
+/// A snapshot's fields beside the damage, and numbers that say what they are (stored as float64
+/// attributes of the step group, e.g. the load P_max the displacement belongs to).
+struct SnapshotFields {
+  std::vector<NodeField> fields;
+  std::vector<std::pair<std::string, double>> attributes;
+};
+
+struct ResultsOptions {
+  std::string detail;           ///< stored as the root attribute "detail"
+  int field_deflate_level = 4;  ///< damage snapshots: 0 = contiguous, 1..9 = shuffle + deflate
+  /// HDF5 file locking on the results file. Off (default) lets ParaView open the file while the
+  /// daemon writes it; one writer per file remains the caller's duty.
+  bool file_locking = false;
+};
+
+/// Thrown for misuse (snapshot before mesh, wrong sizes, a mesh that differs from the stored one)
+/// and for a file that is not a results file; HDF5 failures arrive as h5::Error.
+class ResultsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SnapshotInfo {
+  std::int64_t index = 0;  ///< n of /fields/step_<n>
+  std::int64_t state_seq = 0;
+  std::int64_t total_cycles = 0;
+  /// The snapshot's NodeFields beside the damage (name and kind), in name order.
+  std::vector<std::pair<std::string, NodeField::Kind>> fields;
+  [[nodiscard]] std::string group() const;  ///< "/fields/step_<n>"
+};
+
+class ResultsWriter {
+ public:
+  /// Opens `h5_path` (…/<name>.h5) to continue it, or creates it. An existing file that HDF5
+  /// cannot open is moved aside to <h5_path>.corrupt (see recovered_from()) and a new one is
+  /// started; an HDF5 file that is not a results file is left alone (ResultsError). A row or
+  /// snapshot half-written by a crash is dropped.
+  explicit ResultsWriter(std::filesystem::path h5_path, ResultsOptions options = {});
+  ~ResultsWriter();
+  ResultsWriter(ResultsWriter&&) noexcept;
+  ResultsWriter& operator=(ResultsWriter&&) noexcept;
+  ResultsWriter(const ResultsWriter&) = delete;
+  ResultsWriter& operator=(const ResultsWriter&) = delete;
+
+  /// Node coordinates (m), written once; calling again with the same mesh is a no-op, with a
+  /// different one an error.
+  void write_mesh(std::span<const double> x, std::span<const double> y);
+  void append(const TimeSeriesRow& row);
+  /// Damage φ per node (stored as float32); needs the mesh. Rewrites the XDMF file.
+  void write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
+                      std::span<const float> damage, const SnapshotFields& extra = {});
+  void write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
+                      std::span<const double> damage, const SnapshotFields& extra = {});
+  /// Drops every row and snapshot with state_seq > `state_seq` (resume from a checkpoint).
+  void rewind_to(std::int64_t state_seq);
+
+  [[nodiscard]] std::uint64_t rows() const;
+  /// The time series as written so far, with every row's crack rows (what read_time_series and
+  /// read_crack_rows give, without opening the file a second time).
+  [[nodiscard]] std::vector<TimeSeriesRow> read_rows() const;
+  [[nodiscard]] const std::vector<SnapshotInfo>& snapshots() const;
+  [[nodiscard]] std::size_t node_count() const;  ///< 0 until the mesh is written
+  [[nodiscard]] const std::filesystem::path& h5_path() const;
+  [[nodiscard]] const std::filesystem::path& xdmf_path() const;
+  /// Where an unreadable existing file was moved to, if that happened.
+  [[nodiscard]] const std::optional<std::filesystem::path>& recovered_from() const;
+
+  /// Flushes and closes now (the destructor does it too, without throwing).
+  void close();
+
+  /// <dir>/<name>.xdmf for <dir>/<name>.h5.
+  static std::filesystem::path xdmf_path_for(const std::filesystem::path& h5_path);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// --- reading a results file back (tools, tests) ------------------------------------------------
+
+std::vector<TimeSeriesRow> read_time_series(const std::filesystem::path& h5_path);
+std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path);
+std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path);
+std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
+                                        const SnapshotInfo& snapshot);
+/// A NodeField of a snapshot (`name` as written), node-major; empty when the snapshot has none.
+std::vector<double> read_snapshot_field(const std::filesystem::path& h5_path,
+                                        const SnapshotInfo& snapshot, const std::string& name);
+
+}  // namespace peritwin::outputs

@@ -1,0 +1,89 @@
+#include "service/ingest.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <exception>
+
+#include "twin/messages_io.h"
+
+namespace peritwin::service {
+
+core::Status Ingest::load_keys(const std::optional<config::AuthConfig>& config) {
+  if (!config) {
+    spdlog::warn(
+        "no [auth] in the config: load batches are not authenticated and STATE/REJECT are not "
+        "signed, so anyone on the bus can feed or impersonate this twin (messages/README.md, "
+        "Authentication)");
+    return {};
+  }
+  const config::AuthConfig& auth = *config;
+  auto keys = messages::KeyRing::load(auth.key_file);
+  if (!keys) return core::failure("[auth] key_file: " + keys.error().message());
+  keys_ = std::move(*keys);
+  daemon_key_ = keys_->find(auth.daemon_key);
+  if (daemon_key_ == nullptr) {
+    return core::failure("[auth] daemon_key: the key file " + auth.key_file + " has no key \"" +
+                         auth.daemon_key + "\" to sign STATE and REJECT with");
+  }
+  sources_listed_ = !auth.sources.empty();
+  if (!auth.sources.empty()) {
+    for (const auto& source : auth.sources) {
+      if (keys_->find(source) == nullptr) {
+        return core::failure("[auth] sources: the key file " + auth.key_file +
+                             " has no key for source \"" + source + "\"");
+      }
+    }
+    allowed_sources_ = auth.sources;
+  } else {
+    // Every key but the daemon's own: a producer never needs the daemon's key.
+    for (const auto& id : keys_->ids()) {
+      if (id != auth.daemon_key) allowed_sources_.push_back(id);
+    }
+  }
+  std::sort(allowed_sources_.begin(), allowed_sources_.end());
+  spdlog::info("authentication on: {} source(s) allowed, STATE and REJECT signed with key \"{}\"",
+               allowed_sources_.size(), auth.daemon_key);
+  return {};
+}
+
+messages::Outcome Ingest::authenticate(const Received& r, const messages::Decoded& decoded) const {
+  const std::string& source = decoded.batch->source_id;
+  if (!std::binary_search(allowed_sources_.begin(), allowed_sources_.end(), source)) {
+    return {messages::Verdict::auth, "source_id",
+            "source \"" + source + "\" is not allowed: no key for it in the daemon's key file" +
+                (sources_listed_ ? " or not in [auth] sources" : std::string())};
+  }
+  if (decoded.auth_tag.empty()) {
+    return {messages::Verdict::auth, "auth_tag",
+            "unsigned: this daemon requires an HMAC-SHA256 tag with the key of source \"" + source +
+                "\""};
+  }
+  if (!messages::tag_matches(*keys_->find(source), r.bytes.data(), decoded.signed_size,
+                             decoded.auth_tag)) {
+    return {messages::Verdict::auth, "auth_tag",
+            "wrong tag: not signed with the key of source \"" + source + "\""};
+  }
+  return {};
+}
+
+Ingested Ingest::run(twin::Twin& twin, const Received& r) const {
+  const messages::Decoded decoded = messages::decode_batch(r.bytes.data(), r.bytes.size());
+  if (!decoded.batch) return {Ingested::Step::rejected, "", -1, decoded.error};
+  const messages::Batch& batch = *decoded.batch;
+  if (keys_) {
+    if (messages::Outcome denied = authenticate(r, decoded); !denied.applied()) {
+      return {Ingested::Step::rejected, batch.source_id, batch.seq, std::move(denied)};
+    }
+  }
+  try {
+    return {Ingested::Step::applied, batch.source_id, batch.seq, twin.apply(batch)};
+  } catch (const std::exception& e) {
+    return {Ingested::Step::threw,
+            batch.source_id,
+            batch.seq,
+            {messages::Verdict::internal, "message", e.what()}};
+  }
+}
+
+}  // namespace peritwin::service

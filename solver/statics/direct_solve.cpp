@@ -1,0 +1,169 @@
+// StaticSolver's direct path: the fill-reducing ordering, the factorization and the basis
+// solves, the refactorizing re-solve (the oracle) and the re-solve after a rank update of the
+// factor, and releasing an idle factor's values.
+#include <algorithm>
+#include <chrono>
+#include <vector>
+
+#include "solver/statics/solve_clock.h"
+#include "solver/statics/static_solver.h"
+
+namespace peritwin::statics {
+
+using static_solver_detail::seconds_since;
+
+std::vector<int> StaticSolver::dof_ordering() const {
+  // Order the node graph (the 2x2 blocks of K) and expand it to the free DOFs: 2-4x smaller to
+  // order than the DOF graph, and it keeps each node's DOFs together in the supernodes.
+  const auto nn = disc_.num_nodes();
+  std::vector<Eigen::Triplet<double, int>> links;
+  links.reserve(static_cast<std::size_t>(disc_.num_bonds()) + static_cast<std::size_t>(nn));
+  for (mesh::NodeIndex k = 0; k < nn; ++k) links.emplace_back(k, k, 1.0);
+  for (mesh::BondIndex b = 0; b < disc_.num_bonds(); ++b) {
+    if (!disc_.bond_precut[b]) links.emplace_back(disc_.bond_i[b], disc_.bond_j[b], 1.0);
+  }
+  for (const Tie& tie : ties_) {  // a tie couples every pair of its nodes
+    std::vector<mesh::NodeIndex> nodes;
+    for (const TieTerm& term : tie.terms) nodes.push_back(term.node);
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    for (std::size_t p = 0; p < nodes.size(); ++p) {
+      for (std::size_t q = p + 1; q < nodes.size(); ++q)
+        links.emplace_back(nodes[p], nodes[q], 1.0);
+    }
+  }
+  linalg::SparseMatrix incidence(nn, nn);
+  incidence.setFromTriplets(links.begin(), links.end());
+  linalg::SparseMatrix node_graph = incidence.selfadjointView<Eigen::Upper>();
+  if (model_.options.kind == model::ModelKind::state_based && !mixed_) {
+    node_graph = node_graph * node_graph;  // the dilatation couples nodes two bonds apart
+  }
+  linalg::SparseMatrix node_upper = node_graph.triangularView<Eigen::Upper>();
+  node_upper.makeCompressed();
+  const std::vector<int> node_order =
+      linalg::SparseCholesky::fill_reducing_ordering(node_upper, ordering_);
+  std::vector<int> order;
+  order.reserve(static_cast<std::size_t>(num_unknowns_));
+  for (int k : node_order) {
+    for (int c = 0; c < 2; ++c) {
+      const int f = free_index_[2 * static_cast<std::size_t>(k) + static_cast<std::size_t>(c)];
+      if (f >= 0) order.push_back(f);
+    }
+    if (mixed_) order.push_back(num_free_ + k);
+  }
+  return order;
+}
+
+core::Status StaticSolver::solve() {
+  auto t0 = std::chrono::steady_clock::now();
+  assemble(factor_);
+  timings_.assemble_s = seconds_since(t0);
+  if (!cholesky_.analyzed()) {
+    t0 = std::chrono::steady_clock::now();
+    const std::vector<int> permutation = dof_ordering();
+    if (auto r = cholesky_.analyze(upper_, &permutation); !r.ok()) return r;
+    timings_.analyze_s = seconds_since(t0);
+  }
+  t0 = std::chrono::steady_clock::now();
+  auto report = cholesky_.factorize(upper_);
+  ++factorizations_;
+  updated_ = false;
+  released_ = false;
+  timings_.factor_s = seconds_since(t0);
+  if (!report.ok()) return report;
+  reference_ = factor_;
+
+  t0 = std::chrono::steady_clock::now();
+  solve_bases();
+  timings_.solve_s = seconds_since(t0);
+  // Incremental: the factor is read again only after a rank update, which turns it into LDLᵀ:
+  // do it now (the same values as at the first update, bit for bit) so that a detail that
+  // breaks no bond for a while holds the packed factor, not the supernodal one with its
+  // diagonal blocks' upper triangles (issue 18: memory of a fleet of details).
+  if (incremental_ && cholesky_.convert_to_ldlt().ok()) modified_ = true;
+  return report;
+}
+
+void StaticSolver::solve_bases() {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<int> loaded;
+  std::array<std::vector<double>, 3> forces;
+  for (int basis = 0; basis < 3; ++basis) {
+    forces[static_cast<std::size_t>(basis)] = basis_force(static_cast<Basis>(basis));
+    bool any = false;
+    for (double v : forces[static_cast<std::size_t>(basis)]) any = any || v != 0.0;
+    if (any) loaded.push_back(basis);
+  }
+  Eigen::MatrixXd rhs =
+      Eigen::MatrixXd::Zero(num_unknowns_, static_cast<Eigen::Index>(loaded.size()));
+  for (std::size_t c = 0; c < loaded.size(); ++c) {
+    const auto& f = forces[static_cast<std::size_t>(loaded[c])];
+    for (std::size_t dof = 0; dof < f.size(); ++dof) {
+      if (free_index_[dof] >= 0) rhs(free_index_[dof], static_cast<Eigen::Index>(c)) = f[dof];
+    }
+  }
+  if (!loaded.empty()) cholesky_.solve(rhs);
+  for (int basis = 0; basis < 3; ++basis) {
+    auto& u = u_[static_cast<std::size_t>(basis)];
+    u.assign(free_index_.size(), 0.0);
+    const auto it = std::find(loaded.begin(), loaded.end(), basis);
+    if (it != loaded.end()) {
+      const auto c = static_cast<Eigen::Index>(it - loaded.begin());
+      for (std::size_t dof = 0; dof < u.size(); ++dof) {
+        if (free_index_[dof] >= 0) u[dof] = rhs(free_index_[dof], c);
+      }
+      model::bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
+    } else {
+      s_[static_cast<std::size_t>(basis)].assign(static_cast<std::size_t>(disc_.num_bonds()), 0.0);
+    }
+  }
+  basis_solve_s_ += seconds_since(t0);
+}
+
+core::Status StaticSolver::refactor_resolve() {
+  for (mesh::NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
+    if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
+  }
+  if (modified_) {  // the factor is simplicial LDLᵀ now: analyze again for a supernodal one
+    cholesky_ = linalg::SparseCholesky();
+    modified_ = false;
+  }
+  return solve();
+}
+
+bool StaticSolver::release_factor() {
+  if (!incremental_ || preconditioned_ || updated_ || released_ || !cholesky_.has_values()) {
+    return false;
+  }
+  released_ = cholesky_.release_values();
+  return released_;
+}
+
+core::Status StaticSolver::update_resolve(
+    const std::vector<linalg::SparseCholesky::Column>& added,
+    const std::vector<linalg::SparseCholesky::Column>& removed,
+    std::chrono::steady_clock::time_point t0) {
+  if (released_) {  // upper_ is still the released factor's matrix: the same factor again
+    core::Status f = cholesky_.factorize(upper_);
+    ++factorizations_;
+    released_ = false;
+    if (f.ok()) f = cholesky_.convert_to_ldlt();
+    if (!f.ok()) {
+      update_s_ += seconds_since(t0);
+      return f;
+    }
+  }
+  updated_ = true;
+  modified_ = true;
+  core::Status r = cholesky_.modify_fused(added, removed);
+  ++updates_;
+  if (!r.ok()) {
+    update_s_ += seconds_since(t0);
+    return r;
+  }
+  solve_bases();
+  update_s_ += seconds_since(t0);
+  return r;
+}
+
+}  // namespace peritwin::statics
