@@ -23,6 +23,8 @@ packages=(
   # Spy is a window (the full JRE's AWT), its message viewer and plots need jchart2d, and its test
   # runs it under Xvfb (xvfb-run needs xauth).
   default-jdk-headless default-jre libjchart2d-java xvfb xauth
+  # The rooms check (scripts/check-rooms.py, CTest rooms.*): docs/architecture.md's map enforced.
+  python3
 )
 # The fuzz targets and the sanitizer build (scripts/fuzz.sh, scripts/sanitize.sh, which set
 # PERITWIN_SANITIZER_DEPS=1): clang 14 with its sanitizer and libFuzzer runtimes.
