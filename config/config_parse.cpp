@@ -511,9 +511,7 @@ void read_life(Context& ctx, const toml::table& t, const std::string& path, cons
     // with an A2 is needed, and it must be coarser than the detail's own grid.
     if (const auto dx = req(r, "dx", core::Bound::positive)) {
       l.dx = *dx;
-      if (r.check("dx",
-                  d.fatigue.law == fatigue::FatigueLaw::strain_range ||
-                      d.fatigue.law == fatigue::FatigueLaw::energy,
+      if (r.check("dx", fatigue::law_entry(d.fatigue.law).calibrated_a2,
                   "a coarser estimate model calibrates A2: only with fatigue law "
                   "\"strain_range\" or \"energy\"") &&
           d.dx > 0) {
@@ -676,7 +674,7 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
   }
   if (const auto* f = r.table("fatigue", true)) {
     read_fatigue(ctx, *f, r.path_of("fatigue"), d.horizon_ratio, d.fatigue);
-    if (d.fatigue.law == fatigue::FatigueLaw::bilinear &&
+    if (fatigue::law_entry(d.fatigue.law).damage_based &&
         d.model.kind != model::ModelKind::bond_based) {
       ctx.error(source_of(*f, "law"), r.path_of("fatigue") + ".law",
                 "\"bilinear\" is a bond law (003): it needs model.kind = \"bond_based\"");

@@ -9,6 +9,8 @@
 #include <numbers>
 #include <vector>
 
+#include "solver/fatigue/law_registry.h"
+
 namespace peritwin::config {
 
 namespace {
@@ -356,10 +358,10 @@ ResourceEstimate estimate_resources(const DetailConfig& d) noexcept {
   // band (not for the kinetic law), run in parallel.
   const bool life = d.life.estimates();
   const bool band =
-      d.life.band == BandSource::a2_scatter && d.fatigue.law != fatigue::FatigueLaw::kinetic;
+      d.life.band == BandSource::a2_scatter && fatigue::law_entry(d.fatigue.law).scatter_band;
   e.engines = 1 + (life ? (band ? 3 : 1) : 0);
 
-  const bool bilinear = d.fatigue.law == fatigue::FatigueLaw::bilinear;
+  const bool bilinear = fatigue::law_entry(d.fatigue.law).damage_based;
   e.model_bytes = finite_or_huge(
       e.nodes * (kDiscretizationNodeBytes + (state_based ? kStateBasedNodeBytes : 0.0)) +
       e.bonds * (kDiscretizationBondBytes + kModelBondBytes +

@@ -175,7 +175,6 @@ int main(int argc, char** argv) {
     } else {
       lcm::LCM& lcm = *connection;
       Feed feed(store);
-      using peritwin::messages::Kind;
       for (const peritwin::messages::Kind kind :
            {peritwin::messages::Kind::kState, peritwin::messages::Kind::kStatus,
             peritwin::messages::Kind::kReject, peritwin::messages::Kind::kField,

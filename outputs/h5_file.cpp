@@ -602,11 +602,4 @@ void File::close() {
   }
 }
 
-bool is_hdf5(const std::filesystem::path& path) {
-  quiet();
-  const htri_t r = H5Fis_hdf5(path.string().c_str());
-  if (r < 0) H5Eclear2(H5E_DEFAULT);
-  return r > 0;
-}
-
 }  // namespace peritwin::outputs::h5

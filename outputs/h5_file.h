@@ -255,7 +255,4 @@ class File : public Group {
   [[nodiscard]] bool is_open() const noexcept { return handle_.valid(); }
 };
 
-/// True when `path` is an HDF5 file (signature check only).
-bool is_hdf5(const std::filesystem::path& path);
-
 }  // namespace peritwin::outputs::h5

@@ -15,8 +15,7 @@ What is checked, for every .h/.cpp under a listed folder:
     `peritwin_msgs/`, which count as messages/) that the including folder may include;
   - each `namespace X {` opened at the top level is the folder's namespace or one inside it
     (anonymous namespaces and std are allowed);
-  - no header outside messages/ says `using messages::X;` (a name is spelled with its owner's
-    namespace; a .cpp's own using-declarations are its business).
+  - no `using messages::X;` outside messages/ (a name is spelled with its owner's namespace).
 """
 import os
 import re
@@ -94,7 +93,7 @@ def check_file(path, text, rooms, errors):
             if ns != "std" and not own and not nested:
                 errors.append(f"{path}:{n}: namespace {ns} in {room}/, whose namespace is "
                               f"{info['namespace']}")
-        if room != "messages" and path.endswith(".h") and re.match(r"\s*using\s+(peritwin::)?messages::\w+\s*;", line):
+        if room != "messages" and re.match(r"\s*using\s+(peritwin::)?messages::\w+\s*;", line):
             errors.append(f"{path}:{n}: re-exports a name of messages/ (spell it messages::...)")
 
 

@@ -7,6 +7,7 @@
 #include <limits>
 #include <utility>
 
+#include "solver/fatigue/law_registry.h"
 #include "solver/fatigue/laws/strain_range.h"
 #include "solver/model/pd_model.h"
 
@@ -359,7 +360,7 @@ LifeEstimate estimate_life_coarse(const DetailModel& fine, double dx,
     return run_to_end(*engine, spectrum, ended, cancel);
   };
   const bool band = life.band == config::BandSource::a2_scatter &&
-                    fine.settings().law != peritwin::fatigue::FatigueLaw::kinetic;
+                    peritwin::fatigue::law_entry(fine.settings().law).scatter_band;
   if (!band) {
     const double c = simulate(1.0);
     rep.simulate_s = seconds_since(t0);

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <future>
 
+#include "solver/fatigue/law_registry.h"
 #include "twin/coarse_life.h"
 
 namespace peritwin::twin {
@@ -93,7 +94,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 bool can_fork(const DetailModel& model) {
-  return model.settings().law != peritwin::fatigue::FatigueLaw::bilinear;
+  return !peritwin::fatigue::law_entry(model.settings().law).damage_based;
 }
 
 double run_to_end(fatigue::FatigueEngine& engine, const std::vector<core::LoadBlock>& spectrum,
@@ -194,7 +195,7 @@ LifeEstimate estimate_life(const DetailModel& model, const fatigue::EngineState&
   out.forked = live != nullptr && can_fork(model);
   const config::LifeConfig& life = model.config().life;
   const bool band = life.band == config::BandSource::a2_scatter &&
-                    model.settings().law != peritwin::fatigue::FatigueLaw::kinetic;
+                    peritwin::fatigue::law_entry(model.settings().law).scatter_band;
   std::vector<SimulationStats> local(3);
   std::vector<SimulationStats>& st = stats != nullptr ? *stats : local;
   st.assign(band ? 3 : 1, SimulationStats{});

@@ -106,7 +106,6 @@ class Twin {
   [[nodiscard]] double first_break_load() const { return first_break_load_; }
 
   [[nodiscard]] const DetailModel& model() const { return *model_; }
-  [[nodiscard]] const std::shared_ptr<const DetailModel>& model_ptr() const { return model_; }
   [[nodiscard]] const std::string& detail_id() const { return model_->config().id; }
   [[nodiscard]] const Options& options() const { return options_; }
   /// Batches applied since the virgin state, all sources together (0 = virgin).

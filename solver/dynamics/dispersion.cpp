@@ -42,9 +42,4 @@ double dispersion_group_speed(const KernelChoice& kernel, double wave_speed, int
   return d / (2.0 * dispersion_omega(kernel, wave_speed, m, dx, k, volume_correction));
 }
 
-double finite_difference_omega(double wave_speed, double dx, double courant, double k) {
-  const double dt = courant * dx / wave_speed;                    // Eq. (52)
-  return 2.0 / dt * std::asin(courant * std::sin(0.5 * k * dx));  // Eq. (51)
-}
-
 }  // namespace peritwin::dynamics

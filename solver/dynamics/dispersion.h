@@ -19,7 +19,4 @@ double dispersion_omega(const KernelChoice& kernel, double wave_speed, int m, do
 double dispersion_group_speed(const KernelChoice& kernel, double wave_speed, int m, double dx,
                               double k, bool volume_correction);
 
-/// 001 Eq. (51)-(52): ω = (2/Δt) asin(C sin(kΔx/2)), C = vΔt/Δx.
-double finite_difference_omega(double wave_speed, double dx, double courant, double k);
-
 }  // namespace peritwin::dynamics

@@ -117,7 +117,6 @@ class ExplicitDynamics {
   /// √2 × stable_time_step(): the von Neumann bound √(2ρ / Σ V_j C_ij) of the paper's source
   /// (Silling & Askari 2005), sufficient for stability (see the .cpp); informational.
   [[nodiscard]] double von_neumann_time_step() const;
-  [[nodiscard]] double bond_stiffness_c0() const { return c0_; }
 
   /// u0, v0 interleaved [x0, y0, x1, y1, ...] (size 2·nodes). Sets step 0; u_{−1} from the Taylor
   /// start u_{−1} = u0 − Δt v0 + ½Δt² a0, which makes Eq. (41)'s first step u1 = u0 + Δt v0 + ½Δt²
@@ -163,7 +162,6 @@ class ExplicitDynamics {
   template <bool Breaking>
   void accelerate(int lo, int hi, const double* u, double load, double* a);
   void advance_range(int thread, int lo, int hi);
-  void run_steps(int steps);
 
   const mesh::Discretization* disc_ = nullptr;
   DynamicsSetup setup_;

@@ -10,10 +10,38 @@ namespace {
 
 // The energy law (000 Sec. 4) takes the strain law's A_i, m_i (000 Eq. 44-46), so its reader.
 constexpr std::array kLaws = {
-    LawEntry{"strain_range", FatigueLaw::strain_range, &read_strain_range, true},  // 000 Eq. 14-20
-    LawEntry{"energy", FatigueLaw::energy, &read_strain_range, true},              // 000 Eq. 30-46
-    LawEntry{"bilinear", FatigueLaw::bilinear, &read_bilinear, false},             // 003 Eq. 27-50
-    LawEntry{"kinetic", FatigueLaw::kinetic, &read_kinetic, true},                 // 004 Eq. 12-16
+    // 000 Eq. 14-20
+    LawEntry{.name = "strain_range",
+             .law = FatigueLaw::strain_range,
+             .read = &read_strain_range,
+             .static_failure = true,
+             .damage_based = false,
+             .calibrated_a2 = true,
+             .scatter_band = true},
+    // 000 Eq. 30-46
+    LawEntry{.name = "energy",
+             .law = FatigueLaw::energy,
+             .read = &read_strain_range,
+             .static_failure = true,
+             .damage_based = false,
+             .calibrated_a2 = true,
+             .scatter_band = true},
+    // 003 Eq. 27-50
+    LawEntry{.name = "bilinear",
+             .law = FatigueLaw::bilinear,
+             .read = &read_bilinear,
+             .static_failure = false,
+             .damage_based = true,
+             .calibrated_a2 = false,
+             .scatter_band = true},
+    // 004 Eq. 12-16
+    LawEntry{.name = "kinetic",
+             .law = FatigueLaw::kinetic,
+             .read = &read_kinetic,
+             .static_failure = true,
+             .damage_based = false,
+             .calibrated_a2 = false,
+             .scatter_band = false},
 };
 
 constexpr std::array kStaticFailures = {

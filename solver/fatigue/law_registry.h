@@ -19,6 +19,15 @@ struct LawEntry {
   /// Whether a phase III criterion (000 Eq. 7-12, `static_failure`) applies: false for the
   /// bilinear law (003), whose sc plays that role.
   bool static_failure;
+  /// Bonds carry a damage variable (003 Eq. 13-15) instead of a remaining life: the engine's
+  /// damage mode, bond-based models only, softening bonds (PCG), no fork of the live engine.
+  bool damage_based;
+  /// The law has the phase-II coefficient A2 that 000 App. A calibrates (000 Eq. 27), so a coarser
+  /// estimate model can be calibrated to the detail's grid.
+  bool calibrated_a2;
+  /// Remaining life gets the A2-scatter band (three simulations); not for the kinetic law (004),
+  /// whose constants are physical (U, ω0), not a fitted A2.
+  bool scatter_band;
 };
 
 struct StaticFailureEntry {

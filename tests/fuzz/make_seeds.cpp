@@ -21,7 +21,6 @@
 
 namespace fs = std::filesystem;
 using peritwin::core::LoadBlock;
-using peritwin::messages::Batch;
 
 namespace {
 
@@ -82,7 +81,6 @@ std::vector<std::uint8_t> encode_message(const Message& m) {
 
 /// load_samples_t seeds: evenly spaced, with times and angles, signed-looking, invalid values.
 void samples_seeds(const fs::path& dir) {
-  using peritwin::messages::Samples;
   fs::create_directories(dir);
   const peritwin::messages::Samples even{
       "b1-ct", "gauge-1", 1, 12.5, 1e-4, {400.0, 4000.0, 400.0, 4000.0}, {}, {}};
