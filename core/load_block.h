@@ -41,6 +41,11 @@ inline constexpr double kMinLoadRatio = -10.0;
 /// Most cycles in one block and in one batch (Σ count): 2^50 ≈ 1.1e15, far beyond any structure's
 /// life, and 2^13 batches of it still fit in int64.
 inline constexpr std::int64_t kMaxBatchCycles = std::int64_t{1} << 50;
+/// Most cycles a detail's life may total (its running count): 2^53 ≈ 9.0e15, so that every count
+/// is exact as a double (the life arithmetic, JSON numbers on the dashboard) and the running total
+/// plus one batch (<= 2^50) cannot wrap int64. A batch that would take the total past it is
+/// INVALID (twin::Twin::check_limits), naming the cap.
+inline constexpr std::int64_t kMaxTotalCycles = std::int64_t{1} << 53;
 
 /// OK, or the first rule the block breaks: field "p_max", "r", "alpha" or "count" and the reason.
 Status check_load_block(const LoadBlock& block);

@@ -158,6 +158,7 @@ DetailOutputs::DetailOutputs(const twin::Twin& twin) : id_(twin.detail_id()) {
       std::filesystem::rename(h5_path_, aside);
       writer_ = open_writer(h5_path_, twin);
     }
+    keep_an_earlier_history(twin);
     writer_->rewind_to(twin.state_seq() - 1);
     for (const auto& s : writer_->snapshots()) last_snapshot_seq_ = s.state_seq;
     for (const auto& row : writer_->read_rows()) history_.add(row);
@@ -170,6 +171,29 @@ DetailOutputs::DetailOutputs(const twin::Twin& twin) : id_(twin.detail_id()) {
   } catch (const std::exception& e) {
     disable("cannot open the results file", e);
   }
+}
+
+void DetailOutputs::keep_an_earlier_history(const twin::Twin& twin) {
+  // A start from the initial state (no checkpoint: a fresh run, or a restart before the first
+  // checkpoint) over a file with later states begins a new history. rewind_to() would cut the old
+  // one to its first row without a word: keep it whole under the first free <id>.run<N>.h5.
+  if (twin.state_seq() != 0) return;  // a resume: the rows after the checkpoint are re-applied
+  std::int64_t last = 0;
+  for (const auto& row : writer_->read_rows()) last = std::max(last, row.state_seq);
+  if (last == 0) return;
+  const std::uint64_t rows = writer_->rows();
+  writer_.reset();
+  std::filesystem::path kept;
+  for (int n = 1;; ++n) {
+    kept = dir_ / (id_ + ".run" + std::to_string(n) + ".h5");
+    if (!std::filesystem::exists(kept)) break;
+  }
+  std::filesystem::rename(h5_path_, kept);
+  spdlog::warn(
+      "[{}] {} held an earlier run's history ({} rows, to state_seq {}); this run starts "
+      "from the initial state, so that file is kept as {} and a new one begins",
+      id_, h5_path_.string(), rows, last, kept.string());
+  writer_ = open_writer(h5_path_, twin);
 }
 
 void DetailOutputs::disable(const char* what, const std::exception& e) {

@@ -53,6 +53,8 @@ class DetailOutputs {
  private:
   void snapshot(const twin::Twin& twin);
   void pictures(const twin::Twin& twin);
+  /// At the initial state over a file with later states: keeps that file as <id>.run<N>.h5.
+  void keep_an_earlier_history(const twin::Twin& twin);
   void disable(const char* what, const std::exception& e);
 
   std::filesystem::path dir_;

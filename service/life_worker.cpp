@@ -3,10 +3,18 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace peritwin::service {
 
 void log_life_estimate(const std::string& detail_id, const twin::LifeEstimate& e) {
+  if (std::isnan(e.wall_s)) {  // set at end of life, not simulated (twin::Twin::apply)
+    spdlog::info(
+        "[{}] end of life at cycle {} (state_seq {}): remaining life 0 cycles, no "
+        "estimate simulated",
+        detail_id, e.start_cycles, e.state_seq);
+    return;
+  }
   // Every estimate's cost and the state it started from (issue 18 item 3).
   spdlog::info(
       "[{}] life estimate at state_seq {} (cycle {}): {:.0f} cycles [{:.0f}, {:.0f}] in {:.2f} s "

@@ -83,6 +83,17 @@ messages::Outcome Twin::check_limits(const messages::Batch& batch) const {
                                        "peak bond stretch reaches the critical stretch)")};
     }
   }
+  // The running total stays <= kMaxTotalCycles: check_batch capped this batch's sum at 2^50, so
+  // the sum below cannot wrap.
+  std::int64_t cycles = 0;
+  for (const core::LoadBlock& b : batch.blocks) cycles += b.count;
+  if (const std::int64_t total = engine_->total_cycles(); cycles > core::kMaxTotalCycles - total) {
+    return {messages::Verdict::invalid, "blocks",
+            "the batch's " + std::to_string(cycles) +
+                " cycles would take the detail's total from " + std::to_string(total) +
+                " past the cap of " + std::to_string(core::kMaxTotalCycles) +
+                " cycles (2^53, core::kMaxTotalCycles: counts stay exact as doubles)"};
+  }
   const auto max_sources = static_cast<std::size_t>(model_->config().limits.max_sources);
   if (!applied_.contains(batch.source_id) && applied_.size() >= max_sources) {
     return {messages::Verdict::limit, "source_id",
@@ -167,7 +178,10 @@ messages::Outcome Twin::apply(const messages::Batch& batch) {
   ++counters_.applied;
   refresh();
   if (failure_ != Failure::none) {
-    set_life({0.0, 0.0, 0.0, state_seq_, last_seq_, last_source_});
+    // No simulation: the remaining life is 0. start_cycles (a diagnostic) says where it ended.
+    LifeEstimate ended{0.0, 0.0, 0.0, state_seq_, last_seq_, last_source_};
+    ended.start_cycles = engine_->total_cycles();
+    set_life(ended);
   } else if (options_.life == LifeMode::synchronous) {
     catch_up_life();
   }

@@ -847,7 +847,14 @@ bool FatigueEngine::import_state(const EngineState& s) {
   state_.dose[0] = s.dose[0];
   state_.dose[1] = s.dose[1];
   state_.rates_valid = false;
-  if (s.rates_valid && !state_.failed) compute_rates(s.rate_key);
+  if (s.rates_valid && !state_.failed) {
+    compute_rates(s.rate_key);
+  } else {
+    // Rates not valid (a failed engine, or invalidated by the last breaks): the key of the last
+    // rates is still part of the state and its hash (it was at end of life: a restart after end
+    // of life hashed differently, issue 30).
+    state_.rate_key = s.rate_key;
+  }
   return true;
 }
 

@@ -310,6 +310,40 @@ std::pair<png_uint_32, png_uint_32> png_size(const fs::path& p) {
   return out;
 }
 
+TEST_F(ResultsFieldsTest, AFreshStartKeepsAnEarlierRunsHistoryUnderANewName) {
+  // A run of 3 states, then a new run from the initial state (no checkpoint) in the same
+  // directory: the old file is kept whole as b1-ct.run1.h5 (4 rows, states 0-3), the new one
+  // holds the new run's row only; a third start over a file of the initial state alone has
+  // nothing to keep.
+  config::DetailConfig config = b1_config("every_batches = 0");
+  config.output.directory = dir_.string();
+  config.output.png = false;
+  const auto model = b1_model(config);
+  {
+    auto twin = make_twin(model);
+    outputs::DetailOutputs outputs(*twin);
+    for (std::int64_t seq = 1; seq <= 3; ++seq) {
+      ASSERT_TRUE(twin->apply(batch(seq, {{4000.0, 0.1, 0.0, 1000}})).applied());
+      outputs.record(*twin);
+    }
+    outputs.finish(*twin);
+  }
+  auto seqs = [](const fs::path& h5) {
+    std::vector<std::int64_t> out;
+    for (const auto& row : outputs::read_time_series(h5)) out.push_back(row.state_seq);
+    return out;
+  };
+  ASSERT_EQ(seqs(dir_ / "b1-ct.h5"), (std::vector<std::int64_t>{0, 1, 2, 3}));
+  for (int run = 1; run <= 2; ++run) {
+    auto twin = make_twin(model);
+    outputs::DetailOutputs outputs(*twin);
+    outputs.finish(*twin);
+  }
+  EXPECT_EQ(seqs(dir_ / "b1-ct.run1.h5"), (std::vector<std::int64_t>{0, 1, 2, 3}));
+  EXPECT_FALSE(fs::exists(dir_ / "b1-ct.run2.h5"));
+  EXPECT_EQ(seqs(dir_ / "b1-ct.h5"), (std::vector<std::int64_t>{0}));
+}
+
 TEST_F(ResultsFieldsTest, ResultsDirectoryIsWhatParaViewAndPeopleRead) {
   config::DetailConfig config = b1_config("every_batches = 2");
   config.output.directory = dir_.string();

@@ -209,6 +209,29 @@ TEST_F(TwinTest, LoadsAboveMaxPAreInvalidAndLeaveTheModelUntouched) {
   EXPECT_TRUE(bounded->apply(batch(1, {{5000.0, 0.1, 0.0, 1}})).applied());
 }
 
+TEST_F(TwinTest, TheRunningTotalOfCyclesStopsAtItsCapInsteadOfWrapping) {
+  // 8,193 batches of 2^50 cycles once wrapped the int64 total to a negative count. At 0.01 N
+  // (4e5 times below B1's 4 kN, whose life is ~47,500 cycles) no bond fails in 2^53 cycles, so
+  // the cap is what refuses: 8 batches of 2^50 reach exactly 2^53 = core::kMaxTotalCycles, the
+  // 9th (even of one cycle) is INVALID with the cap in its reason and changes nothing.
+  auto twin = make_twin(model_);
+  const core::LoadBlock tiny{0.01, 0.1, 0.0, core::kMaxBatchCycles};
+  for (std::int64_t seq = 1; seq <= 8; ++seq) {
+    const messages::Outcome o = twin->apply(batch(seq, {tiny}));
+    ASSERT_TRUE(o.applied()) << seq << ": " << o.why;
+  }
+  ASSERT_EQ(twin->engine().total_cycles(), core::kMaxTotalCycles);
+  ASSERT_EQ(twin->engine().broken_bonds(), make_twin(model_)->engine().broken_bonds());
+  const auto hash = twin->state_hash();
+  const messages::Outcome o = twin->apply(batch(9, {{0.01, 0.1, 0.0, 1}}));
+  EXPECT_EQ(o.verdict, messages::Verdict::invalid);
+  EXPECT_EQ(o.what, "blocks");
+  EXPECT_NE(o.why.find("9007199254740992"), std::string::npos) << o.why;
+  EXPECT_EQ(twin->state_hash(), hash);
+  EXPECT_EQ(twin->engine().total_cycles(), core::kMaxTotalCycles);
+  EXPECT_EQ(twin->applied_seq("test"), 8);
+}
+
 TEST_F(TwinTest, ANewSourceBeyondMaxSourcesIsRefusedAndTheKnownOnesGoOn) {
   auto config = b1_config("every_batches = 0", {{"max_sources = 16", "max_sources = 2"}});
   auto twin = make_twin(b1_model(config));
@@ -359,6 +382,32 @@ TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
   EXPECT_EQ(resumed->engine().break_events().size(), straight->engine().break_events().size());
   EXPECT_EQ(twin::state_message(*resumed, 0).state_hash,
             twin::state_message(*straight, 0).state_hash);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_F(TwinTest, CheckpointResumeAtEndOfLifeIsBitIdentical) {
+  // One batch past B1's life (~47,500 cycles at 4 kN), checkpointed at end of life and resumed:
+  // the same state and engine hashes, the same published numbers, and still ended.
+  auto ended = make_twin(model_);
+  ASSERT_TRUE(ended->apply(batch(1, {{4000, 0.1, 0, 200'000}})).applied());
+  ASSERT_NE(ended->failure(), twin::Failure::none);
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("peritwin_twin_eol_ckpt_test_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto path = outputs::checkpoint_path(dir, "checkpoint", 1);
+  outputs::write_checkpoint(path, ended->to_checkpoint());
+  auto resumed = make_twin(model_);
+  const core::Status restored = resumed->restore(outputs::read_checkpoint(path));
+  ASSERT_TRUE(restored.ok()) << core::message_of(restored);
+  EXPECT_EQ(resumed->failure(), ended->failure());
+  EXPECT_EQ(resumed->engine().total_cycles(), ended->engine().total_cycles());
+  EXPECT_EQ(resumed->engine().state_hash(), ended->engine().state_hash());
+  EXPECT_EQ(resumed->state_hash(), ended->state_hash());
+  const auto a = twin::state_message(*ended, 0);
+  const auto b = twin::state_message(*resumed, 0);
+  EXPECT_EQ(b.state_hash, a.state_hash);
+  EXPECT_EQ(b.engine_hash, a.engine_hash);
   std::filesystem::remove_all(dir);
 }
 
