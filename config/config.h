@@ -51,7 +51,8 @@
 //                        shared equally by the selected nodes
 //   [[detail.support]] R name "", exactly one of point | region, fix_x true, fix_y true (not
 //   (at least one)       both false)
-//   [detail.output]      directory "results/<id>" (relative to the daemon's working directory),
+//   [detail.output]      directory "results/<id>" (relative to the config file's directory; made
+//                        absolute, as [auth] key_file),
 //                        field_every_batches 10 (>= 0, 0 = never), png false
 //   [detail.life]        criterion "phase3" | "crack_length" | "connectivity",
 //                        critical_crack_length (m, > 0: the length along the crack path of the

@@ -689,6 +689,9 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
              });
   d.output.directory = "results/" + d.id;
   if (const auto* o = r.table("output", false)) read_output(ctx, *o, r.path_of("output"), d.output);
+  // Relative to the config file's directory, as [auth] key_file: where the results go must not
+  // depend on where the daemon was started from.
+  if (!d.output.directory.empty()) d.output.directory = resolve_path(d.output.directory, ctx.file);
   if (const auto* l = r.table("life", false)) read_life(ctx, *l, r.path_of("life"), d, d.life);
   if (const auto* k = r.table("stress_intensity", false)) {
     read_stress_intensity(ctx, *k, r.path_of("stress_intensity"), d.stress_intensity);

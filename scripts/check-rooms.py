@@ -15,7 +15,8 @@ What is checked, for every .h/.cpp under a listed folder:
     `peritwin_msgs/`, which count as messages/) that the including folder may include;
   - each `namespace X {` opened at the top level is the folder's namespace or one inside it
     (anonymous namespaces and std are allowed);
-  - no `using messages::X;` outside messages/ (a name is spelled with its owner's namespace).
+  - no `using messages::X;` outside messages/ (a name is spelled with its owner's namespace);
+  - every folder holding sources is in a room, and a room may include only rooms above it.
 """
 import os
 import re
@@ -112,8 +113,22 @@ def unlisted_sources(root, rooms):
     return errors
 
 
+def table_order(rooms):
+    """Dependencies point one way: every folder a room may include is a room above it."""
+    errors = []
+    order = list(rooms)
+    for i, room in enumerate(order):
+        for m in sorted(rooms[room]["may"] - {"*"}):
+            if m not in rooms:
+                errors.append(f"docs/architecture.md: {room}/ may include {m}/, which is no room")
+            elif order.index(m) >= i:
+                errors.append(f"docs/architecture.md: {room}/ may include {m}/, a room below it "
+                              "(dependencies point up the table)")
+    return errors
+
+
 def check_tree(root, rooms):
-    errors = unlisted_sources(root, rooms)
+    errors = table_order(rooms) + unlisted_sources(root, rooms)
     for folder in sorted(rooms):
         base = os.path.join(root, folder)
         if not os.path.isdir(base):
@@ -149,13 +164,18 @@ def self_test(root):
         if not any(expect in e for e in errors):
             print(f"self-test: {path} with {text.strip()!r} was not refused ({errors})")
             ok = False
+    backwards = dict(rooms)
+    backwards["core"] = {"namespace": "peritwin::core", "may": {"twin"}}
+    if not any("a room below it" in e for e in table_order(backwards)):
+        print("self-test: core/ allowed to include twin/ (below it) was not refused")
+        ok = False
     allowed = []
     check_file("twin/x.h", '#include "messages/batch.h"\nnamespace peritwin::twin {\n'
                'namespace detail {\n}\n}\n', rooms, allowed)
     if allowed:
         print(f"self-test: an allowed include was refused: {allowed}")
         ok = False
-    print("self-test: " + ("6 forbidden cases refused, 1 allowed case accepted" if ok else "FAILED"))
+    print("self-test: " + ("7 forbidden cases refused, 1 allowed case accepted" if ok else "FAILED"))
     return 0 if ok else 1
 
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <numbers>
 #include <string>
 #include <string_view>
@@ -126,7 +127,8 @@ TEST(Config, PlateParsesWithDefaults) {
   EXPECT_EQ(d.loads[0].where.path, "detail[0].load[0]");
   EXPECT_TRUE(d.supports[0].fix_x);
   EXPECT_TRUE(d.supports[0].fix_y);
-  EXPECT_EQ(d.output.directory, "results/plate");
+  // Relative to the config file's directory ("plate.toml": the working directory), made absolute.
+  EXPECT_EQ(d.output.directory, (std::filesystem::current_path() / "results/plate").string());
   EXPECT_EQ(d.output.field_every_batches, 10);
   EXPECT_FALSE(d.output.png);
   EXPECT_EQ(d.life.criterion, config::LifeCriterion::phase3);
@@ -212,7 +214,9 @@ TEST(Config, B1Example) {
     EXPECT_EQ(xy(s.target.point), XY(0.0625, k == 0 ? 0.0005 : -0.0005));
     EXPECT_TRUE(s.fix_x && s.fix_y);
   }
-  EXPECT_EQ(d.output.directory, "results/b1-ct");
+  EXPECT_EQ(std::filesystem::path(d.output.directory).filename(), "b1-ct");
+  EXPECT_EQ(std::filesystem::path(d.output.directory).parent_path().filename(), "results");
+  EXPECT_TRUE(std::filesystem::path(d.output.directory).is_absolute());
   EXPECT_TRUE(d.output.png);
   EXPECT_EQ(d.life.criterion, config::LifeCriterion::crack_length);
   EXPECT_EQ(d.life.critical_crack_length, 0.008);
