@@ -426,12 +426,14 @@ class Stream {
   std::string input_error_;
   bool line_too_long_ = false;  ///< read_input() met a line beyond kMaxLineBytes
   std::string first_bad_;       ///< the first line skipped, for the no-usable-line error
+  double load_bound_ = 0.0;     ///< sample_load_bound(), or in-process the twin's max_p
   int behind_ = 0;              ///< samples in a row refused as not after last_time ...
   double behind_last_ = 0.0;    ///< ... the last of them
   LineInput lines_in_;
 };
 
 std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
+  load_bound_ = stream::sample_load_bound(detail_);
   std::vector<messages::Batch> resend;
   if (!o_.state_file.empty() && std::filesystem::exists(o_.state_file)) {
     if (auto rc = restore_state(o_, detail_, in_.seekable, pipeline_, resend)) return rc;
@@ -461,6 +463,9 @@ std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
     }
     local_ = std::move(*created);
     printer_.print(local_->state());
+    // The model is built here: its max_p (configured or derived) bounds the samples, as the
+    // twin bounds the blocks.
+    if (std::isfinite(local_->twin().max_p())) load_bound_ = local_->twin().max_p();
     if (!pipeline_) pipeline_.emplace(detail_, o_.source_id, o_.batching, 1);
   } else if (auto rc = set_up_sender(std::move(auth), std::move(resend))) {
     return rc;
@@ -553,7 +558,7 @@ void Stream::take(double t, double p, double alpha) {
   const double now_s =
       std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
   const double load = pipe.load(p);
-  const double bound = stream::sample_load_bound(detail_);
+  const double bound = load_bound_;
   const bool behind = std::isfinite(t) && pipe.last_time && !(t > *pipe.last_time);
   std::ostringstream why;
   if (!std::isfinite(t)) {
@@ -564,7 +569,7 @@ void Stream::take(double t, double p, double alpha) {
     why << "time not after " << *pipe.last_time << " s";
   } else if (std::isfinite(load) && (load > bound || load < -10.0 * bound)) {
     why << "load P = " << load << " N is outside [" << -10.0 * bound << ", " << bound << "] N"
-        << (detail_.limits.max_p ? " ([detail.limits] max_p)" : " (absurd for any detail)");
+        << (local_ || detail_.limits.max_p ? " (the detail's max_p)" : " (absurd for any detail)");
   }
   if (why.tellp() == 0) {
     behind_ = 0;

@@ -112,7 +112,8 @@ inline constexpr double kAbsurdLoad = 1e9;
 /// The range of a sample's load P (N) the stream takes: P <= bound and P >= -10 bound (the
 /// compressive side of a cycle at R = -10, core/load_block.h), bound being [detail.limits]
 /// max_p when configured (a sample above it would make the daemon refuse its whole batch),
-/// else kAbsurdLoad.
+/// else kAbsurdLoad. (--in-process, where the model is built, bounds by the twin's max_p,
+/// configured or derived.)
 double sample_load_bound(const config::DetailConfig& detail);
 
 /// One input line: a sample (t, measured, alpha), nothing (blank, '#' comment, the series header

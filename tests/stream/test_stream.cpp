@@ -299,12 +299,15 @@ TEST_F(Stream, ATimeGlitchAheadIsOvercome) {
       << read_file(dir_ / "stream.log");
 }
 
-// One absurd load (1e308 N) is skipped and counted, a NaN one is a dropout (nonfinite_samples):
+// One absurd load (1e308 N), and in-process one above the twin's max_p (derived from the model),
+// is skipped and counted, a NaN one is a dropout (nonfinite_samples):
 // the batch they fall in is applied, the load is the clean series' (the in-process twin refuses an
 // invalid batch, which would end the stream with exit 3).
 TEST_F(Stream, AnAbsurdSampleIsSkippedAndItsBatchApplied) {
   const std::string reference = replay_summary(kSeries);
   auto rows = series_rows();
+  ASSERT_EQ(rows[600].substr(0, 6), "30.00,");
+  rows.insert(rows.begin() + 601, "30.025,500000");  // above B1's derived max_p (~177 kN)
   ASSERT_EQ(rows[400].substr(0, 6), "20.00,");
   rows.insert(rows.begin() + 401, "20.025,nan");
   ASSERT_EQ(rows[200].substr(0, 6), "10.00,");
@@ -314,7 +317,7 @@ TEST_F(Stream, AnAbsurdSampleIsSkippedAndItsBatchApplied) {
   const auto lines = lines_to_end(*s);
   ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
   ASSERT_FALSE(lines.empty());
-  EXPECT_EQ(field(lines.back(), "bad_lines"), "1") << lines.back();
+  EXPECT_EQ(field(lines.back(), "bad_lines"), "2") << lines.back();
   EXPECT_EQ(field(lines.back(), "nonfinite_samples"), "1") << lines.back();
   EXPECT_EQ(field(lines.back(), "samples"), "1201") << lines.back();
   expect_same_load(reference, lines.back());
