@@ -730,13 +730,9 @@ int Stream::finish() {
   const loads::ResidueRule rule = o_.residue == "whole"  ? loads::ResidueRule::whole
                                   : o_.residue == "keep" ? loads::ResidueRule::keep
                                                          : loads::ResidueRule::half;
-  // The detail reached its end of life during the stream: nothing more is applied.
-  const std::string end_of_life = sender_ ? sender_->end_of_life() : std::string();
-  if (!end_of_life.empty()) {
-    std::cerr << "peritwin-stream: end of life reached, the rest of the input is not applied: "
-              << end_of_life << "\n";
-  }
-  if (error_.empty() && end_of_life.empty()) {
+  // The detail reached its end of life while the input was read: nothing more is applied.
+  const bool ended = sender_ && !sender_->end_of_life().empty();
+  if (error_.empty() && !ended) {
     pipe.finish(rule, closed_);
     if (deliver() && sender_) {
       if (!o_.state_file.empty()) save_state(sender_->unacknowledged());
@@ -748,6 +744,11 @@ int Stream::finish() {
       }
       if (error_.empty() && !o_.state_file.empty()) save_state(sender_->unacknowledged());
     }
+  }
+  // Before or after the end of input: the daemon's FAILED reason of the first batch not applied.
+  if (sender_ && !sender_->end_of_life().empty()) {
+    std::cerr << "peritwin-stream: end of life reached, the rest of the input is not applied: "
+              << sender_->end_of_life() << "\n";
   }
   if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
   if (conn_fd_ >= 0) ::close(conn_fd_);

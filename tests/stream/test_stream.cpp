@@ -614,6 +614,31 @@ TEST_F(StreamOverHub, ProducersExitThreeOnAnInvalidBatchWithTheDaemonsReason) {
   d->wait_for(kWaitS);
 }
 
+// The gauge record takes the demo detail to its end of life (state 40, cycle 39 639): the batches
+// after it are refused FAILED, which for the stream that applied the batches before is the end,
+// not an error: the daemon's reason on stderr, exit 0.
+TEST_F(StreamOverHub, TheEndOfLifeReachedByTheStreamExitsZeroWithTheReason) {
+  auto d = daemon("daemon.log");
+  auto s = stream({"--input", std::string(PERITWIN_EXAMPLES_DIR) + "/b1-gauge.csv", "--lcm-url",
+                   hub_->url(), "--give-up-after", "600"},
+                  "stream.log");
+  const auto lines = lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(field(lines.back(), "end_of_life_cycle"), "-1") << lines.back();
+  EXPECT_NE(read_file(dir_ / "stream.log")
+                .find("peritwin-stream: end of life reached, the rest of the input is not applied: "
+                      "the daemon refused batch "),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+  EXPECT_NE(read_file(dir_ / "stream.log")
+                .find("(CODE_FAILED): message: the detail reached its end-of-life criterion"),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
 // --key-file: a daemon with [auth] takes the stream's signed batches, the stream verifies every
 // STATE, and of the samples on the bus only those signed with their source's key are taken
 // (an unsigned copy of the whole series from another source is refused). The same load as the
