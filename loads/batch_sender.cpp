@@ -61,6 +61,33 @@ std::string printable(const std::string& text) {
 /// The seq of probe_applied()'s batch: never applied (it skips ahead of any source).
 constexpr std::int64_t kProbeSeq = std::numeric_limits<std::int64_t>::max();
 
+/// A reject no resend can cure: the batch itself (INVALID), the daemon's keys (AUTH), its limits
+/// (LIMIT) or the detail's end (FAILED) refuse it, and would refuse it again. DUPLICATE and GAP
+/// are the protocol at work (the STATE tells where to resend from); DECODE, WRONG_DETAIL and
+/// INTERNAL are left to the no-progress timeout as before.
+bool incurable(std::int8_t code) {
+  using R = peritwin_msgs::reject_t;
+  return code == R::CODE_INVALID || code == R::CODE_AUTH || code == R::CODE_LIMIT ||
+         code == R::CODE_FAILED;
+}
+
+/// reject_t's name of a code, for the error line.
+std::string code_name(std::int8_t code) {
+  using R = peritwin_msgs::reject_t;
+  switch (code) {
+    case R::CODE_INVALID:
+      return "CODE_INVALID";
+    case R::CODE_AUTH:
+      return "CODE_AUTH";
+    case R::CODE_LIMIT:
+      return "CODE_LIMIT";
+    case R::CODE_FAILED:
+      return "CODE_FAILED";
+    default:
+      return "code " + std::to_string(code);
+  }
+}
+
 std::int64_t checkpointed_seq(const peritwin_msgs::damage_state_t& s, const std::string& source) {
   for (std::size_t i = 0; i < s.source_ids.size() && i < s.checkpointed_seq.size(); ++i) {
     if (s.source_ids[i] == source) return s.checkpointed_seq[i];
@@ -141,14 +168,30 @@ void BatchSender::on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::strin
   }
   const auto reject = messages::decode_reject(rbuf->data, size);
   if (!reject || reject->source_id != source_id_) return;
-  if (reject->code == peritwin_msgs::reject_t::CODE_FAILED) ++rejected_failed_;
+  // Only a reject of one of this run's batches (or of the probe) says something about this run:
+  // another producer on the same source id gets its own.
+  const bool ours = reject->seq == kProbeSeq ||
+                    (first_seq_ > 0 && reject->seq >= first_seq_ && reject->seq <= last_seq_);
+  if (!ours || !incurable(reject->code)) return;
+  const std::string refused = "the daemon refused " +
+                              (reject->seq == kProbeSeq ? std::string("the probe batch")
+                                                        : "batch " + std::to_string(reject->seq)) +
+                              " of source \"" + source_id_ + "\" (" + code_name(reject->code) +
+                              "): " + printable(reject->what) + ": " + printable(reject->why);
+  if (reject->code == peritwin_msgs::reject_t::CODE_FAILED) {
+    // The daemon checks duplicates and gaps first: FAILED for seq s means it had applied s - 1.
+    // pump() decides whether this run brought the detail to its end of life (done) or found it
+    // ended (failed).
+    if (failed_seq_ == 0 || reject->seq < failed_seq_) {
+      failed_seq_ = reject->seq;
+      failed_why_ = refused;
+    }
+    return;
+  }
   if (reject->code == peritwin_msgs::reject_t::CODE_AUTH) {
-    fatal_ = "the daemon refused " +
-             (reject->seq == kProbeSeq ? std::string("the probe batch")
-                                       : "batch " + std::to_string(reject->seq)) +
-             " of source \"" + source_id_ + "\" (CODE_AUTH): " + printable(reject->what) + ": " +
-             printable(reject->why) +
-             (auth_.batch_key ? "" : " (this run signs nothing: give it --key-file)");
+    fatal_ = refused + (auth_.batch_key ? "" : " (this run signs nothing: give it --key-file)");
+  } else {
+    fatal_ = refused + " (not sent again: no resend can change that)";
   }
 }
 
@@ -241,7 +284,10 @@ void BatchSender::add(messages::Batch batch) {
     last_progress_ = std::chrono::steady_clock::now();
     resend_after_ = options_.resend_after_s;
   }
-  if (last_seq_ == 0) next_ = std::max(next_, batch.seq);
+  if (last_seq_ == 0) {
+    next_ = std::max(next_, batch.seq);
+    first_seq_ = batch.seq;
+  }
   last_seq_ = batch.seq;
   batches_.push_back(std::move(batch));
 }
@@ -277,8 +323,13 @@ BatchSender::Progress BatchSender::pump(int timeout_ms) {
   if (!receive(timeout_ms)) return Progress::failed;
   take_states();
   if (finished_ && applied_ >= 0 && applied_ >= last_seq_) return Progress::done;
-  if (last_state_ && last_state_->failure != 0 && rejected_failed_ > 0) {
-    return Progress::done;  // the detail reached its end of life: the rest is refused
+  if (failed_seq_ > 0) {
+    if (failed_seq_ - 1 >= first_seq_) {  // this run's batches reached the end of life: done
+      end_of_life_ = failed_why_;
+      return Progress::done;
+    }
+    error_ = failed_why_ + "; none of this run's batches was applied";
+    return Progress::failed;
   }
   if (!outstanding() && applied_ >= 0) {
     last_progress_ = std::chrono::steady_clock::now();

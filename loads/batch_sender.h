@@ -11,6 +11,14 @@
 // daemon reports them durable (damage_state_t.checkpointed_seq), at most kMaxRetained beyond it,
 // so that a daemon that restarts from its checkpoint gets them again.
 //
+// A reject of one of this run's batches (or of the probe) that no resend can cure ends the run
+// at once with the daemon's reason ("the daemon refused batch 1 of source "replay" (CODE_INVALID):
+// blocks[0].p_max: ..."): INVALID (the batch is out of the detail's domain, e.g. p_max above
+// max_p), AUTH and LIMIT (max_sources) fail the run; FAILED (the detail reached its end of life)
+// is done when a batch of this run was applied before it (this run brought the detail there; the
+// rest of the batches is not applied: end_of_life() says why) and fails it otherwise (the detail
+// had ended before). DUPLICATE and GAP are the protocol (resend from the STATE's applied seq).
+//
 // Authentication (ReplayAuth, messages/README.md "Authentication"): with a batch key every batch
 // is signed before it is published; with a daemon key every STATE and REJECT on the detail's
 // channels is checked on its bytes before it is decoded, and the first one that is unsigned or
@@ -89,6 +97,9 @@ class BatchSender {
   /// Seq of the last batch added (0 before any).
   [[nodiscard]] std::int64_t last_seq() const { return last_seq_; }
   [[nodiscard]] const std::string& error() const { return error_; }
+  /// After a done pump(): the daemon's FAILED reject when the detail reached its end of life
+  /// during the run (the batches from its seq on are not applied); empty otherwise.
+  [[nodiscard]] const std::string& end_of_life() const { return end_of_life_; }
   [[nodiscard]] const std::optional<peritwin_msgs::damage_state_t>& last_state() const {
     return last_state_;
   }
@@ -122,7 +133,9 @@ class BatchSender {
   std::int64_t durable_ = 0;   ///< the daemon's checkpointed seq of the source
   std::int64_t next_ = 1;      ///< next seq to publish
   bool finished_ = false;
-  std::int64_t rejected_failed_ = 0;
+  std::int64_t first_seq_ = 0;   ///< seq of the first batch added (0 before any)
+  std::int64_t failed_seq_ = 0;  ///< lowest seq of ours the daemon refused FAILED (0: none)
+  std::string failed_why_, end_of_life_;
   std::int64_t published_ = 0;
   std::int64_t rewinds_ = 0;
   std::chrono::steady_clock::time_point last_progress_, last_send_;

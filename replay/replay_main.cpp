@@ -29,9 +29,17 @@
 // line {"detail","cycles","broken_bonds","crack_length_m","remaining_cycles","end_of_life_cycle",
 // "state_hash","engine_hash"} with --json, for a series with "skipped_cycles": {"compressive",
 // "mirrored_compressive","remapped_below_floor","degenerate","nonfinite_samples"} (without
-// --json these counts are one line on stderr). Exit codes: 0 done, 2 bad usage/config/history or a
-// source that already has batches (without --continue/--resume), 3 runtime failure (LCM, no
-// progress; a tcpq hub unreachable at start or lost during the run, named in one line).
+// --json these counts are one line on stderr).
+// Before anything is sent: a history whose peak is above the config's [detail.limits] max_p is
+// refused naming the block (a units slip is likely; without max_p in the config the daemon
+// derives it from the model, and only its INVALID reject can say so).
+// A reject no resend can cure (loads/batch_sender.h) ends the run at once with the daemon's
+// reason: INVALID, AUTH, LIMIT exit 3; FAILED after a batch of this run was applied is the end of
+// life reached (the reason on stderr, exit 0), before any exit 3.
+// Exit codes (core/exit_codes.h): 0 done (kExitOk), 2 (kExitUsage) bad usage/config/history, a
+// history above the configured max_p or a source that already has batches (without
+// --continue/--resume), 3 (kExitRuntime) runtime failure (LCM, no progress, a batch the daemon
+// refuses for good; a tcpq hub unreachable at start or lost during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -163,6 +171,11 @@ std::optional<int> read_history(Options& o, const config::DetailConfig& detail,
               << " (the daemon would reject it)\n";
     return core::kExitUsage;
   }
+  if (const core::Status peak = replay::check_peak(out.blocks, detail.limits); !peak) {
+    std::cerr << "peritwin-replay: " << o.history << ": " << peak.error().message()
+              << "; nothing sent\n";
+    return core::kExitUsage;
+  }
   return std::nullopt;
 }
 
@@ -292,6 +305,10 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
     std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
               << "\n";
     return core::kExitRuntime;
+  }
+  if (!r.end_of_life.empty()) {
+    std::cerr << "peritwin-replay: end of life reached, the rest of the history is not applied: "
+              << r.end_of_life << "\n";
   }
   final_state = r.final_state;
   return core::kExitOk;

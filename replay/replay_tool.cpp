@@ -1,5 +1,6 @@
 #include "replay/replay_tool.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -91,6 +92,25 @@ core::Status check_blocks(std::span<const core::LoadBlock> blocks) {
   return core::check_load_blocks(blocks, std::numeric_limits<std::int64_t>::max());
 }
 
+core::Status check_peak(std::span<const core::LoadBlock> blocks,
+                        const config::LimitsConfig& limits) {
+  if (!limits.max_p) return {};
+  const double max_p = *limits.max_p;
+  std::size_t first = blocks.size();
+  double peak = 0.0;
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    peak = std::max(peak, blocks[i].p_max);
+    if (first == blocks.size() && blocks[i].p_max > max_p) first = i;
+  }
+  if (first == blocks.size()) return {};
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "p_max = %g N is above the detail's [detail.limits] max_p = %g N (the history's "
+                "peak is %g N, %.3g x max_p: a load in the wrong unit?)",
+                blocks[first].p_max, max_p, peak, peak / max_p);
+  return core::Error{"blocks[" + std::to_string(first) + "].p_max", text};
+}
+
 LcmReplayer::LcmReplayer(lcm::LCM& lcm, std::vector<messages::Batch> batches,
                          loads::ReplayOptions options, loads::ReplayAuth auth)
     : sender_(lcm, batches.empty() ? std::string() : batches.front().detail_id,
@@ -112,6 +132,7 @@ ReplayResult LcmReplayer::run(
     const auto progress = sender_.pump(20);
     if (progress == loads::BatchSender::Progress::done) {
       result.ok = true;
+      result.end_of_life = sender_.end_of_life();
       break;
     }
     if (progress == loads::BatchSender::Progress::failed) {

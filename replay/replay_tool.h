@@ -61,9 +61,19 @@ core::Expected<HistoryBlocks> read_lcm_log(std::istream& in, const std::string& 
 /// invalid block as "blocks[i].<field>".
 core::Status check_blocks(std::span<const core::LoadBlock> blocks);
 
+/// The history's peak against the detail's [detail.limits] max_p, when the config sets it (the
+/// default max_p is derived from the model, which the tool does not build: then OK): the first
+/// block above it named as "blocks[i].p_max", with the history's peak (a units slip is likely:
+/// the daemon would refuse the batch INVALID).
+core::Status check_peak(std::span<const core::LoadBlock> blocks,
+                        const config::LimitsConfig& limits);
+
 struct ReplayResult {
   bool ok = false;
-  std::string error;
+  std::string error;  ///< when !ok: why (a reject no resend cures names the daemon's reason)
+  /// ok, but the detail reached its end of life during the run: the daemon's FAILED reject of
+  /// the first batch not applied (BatchSender::end_of_life()).
+  std::string end_of_life;
   std::optional<peritwin_msgs::damage_state_t> final_state;
   std::int64_t published = 0;  ///< batch messages sent (resends included)
   std::int64_t rewinds = 0;    ///< times sending restarted at applied + 1

@@ -13,6 +13,11 @@
 // takes one connection at a time (a closed connection is not the end: the next one continues the
 // stream). lcm: load_samples_t on PERITWIN_<DETAIL>_SAMPLES (each (source, seq) once, gaps
 // reported). A line that is no sample is skipped and counted (bad_lines), the first ones named.
+// Bounds (stream/stream_tool.h): a line longer than kMaxLineBytes (4 KiB) ends the input with an
+// error; a sample whose time is not finite, beyond the clock (kMaxFutureSeconds) or not after the
+// previous one, or whose load is outside sample_load_bound(), is skipped and counted (bad_lines),
+// never taken, so it poisons neither later samples nor its batch (after kRebaseAfter samples in
+// a row behind an outlying time the stream goes on from them).
 // Each sample: P = scale * measured + offset, then RainflowCounter (gate) -> CycleBlocks
 // (alpha_bin, compressed_bonds_fatigue) -> batches closed at --batch-cycles (1000) cycles,
 // --batch-blocks (1024) blocks, or --batch-seconds of sample time (0: off).
@@ -33,8 +38,14 @@
 // file that is corrupt: exit 2 naming it and why.
 // Output: with --json one JSON line per STATE, then the summary (twin::summary_json) with
 // "stream": {samples, nonfinite_samples, bad_lines, reversals, cycles, batches, lost_samples} and
-// "skipped_cycles" as peritwin-replay. Exit codes: 0 done, 2 bad usage/config/state file,
-// 3 runtime failure (LCM, no progress, a state file that cannot be written).
+// "skipped_cycles" as peritwin-replay (also after an input error).
+// A reject no resend can cure ends the stream at once with the daemon's reason, as in
+// peritwin-replay (loads/batch_sender.h); FAILED after a batch of the stream was applied is the
+// detail's end of life: the rest of the input is not read, exit 0.
+// Exit codes (core/exit_codes.h): 0 done (kExitOk), 2 (kExitUsage) bad usage/config/state file or
+// input that is no sample stream (a line over 4 KiB, lines without one usable sample; what came
+// before is delivered first), 3 (kExitRuntime) runtime failure (LCM, no progress, a batch the
+// daemon refuses for good, a state file that cannot be written).
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -45,6 +56,8 @@
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
@@ -53,6 +66,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <sstream>
 
 #include "core/cli_checks.h"
 #include "core/exit_codes.h"
@@ -72,31 +86,37 @@ using core::kExitOk;
 using core::kExitRuntime;
 using core::kExitUsage;
 
-/// Lines from a descriptor as they arrive (stdin, a FILE, a FIFO, a TCP connection).
+/// Lines from a descriptor as they arrive (stdin, a FILE, a FIFO, a TCP connection), each at most
+/// stream::kMaxLineBytes long: a longer one is not read on (its memory stays bounded).
 class LineInput {
  public:
-  /// Reads what is available within timeout_ms; complete lines go to `lines`. False at EOF.
-  bool read(int fd, int timeout_ms, std::vector<std::string>& lines) {
+  enum class Read { open, eof, too_long };
+  /// Reads what is available within timeout_ms; complete lines go to `lines` (those before an
+  /// over-long one too).
+  Read read(int fd, int timeout_ms, std::vector<std::string>& lines) {
     pollfd p{fd, POLLIN, 0};
     const int ready = ::poll(&p, 1, timeout_ms);
-    if (ready <= 0) return true;
+    if (ready <= 0) return Read::open;
     char buf[65536];
     const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0) return errno == EINTR || errno == EAGAIN;
+    if (n < 0) return errno == EINTR || errno == EAGAIN ? Read::open : Read::eof;
     if (n == 0) {
       if (!partial_.empty()) lines.push_back(std::move(partial_));
       partial_.clear();
-      return false;
+      return Read::eof;
     }
     for (ssize_t i = 0; i < n; ++i) {
       if (buf[i] == '\n') {
         lines.push_back(std::move(partial_));
         partial_.clear();
+      } else if (partial_.size() >= stream::kMaxLineBytes) {
+        partial_.clear();
+        return Read::too_long;
       } else {
         partial_ += buf[i];
       }
     }
-    return true;
+    return Read::open;
   }
 
  private:
@@ -378,6 +398,9 @@ class Stream {
   bool deliver();
   void take(double t, double p, double alpha);
   void take_line(const std::string& line);
+  [[nodiscard]] std::string input_name() const {
+    return in_.kind == Input::Kind::tcp ? o_.input : o_.input == "-" ? "stdin" : o_.input;
+  }
   bool read_input(bool backlog, std::vector<std::string>& lines);
   void save_state(const std::vector<messages::Batch>& pending) {
     if (const core::Status saved = stream::save_state(o_.state_file, *pipeline_, pending); !saved) {
@@ -398,10 +421,19 @@ class Stream {
   std::uint64_t skip_lines_ = 0, bad_reported_ = 0;
   std::vector<messages::Batch> closed_;
   std::string error_;
+  /// The input is no sample stream (an over-long line, no usable line): exit kExitUsage after
+  /// what was taken before is delivered.
+  std::string input_error_;
+  bool line_too_long_ = false;  ///< read_input() met a line beyond kMaxLineBytes
+  std::string first_bad_;       ///< the first line skipped, for the no-usable-line error
+  double load_bound_ = 0.0;     ///< sample_load_bound(), or in-process the twin's max_p
+  int behind_ = 0;              ///< samples in a row refused as not after last_time ...
+  double behind_last_ = 0.0;    ///< ... the last of them
   LineInput lines_in_;
 };
 
 std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
+  load_bound_ = stream::sample_load_bound(detail_);
   std::vector<messages::Batch> resend;
   if (!o_.state_file.empty() && std::filesystem::exists(o_.state_file)) {
     if (auto rc = restore_state(o_, detail_, in_.seekable, pipeline_, resend)) return rc;
@@ -431,6 +463,9 @@ std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
     }
     local_ = std::move(*created);
     printer_.print(local_->state());
+    // The model is built here: its max_p (configured or derived) bounds the samples, as the
+    // twin bounds the blocks.
+    if (std::isfinite(local_->twin().max_p())) load_bound_ = local_->twin().max_p();
     if (!pipeline_) pipeline_.emplace(detail_, o_.source_id, o_.batching, 1);
   } else if (auto rc = set_up_sender(std::move(auth), std::move(resend))) {
     return rc;
@@ -518,15 +553,50 @@ bool Stream::deliver() {
 
 void Stream::take(double t, double p, double alpha) {
   stream::Pipeline& pipe = *pipeline_;
-  if (pipe.last_time && !(t > *pipe.last_time)) {
-    if (bad_reported_++ < 5) {
-      std::cerr << "peritwin-stream: sample at t = " << t << " s skipped: time not after "
-                << *pipe.last_time << " s\n";
-    }
-    ++pipe.counts.bad_lines;
+  // One bad sample is skipped and counted (bad_lines), never taken: a time beyond the clock or a
+  // load beyond the detail's range would refuse every later sample or the whole batch.
+  const double now_s =
+      std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  const double load = pipe.load(p);
+  const double bound = load_bound_;
+  const bool behind = std::isfinite(t) && pipe.last_time && !(t > *pipe.last_time);
+  std::ostringstream why;
+  if (!std::isfinite(t)) {
+    why << "the time is not a finite number";
+  } else if (t > now_s + stream::kMaxFutureSeconds) {
+    why << "time " << t << " s is more than a day after the clock's now (Unix time)";
+  } else if (behind) {
+    why << "time not after " << *pipe.last_time << " s";
+  } else if (std::isfinite(load) && (load > bound || load < -10.0 * bound)) {
+    why << "load P = " << load << " N is outside [" << -10.0 * bound << ", " << bound << "] N"
+        << (local_ || detail_.limits.max_p ? " (the detail's max_p)" : " (absurd for any detail)");
+  }
+  if (why.tellp() == 0) {
+    behind_ = 0;
+    pipe.sample(t, p, alpha, closed_);
     return;
   }
-  pipe.sample(t, p, alpha, closed_);
+  ++pipe.counts.bad_lines;
+  if (bad_reported_++ < 5) {
+    std::cerr << "peritwin-stream: sample at t = " << t << " s skipped: " << why.str() << "\n";
+  }
+  if (first_bad_.empty()) {
+    std::ostringstream text;
+    text << "the sample at t = " << t << " s: " << why.str();
+    first_bad_ = text.str();
+  }
+  if (!behind) return;
+  // Samples that keep coming before the last time taken, in order among themselves: that time
+  // was the outlier (a glitch ahead); the stream goes on from them.
+  behind_ = behind_ > 0 && t > behind_last_ ? behind_ + 1 : 1;
+  behind_last_ = t;
+  if (behind_ >= stream::kRebaseAfter) {
+    std::cerr << "peritwin-stream: " << behind_
+              << " samples in a row before t = " << *pipe.last_time << " s, the last at t = " << t
+              << " s: that time was out of line, the stream goes on from t = " << t << " s\n";
+    pipe.last_time = t;
+    behind_ = 0;
+  }
 }
 
 void Stream::take_line(const std::string& line) {
@@ -538,11 +608,14 @@ void Stream::take_line(const std::string& line) {
   } else if (parsed.kind == stream::ParsedLine::Kind::bad) {
     ++pipe.counts.bad_lines;
     if (bad_reported_++ < 5) {
-      std::cerr << "peritwin-stream: "
-                << (in_.kind == Input::Kind::tcp ? o_.input
-                    : o_.input == "-"            ? "stdin"
-                                                 : o_.input)
-                << ": line " << pipe.counts.input_lines << " skipped: " << parsed.why << "\n";
+      std::cerr << "peritwin-stream: " << input_name() << ": line " << pipe.counts.input_lines
+                << " skipped: " << parsed.why << "\n";
+    }
+    if (first_bad_.empty()) {
+      std::string text;
+      for (const char c : line.substr(0, 60)) text += c >= 0x20 && c < 0x7f ? c : '?';
+      first_bad_ = "line " + std::to_string(pipe.counts.input_lines) + " \"" + text +
+                   (line.size() > 60 ? "...\"" : "\"") + ": " + parsed.why;
     }
   }
 }
@@ -553,7 +626,9 @@ bool Stream::read_input(bool backlog, std::vector<std::string>& lines) {
   const int wait_ms = sender_ ? 0 : 50;
   if (backlog) return true;
   if (in_.kind == Input::Kind::fd) {
-    return lines_in_.read(in_.fd, wait_ms, lines);
+    const LineInput::Read r = lines_in_.read(in_.fd, wait_ms, lines);
+    line_too_long_ = r == LineInput::Read::too_long;
+    return r == LineInput::Read::open;
   } else if (in_.kind == Input::Kind::tcp) {
     if (conn_fd_ < 0) {
       pollfd p{listen_fd_, POLLIN, 0};
@@ -561,9 +636,12 @@ bool Stream::read_input(bool backlog, std::vector<std::string>& lines) {
         conn_fd_ = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
         lines_in_ = LineInput{};
       }
-    } else if (!lines_in_.read(conn_fd_, wait_ms, lines)) {
+    } else if (const LineInput::Read r = lines_in_.read(conn_fd_, wait_ms, lines);
+               r != LineInput::Read::open) {
       ::close(conn_fd_);
       conn_fd_ = -1;
+      line_too_long_ = r == LineInput::Read::too_long;
+      return !line_too_long_;  // an over-long line ends the stream, a closed connection not
     }
   }
   return true;
@@ -599,6 +677,11 @@ void Stream::loop() {
       }
       take_line(line);
     }
+    if (line_too_long_) {
+      input_error_ = input_name() + ": line " + std::to_string(pipe.counts.input_lines + 1) +
+                     " is longer than " + std::to_string(stream::kMaxLineBytes) +
+                     " bytes without an end of line: no sample stream; input ended there";
+    }
     if (samples_in_) {
       if (!sender_ && messages::handle_lcm(*lcm_, 50) < 0 && errno != EINTR) {
         error_ = "LCM failed while receiving";
@@ -616,10 +699,12 @@ void Stream::loop() {
     if (!deliver()) break;
     if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
     lines_idle = lines.empty();
-    if (sender_ && sender_->pump(0) == loads::BatchSender::Progress::failed) {
+    const auto progress = sender_ ? sender_->pump(0) : loads::BatchSender::Progress::running;
+    if (progress == loads::BatchSender::Progress::failed) {
       error_ = sender_->error();
       break;
     }
+    if (progress == loads::BatchSender::Progress::done) break;  // the detail's end of life
   }
 }
 
@@ -645,7 +730,9 @@ int Stream::finish() {
   const loads::ResidueRule rule = o_.residue == "whole"  ? loads::ResidueRule::whole
                                   : o_.residue == "keep" ? loads::ResidueRule::keep
                                                          : loads::ResidueRule::half;
-  if (error_.empty()) {
+  // The detail reached its end of life while the input was read: nothing more is applied.
+  const bool ended = sender_ && !sender_->end_of_life().empty();
+  if (error_.empty() && !ended) {
     pipe.finish(rule, closed_);
     if (deliver() && sender_) {
       if (!o_.state_file.empty()) save_state(sender_->unacknowledged());
@@ -657,6 +744,11 @@ int Stream::finish() {
       }
       if (error_.empty() && !o_.state_file.empty()) save_state(sender_->unacknowledged());
     }
+  }
+  // Before or after the end of input: the daemon's FAILED reason of the first batch not applied.
+  if (sender_ && !sender_->end_of_life().empty()) {
+    std::cerr << "peritwin-stream: end of life reached, the rest of the input is not applied: "
+              << sender_->end_of_life() << "\n";
   }
   if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
   if (conn_fd_ >= 0) ::close(conn_fd_);
@@ -671,11 +763,24 @@ int Stream::finish() {
     std::cerr << "peritwin-stream: " << error_ << "\n";
     return core::kExitRuntime;
   }
+  // Lines came, none of them usable (e.g. "0;4000" or "0,5;4000,0"): the input is no sample
+  // stream, which a zero exit would hide.
+  if (input_error_.empty() && pipe.counts.bad_lines > 0 &&
+      pipe.counts.samples <= rf.nonfinite_samples) {
+    input_error_ = input_name() + ": no usable sample in " + std::to_string(pipe.counts.bad_lines) +
+                   " skipped lines or samples; the first: " + first_bad_ +
+                   " (expected lines t,P or t,P,alpha with '.' decimals)";
+  }
+  // The summary also after an input error: what was taken before it was delivered.
   std::optional<peritwin_msgs::damage_state_t> final_state;
   if (local_) final_state = local_->state();
   if (sender_) final_state = sender_->last_state();
   if (o_.json && final_state) {
     std::cout << messages::summary_json(*final_state, summary_extra(pipe)) << std::endl;
+  }
+  if (!input_error_.empty()) {
+    std::cerr << "peritwin-stream: " << input_error_ << "\n";
+    return core::kExitUsage;
   }
   return core::kExitOk;
 }

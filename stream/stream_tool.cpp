@@ -393,6 +393,10 @@ std::optional<std::uint64_t> read_received(const std::filesystem::path& state_fi
   return static_cast<std::uint64_t>(v);
 }
 
+double sample_load_bound(const config::DetailConfig& detail) {
+  return detail.limits.max_p ? *detail.limits.max_p : kAbsurdLoad;
+}
+
 ParsedLine parse_line(std::string_view line) {
   ParsedLine out;
   line = trim(line);

@@ -48,6 +48,8 @@ class Pipeline {
   /// One sample (measured value in the sensor's unit, angle in rad, time in s); closed batches
   /// go to `out`.
   void sample(double t, double measured, double alpha, std::vector<messages::Batch>& out);
+  /// The load of a measured value: scale * measured + offset (N).
+  [[nodiscard]] double load(double measured) const { return scale_ * measured + offset_; }
   /// End of the input: the residue by `rule`, then the open batch.
   void finish(loads::ResidueRule rule, std::vector<messages::Batch>& out);
 
@@ -92,6 +94,27 @@ core::Expected<RestoredState, std::string> load_state(const std::filesystem::pat
 /// "<file>.received": samples read so far (see the top of the file).
 void write_received(const std::filesystem::path& state_file, std::uint64_t samples);
 std::optional<std::uint64_t> read_received(const std::filesystem::path& state_file);
+
+/// Bounds of the input (README "Streaming from sensors"): a line of a descriptor input (stdin, a
+/// FILE, a FIFO, TCP) longer than this without its newline ends the input with an error (a sample
+/// line is some 40 bytes; without the bound an endless line grows the memory without end).
+inline constexpr std::size_t kMaxLineBytes = 4096;
+/// A sample time later than the wall clock's now (as Unix seconds) plus this is no measurement
+/// (e.g. "1e308,5"): skipped and counted. Times relative to a start are far below it.
+inline constexpr double kMaxFutureSeconds = 86400.0;
+/// Samples refused as not after the previous time, in a row and increasing among themselves,
+/// after which that previous time is taken as the outlier: the stream goes on from them.
+inline constexpr int kRebaseAfter = 5;
+/// Without [detail.limits] max_p: the largest |P| (N) of a sample taken (a larger one is a
+/// glitch or garbage, no structural detail's load).
+inline constexpr double kAbsurdLoad = 1e9;
+
+/// The range of a sample's load P (N) the stream takes: P <= bound and P >= -10 bound (the
+/// compressive side of a cycle at R = -10, core/load_block.h), bound being [detail.limits]
+/// max_p when configured (a sample above it would make the daemon refuse its whole batch),
+/// else kAbsurdLoad. (--in-process, where the model is built, bounds by the twin's max_p,
+/// configured or derived.)
+double sample_load_bound(const config::DetailConfig& detail);
 
 /// One input line: a sample (t, measured, alpha), nothing (blank, '#' comment, the series header
 /// "time_s,load_N[,angle_rad]") or an error (why).

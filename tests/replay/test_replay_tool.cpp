@@ -324,6 +324,9 @@ enum class Answer {
   wrong_key_states,  ///< STATE signed with a key that is not the daemon's
   unsigned_reject,   ///< REJECT (GAP) without a tag
   auth_reject,       ///< REJECT CODE_AUTH, signed, as a daemon with another key for the source
+  invalid_reject,    ///< REJECT CODE_INVALID (p_max above max_p) for every batch, signed
+  failed_reject,     ///< REJECT CODE_FAILED for every batch: a detail that had ended before
+  end_of_life,       ///< seq 1 applied and the end of life reached, CODE_FAILED for the others
 };
 
 /// Answers every batch on b1-ct's LOAD channel of `lcm` like a daemon would, after checking its
@@ -365,6 +368,21 @@ class FakeDaemon {
       lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
       return;
     }
+    const bool failed =
+        answer_ == Answer::failed_reject || (answer_ == Answer::end_of_life && d.batch->seq > 1);
+    if (answer_ == Answer::invalid_reject || failed) {
+      auto r = messages::reject_message(
+          "b1-ct", source, d.batch->seq,
+          failed ? messages::Outcome{messages::Verdict::failed, "message",
+                                     "the detail reached its end-of-life criterion at cycle 700; "
+                                     "it applies no more cycles"}
+                 : messages::Outcome{messages::Verdict::invalid, "blocks[0].p_max",
+                                     "p_max = 4e+06 N is above the detail's bound max_p = 40000 N"},
+          messages::now_utime());
+      messages::sign(r, daemon_key_);
+      lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
+      return;
+    }
     if (!ok && answer_ == Answer::signed_states) return;  // a daemon with [auth] rejects it
     if (d.batch->seq == applied_ + 1) ++applied_;
     peritwin_msgs::damage_state_t s{};
@@ -380,7 +398,10 @@ class FakeDaemon {
     s.remaining_cycles = s.remaining_cycles_low = s.remaining_cycles_high = s.k_i;
     s.remaining_life_seq = -1;
     s.state_hash = "fake-" + std::to_string(applied_);
-    if (answer_ == Answer::signed_states) messages::sign(s, daemon_key_);
+    if (answer_ == Answer::end_of_life) s.failure = 1;
+    if (answer_ == Answer::signed_states || answer_ == Answer::end_of_life) {
+      messages::sign(s, daemon_key_);
+    }
     if (answer_ == Answer::wrong_key_states) {
       messages::AuthKey other = daemon_key_;
       other.bytes[0] ^= 1;
@@ -478,6 +499,81 @@ TEST(ReplayAuthMemq, WithoutKeysAForgedStateIsBelieved) {
   ASSERT_TRUE(run.result.ok) << run.result.error;
   EXPECT_EQ(run.result.final_state->state_hash, "fake-3");
   EXPECT_EQ(run.verified, 0);
+}
+
+// A reject no resend can cure ends the run at once with the daemon's reason: INVALID (and
+// AUTH, LIMIT) fail it after the one batch, not after give_up_after_s of resends (kWaitS here).
+TEST(ReplayRejectMemq, InvalidRejectEndsTheRunAtOnceWithTheReason) {
+  const auto run = run_memq(Answer::invalid_reject, both_keys());
+  EXPECT_FALSE(run.result.ok);
+  EXPECT_EQ(run.result.error,
+            "the daemon refused batch 1 of source \"replay\" (CODE_INVALID): blocks[0].p_max: "
+            "p_max = 4e+06 N is above the detail's bound max_p = 40000 N (not sent again: no "
+            "resend can change that)");
+  EXPECT_EQ(run.batches, 1);  // lockstep: batch 1, never resent
+}
+
+// FAILED: done when a batch of the run was applied before it (the run reached the end of life,
+// the rest is not applied, and the reason is kept), failed when none was (the detail had ended).
+TEST(ReplayRejectMemq, FailedIsTheEndOfLifeOnlyAfterABatchOfTheRun) {
+  const auto reached = run_memq(Answer::end_of_life, both_keys());
+  ASSERT_TRUE(reached.result.ok) << reached.result.error;
+  EXPECT_EQ(reached.result.end_of_life,
+            "the daemon refused batch 2 of source \"replay\" (CODE_FAILED): message: the detail "
+            "reached its end-of-life criterion at cycle 700; it applies no more cycles");
+  EXPECT_EQ(reached.batches, 2);
+  const auto ended = run_memq(Answer::failed_reject, both_keys());
+  EXPECT_FALSE(ended.result.ok);
+  EXPECT_NE(ended.result.error.find("(CODE_FAILED): message: the detail reached its end-of-life "
+                                    "criterion at cycle 700; it applies no more cycles; none of "
+                                    "this run's batches was applied"),
+            std::string::npos)
+      << ended.result.error;
+}
+
+// [detail.limits] max_p set in the config: a history above it is named before anything is sent.
+TEST(ReplayPeak, AHistoryAboveTheConfiguredMaxPIsNamed) {
+  config::LimitsConfig limits;
+  const std::vector<core::LoadBlock> blocks{{4000, 0.1, 0, 10}, {4e6, 0.1, 0, 10}, {5e6, 0, 0, 1}};
+  EXPECT_TRUE(check_peak(blocks, limits));  // max_p derived from the model: not known here
+  limits.max_p = 5000.0;
+  const core::Status peak = check_peak(blocks, limits);
+  ASSERT_FALSE(peak);
+  EXPECT_EQ(peak.error().field, "blocks[1].p_max");
+  EXPECT_EQ(peak.error().reason,
+            "p_max = 4e+06 N is above the detail's [detail.limits] max_p = 5000 N (the history's "
+            "peak is 5e+06 N, 1e+03 x max_p: a load in the wrong unit?)");
+  EXPECT_TRUE(check_peak(std::vector<core::LoadBlock>{{5000, 0.1, 0, 1}}, limits));
+}
+
+TEST(ReplayPeak, TheBinaryExitsTwoBeforeSendingAnything) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("peritwin_replay_peak_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ifstream in(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+  std::string config((std::istreambuf_iterator<char>(in)), {});
+  const std::string commented = "# max_p = 40000.0";
+  ASSERT_NE(config.find(commented), std::string::npos);
+  config.replace(config.find(commented), commented.size(), "max_p = 5000.0");
+  std::ofstream(dir / "b1.toml") << config;
+  std::ofstream(dir / "kn-as-n.csv") << "p_max_N,r,angle_rad,count\n4000,0.1,0,1000\n"
+                                        "4000000,0.1,0,1000\n";
+  // An LCM URL nobody listens on: a run that got as far as sending would exit 3.
+  peritwin::testing::Process r(
+      {std::string(PERITWIN_BIN_DIR) + "/peritwin-replay", "--config", (dir / "b1.toml").string(),
+       "--history", (dir / "kn-as-n.csv").string(), "--lcm-url", "tcpq://127.0.0.1:1"},
+      (dir / "replay.log").string());
+  const auto status = r.wait_for(kWaitS);
+  ASSERT_TRUE(status && WIFEXITED(*status));
+  EXPECT_EQ(WEXITSTATUS(*status), 2);
+  std::ifstream log_in(dir / "replay.log");
+  const std::string log((std::istreambuf_iterator<char>(log_in)), {});
+  EXPECT_NE(log.find("kn-as-n.csv: blocks[1].p_max: p_max = 4e+06 N is above the detail's "
+                     "[detail.limits] max_p = 5000 N"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("nothing sent"), std::string::npos) << log;
+  if (!::testing::Test::HasFailure()) fs::remove_all(dir);
 }
 
 /// The binary over tcpq:// with LCM's Java hub (one per suite) and the fake daemon on a thread.

@@ -176,6 +176,176 @@ TEST_F(Stream, CorruptStateFileExitsTwoNamingIt) {
       << log;
 }
 
+/// The data rows of the example series ("t,P"), without its comments and header.
+std::vector<std::string> series_rows() {
+  std::vector<std::string> rows;
+  std::ifstream in(kSeries);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#' && line[0] != 't') rows.push_back(line);
+  }
+  return rows;
+}
+
+void write_rows(const fs::path& file, const std::vector<std::string>& rows) {
+  std::ofstream out(file);
+  out << "time_s,load_N\n";
+  for (const auto& r : rows) out << r << "\n";
+}
+
+/// Writes `bytes` to the loopback TCP port without a newline; errors (the stream closing the
+/// connection) end it quietly.
+void send_without_newline(int port, std::size_t bytes) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  const std::string chunk(65536, '7');
+  for (std::size_t sent = 0; sent < bytes;) {
+    const ssize_t n = ::send(fd, chunk.data(), std::min(chunk.size(), bytes - sent), MSG_NOSIGNAL);
+    if (n <= 0) break;
+    sent += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+}
+
+// stdin that never ends its line (an endless pipe): the stream stops reading at 4 KiB, says so
+// and exits 2, instead of growing its memory for ever.
+TEST_F(Stream, AnEndlessLineOnStdinEndsTheStreamWithExitTwo) {
+  Process s({"/bin/sh", "-c",
+             "yes 1234567890 | tr -d '\\n' | '" + kBin + "/peritwin-stream' --config '" + kConfig +
+                 "' --json --in-process --input -"},
+            (dir_ / "stream.log").string());
+  lines_to_end(s);
+  EXPECT_EQ(exit_code(s), 2) << read_file(dir_ / "stream.log");
+  EXPECT_NE(read_file(dir_ / "stream.log")
+                .find("peritwin-stream: stdin: line 1 is longer than 4096 bytes without an end of "
+                      "line: no sample stream; input ended there"),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+}
+
+// The same over TCP, after half the series: those samples are taken (the summary says so), the
+// 1 MB line ends the stream with exit 2.
+TEST_F(Stream, AnEndlessLineOnTcpEndsTheStreamWithExitTwo) {
+  const int port = peritwin::core::free_loopback_port();
+  auto s =
+      stream({"--input", "tcp://127.0.0.1:" + std::to_string(port), "--in-process"}, "stream.log");
+  ASSERT_TRUE(peritwin::core::wait_for_loopback_port(port, kWaitS))
+      << read_file(dir_ / "stream.log");
+  const auto rows = series_rows();
+  {
+    std::string text;
+    for (std::size_t i = 0; i < 600; ++i) text += rows[i] + "\n";
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    ASSERT_EQ(::write(fd, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+    ::close(fd);
+  }
+  ASSERT_NO_FATAL_FAILURE(send_without_newline(port, 1u << 20));
+  const auto lines = lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 2) << read_file(dir_ / "stream.log");
+  const std::string log = read_file(dir_ / "stream.log");
+  EXPECT_NE(log.find("tcp://127.0.0.1:" + std::to_string(port) +
+                     ": line 601 is longer than 4096 bytes without an end of line"),
+            std::string::npos)
+      << log;
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "600") << lines.back();
+}
+
+// One bad time skips its line and is counted, and no later sample is lost: 1e308 s (beyond the
+// clock), inf, and a time going backwards. The load is the replay's of the clean series.
+TEST_F(Stream, ABadTimestampSkipsItsLineOnly) {
+  const std::string reference = replay_summary(kSeries);
+  auto rows = series_rows();
+  rows.insert(rows.begin() + 500, "1.0,2500");  // backwards (the row before is at 24.95 s)
+  rows.insert(rows.begin() + 300, "inf,2500");
+  rows.insert(rows.begin() + 100, "1e308,5");
+  write_rows(dir_ / "bad-times.csv", rows);
+  auto s = stream({"--input", (dir_ / "bad-times.csv").string(), "--in-process"}, "stream.log");
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "samples"), "1200") << lines.back();
+  EXPECT_EQ(field(lines.back(), "bad_lines"), "3") << lines.back();
+  expect_same_load(reference, lines.back());  // every later sample taken: the same cycles
+  EXPECT_NE(read_file(dir_ / "stream.log").find("more than a day after the clock"),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+}
+
+// A time glitch ahead that is no nonsense by itself (30000 s in a 60 s record): the samples after
+// it are refused as going backwards, five in a row, then the stream takes that time as the
+// outlier and goes on; the rest of the record is taken.
+TEST_F(Stream, ATimeGlitchAheadIsOvercome) {
+  auto rows = series_rows();
+  rows.insert(rows.begin() + 100, "30000,2500");
+  write_rows(dir_ / "glitch.csv", rows);
+  auto s = stream({"--input", (dir_ / "glitch.csv").string(), "--in-process"}, "stream.log");
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "bad_lines"), "5") << lines.back();
+  EXPECT_EQ(field(lines.back(), "samples"), "1196") << lines.back();  // 1201 - 5
+  EXPECT_GT(std::stoll(field(lines.back(), "cycles")), 50) << lines.back();
+  EXPECT_NE(read_file(dir_ / "stream.log").find("that time was out of line"), std::string::npos)
+      << read_file(dir_ / "stream.log");
+}
+
+// One absurd load (1e308 N), and in-process one above the twin's max_p (derived from the model),
+// is skipped and counted, a NaN one is a dropout (nonfinite_samples):
+// the batch they fall in is applied, the load is the clean series' (the in-process twin refuses an
+// invalid batch, which would end the stream with exit 3).
+TEST_F(Stream, AnAbsurdSampleIsSkippedAndItsBatchApplied) {
+  const std::string reference = replay_summary(kSeries);
+  auto rows = series_rows();
+  ASSERT_EQ(rows[600].substr(0, 6), "30.00,");
+  rows.insert(rows.begin() + 601, "30.025,500000");  // above B1's derived max_p (~177 kN)
+  ASSERT_EQ(rows[400].substr(0, 6), "20.00,");
+  rows.insert(rows.begin() + 401, "20.025,nan");
+  ASSERT_EQ(rows[200].substr(0, 6), "10.00,");
+  rows.insert(rows.begin() + 201, "10.025,1e308");
+  write_rows(dir_ / "absurd.csv", rows);
+  auto s = stream({"--input", (dir_ / "absurd.csv").string(), "--in-process"}, "stream.log");
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(field(lines.back(), "bad_lines"), "2") << lines.back();
+  EXPECT_EQ(field(lines.back(), "nonfinite_samples"), "1") << lines.back();
+  EXPECT_EQ(field(lines.back(), "samples"), "1201") << lines.back();
+  expect_same_load(reference, lines.back());
+  EXPECT_NE(read_file(dir_ / "stream.log").find("load P = 1e+308 N is outside"), std::string::npos)
+      << read_file(dir_ / "stream.log");
+}
+
+// A semicolon, decimal-comma CSV: every line is bad, no sample; exit 2 naming the first line.
+TEST_F(Stream, NoUsableLineExitsTwoNamingTheFirst) {
+  {
+    std::ofstream out(dir_ / "excel.csv");
+    out << "time_s;load_N\n";
+    for (const auto& row : series_rows()) {
+      std::string r = row;
+      for (char& c : r) c = c == ',' ? ';' : c == '.' ? ',' : c;
+      out << r << "\n";
+    }
+  }
+  auto s = stream({"--input", (dir_ / "excel.csv").string(), "--in-process"}, "stream.log");
+  lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 2) << read_file(dir_ / "stream.log");
+  const std::string log = read_file(dir_ / "stream.log");
+  EXPECT_NE(log.find("excel.csv: no usable sample in 1201 skipped lines or samples; the first: "
+                     "line 1 \"time_s;load_N\": expected t,P or t,P,alpha (1 fields)"),
+            std::string::npos)
+      << log;
+}
+
 /// Over LCM's TCP hub (skipped without java / lcm.jar).
 class StreamOverHub : public Stream {
  protected:
@@ -399,6 +569,72 @@ TEST_F(StreamOverHub, LcmSamplesTakenOnceAcrossARestart) {
   expect_same_load(reference, lines.back());
   EXPECT_EQ(read_file(dir_ / "stream2.log").find("gap"), std::string::npos)
       << read_file(dir_ / "stream2.log");
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+// Loads in the wrong unit (x1000, above the detail's max_p, which the daemon derives from the
+// model): the daemon refuses the first batch INVALID, and both producers say why and exit 3 at
+// once instead of resending until --give-up-after (600 s here).
+TEST_F(StreamOverHub, ProducersExitThreeOnAnInvalidBatchWithTheDaemonsReason) {
+  auto d = daemon("daemon.log");
+  std::ofstream(dir_ / "cycles-x1000.csv") << "p_max_N,r,angle_rad,count\n4000000,0.1,0,1000\n"
+                                              "4000000,0.1,0,1000\n";
+  Process r(
+      {kBin + "/peritwin-replay", "--config", kConfig, "--history",
+       (dir_ / "cycles-x1000.csv").string(), "--lcm-url", hub_->url(), "--give-up-after", "600"},
+      (dir_ / "replay.log").string());
+  lines_to_end(r);
+  EXPECT_EQ(exit_code(r), 3) << read_file(dir_ / "replay.log");
+  EXPECT_NE(read_file(dir_ / "replay.log")
+                .find("peritwin-replay: the daemon refused batch 1 of source \"replay\" "
+                      "(CODE_INVALID): blocks[0].p_max: p_max = 4e+06 N is above the detail's "
+                      "bound max_p"),
+            std::string::npos)
+      << read_file(dir_ / "replay.log");
+
+  auto rows = series_rows();
+  for (auto& row : rows) {
+    const auto comma = row.find(',');
+    row = row.substr(0, comma) + "," + std::to_string(1000 * std::stod(row.substr(comma + 1)));
+  }
+  write_rows(dir_ / "series-x1000.csv", rows);
+  auto s = stream({"--input", (dir_ / "series-x1000.csv").string(), "--lcm-url", hub_->url(),
+                   "--give-up-after", "600"},
+                  "stream.log");
+  lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 3) << read_file(dir_ / "stream.log");
+  const std::string log = read_file(dir_ / "stream.log");
+  EXPECT_NE(log.find("peritwin-stream: the daemon refused batch 1 of source \"stream\" "
+                     "(CODE_INVALID): blocks["),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("is above the detail's bound max_p"), std::string::npos) << log;
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+// The gauge record takes the demo detail to its end of life (state 40, cycle 39 639): the batches
+// after it are refused FAILED, which for the stream that applied the batches before is the end,
+// not an error: the daemon's reason on stderr, exit 0.
+TEST_F(StreamOverHub, TheEndOfLifeReachedByTheStreamExitsZeroWithTheReason) {
+  auto d = daemon("daemon.log");
+  auto s = stream({"--input", std::string(PERITWIN_EXAMPLES_DIR) + "/b1-gauge.csv", "--lcm-url",
+                   hub_->url(), "--give-up-after", "600"},
+                  "stream.log");
+  const auto lines = lines_to_end(*s);
+  EXPECT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(field(lines.back(), "end_of_life_cycle"), "-1") << lines.back();
+  EXPECT_NE(read_file(dir_ / "stream.log")
+                .find("peritwin-stream: end of life reached, the rest of the input is not applied: "
+                      "the daemon refused batch "),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
+  EXPECT_NE(read_file(dir_ / "stream.log")
+                .find("(CODE_FAILED): message: the detail reached its end-of-life criterion"),
+            std::string::npos)
+      << read_file(dir_ / "stream.log");
   d->signal(SIGTERM);
   d->wait_for(kWaitS);
 }
