@@ -6,14 +6,14 @@
 //
 // The JSON it builds:
 //   detail_json(id)  the latest STATE's fields in messages::state_json's order at the top level
-//                    (plus k_ii, remaining_life_source, signed, tip, cracks, "from_results",
-//                    "life" {state, remaining, low, high, end_cycle, estimate_cycle,
-//                    estimate_source, estimate_seq, age_cycles, age_s}: the estimate counted down
-//                    to this state, see Countdown), then "health", "status_age_s", "status" {...},
-//                    "rejects" and "last_reject" {...} (refusals only), "protocol" {probes,
-//                    duplicates, gaps, last}, "fields", "undecodable". Without a STATE since the
-//                    start but with a results file (--results): its last row under the same keys
-//                    ("from_results": true).
+//                    (plus k_ii, remaining_life_source, signed, tip, cracks, "from_results"),
+//                    then "health", "status_age_s", "status" {...}, "rejects" (refusals only),
+//                    "fields", ..., "undecodable", then "life" {state, remaining, low, high,
+//                    end_cycle, estimate_cycle, estimate_source, estimate_seq, age_cycles, age_s}:
+//                    the estimate counted down to this state, see Countdown), "last_reject" {...}
+//                    (the last refusal), "protocol" {probes, duplicates, gaps, last}. Without a
+//                    STATE since the start but with a results file (--results): its last row
+//                    under the same keys ("from_results": true).
 //                    64-bit integers (seq, cycles) are JSON numbers below 2^53 and decimal strings
 //                    from there on: a browser's JSON.parse reads doubles.
 //   details_json()   {"details": [detail_json of each, by id], "undecodable": total}
@@ -131,9 +131,10 @@ struct FileState {
 
 /// The remaining-life estimate the detail's countdown runs from.
 struct LifeAnchor {
-  std::string source;     ///< remaining_life_source ("" with seq -1: the initial state)
-  std::int64_t seq = -1;  ///< remaining_life_seq
-  bool keyed = true;      ///< false: from a results file, whose rows do not name the batch
+  std::string source;       ///< remaining_life_source ("" with seq -1: the initial state)
+  std::string source_json;  ///< `source` as JSON text (escaped once, written every event)
+  std::int64_t seq = -1;    ///< remaining_life_seq
+  bool keyed = true;        ///< false: from a results file, whose rows do not name the batch
   double central = std::numeric_limits<double>::quiet_NaN();
   double low = std::numeric_limits<double>::quiet_NaN();
   double high = std::numeric_limits<double>::quiet_NaN();
@@ -170,14 +171,14 @@ struct DetailRecord {
   /// Refusals: a batch the daemon would not take (INVALID, AUTH, LIMIT, FAILED, and DECODE,
   /// WRONG_DETAIL, INTERNAL): what an operator must look at.
   std::int64_t rejects = 0;
-  std::optional<peritwin_msgs::reject_t> last_reject;  ///< the last refusal
+  std::string last_reject;  ///< the last refusal as JSON text; "" none
   /// Protocol events, the exactly-once handshake working as meant: a producer's probe (GAP with
   /// seq 2^63 − 1, answered with the STATE), a resend answered as DUPLICATE, a GAP asking for a
   /// resend. Counted apart; never in `rejects`.
   std::int64_t probes = 0;
   std::int64_t duplicates = 0;
   std::int64_t gaps = 0;
-  std::optional<peritwin_msgs::reject_t> last_protocol;
+  std::string last_protocol;            ///< the last protocol event as JSON text; "" none
   std::optional<LifeAnchor> life;       ///< the estimate of the latest STATE (or results file)
   std::deque<BatchState> batches;       ///< newest last, at most kBatchMemory, none before `life`'s
   std::int64_t initial_utime = 0;       ///< utime of state 0 when received (estimates on it)

@@ -162,8 +162,33 @@ TEST(DashboardStore, DetailJsonIsTheDumpOfItsOwnParseWithNoKeyTwice) {
          st.health = "ok";
          return st;
        }()));
+  // A counted-down estimate (the life part is written as text, not dumped): whole, fractional,
+  // past 1e15 (dump() writes 1e+15) and -0.0 numbers; a refusal and a probe with awkward text.
+  const auto cd = messages::channel("b1-cd", messages::Kind::kState);
+  auto s0 = state(0, 0, 0.0);
+  s0.detail_id = "b1-cd";
+  s0.remaining_cycles = 1.0e15;
+  s0.remaining_cycles_low = 0.5;
+  s0.remaining_cycles_high = -0.0;
+  s0.remaining_life_seq = -1;
+  s0.remaining_life_source = "";
+  s0.utime = 1'000'001;
+  auto s1 = s0;
+  s1.state_seq = 1;
+  s1.applied_seq = {1};
+  s1.total_cycles = 3;
+  s1.utime = 2'500'000;
+  feed(store, cd, encode(s0));
+  feed(store, cd, encode(s1));
+  feed(store, messages::channel("b1-cd", messages::Kind::kReject),
+       encode(messages::reject_message("b1-cd", "r\xc3\xa9\x01\"", 4,
+                                       {messages::Verdict::invalid, "x\"", "\t\xc3\xa9"}, 1)));
+  feed(store, messages::channel("b1-cd", messages::Kind::kReject),
+       encode(messages::reject_message("b1-cd", "p", std::numeric_limits<std::int64_t>::max(),
+                                       {messages::Verdict::gap, "seq", "probe"}, 1)));
+  ASSERT_EQ(json::parse(*store.detail_json("b1-cd", kT0))["life"]["state"], "countdown");
   ASSERT_EQ(top_level_keys(R"({"a": {"b": 1}, "a": 2})"), (std::vector<std::string>{"a", "a"}));
-  for (const std::string id : {"b1-ct", "b1-dg"}) {
+  for (const std::string id : {"b1-ct", "b1-dg", "b1-cd"}) {
     const auto text = store.detail_json(id, kT0);
     ASSERT_TRUE(text) << id;
     const auto ordered = nlohmann::ordered_json::parse(*text);
