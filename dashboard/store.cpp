@@ -419,7 +419,11 @@ void Store::on_state_life(DetailRecord& d, const peritwin_msgs::damage_state_t& 
     const std::size_t n = std::min(s.source_ids.size(), s.applied_seq.size());
     for (std::size_t i = 0; i < n; ++i) {
       if (s.applied_seq[i] == messages::applied_seq(*d.state, s.source_ids[i])) continue;
-      d.batches.push_back({s.source_ids[i], s.applied_seq[i], s.total_cycles, s.utime});
+      auto& names = d.batch_sources;
+      const auto source = static_cast<std::uint32_t>(
+          std::find(names.begin(), names.end(), s.source_ids[i]) - names.begin());
+      if (source == names.size()) names.push_back(s.source_ids[i]);
+      d.batches.push_back({source, s.applied_seq[i], s.total_cycles, s.utime});
       if (d.batches.size() > kBatchMemory) d.batches.pop_front();
       break;
     }
@@ -452,9 +456,12 @@ void Store::on_state_life(DetailRecord& d, const peritwin_msgs::damage_state_t& 
     a.cycles = 0;  // made on the initial state: the virgin detail, no cycles applied
     a.utime = d.initial_utime;
   } else {
-    const auto it = std::find_if(d.batches.rbegin(), d.batches.rend(), [&a](const BatchState& b) {
-      return b.seq == a.seq && b.source == a.source;
-    });
+    const auto& names = d.batch_sources;
+    const auto source =
+        static_cast<std::uint32_t>(std::find(names.begin(), names.end(), a.source) - names.begin());
+    const auto it = std::find_if(
+        d.batches.rbegin(), d.batches.rend(),
+        [&a, source](const BatchState& b) { return b.seq == a.seq && b.source == source; });
     if (it != d.batches.rend()) {
       a.cycles = it->cycles;
       a.utime = it->utime;

@@ -63,8 +63,10 @@ inline constexpr std::size_t kHistoryPoints = 10000;
 inline constexpr double kMeshRequestPeriodS = 5.0;
 
 /// Batches remembered per detail to find the state a remaining-life estimate was made on (the
-/// life worker lags the live state by the length of one forward simulation).
-inline constexpr std::size_t kBatchMemory = 65536;
+/// life worker lags the live state by the length of one forward simulation): 32 bytes each, so
+/// at most 512 kB per detail (reached only while no estimate comes: each new one drops the
+/// batches before its own). An estimate made further back is shown as published (unanchored).
+inline constexpr std::size_t kBatchMemory = 16384;
 
 /// One point of a detail's history (a STATE, or a row of its results file). remaining, low and
 /// high are counted down to this point's cycles (see Countdown), not the estimate as published.
@@ -144,7 +146,7 @@ struct LifeAnchor {
 
 /// The batch that produced a state the store received (its predecessor received too).
 struct BatchState {
-  std::string source;
+  std::uint32_t source = 0;  ///< index into DetailRecord::batch_sources
   std::int64_t seq = 0;
   std::int64_t cycles = 0;
   std::int64_t utime = 0;
@@ -178,11 +180,12 @@ struct DetailRecord {
   std::int64_t probes = 0;
   std::int64_t duplicates = 0;
   std::int64_t gaps = 0;
-  std::string last_protocol;            ///< the last protocol event as JSON text; "" none
-  std::optional<LifeAnchor> life;       ///< the estimate of the latest STATE (or results file)
-  std::deque<BatchState> batches;       ///< newest last, at most kBatchMemory, none before `life`'s
-  std::int64_t initial_utime = 0;       ///< utime of state 0 when received (estimates on it)
-  std::optional<FileState> file_state;  ///< the results file's last state (--results)
+  std::string last_protocol;       ///< the last protocol event as JSON text; "" none
+  std::optional<LifeAnchor> life;  ///< the estimate of the latest STATE (or results file)
+  std::deque<BatchState> batches;  ///< newest last, at most kBatchMemory, none before `life`'s
+  std::vector<std::string> batch_sources;  ///< the source ids `batches` index (seen, in order)
+  std::int64_t initial_utime = 0;          ///< utime of state 0 when received (estimates on it)
+  std::optional<FileState> file_state;     ///< the results file's last state (--results)
   std::int64_t fields = 0;
   History history{kHistoryPoints};
   std::size_t backfilled = 0;  ///< points read from a results file

@@ -577,6 +577,25 @@ TEST(DashboardStore, EstimateStateIsFoundAmongInterleavedSourcesOrLeftUnanchored
   EXPECT_TRUE(j["life"]["age_cycles"].is_null());
 }
 
+// The batches kept to date estimates are bounded (kBatchMemory): an estimate made on a state
+// further back than that is shown as published, one within it is counted down.
+TEST(DashboardStore, EstimatesBeyondTheBatchMemoryAreUnanchored) {
+  dashboard::Store store;
+  const auto ch = messages::channel("b1-ct", messages::Kind::kState);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto n = static_cast<std::int64_t>(kBatchMemory) + 10;
+  for (std::int64_t k = 0; k <= n; ++k) {
+    feed(store, ch, encode(life_state(k, "replay", k, 10 * k, nan, "", -1)));
+  }
+  feed(store, ch, encode(life_state(n + 1, "replay", n + 1, 10 * (n + 1), 500.0, "replay", 5)));
+  EXPECT_EQ(json::parse(*store.detail_json("b1-ct", kT0))["life"]["state"], "unanchored");
+  feed(store, ch, encode(life_state(n + 2, "replay", n + 2, 10 * (n + 2), 500.0, "replay", n)));
+  const auto j = json::parse(*store.detail_json("b1-ct", kT0));
+  EXPECT_EQ(j["life"]["state"], "countdown");
+  EXPECT_EQ(j["life"]["estimate_cycle"], 10 * n);
+  EXPECT_EQ(j["life"]["remaining"], 480.0);
+}
+
 /// The JSON text's value of `key` inside `text` as written (digits or a quoted string).
 std::string raw_value(const std::string& text, const std::string& key) {
   const auto at = text.find("\"" + key + "\":");
