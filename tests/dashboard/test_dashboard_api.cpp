@@ -665,6 +665,18 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   EXPECT_EQ(png->substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   std::ofstream(shot, std::ios::binary) << *png;
   EXPECT_TRUE(fs::exists(shot) && fs::file_size(shot) == png->size()) << shot;
+
+  // The demo detail's card (END OF LIFE, the countdown chart), for a person to look at.
+  ASSERT_TRUE(browser.evaluate(page, demo_card + ".scrollIntoView(); true", 60).value_or(json()) ==
+              true);
+  const fs::path life_shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-life-test.png";
+  const auto life_captured =
+      browser.call("Page.captureScreenshot", {{"format", "png"}}, page, kWaitS);
+  ASSERT_TRUE(life_captured && (*life_captured)["result"].contains("data"));
+  const auto life_png =
+      testing::base64_decode((*life_captured)["result"]["data"].get<std::string>());
+  ASSERT_TRUE(life_png && life_png->size() > 8);
+  std::ofstream(life_shot, std::ios::binary) << *life_png;
 }
 
 }  // namespace
