@@ -187,7 +187,11 @@ Countdown count_down(double central, double low, double high, std::int64_t estim
   Countdown c;
   // Cycles applied since the estimate's state, exact as an integer (a restarted daemon on an
   // older checkpoint could go back: then the age is negative and the life counts up again).
-  c.age_cycles = cycles - estimate_cycles;
+  // Saturated: the numbers come off the bus, a hostile pair must not overflow.
+  if (__builtin_sub_overflow(cycles, estimate_cycles, &c.age_cycles)) {
+    c.age_cycles = cycles < estimate_cycles ? std::numeric_limits<std::int64_t>::min()
+                                            : std::numeric_limits<std::int64_t>::max();
+  }
   const double age = static_cast<double>(c.age_cycles);
   const auto left = [age](double v) { return std::isnan(v) ? v : std::max(0.0, v - age); };
   c.remaining = left(central);
@@ -415,7 +419,8 @@ void Store::on_state_life(DetailRecord& d, const peritwin_msgs::damage_state_t& 
   // The batch that produced `s` is known when its predecessor was the last state received: it
   // is the one source whose applied seq moved. (Without the predecessor the first state seen with
   // that seq could be a later one: its cycles would date the estimate too late.)
-  if (d.state && s.state_seq == d.state->state_seq + 1) {
+  if (d.state && d.state->state_seq < std::numeric_limits<std::int64_t>::max() &&
+      s.state_seq == d.state->state_seq + 1) {
     const std::size_t n = std::min(s.source_ids.size(), s.applied_seq.size());
     for (std::size_t i = 0; i < n; ++i) {
       if (s.applied_seq[i] == messages::applied_seq(*d.state, s.source_ids[i])) continue;

@@ -596,6 +596,25 @@ TEST(DashboardStore, EstimatesBeyondTheBatchMemoryAreUnanchored) {
   EXPECT_EQ(j["life"]["remaining"], 480.0);
 }
 
+// Cycle counts off the bus are not trusted: a hostile pair saturates the estimate's age instead
+// of overflowing, and the countdown stays at 0.
+TEST(DashboardStore, HostileCyclesSaturateTheCountdown) {
+  dashboard::Store store;
+  const auto ch = messages::channel("b1-ct", messages::Kind::kState);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::int64_t max = std::numeric_limits<std::int64_t>::max();
+  feed(store, ch, encode(life_state(0, "replay", 0, 0, nan, "", -1)));
+  feed(store, ch, encode(life_state(1, "replay", 1, -5, nan, "", -1)));
+  feed(store, ch, encode(life_state(2, "replay", 2, max, 100.0, "replay", 1)));
+  const auto j = json::parse(*store.detail_json("b1-ct", kT0));
+  EXPECT_EQ(j["life"]["state"], "countdown");
+  EXPECT_EQ(j["life"]["estimate_cycle"], -5);
+  EXPECT_EQ(j["life"]["age_cycles"], "9223372036854775807");
+  EXPECT_EQ(j["life"]["remaining"], 0.0);
+  EXPECT_EQ(j["life"]["end_cycle"], 95);
+  EXPECT_EQ(j["cycles"], "9223372036854775807");
+}
+
 /// The JSON text's value of `key` inside `text` as written (digits or a quoted string).
 std::string raw_value(const std::string& text, const std::string& key) {
   const auto at = text.find("\"" + key + "\":");
