@@ -152,11 +152,16 @@ int main(int argc, char** argv) {
     }
     for (const auto& file : peritwin::dashboard::find_results_files(results)) {
       try {
-        const auto points = peritwin::dashboard::read_history_points(file.path);
-        const std::size_t taken =
-            store.backfill(file.detail_id, points, peritwin::dashboard::Clock::now());
+        auto content = peritwin::dashboard::read_results(file.path);
+        const auto now = peritwin::dashboard::Clock::now();
+        const std::size_t taken = store.backfill(file.detail_id, content.points, now);
+        // The card's numbers and the map from the file's last state and snapshot, until the
+        // detail publishes newer ones.
+        if (content.last) {
+          store.backfill_latest(file.detail_id, *content.last, std::move(content.snapshot), now);
+        }
         spdlog::info("[{}] back-filled {} of {} state(s) from {}", file.detail_id, taken,
-                     points.size(), file.path.string());
+                     content.points.size(), file.path.string());
       } catch (const std::exception& e) {
         spdlog::warn("[{}] {}: not back-filled: {}", file.detail_id, file.path.string(), e.what());
       }

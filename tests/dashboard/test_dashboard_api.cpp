@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -33,6 +34,7 @@
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/mesh.h"
+#include "outputs/results_writer.h"
 #include "tests/dashboard/cdp_pipe.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
@@ -342,6 +344,43 @@ TEST_F(DashboardApi, ReportsTheLastStateAndItsHistoryAndThePageShowsThem) {
   for (const char* column : {"state_seq", "cycles", "crack_length_m", "remaining"}) {
     EXPECT_EQ(late_history[column], history[column]) << column;
   }
+  // Issue 30 item 3: no STATE since it started, yet its card is the results file's last row and
+  // its map the file's newest snapshot (drawn on the mesh it asked for), not "–" and a blank map.
+  {
+    const auto rows = outputs::read_time_series(dir_ / "results" / "b1-ct" / "b1-ct.h5");
+    ASSERT_FALSE(rows.empty());
+    const auto& row = rows.back();
+    const json card = json::parse(get("/api/details/b1-ct", late_port_).second);
+    EXPECT_EQ(card["from_results"], true) << card.dump();
+    EXPECT_EQ(card["state_seq"], row.state_seq);
+    EXPECT_EQ(card["state_seq"], kBatches);
+    EXPECT_EQ(card["cycles"], row.total_cycles);
+    EXPECT_EQ(card["cycles"], last["cycles"]);
+    EXPECT_EQ(card["broken_bonds"], row.broken_bonds);
+    EXPECT_EQ(card["crack_length_m"], row.crack_length_m);
+    EXPECT_EQ(card["crack_length_m"], last["crack_length_m"]);
+    EXPECT_EQ(card["crack_count"], row.crack_count);
+    const auto snapshots = outputs::read_snapshot_list(dir_ / "results" / "b1-ct" / "b1-ct.h5");
+    ASSERT_FALSE(snapshots.empty());
+    const auto& newest = snapshots.back();
+    const json late_field = [&] {
+      const auto deadline =
+          std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+      while (std::chrono::steady_clock::now() < deadline) {
+        const auto [status, body] = get("/api/details/b1-ct/field", late_port_);
+        if (status == 200 && json::parse(body)["mesh_hash"] == api_mesh["mesh_hash"]) {
+          return json::parse(body);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+      return json();
+    }();
+    ASSERT_FALSE(late_field.is_null()) << read_file(dir_ / "late.log");
+    EXPECT_EQ(late_field["state_seq"], newest.state_seq);
+    EXPECT_EQ(late_field["from_results"], true);
+    EXPECT_EQ(late_field["damage"].get<std::vector<float>>(),
+              outputs::read_snapshot_damage(dir_ / "results" / "b1-ct" / "b1-ct.h5", newest));
+  }
 
   // The page in a real browser. ?events=off: headless chromium's virtual time does not run out
   // while an event stream is open; the page loads /api/details and the history either way.
@@ -506,6 +545,116 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   }
   EXPECT_GT(s["mapNodes"].get<int>(), 0);
 
+  // Issue 30 item 2: whatever the replay's probe (seq 2^63 − 1, answered with GAP when the daemon
+  // was up to hear it) did, the card counts refusals only: none here.
+  const auto rejects = browser.evaluate(page, "(() => { const c = " + card + R"(;
+      return {rejects: c.querySelector('.rejects').dataset.value,
+              lastRejectHidden: c.querySelector('.last-reject').hidden}; })())",
+                                        60);
+  ASSERT_TRUE(rejects && rejects->is_object());
+  EXPECT_EQ((*rejects)["rejects"], "0");
+  EXPECT_EQ((*rejects)["lastRejectHidden"], true);
+
+  // Issue 30 item 1, in the page: a detail whose STATEs (published here) carry the estimate made
+  // on the initial state, 38,373 cycles, then 3,000 and 9,000 cycles applied: the card counts
+  // down to 29,373 and the chart falls by the cycles applied; a refusal is counted; then the
+  // detail fails: END OF LIFE.
+  lcm::LCM bus(hub_->url());
+  ASSERT_TRUE(bus.good());
+  const std::string demo = "life-demo";
+  const auto demo_state = [&](std::int64_t seq, std::int64_t cycles) {
+    peritwin_msgs::damage_state_t m{};
+    m.utime = 1'000'000 * (seq + 1);
+    m.detail_id = demo;
+    m.state_seq = seq;
+    m.num_sources = 1;
+    m.source_ids = {"gauge"};
+    m.applied_seq = {seq};
+    m.checkpointed_seq = {0};
+    m.total_cycles = cycles;
+    m.k_i = m.k_ii = std::nan("");
+    m.remaining_cycles = 38373.0;
+    m.remaining_cycles_low = 30000.0;
+    m.remaining_cycles_high = 50000.0;
+    m.remaining_life_seq = -1;
+    m.end_of_life_cycle = -1;
+    m.state_hash = m.engine_hash = "0";
+    return m;
+  };
+  const std::vector<std::int64_t> demo_cycles{0, 3000, 9000};
+  for (std::size_t k = 0; k < demo_cycles.size(); ++k) {
+    const auto m = demo_state(static_cast<std::int64_t>(k), demo_cycles[k]);
+    bus.publish(messages::channel(demo, messages::Kind::kState), &m);
+  }
+  const auto refusal = messages::reject_message(
+      demo, "gauge", 7, {messages::Verdict::invalid, "blocks[0].r", "r = 1.2 must be < 1"}, 1);
+  bus.publish(messages::channel(demo, messages::Kind::kReject), &refusal);
+  // A producer's probe and a resend: protocol events, shown apart, the probe's seq exactly.
+  const auto duplicate = messages::reject_message(
+      demo, "gauge", 2, {messages::Verdict::duplicate, "seq", "seq 2 is already applied"}, 1);
+  bus.publish(messages::channel(demo, messages::Kind::kReject), &duplicate);
+  const auto probe =
+      messages::reject_message(demo, "gauge", std::numeric_limits<std::int64_t>::max(),
+                               {messages::Verdict::gap, "seq", "probe"}, 1);
+  bus.publish(messages::channel(demo, messages::Kind::kReject), &probe);
+  const std::string demo_card = "document.querySelector('.card[data-detail=\"life-demo\"]')";
+  ASSERT_TRUE(wait_until("(() => { const c = " + demo_card +
+                         "; return c !== null && c.querySelector('.state-seq').dataset.value === "
+                         "'2' && c.querySelector('.probes').dataset.value === '1'; })()"))
+      << browser.evaluate(page, "document.body.outerHTML", 60).value_or(json()).dump();
+  const auto life = browser.evaluate(page, "(() => { const c = " + demo_card + R"(;
+      const chart = Chart.getChart(c.querySelector('.chart-life'));
+      return {remaining: c.querySelector('.remaining').dataset.value,
+              remainingText: c.querySelector('.remaining').textContent,
+              end: c.querySelector('.end-of-life').dataset.value,
+              x: chart.data.datasets[2].data.map(p => p.x),
+              y: chart.data.datasets[2].data.map(p => p.y),
+              eolHidden: c.querySelector('.eol').hidden,
+              rejects: c.querySelector('.rejects').dataset.value,
+              lastReject: c.querySelector('.last-reject').textContent,
+              duplicates: c.querySelector('.duplicates').dataset.value,
+              lastProtocol: c.querySelector('.last-protocol').dataset.value,
+              lastProtocolText: c.querySelector('.last-protocol').textContent}; })())",
+                                     60);
+  ASSERT_TRUE(life && life->is_object()) << read_file(dir_ / "chromium.log");
+  EXPECT_EQ((*life)["rejects"], "1");
+  EXPECT_NE((*life)["lastReject"].get<std::string>().find("r = 1.2 must be < 1"),
+            std::string::npos);
+  EXPECT_EQ((*life)["duplicates"], "1");
+  EXPECT_EQ((*life)["lastProtocol"], "9223372036854775807");
+  EXPECT_NE((*life)["lastProtocolText"].get<std::string>().find("seq 9223372036854775807"),
+            std::string::npos)
+      << life->dump();
+  EXPECT_EQ((*life)["remaining"], "29373");
+  EXPECT_EQ((*life)["remainingText"], "29,373");
+  EXPECT_EQ((*life)["end"], "38373");
+  EXPECT_EQ((*life)["eolHidden"], true);
+  ASSERT_EQ((*life)["y"].size(), demo_cycles.size()) << life->dump();
+  for (std::size_t k = 0; k < demo_cycles.size(); ++k) {
+    EXPECT_EQ((*life)["x"][k].get<double>(), static_cast<double>(demo_cycles[k]));
+    EXPECT_EQ((*life)["y"][k].get<double>(), 38373.0 - static_cast<double>(demo_cycles[k]));
+  }
+  auto failed = demo_state(3, 9500);
+  failed.failure = peritwin_msgs::damage_state_t::FAILURE_END_CRITERION;
+  failed.end_of_life_cycle = 9400;
+  failed.remaining_cycles = failed.remaining_cycles_low = failed.remaining_cycles_high = 0.0;
+  bus.publish(messages::channel(demo, messages::Kind::kState), &failed);
+  ASSERT_TRUE(wait_until("(() => { const c = " + demo_card +
+                         "; return c.querySelector('.state-seq').dataset.value === '3'; })()"));
+  const auto eol = browser.evaluate(page, "(() => { const c = " + demo_card + R"(;
+      return {eolHidden: c.querySelector('.eol').hidden,
+              eolText: c.querySelector('.eol').textContent,
+              health: c.querySelector('.health').textContent,
+              remaining: c.querySelector('.remaining').dataset.value,
+              end: c.querySelector('.end-of-life').dataset.value}; })())",
+                                    60);
+  ASSERT_TRUE(eol && eol->is_object());
+  EXPECT_EQ((*eol)["eolHidden"], false);
+  EXPECT_EQ((*eol)["eolText"], "end of life");  // shown upper case by CSS
+  EXPECT_NE((*eol)["health"], "failed");
+  EXPECT_EQ((*eol)["remaining"], "0");
+  EXPECT_EQ((*eol)["end"], "9400");
+
   const fs::path shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-live-test.png";
   fs::remove(shot);
   const auto captured = browser.call("Page.captureScreenshot", {{"format", "png"}}, page, kWaitS);
@@ -516,6 +665,18 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   EXPECT_EQ(png->substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
   std::ofstream(shot, std::ios::binary) << *png;
   EXPECT_TRUE(fs::exists(shot) && fs::file_size(shot) == png->size()) << shot;
+
+  // The demo detail's card (END OF LIFE, the countdown chart), for a person to look at.
+  ASSERT_TRUE(browser.evaluate(page, demo_card + ".scrollIntoView(); true", 60).value_or(json()) ==
+              true);
+  const fs::path life_shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-life-test.png";
+  const auto life_captured =
+      browser.call("Page.captureScreenshot", {{"format", "png"}}, page, kWaitS);
+  ASSERT_TRUE(life_captured && (*life_captured)["result"].contains("data"));
+  const auto life_png =
+      testing::base64_decode((*life_captured)["result"]["data"].get<std::string>());
+  ASSERT_TRUE(life_png && life_png->size() > 8);
+  std::ofstream(life_shot, std::ios::binary) << *life_png;
 }
 
 }  // namespace
