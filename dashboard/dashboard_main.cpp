@@ -1,11 +1,14 @@
 // peritwin-dashboard: a read-only web dashboard of every detail on the bus. See README.md,
 // "Dashboard", and dashboard/store.h, dashboard/server.h.
 //
-//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR] [--log-level L]
+//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR]
+//                      [--max-event-streams 64] [--log-level L]
 //
 // It publishes one thing only: a mesh_request_t on PERITWIN_<DETAIL>_MESH_REQUEST for a detail it
 // has no mesh of (every 5 s at most per detail), which its daemon answers on the MESH channel.
 // --results DIR back-fills each detail's history from the daemon's results files under DIR.
+// --max-event-streams N caps the open /api/events streams (503 beyond); the server has N + 8
+// workers, so the page and the API are always answered (dashboard/http_server.h).
 //
 // Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
@@ -25,6 +28,7 @@
 #include "core/program.h"
 #include "core/stop_signal.h"
 #include "dashboard/backfill.h"
+#include "dashboard/http_server.h"
 #include "dashboard/server.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
@@ -95,6 +99,11 @@ int main(int argc, char** argv) {
   app.add_option("--results", results,
                  "back-fill each detail's history from the daemon's results files under DIR "
                  "(<DIR>/<id>.h5 or <DIR>/*/<id>.h5)");
+  std::size_t max_event_streams = peritwin::dashboard::kDefaultMaxEventStreams;
+  app.add_option("--max-event-streams", max_event_streams,
+                 "open /api/events streams at most, each holding a thread; HTTP 503 beyond "
+                 "(default 64)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{4096}));
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   if (const auto rc = peritwin::core::parse_options(app, argc, argv)) return *rc;
@@ -113,8 +122,12 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
 
   peritwin::dashboard::Store store;
-  httplib::Server server;
-  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS);
+  // Workers: one per event stream at the cap, and kReserveWorkers more for the page and the API.
+  constexpr std::size_t kReserveWorkers = 8;
+  peritwin::dashboard::ServerLimits limits;
+  limits.workers = max_event_streams + kReserveWorkers;
+  peritwin::dashboard::BoundedServer server(limits);
+  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS, max_event_streams);
   // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use
   // (requests then go to either): SO_REUSEADDR only, so that is refused.
   server.set_socket_options([](int sock) {
