@@ -19,6 +19,9 @@ namespace {
 
 using SteadyClock = std::chrono::steady_clock;
 
+/// The largest request body read (no route takes one).
+constexpr std::size_t kMaxPayload = 64 * 1024;
+
 void close_connection(socket_t sock) {
   ::shutdown(sock, SHUT_RDWR);
   ::close(sock);
@@ -39,9 +42,18 @@ int poll_one(socket_t sock, short events, std::chrono::milliseconds timeout) {
 class SocketStream final : public httplib::Stream {
  public:
   SocketStream(socket_t sock, const ServerLimits& limits)
-      : sock_(sock), read_timeout_(limits.read_timeout), write_timeout_(limits.write_timeout) {}
+      : sock_(sock),
+        read_deadline_(SteadyClock::now() + limits.read_timeout),
+        write_timeout_(limits.write_timeout) {}
 
-  bool is_readable() const override { return poll_one(sock_, POLLIN, read_timeout_) > 0; }
+  /// Everything of one request is read by `read_deadline_`, the read timeout after the worker
+  /// took it: its headers are already there (the gate waited for them), and a body dribbled in
+  /// slowly (a byte every few seconds) must not hold the worker longer than that.
+  bool is_readable() const override {
+    const auto left =
+        std::chrono::ceil<std::chrono::milliseconds>(read_deadline_ - SteadyClock::now());
+    return left.count() > 0 && poll_one(sock_, POLLIN, left) > 0;
+  }
   /// False once the client is gone (it hung up or reset): httplib asks before each piece of a
   /// chunked response, so an event stream whose client closed ends and frees its worker and slot.
   bool is_writable() const override {
@@ -91,7 +103,8 @@ class SocketStream final : public httplib::Stream {
   }
 
   socket_t sock_;
-  std::chrono::milliseconds read_timeout_, write_timeout_;
+  SteadyClock::time_point read_deadline_;
+  std::chrono::milliseconds write_timeout_;
 };
 
 }  // namespace
@@ -257,6 +270,8 @@ BoundedServer::BoundedServer(const ServerLimits& limits) : limits_(limits) {
   set_keep_alive_max_count(limits_.keep_alive_max_count);
   set_read_timeout(limits_.read_timeout);
   set_write_timeout(limits_.write_timeout);
+  // No route takes a body: a request announcing more than this is refused (413), not read.
+  set_payload_max_length(kMaxPayload);
   new_task_queue = [this] { return new Pool(*this); };
 }
 

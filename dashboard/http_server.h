@@ -31,7 +31,8 @@ struct ServerLimits {
   std::size_t keep_alive_max_count = 100;
   /// Connections waiting for their headers at most; a new one beyond is closed at once.
   std::size_t max_waiting = 4096;
-  /// A worker's read (request body) and write (response, event) give up after this.
+  /// A request's body must be read within this after a worker takes it; a write (response,
+  /// event) waits this long at most for the client to take some.
   std::chrono::seconds read_timeout{5};
   std::chrono::seconds write_timeout{5};
 };
