@@ -145,6 +145,9 @@ int main(int argc, char** argv) {
     spdlog::critical("cannot listen on {}: address in use or not available here", listen);
     return peritwin::core::kExitRuntime;
   }
+  // A burst of connections waits in the accept queue instead of having its SYNs dropped.
+  constexpr int kListenBacklog = 1024;
+  if (!server.set_backlog(kListenBacklog)) spdlog::warn("listen backlog not raised: {}", errno);
   if (!is_loopback(address->host)) {
     spdlog::warn(
         "listening on {} (not loopback): anyone who can reach it sees every detail's "

@@ -275,6 +275,11 @@ BoundedServer::BoundedServer(const ServerLimits& limits) : limits_(limits) {
   new_task_queue = [this] { return new Pool(*this); };
 }
 
+bool BoundedServer::set_backlog(int backlog) {
+  const socket_t sock = svr_sock_;
+  return sock != INVALID_SOCKET && ::listen(sock, backlog) == 0;  // again: updates the backlog
+}
+
 bool BoundedServer::process_and_close_socket(socket_t sock) {
   Pool* pool = pool_.load();
   if (pool == nullptr) {

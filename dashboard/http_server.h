@@ -41,6 +41,11 @@ class BoundedServer : public httplib::Server {
  public:
   explicit BoundedServer(const ServerLimits& limits);
 
+  /// After bind_to_port/bind_to_any_port: the listening socket's accept queue takes `backlog`
+  /// connections (httplib listens with 5, so a burst of connections, e.g. 200 at once, had SYNs
+  /// dropped and the clients' connects waited a second or more for the retransmission).
+  bool set_backlog(int backlog);
+
  private:
   class Pool;
   friend class Pool;
