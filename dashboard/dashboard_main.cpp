@@ -13,11 +13,13 @@
 // Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
 // for the hub), 2 bad usage (nothing started), 3 runtime failure (the address cannot be bound,
-// LCM cannot open the URL). A tcpq hub that is down is waited for, as the daemon does.
+// LCM cannot open the URL, the HTTP server stops accepting connections). A tcpq hub that is down is
+// waited for, as the daemon does.
 #include <netinet/tcp.h>
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -156,7 +158,19 @@ int main(int argc, char** argv) {
   }
   const std::string host =
       address->host.find(':') != std::string::npos ? "[" + address->host + "]" : address->host;
-  std::thread http([&server] { server.listen_after_bind(); });
+  // httplib's accept loop ends for good on an accept() failure other than EMFILE (ENFILE,
+  // ENOBUFS, ...): the page would then be gone for good while the process lives on. That stops the
+  // dashboard with exit code 3 instead, for whoever supervises it to restart it.
+  std::atomic<bool> http_failed{false};
+  std::thread http([&server, &http_failed] {
+    if (!server.listen_after_bind()) {
+      spdlog::critical("the HTTP server stopped accepting connections: stopping");
+      http_failed = true;
+    }
+  });
+  const auto keep_serving = [&http_failed] {
+    return peritwin::core::keep_running() && !http_failed;
+  };
   std::printf("peritwin-dashboard: http://%s:%d/\n", host.c_str(), port);
   std::fflush(stdout);
   spdlog::info("serving http://{}:{}/ (read-only), LCM \"{}\"", host, port,
@@ -186,7 +200,7 @@ int main(int argc, char** argv) {
 
   int rc = peritwin::core::kExitOk;
   try {
-    peritwin::messages::HubConnection hub(lcm_url, peritwin::core::keep_running);
+    peritwin::messages::HubConnection hub(lcm_url, keep_serving);
     const std::unique_ptr<lcm::LCM> connection = hub.open();
     if (!connection) {
       if (!hub.error().empty()) {
@@ -206,7 +220,7 @@ int main(int argc, char** argv) {
       // Mesh requests are looked for every 0.1 s, not after every message (at 1100 messages/s
       // that was 1100 passes over every detail under the store's mutex).
       auto requests_due = peritwin::dashboard::Clock::time_point{};
-      while (peritwin::core::keep_running()) {
+      while (keep_serving()) {
         if (!hub.connected()) {
           hub.reconnect(lcm);
         } else {
@@ -234,5 +248,6 @@ int main(int argc, char** argv) {
   store.close();
   server.stop();
   http.join();
+  if (http_failed) rc = peritwin::core::kExitRuntime;
   return rc;
 }
