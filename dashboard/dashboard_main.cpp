@@ -158,9 +158,10 @@ int main(int argc, char** argv) {
   }
   const std::string host =
       address->host.find(':') != std::string::npos ? "[" + address->host + "]" : address->host;
-  // httplib's accept loop ends for good on an accept() failure other than EMFILE (ENFILE,
-  // ENOBUFS, ...): the page would then be gone for good while the process lives on. That stops the
-  // dashboard with exit code 3 instead, for whoever supervises it to restart it.
+  // httplib 0.11.4's accept loop ends for good on an accept() failure other than EMFILE, EINTR or
+  // EAGAIN (ENFILE, ENOBUFS, ECONNABORTED, ...; read from its listen_internal): the page would
+  // then be gone while the process lives on. That stops the dashboard with exit code 3 instead,
+  // for whoever supervises it to restart it.
   std::atomic<bool> http_failed{false};
   std::thread http([&server, &http_failed] {
     if (!server.listen_after_bind()) {
