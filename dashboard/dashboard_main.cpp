@@ -17,8 +17,10 @@
 // waited for, as the daemon does.
 #include <netinet/tcp.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -128,6 +130,23 @@ int main(int argc, char** argv) {
   constexpr std::size_t kReserveWorkers = 8;
   peritwin::dashboard::ServerLimits limits;
   limits.workers = max_event_streams + kReserveWorkers;
+  // Connections waiting for their headers hold a file descriptor each: their number stays below
+  // the descriptor limit (raised to the hard limit if it can be), leaving room for the streams,
+  // the requests being answered, LCM and files, so that accept() does not fail with EMFILE.
+  rlimit files{};
+  if (getrlimit(RLIMIT_NOFILE, &files) == 0) {
+    if (files.rlim_cur < files.rlim_max) {
+      files.rlim_cur = files.rlim_max;
+      if (setrlimit(RLIMIT_NOFILE, &files) != 0) getrlimit(RLIMIT_NOFILE, &files);
+    }
+    constexpr rlim_t kOtherFiles = 128;
+    const rlim_t room = files.rlim_cur > limits.workers + kOtherFiles
+                            ? files.rlim_cur - limits.workers - kOtherFiles
+                            : 0;
+    limits.max_waiting = std::max<std::size_t>(16, std::min<rlim_t>(limits.max_waiting, room));
+  }
+  spdlog::info("HTTP: {} event streams at most, {} workers, {} connections waiting at most",
+               max_event_streams, limits.workers, limits.max_waiting);
   peritwin::dashboard::BoundedServer server(limits);
   peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS, max_event_streams);
   // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use

@@ -144,7 +144,7 @@ class BoundedServer::Pool final : public httplib::TaskQueue {
   void wait_for_request(socket_t sock, SteadyClock::time_point deadline, std::size_t served) {
     {
       const std::lock_guard lock(mutex_);
-      if (!stopping_ && waiting_ + arrivals_.size() < server_.limits_.max_waiting) {
+      if (!stopping_) {
         arrivals_.push_back({sock, deadline, served});
         sock = -1;
       }
@@ -196,7 +196,13 @@ class BoundedServer::Pool final : public httplib::TaskQueue {
         if (stopping_) break;
         waiting.insert(waiting.end(), arrivals_.begin(), arrivals_.end());
         arrivals_.clear();
-        waiting_ = waiting.size();
+      }
+      // Too many waiting: the oldest are closed (a flood of idle connections cannot keep a new
+      // request, whose headers usually come with it, from being answered).
+      if (waiting.size() > server_.limits_.max_waiting) {
+        const auto excess = waiting.size() - server_.limits_.max_waiting;
+        for (std::size_t i = 0; i < excess; ++i) close_connection(waiting[i].sock);
+        waiting.erase(waiting.begin(), waiting.begin() + static_cast<std::ptrdiff_t>(excess));
       }
       // Poll the eventfd and the connections with nothing yet, up to the nearest deadline (or
       // the next tick for the partial ones).
@@ -259,7 +265,6 @@ class BoundedServer::Pool final : public httplib::TaskQueue {
   std::mutex mutex_;
   bool stopping_ = false;
   std::vector<Waiting> arrivals_;
-  std::size_t waiting_ = 0;
 };
 
 BoundedServer::BoundedServer(const ServerLimits& limits) : limits_(limits) {

@@ -29,7 +29,7 @@ struct ServerLimits {
   std::chrono::milliseconds keep_alive_timeout{5000};
   /// Requests per connection; the last one is answered with "Connection: close".
   std::size_t keep_alive_max_count = 100;
-  /// Connections waiting for their headers at most; a new one beyond is closed at once.
+  /// Connections waiting for their headers at most; beyond, the oldest waiting are closed.
   std::size_t max_waiting = 4096;
   /// A request's body must be read within this after a worker takes it; a write (response,
   /// event) waits this long at most for the client to take some.
