@@ -1,20 +1,27 @@
 // peritwin-dashboard: a read-only web dashboard of every detail on the bus. See README.md,
 // "Dashboard", and dashboard/store.h, dashboard/server.h.
 //
-//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR] [--log-level L]
+//   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR]
+//                      [--max-event-streams 64] [--log-level L]
 //
 // It publishes one thing only: a mesh_request_t on PERITWIN_<DETAIL>_MESH_REQUEST for a detail it
 // has no mesh of (every 5 s at most per detail), which its daemon answers on the MESH channel.
 // --results DIR back-fills each detail's history from the daemon's results files under DIR.
+// --max-event-streams N caps the open /api/events streams (503 beyond); the server has N + 8
+// workers, so the page and the API are always answered (dashboard/http_server.h).
 //
 // Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
 // for the hub), 2 bad usage (nothing started), 3 runtime failure (the address cannot be bound,
-// LCM cannot open the URL). A tcpq hub that is down is waited for, as the daemon does.
+// LCM cannot open the URL, the HTTP server stops accepting connections). A tcpq hub that is down is
+// waited for, as the daemon does.
 #include <netinet/tcp.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -25,6 +32,7 @@
 #include "core/program.h"
 #include "core/stop_signal.h"
 #include "dashboard/backfill.h"
+#include "dashboard/http_server.h"
 #include "dashboard/server.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
@@ -95,6 +103,11 @@ int main(int argc, char** argv) {
   app.add_option("--results", results,
                  "back-fill each detail's history from the daemon's results files under DIR "
                  "(<DIR>/<id>.h5 or <DIR>/*/<id>.h5)");
+  std::size_t max_event_streams = peritwin::dashboard::kDefaultMaxEventStreams;
+  app.add_option("--max-event-streams", max_event_streams,
+                 "open /api/events streams at most, each holding a thread; HTTP 503 beyond "
+                 "(default 64)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{4096}));
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   if (const auto rc = peritwin::core::parse_options(app, argc, argv)) return *rc;
@@ -113,8 +126,29 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
 
   peritwin::dashboard::Store store;
-  httplib::Server server;
-  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS);
+  // Workers: one per event stream at the cap, and kReserveWorkers more for the page and the API.
+  constexpr std::size_t kReserveWorkers = 8;
+  peritwin::dashboard::ServerLimits limits;
+  limits.workers = max_event_streams + kReserveWorkers;
+  // Connections waiting for their headers hold a file descriptor each: their number stays below
+  // the descriptor limit (raised to the hard limit if it can be), leaving room for the streams,
+  // the requests being answered, LCM and files, so that accept() does not fail with EMFILE.
+  rlimit files{};
+  if (getrlimit(RLIMIT_NOFILE, &files) == 0) {
+    if (files.rlim_cur < files.rlim_max) {
+      files.rlim_cur = files.rlim_max;
+      if (setrlimit(RLIMIT_NOFILE, &files) != 0) getrlimit(RLIMIT_NOFILE, &files);
+    }
+    constexpr rlim_t kOtherFiles = 128;
+    const rlim_t room = files.rlim_cur > limits.workers + kOtherFiles
+                            ? files.rlim_cur - limits.workers - kOtherFiles
+                            : 0;
+    limits.max_waiting = std::max<std::size_t>(16, std::min<rlim_t>(limits.max_waiting, room));
+  }
+  spdlog::info("HTTP: {} event streams at most, {} workers, {} connections waiting at most",
+               max_event_streams, limits.workers, limits.max_waiting);
+  peritwin::dashboard::BoundedServer server(limits);
+  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS, max_event_streams);
   // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use
   // (requests then go to either): SO_REUSEADDR only, so that is refused.
   server.set_socket_options([](int sock) {
@@ -132,6 +166,9 @@ int main(int argc, char** argv) {
     spdlog::critical("cannot listen on {}: address in use or not available here", listen);
     return peritwin::core::kExitRuntime;
   }
+  // A burst of connections waits in the accept queue instead of having its SYNs dropped.
+  constexpr int kListenBacklog = 1024;
+  if (!server.set_backlog(kListenBacklog)) spdlog::warn("listen backlog not raised: {}", errno);
   if (!is_loopback(address->host)) {
     spdlog::warn(
         "listening on {} (not loopback): anyone who can reach it sees every detail's "
@@ -140,7 +177,20 @@ int main(int argc, char** argv) {
   }
   const std::string host =
       address->host.find(':') != std::string::npos ? "[" + address->host + "]" : address->host;
-  std::thread http([&server] { server.listen_after_bind(); });
+  // httplib 0.11.4's accept loop ends for good on an accept() failure other than EMFILE, EINTR or
+  // EAGAIN (ENFILE, ENOBUFS, ECONNABORTED, ...; read from its listen_internal): the page would
+  // then be gone while the process lives on. That stops the dashboard with exit code 3 instead,
+  // for whoever supervises it to restart it.
+  std::atomic<bool> http_failed{false};
+  std::thread http([&server, &http_failed] {
+    if (!server.listen_after_bind()) {
+      spdlog::critical("the HTTP server stopped accepting connections: stopping");
+      http_failed = true;
+    }
+  });
+  const auto keep_serving = [&http_failed] {
+    return peritwin::core::keep_running() && !http_failed;
+  };
   std::printf("peritwin-dashboard: http://%s:%d/\n", host.c_str(), port);
   std::fflush(stdout);
   spdlog::info("serving http://{}:{}/ (read-only), LCM \"{}\"", host, port,
@@ -170,7 +220,7 @@ int main(int argc, char** argv) {
 
   int rc = peritwin::core::kExitOk;
   try {
-    peritwin::messages::HubConnection hub(lcm_url, peritwin::core::keep_running);
+    peritwin::messages::HubConnection hub(lcm_url, keep_serving);
     const std::unique_ptr<lcm::LCM> connection = hub.open();
     if (!connection) {
       if (!hub.error().empty()) {
@@ -190,7 +240,7 @@ int main(int argc, char** argv) {
       // Mesh requests are looked for every 0.1 s, not after every message (at 1100 messages/s
       // that was 1100 passes over every detail under the store's mutex).
       auto requests_due = peritwin::dashboard::Clock::time_point{};
-      while (peritwin::core::keep_running()) {
+      while (keep_serving()) {
         if (!hub.connected()) {
           hub.reconnect(lcm);
         } else {
@@ -218,5 +268,6 @@ int main(int argc, char** argv) {
   store.close();
   server.stop();
   http.join();
+  if (http_failed) rc = peritwin::core::kExitRuntime;
   return rc;
 }

@@ -1,6 +1,8 @@
 #include "dashboard/server.h"
 
+#include <atomic>
 #include <fstream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -12,6 +14,9 @@ namespace {
 
 /// How long an event stream gathers events after a write before the next one.
 constexpr std::chrono::milliseconds kEventCoalesce{5};
+
+/// Retry-After of the 503 to an event stream beyond the cap, in seconds.
+constexpr int kStreamRetryAfterS = 10;
 
 void not_found(httplib::Response& res, const std::string& what) {
   res.status = 404;
@@ -32,7 +37,8 @@ void json(httplib::Response& res, const std::string& body) {
 
 }  // namespace
 
-void install_routes(httplib::Server& server, Store& store, const std::string& chartjs) {
+void install_routes(httplib::Server& server, Store& store, const std::string& chartjs,
+                    std::size_t max_event_streams) {
   server.Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(kPageHtml, "text/html; charset=utf-8");
   });
@@ -80,8 +86,25 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                  json(res, *body);
                });
   }
-  server.Get("/api/events", [&store](const httplib::Request& req, httplib::Response& res) {
+  // The open event streams, each holding a worker while open: at most max_event_streams, so that
+  // the workers beyond them (dashboard_main.cpp) always serve the page and the API.
+  auto open_streams = std::make_shared<std::atomic<std::size_t>>(0);
+  server.Get("/api/events", [&store, open_streams, max_event_streams](const httplib::Request& req,
+                                                                      httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
+    if (open_streams->fetch_add(1) >= max_event_streams) {
+      open_streams->fetch_sub(1);
+      // Answered at once, holding no worker beyond this answer (an EventSource stops on a 503).
+      res.status = 503;
+      res.set_header("Retry-After", std::to_string(kStreamRetryAfterS));
+      res.set_content("too many open event streams (" + std::to_string(max_event_streams) +
+                          ", --max-event-streams): try again later\n",
+                      "text/plain; charset=utf-8");
+      return;
+    }
+    // The slot, given back when httplib drops the content provider holding it (the stream
+    // ended: client gone, a write failed or timed out, the dashboard stopping).
+    std::shared_ptr<void> slot(nullptr, [open_streams](void*) { open_streams->fetch_sub(1); });
     // Events after the one a reconnecting EventSource names (Last-Event-ID), else after ?after=ID
     // (the X-Last-Event-Id of the /api/details snapshot the page drew), else after the newest at
     // connection time. An id this process has not reached yet (another dashboard's) counts as
@@ -99,7 +122,7 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
     };
     auto stream = std::make_shared<Stream>(Stream{start});
     res.set_chunked_content_provider(
-        "text/event-stream", [&store, stream](std::size_t, httplib::DataSink& sink) {
+        "text/event-stream", [&store, stream, slot](std::size_t, httplib::DataSink& sink) {
           if (store.closed()) return false;
           // After a write of events, the next ones are gathered for kEventCoalesce first: one
           // wake-up and one send per 5 ms at most instead of one per event (at 1100 events/s

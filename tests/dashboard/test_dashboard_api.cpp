@@ -13,9 +13,14 @@
 // chromium.
 //
 // Every wait has a deadline of minutes (shared, loaded machines); nothing asserts on wall time.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -31,6 +36,7 @@
 #include <regex>
 #include <thread>
 
+#include "dashboard/server.h"
 #include "messages/channels.h"
 #include "messages/codec.h"
 #include "messages/mesh.h"
@@ -677,6 +683,159 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
       testing::base64_decode((*life_captured)["result"]["data"].get<std::string>());
   ASSERT_TRUE(life_png && life_png->size() > 8);
   std::ofstream(life_shot, std::ios::binary) << *life_png;
+}
+
+// A raw connection to the dashboard (no thread per connection in the test): what the lockout
+// tests hold open by the hundred.
+class RawConnection {
+ public:
+  explicit RawConnection(int port) : fd_(::socket(AF_INET, SOCK_STREAM, 0)) {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = fd_ >= 0 && ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+  }
+  ~RawConnection() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  RawConnection(const RawConnection&) = delete;
+  RawConnection& operator=(const RawConnection&) = delete;
+  bool connected() const { return connected_; }
+  bool send(const std::string& text) {
+    return ::send(fd_, text.data(), text.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(text.size());
+  }
+  /// What arrives until the response headers are complete; shorter if the connection closes or
+  /// nothing comes for `timeout_s`.
+  std::string read_headers(double timeout_s) {
+    std::string got;
+    while (got.find("\r\n\r\n") == std::string::npos) {
+      if (!wait_readable(timeout_s)) break;
+      char buffer[4096];
+      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
+      if (n <= 0) break;
+      got.append(buffer, static_cast<std::size_t>(n));
+    }
+    return got;
+  }
+  /// True when the server closed the connection (EOF or reset) within `timeout_s`.
+  bool closed_by_server(double timeout_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (!wait_readable(1.0)) continue;
+      char buffer[4096];
+      if (::recv(fd_, buffer, sizeof buffer, 0) <= 0) return true;
+    }
+    return false;
+  }
+
+ private:
+  bool wait_readable(double timeout_s) {
+    pollfd p{fd_, POLLIN, 0};
+    return ::poll(&p, 1, static_cast<int>(timeout_s * 1000)) > 0;
+  }
+  int fd_;
+  bool connected_ = false;
+};
+
+constexpr const char* kEventsRequest = "GET /api/events HTTP/1.1\r\nHost: test\r\n\r\n";
+/// The lockout tests' "still served": an answer within this (generous; not a speed assertion).
+constexpr int kServedWithinS = 10;
+
+/// `count` event streams, each answered 200 (its headers read).
+std::vector<std::unique_ptr<RawConnection>> open_event_streams(int port, std::size_t count) {
+  std::vector<std::unique_ptr<RawConnection>> streams;
+  for (std::size_t i = 0; i < count; ++i) {
+    auto c = std::make_unique<RawConnection>(port);
+    EXPECT_TRUE(c->connected() && c->send(kEventsRequest)) << i;
+    const std::string headers = c->read_headers(kWaitS);
+    EXPECT_EQ(headers.rfind("HTTP/1.1 200", 0), 0u) << "stream " << i << ": " << headers;
+    streams.push_back(std::move(c));
+  }
+  return streams;
+}
+
+/// GET path with a client of `timeout_s` (connect and read): {status, seconds taken}.
+std::pair<int, double> timed_get(int port, const std::string& path, int timeout_s) {
+  httplib::Client client("127.0.0.1", port);
+  client.set_connection_timeout(timeout_s, 0);
+  client.set_read_timeout(timeout_s, 0);
+  const auto start = std::chrono::steady_clock::now();
+  const auto res = client.Get(path.c_str());
+  const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  return {res ? res->status : -1, took.count()};
+}
+
+// Issue 30 item 4: eight open event streams used to lock the page out (httplib's 8 workers, one
+// per stream). With the default cap of streams open, the page and the API are still served, one
+// stream more gets 503 with its reason and Retry-After, and once the streams close (the clients
+// gone, noticed by the dashboard) a new stream is accepted again.
+TEST_F(DashboardApi, EventStreamsBeyondTheCapGet503AndThePageIsStillServed) {
+  ASSERT_NO_FATAL_FAILURE(start_dashboard());
+  auto streams = open_event_streams(port_, kDefaultMaxEventStreams);
+  ASSERT_FALSE(::testing::Test::HasFailure()) << read_file(dir_ / "dashboard.log");
+
+  EXPECT_EQ(timed_get(port_, "/", kServedWithinS).first, 200);
+  EXPECT_EQ(timed_get(port_, "/api/details", kServedWithinS).first, 200);
+
+  httplib::Client client("127.0.0.1", port_);
+  client.set_read_timeout(kServedWithinS, 0);
+  const auto refused = client.Get("/api/events");
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 503);
+  EXPECT_NE(refused->body.find("too many open event streams"), std::string::npos) << refused->body;
+  EXPECT_EQ(refused->get_header_value("Content-Type"), "text/plain; charset=utf-8");
+  EXPECT_EQ(refused->get_header_value("Retry-After"), "10");
+
+  streams.clear();  // the clients go away: their streams end and give their slots back
+  bool accepted = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+  while (!accepted && std::chrono::steady_clock::now() < deadline) {
+    RawConnection again(port_);
+    ASSERT_TRUE(again.connected() && again.send(kEventsRequest));
+    const std::string headers = again.read_headers(kWaitS);
+    accepted = headers.rfind("HTTP/1.1 200", 0) == 0;
+    if (!accepted) std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  EXPECT_TRUE(accepted) << read_file(dir_ / "dashboard.log");
+  EXPECT_EQ(timed_get(port_, "/", kServedWithinS).first, 200);
+}
+
+// 200 connections that send nothing or half a request line (slowloris) hold no worker: with them
+// and the cap of event streams open the page is served, and after they close it still is. A
+// connection that never completes its request is closed by the dashboard (header timeout). The
+// times of GET / are printed, not asserted.
+TEST_F(DashboardApi, IdleAndHalfRequestConnectionsDoNotLockThePageOut) {
+  ASSERT_NO_FATAL_FAILURE(start_dashboard());
+  auto streams = open_event_streams(port_, kDefaultMaxEventStreams);
+  ASSERT_FALSE(::testing::Test::HasFailure()) << read_file(dir_ / "dashboard.log");
+  std::vector<std::unique_ptr<RawConnection>> idle;
+  for (int i = 0; i < 200; ++i) {
+    idle.push_back(std::make_unique<RawConnection>(port_));
+    ASSERT_TRUE(idle.back()->connected()) << i;
+    if (i % 2 == 1) {
+      ASSERT_TRUE(idle.back()->send("GET / HT"));  // half a request line
+    }
+  }
+  for (int run = 0; run < 5; ++run) {
+    const auto [status, took] = timed_get(port_, "/", kServedWithinS);
+    EXPECT_EQ(status, 200) << "run " << run;
+    std::printf("GET / with %zu event streams and 200 idle connections open: %.1f ms\n",
+                kDefaultMaxEventStreams, took * 1e3);
+  }
+  EXPECT_EQ(timed_get(port_, "/api/details", kServedWithinS).first, 200);
+
+  // Closed by the dashboard, not by the client: idle for longer than the header timeout.
+  EXPECT_TRUE(idle.front()->closed_by_server(kWaitS));
+  EXPECT_TRUE(idle.back()->closed_by_server(kWaitS));
+  idle.clear();
+  streams.clear();
+  for (int run = 0; run < 3; ++run) {
+    const auto [status, took] = timed_get(port_, "/", kServedWithinS);
+    EXPECT_EQ(status, 200) << "run " << run;
+    std::printf("GET / after they closed: %.1f ms\n", took * 1e3);
+  }
 }
 
 }  // namespace
