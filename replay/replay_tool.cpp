@@ -150,13 +150,25 @@ ReplayResult LcmReplayer::run(
   return result;
 }
 
-std::string describe(const peritwin_msgs::damage_state_t& s) {
+std::string describe(const peritwin_msgs::damage_state_t& s) { return describe(s, std::nullopt); }
+
+std::string describe(const peritwin_msgs::damage_state_t& s,
+                     std::optional<std::int64_t> estimate_cycles) {
   char buf[320];
   std::string life = "remaining life not estimated yet";
   if (s.failure != 0) {
     life = s.failure == peritwin_msgs::damage_state_t::FAILURE_SINGULAR
                ? "FINAL FAILURE (the detail came apart)"
                : "END OF LIFE (criterion met)";
+  } else if (std::isfinite(s.remaining_cycles) && estimate_cycles &&
+             *estimate_cycles <= s.total_cycles) {
+    const double age = static_cast<double>(s.total_cycles - *estimate_cycles);
+    auto left = [age](double e) { return std::max(0.0, e - age); };
+    std::snprintf(buf, sizeof buf,
+                  "remaining %.0f cycles [%.0f, %.0f] (estimated at cycle %lld, %.0f cycles ago)",
+                  left(s.remaining_cycles), left(s.remaining_cycles_low),
+                  left(s.remaining_cycles_high), static_cast<long long>(*estimate_cycles), age);
+    life = buf;
   } else if (std::isfinite(s.remaining_cycles)) {
     std::snprintf(buf, sizeof buf, "remaining %.0f cycles [%.0f, %.0f] (estimated at seq %s)",
                   s.remaining_cycles, s.remaining_cycles_low, s.remaining_cycles_high,
@@ -171,11 +183,33 @@ std::string describe(const peritwin_msgs::damage_state_t& s) {
   return buf + life;
 }
 
+std::optional<std::int64_t> LifeCountdown::observe(const peritwin_msgs::damage_state_t& s) {
+  const auto n = std::min(s.source_ids.size(), s.applied_seq.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    auto [it, fresh] = applied_.try_emplace(s.source_ids[i], s.applied_seq[i]);
+    if (!fresh && it->second == s.applied_seq[i]) continue;
+    it->second = s.applied_seq[i];
+    if (!seen_any_) continue;  // the baseline: these batches may be older than this state
+    const auto key = std::make_pair(s.source_ids[i], s.applied_seq[i]);
+    if (cycles_.insert_or_assign(key, s.total_cycles).second) order_.push_back(key);
+    if (order_.size() > kMaxBatches) {
+      cycles_.erase(order_.front());
+      order_.pop_front();
+    }
+  }
+  seen_any_ = true;
+  if (s.remaining_life_seq < 0) return std::int64_t{0};  // the estimate of the initial state
+  const auto it = cycles_.find({s.remaining_life_source, s.remaining_life_seq});
+  if (it == cycles_.end()) return std::nullopt;
+  return it->second;
+}
+
 void StatePrinter::print(const peritwin_msgs::damage_state_t& s) {
+  const std::optional<std::int64_t> estimate_cycles = countdown_.observe(s);
   if (s.state_seq == last_seq_ && s.remaining_life_seq == last_life_) return;
   last_seq_ = s.state_seq;
   last_life_ = s.remaining_life_seq;
-  std::cout << (json_ ? messages::state_json(s) : describe(s)) << std::endl;
+  std::cout << (json_ ? messages::state_json(s) : describe(s, estimate_cycles)) << std::endl;
 }
 
 }  // namespace peritwin::replay

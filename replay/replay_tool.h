@@ -12,10 +12,12 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <filesystem>
 #include <functional>
 #include <istream>
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -97,8 +99,32 @@ class LcmReplayer {
 };
 
 /// "state 12: 12000 cycles, 36 broken bonds, crack 1.00 mm, remaining 48000 cycles [40000,
-/// 56000] (estimated at seq 10)".
+/// 56000] (estimated at seq 10)": the estimate as published.
 std::string describe(const peritwin_msgs::damage_state_t& state);
+/// With `estimate_cycles`, the total cycles C of the state the estimate was made on, the remaining
+/// life counted down to this state: max(0, E + C - cycles) and the band likewise, "remaining 45000
+/// cycles [37000, 53000] (estimated at cycle 10000, 3000 cycles ago)". Without, describe(state).
+std::string describe(const peritwin_msgs::damage_state_t& state,
+                     std::optional<std::int64_t> estimate_cycles);
+
+/// Which total cycles each batch brought the detail to, from the STATEs seen in order: a STATE
+/// names the batch its estimate was made after (remaining_life_source, remaining_life_seq), not
+/// that state's cycles, so the countdown needs them. The batch that produced a state is the
+/// source whose applied seq moved since the state before; the first state seen only sets the
+/// baseline (its batches may be older than its cycles). At most kMaxBatches remembered.
+class LifeCountdown {
+ public:
+  static constexpr std::size_t kMaxBatches = 4096;
+  /// Records `state`; the cycles of the state its estimate was made on, when known (0 for an
+  /// estimate of the initial state, remaining_life_seq < 0).
+  std::optional<std::int64_t> observe(const peritwin_msgs::damage_state_t& state);
+
+ private:
+  bool seen_any_ = false;
+  std::map<std::string, std::int64_t> applied_;  ///< source -> applied seq at the last state
+  std::map<std::pair<std::string, std::int64_t>, std::int64_t> cycles_;  ///< batch -> cycles
+  std::deque<std::pair<std::string, std::int64_t>> order_;               ///< oldest first
+};
 
 /// The state lines of peritwin-replay and peritwin-stream on stdout: each state once (a new
 /// state_seq or remaining_life_seq), as twin::state_json with `json`, else describe(); flushed.
@@ -114,6 +140,7 @@ class StatePrinter {
  private:
   bool json_;
   std::int64_t last_seq_ = -2, last_life_ = -2;
+  LifeCountdown countdown_;  ///< the text lines count the remaining life down (JSON: as published)
 };
 
 }  // namespace peritwin::replay

@@ -312,6 +312,58 @@ TEST(ReplayDescribe, OneLinePerState) {
   EXPECT_NE(describe(s).find("END OF LIFE"), std::string::npos);
 }
 
+TEST(ReplayDescribe, TheRemainingLifeCountsDownBetweenEstimates) {
+  // B1 in the demo: estimate at the initial state 38,373 cycles [30,000, 48,000]; after batches
+  // of 1000 cycles the text line counts down by exactly the cycles applied; a new estimate made
+  // after batch 10 (10,000 cycles) counts down from there.
+  replay::LifeCountdown countdown;
+  auto state = [](std::int64_t seq, double remaining, std::int64_t life_seq) {
+    peritwin_msgs::damage_state_t s{};
+    s.state_seq = seq;
+    s.total_cycles = 1000 * seq;
+    if (seq > 0) {
+      s.num_sources = 1;
+      s.source_ids = {"replay"};
+      s.applied_seq = {seq};
+    }
+    s.remaining_cycles = remaining;
+    s.remaining_cycles_low = remaining - 8373;
+    s.remaining_cycles_high = remaining + 9627;
+    s.remaining_life_seq = life_seq;
+    s.remaining_life_source = life_seq < 0 ? "" : "replay";
+    s.failure = 0;
+    return s;
+  };
+  for (std::int64_t seq = 0; seq <= 9; ++seq) {
+    const auto s = state(seq, 38373, -1);
+    const auto at = countdown.observe(s);
+    ASSERT_EQ(at, 0) << seq;
+    EXPECT_EQ(describe(s, at),
+              "state " + std::to_string(seq) + ": " + std::to_string(1000 * seq) +
+                  " cycles, 0 broken bonds, crack 0.00 mm, remaining " +
+                  std::to_string(38373 - 1000 * seq) + " cycles [" +
+                  std::to_string(30000 - 1000 * seq) + ", " + std::to_string(48000 - 1000 * seq) +
+                  "] (estimated at cycle 0, " + std::to_string(1000 * seq) + " cycles ago)");
+  }
+  // The estimate of state 10 arrives with state 11 (the life worker lags by one).
+  ASSERT_EQ(countdown.observe(state(10, 38373, -1)), 0);
+  const auto s11 = state(11, 28000, 10);
+  const auto at = countdown.observe(s11);
+  ASSERT_EQ(at, 10000);
+  EXPECT_NE(describe(s11, at).find("remaining 27000 cycles [18627, 36627] (estimated at cycle "
+                                   "10000, 1000 cycles ago)"),
+            std::string::npos)
+      << describe(s11, at);
+  // An estimate of a batch never seen (before this printer started) is shown as published.
+  const auto unseen = state(12, 5000, 3);
+  replay::LifeCountdown late;
+  EXPECT_FALSE(late.observe(unseen).has_value());
+  EXPECT_NE(describe(unseen, std::nullopt)
+                .find("remaining 5000 cycles [-3373, 14627] (estimated "
+                      "at seq 3)"),
+            std::string::npos);
+}
+
 // --- authentication against a fake daemon ------------------------------------------------
 
 /// Deadline of every wait on another process or on a replay run.
