@@ -316,9 +316,7 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
 
 /// The replay of `o` (after --generate-key-file and the required options); the exit code.
 int run(Options o) {
-  // The memory bound (75 % of physical memory) only where the model is built: in-process.
-  const auto loaded = config::load_config(
-      o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
+  const auto loaded = replay::load_producer_config(o.config_file, o.in_process);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return core::kExitUsage;

@@ -150,6 +150,10 @@ ReplayResult LcmReplayer::run(
   return result;
 }
 
+config::ConfigResult load_producer_config(const std::string& file, bool in_process) {
+  return config::load_config(file, {in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
+}
+
 std::string describe(const peritwin_msgs::damage_state_t& s) { return describe(s, std::nullopt); }
 
 std::string describe(const peritwin_msgs::damage_state_t& s,
@@ -184,12 +188,14 @@ std::string describe(const peritwin_msgs::damage_state_t& s,
 }
 
 std::optional<std::int64_t> LifeCountdown::observe(const peritwin_msgs::damage_state_t& s) {
+  const bool successor = last_state_seq_ && s.state_seq == *last_state_seq_ + 1;
+  last_state_seq_ = s.state_seq;
   const auto n = std::min(s.source_ids.size(), s.applied_seq.size());
   for (std::size_t i = 0; i < n; ++i) {
     auto [it, fresh] = applied_.try_emplace(s.source_ids[i], s.applied_seq[i]);
     if (!fresh && it->second == s.applied_seq[i]) continue;
     it->second = s.applied_seq[i];
-    if (!seen_any_) continue;  // the baseline: these batches may be older than this state
+    if (!successor) continue;
     const auto key = std::make_pair(s.source_ids[i], s.applied_seq[i]);
     if (cycles_.insert_or_assign(key, s.total_cycles).second) order_.push_back(key);
     if (order_.size() > kMaxBatches) {
@@ -197,7 +203,6 @@ std::optional<std::int64_t> LifeCountdown::observe(const peritwin_msgs::damage_s
       order_.pop_front();
     }
   }
-  seen_any_ = true;
   if (s.remaining_life_seq < 0) return std::int64_t{0};  // the estimate of the initial state
   const auto it = cycles_.find({s.remaining_life_source, s.remaining_life_seq});
   if (it == cycles_.end()) return std::nullopt;

@@ -98,6 +98,10 @@ class LcmReplayer {
   loads::BatchSender sender_;
 };
 
+/// The config as a producer (peritwin-replay, peritwin-stream) reads it: the memory bound (75 %
+/// of physical memory) only in-process, where the model is built; over LCM, none.
+[[nodiscard]] config::ConfigResult load_producer_config(const std::string& file, bool in_process);
+
 /// "state 12: 12000 cycles, 36 broken bonds, crack 1.00 mm, remaining 48000 cycles [40000,
 /// 56000] (estimated at seq 10)": the estimate as published.
 std::string describe(const peritwin_msgs::damage_state_t& state);
@@ -110,8 +114,10 @@ std::string describe(const peritwin_msgs::damage_state_t& state,
 /// Which total cycles each batch brought the detail to, from the STATEs seen in order: a STATE
 /// names the batch its estimate was made after (remaining_life_source, remaining_life_seq), not
 /// that state's cycles, so the countdown needs them. The batch that produced a state is the
-/// source whose applied seq moved since the state before; the first state seen only sets the
-/// baseline (its batches may be older than its cycles). At most kMaxBatches remembered.
+/// source whose applied seq moved since its predecessor, known only when that predecessor
+/// (state_seq − 1) was the last state seen: after a missed state, a source that moved in it
+/// would be dated too late (the dashboard's store, Store::on_state_life, keeps the same rule).
+/// At most kMaxBatches remembered.
 class LifeCountdown {
  public:
   static constexpr std::size_t kMaxBatches = 4096;
@@ -120,7 +126,7 @@ class LifeCountdown {
   std::optional<std::int64_t> observe(const peritwin_msgs::damage_state_t& state);
 
  private:
-  bool seen_any_ = false;
+  std::optional<std::int64_t> last_state_seq_;   ///< of the last state seen
   std::map<std::string, std::int64_t> applied_;  ///< source -> applied seq at the last state
   std::map<std::pair<std::string, std::int64_t>, std::int64_t> cycles_;  ///< batch -> cycles
   std::deque<std::pair<std::string, std::int64_t>> order_;               ///< oldest first

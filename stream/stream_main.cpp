@@ -789,8 +789,7 @@ int Stream::finish() {
 int run(Options o) {
   o.replay.lockstep = o.lockstep;
   o.batching.merge_identical = true;
-  const auto loaded = config::load_config(
-      o.config_file, {o.in_process ? 0 : std::numeric_limits<std::uint64_t>::max()});
+  const auto loaded = replay::load_producer_config(o.config_file, o.in_process);
   if (!loaded.ok()) {
     std::cerr << loaded.error_text();
     return core::kExitUsage;

@@ -358,6 +358,10 @@ TEST(ReplayDescribe, TheRemainingLifeCountsDownBetweenEstimates) {
   const auto unseen = state(12, 5000, 3);
   replay::LifeCountdown late;
   EXPECT_FALSE(late.observe(unseen).has_value());
+  // After a missed state the next one's batch is not dated (a source that moved in the missed
+  // state would be dated too late): state 14 after 12 leaves batch 14 unknown, 15 after 14 not.
+  EXPECT_FALSE(late.observe(state(14, 5000, 14)).has_value());
+  EXPECT_EQ(late.observe(state(15, 5000, 15)), 15000);
   EXPECT_NE(describe(unseen, std::nullopt)
                 .find("remaining 5000 cycles [-3373, 14627] (estimated "
                       "at seq 3)"),
