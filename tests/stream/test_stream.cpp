@@ -53,6 +53,21 @@ std::string field(const std::string& json, const std::string& key) {
   return json.substr(start, end - start);
 }
 
+/// A TCP connection to 127.0.0.1:`port` (the stream's tcp:// input); -1 when it fails.
+int connect_loopback(int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return -1;
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
 std::vector<std::string> lines_to_end(Process& p) {
   std::vector<std::string> lines;
   while (auto line = p.read_line(kWaitS)) lines.push_back(*line);
@@ -136,12 +151,8 @@ TEST_F(Stream, TcpConnectionEqualsTheReplayAfterSigterm) {
   const std::string text = read_file(kSeries);
   const std::size_t half = text.find('\n', text.size() / 2) + 1;
   for (const auto& piece : {text.substr(0, half), text.substr(half)}) {  // two connections
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const int fd = connect_loopback(port);
+    ASSERT_GE(fd, 0) << "connect to 127.0.0.1:" << port;
     ASSERT_EQ(::write(fd, piece.data(), piece.size()), static_cast<ssize_t>(piece.size()));
     ::close(fd);
   }
@@ -196,12 +207,8 @@ void write_rows(const fs::path& file, const std::vector<std::string>& rows) {
 /// Writes `bytes` to the loopback TCP port without a newline; errors (the stream closing the
 /// connection) end it quietly.
 void send_without_newline(int port, std::size_t bytes) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_port = htons(static_cast<std::uint16_t>(port));
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  const int fd = connect_loopback(port);
+  ASSERT_GE(fd, 0) << "connect to 127.0.0.1:" << port;
   const std::string chunk(65536, '7');
   for (std::size_t sent = 0; sent < bytes;) {
     const ssize_t n = ::send(fd, chunk.data(), std::min(chunk.size(), bytes - sent), MSG_NOSIGNAL);
@@ -239,12 +246,8 @@ TEST_F(Stream, AnEndlessLineOnTcpEndsTheStreamWithExitTwo) {
   {
     std::string text;
     for (std::size_t i = 0; i < 600; ++i) text += rows[i] + "\n";
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(static_cast<std::uint16_t>(port));
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const int fd = connect_loopback(port);
+    ASSERT_GE(fd, 0) << "connect to 127.0.0.1:" << port;
     ASSERT_EQ(::write(fd, text.data(), text.size()), static_cast<ssize_t>(text.size()));
     ::close(fd);
   }
