@@ -15,7 +15,13 @@
 //
 //   [[detail]]           id R (1-32 chars [A-Za-z0-9_-], unique after upper-casing and '-'->'_'),
 //                        description ""
-//   [detail.geometry] R  thickness R (m, > 0), rigid_factor 200 (E_rigid/E, >= 1),
+//   [detail.geometry] R  thickness R (m, > 0), rigid_model "constraint" | "stiff_material"
+//                          (how rigid_regions are modelled, mesh::RigidModel: "constraint" ties
+//                          each region to one rigid motion, any ν; "stiff_material" is 000 Sec.
+//                          6.1's E_rigid = rigid_factor·E, refused where it is indefinite, e.g.
+//                          ν < 0.3266 in plane stress at 200), rigid_factor 200 (E_rigid/E, >= 1,
+//                          stiff_material), rigid_penalty 1000 (>= 1, constraint: a tie's
+//                          stiffness over its bond's),
 //                        outline R [region, ...] (m, at least one; the body is their union,
 //                          e.g. rectangles, or a polygon with arcs and fillets),
 //                        holes [] [region, ...] (circles or polygons), notches [] [{from, to} |

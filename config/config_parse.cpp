@@ -186,8 +186,16 @@ bool read_geometry(Context& ctx, const toml::table& t, const std::string& path,
   const std::size_t errors_before = ctx.errors.size();
   TableReader r(ctx, t, path);
   if (const auto h = req(r, "thickness", core::Bound::positive)) g.thickness = *h;
+  g.rigid_model = r.choice<mesh::RigidModel>("rigid_model",
+                                             {{"constraint", mesh::RigidModel::constraint},
+                                              {"stiff_material", mesh::RigidModel::stiff_material}},
+                                             g.rigid_model)
+                      .value_or(g.rigid_model);
   g.rigid_factor = r.number("rigid_factor", 200.0);
   r.check("rigid_factor", g.rigid_factor >= 1, "must be >= 1 (E_rigid / E)");
+  g.rigid_penalty = r.number("rigid_penalty", g.rigid_penalty);
+  r.check("rigid_penalty", g.rigid_penalty >= 1,
+          "must be >= 1 (a rigid region's tie stiffness / its bond's)");
   bool outline_ok = r.has("outline");
   each_table(r, "outline", true, "an array of rectangles, polygons or circles",
              [&](const auto& e, const auto& p) {
@@ -669,6 +677,16 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     if (ctx.errors.size() == errors_before) {
       if (std::string why = core::message_of(model::validate(d.material, d.model)); !why.empty()) {
         ctx.error(m->source(), r.path_of("material"), why);
+      } else if (d.geometry.rigid_model == mesh::RigidModel::stiff_material &&
+                 !d.geometry.rigid_regions.empty()) {
+        // Issue 31: 000's stiff material is indefinite in the state-based model below ν ≈ 1/3.
+        const std::string stiff = core::message_of(
+            model::check_stiff_rigid_material(d.material, d.model, d.geometry.rigid_factor));
+        if (!stiff.empty()) {
+          const auto* g = t["geometry"].as_table();
+          ctx.error(g != nullptr ? source_of(*g, "rigid_model") : m->source(),
+                    r.path_of("geometry") + ".rigid_model", stiff);
+        }
       }
     }
   }

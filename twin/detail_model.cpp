@@ -9,6 +9,7 @@
 #include <mutex>
 
 #include "core/fnv1a.h"
+#include "solver/statics/rigid_regions.h"
 
 namespace peritwin::twin {
 
@@ -78,8 +79,9 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
   }
   sp.supports = boundary.supports;
   sp.loads = boundary.loads;
-  sp.model =
-      model::build_model(sp.disc, config.material, config.model, config.geometry.rigid_factor);
+  sp.model = model::build_model(sp.disc, config.material, config.model,
+                                statics::material_rigid_factor(config.geometry));
+  sp.ties = statics::rigid_region_ties(sp.disc, sp.model, config.geometry);
   crack::CrackTrackerOptions tracker_options;
   tracker_options.phase_switch_damage = config.fatigue.phase_switch_damage;
   m->tracker_ =
@@ -104,6 +106,15 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
   h.vec(d.bond_precut);
   h.vec(sp.model.bond_stiffness);
   h.vec(sp.model.dilatation_stiffness);
+  // Rigid-region ties (issue 31). Only when there are some, so that the signature of a detail
+  // without them (every detail before) is unchanged and its checkpoints still resume.
+  if (!sp.ties.empty()) {
+    h.value(sp.ties.size());
+    for (const auto& tie : sp.ties) {
+      h.vec(tie.terms);
+      h.value(tie.stiffness);
+    }
+  }
   for (const auto& s : sp.supports) {
     h.vec(s.nodes);
     h.value(s.fix_x);
@@ -147,8 +158,8 @@ fatigue::FatigueSettings DetailModel::engine_settings(double a2_factor, bool liv
 std::unique_ptr<fatigue::FatigueEngine> DetailModel::make_engine(double a2_factor,
                                                                  bool live) const {
   const fatigue::FatigueSettings s = engine_settings(a2_factor, live);
-  return std::make_unique<fatigue::FatigueEngine>(specimen_.disc, specimen_.model,
-                                                  specimen_.supports, specimen_.loads, s);
+  return std::make_unique<fatigue::FatigueEngine>(
+      specimen_.disc, specimen_.model, specimen_.supports, specimen_.loads, s, specimen_.ties);
 }
 
 std::string DetailModel::surface_name(mesh::Point p) const {

@@ -43,6 +43,8 @@ class DetailModel {
   /// The outline, holes and notches the discretization was cut from.
   [[nodiscard]] const mesh::DetailGeometry& geometry() const { return specimen_.geometry; }
   [[nodiscard]] const model::PdModel& pd() const { return specimen_.model; }
+  /// Everything a static solve is built from (the rigid regions' ties included).
+  [[nodiscard]] const statics::Specimen& specimen() const { return specimen_; }
   [[nodiscard]] const fatigue::FatigueSettings& settings() const { return settings_; }
   [[nodiscard]] const crack::CrackTracker& tracker() const { return *tracker_; }
   /// Finds every crack (notch, surface, interior) from the damage; its notches are the tracker's.

@@ -69,6 +69,7 @@ HoleRunResult run_ct_with_hole(double dx, double p_max, bool propagation_limit, 
   const mesh::Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
   const mesh::Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
   g.rigid_regions = {mesh::Region::of(upper_pin), mesh::Region::of(lower_pin)};
+  g.rigid_model = mesh::RigidModel::stiff_material;  // 002's pins, as documented for B3
   const double horizon = 3.015 * dx;
   // 002 Sec. 7: no-fail rings 2δ wide around the pins.
   g.no_fail_zones = {

@@ -99,6 +99,7 @@ struct Inputs {
   std::string model_name = "state_based";
   std::string plane_name = "plane_stress";
   std::string kernel_name = "constant";
+  std::string rigid_model_name = "constraint";
   std::vector<double> check_factors{1.25, 1.5};
   PhaseOne phase_one;
 };
@@ -266,6 +267,11 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--kernel", in.kernel_name,
                  "bond-based micromodulus kernel: constant (default) | conical | gaussian")
       ->check(CLI::IsMember({"constant", "conical", "gaussian"}));
+  app.add_option("--rigid-model", in.rigid_model_name,
+                 "the coupon's pins: constraint (default; rigid-body ties, any nu) | "
+                 "stiff_material (000 Sec. 6.1's 200*E, B1's documented A2; state-based only "
+                 "for nu near 1/3 and above)")
+      ->check(CLI::IsMember({"constraint", "stiff_material"}));
   app.add_flag_callback(
       "--no-surface-correction", [&] { s.model.options.surface_correction = false; },
       "[detail.model] surface_correction = false");
@@ -355,6 +361,15 @@ std::optional<int> prepare(Options& o, Plan& plan) {
                    : in.kernel_name == "gaussian" ? model::Kernel::gaussian
                                                   : model::Kernel::constant;
   if (const core::Status st = validate(mat, options); !st) return usage(core::message_of(st));
+  s.coupon.rigid_model = in.rigid_model_name == "stiff_material" ? mesh::RigidModel::stiff_material
+                                                                 : mesh::RigidModel::constraint;
+  if (s.coupon.rigid_model == mesh::RigidModel::stiff_material) {
+    if (const core::Status st =
+            model::check_stiff_rigid_material(mat, options, mesh::DetailGeometry{}.rigid_factor);
+        !st) {
+      return usage(core::message_of(st));
+    }
+  }
   s.model.law =
       in.law_name == "energy" ? fatigue::FatigueLaw::energy : fatigue::FatigueLaw::strain_range;
   s.model.phase_switch_damage =

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "solver/statics/rigid_regions.h"
 #include "solver/statics/static_solver.h"
 
 namespace peritwin::validation {
@@ -30,10 +31,13 @@ statics::Specimen make_compact_tension(const CompactTensionSpec& spec,
   const mesh::Circle upper_pin{{0.25 * w, 0.275 * w}, 0.125 * w};
   const mesh::Circle lower_pin{{0.25 * w, -0.275 * w}, 0.125 * w};
   s.geometry.rigid_regions = {mesh::Region::of(upper_pin), mesh::Region::of(lower_pin)};
+  s.geometry.rigid_model = spec.rigid_model;
   s.initial_crack_tip = {0.25 * w + spec.initial_crack, 0.0};
   s.geometry.notches.push_back({"pre-crack", {{-dx, 0.0}, s.initial_crack_tip}});
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx);
-  s.model = model::build_model(s.disc, s.material, options, s.geometry.rigid_factor);
+  s.model =
+      model::build_model(s.disc, s.material, options, statics::material_rigid_factor(s.geometry));
+  s.ties = statics::rigid_region_ties(s.disc, s.model, s.geometry);
   for (const double side : {1.0, -1.0}) {
     const mesh::NodeIndex k = s.disc.nearest_node({1.25 * w, side * 0.5 * dx});
     s.supports.push_back({{k}, true, true});
@@ -204,6 +208,7 @@ statics::Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec
   }
   for (const auto& c : upper) s.geometry.rigid_regions.push_back(mesh::Region::of(c));
   for (const auto& c : lower) s.geometry.rigid_regions.push_back(mesh::Region::of(c));
+  s.geometry.rigid_model = mesh::RigidModel::stiff_material;  // 000 Sec. 6.2's pin material
   s.disc = discretize(s.geometry, dx, horizon_ratio * dx, spec.grid);
   s.model = model::build_model(s.disc, s.material, options, s.geometry.rigid_factor);
   // 000 Eq. (51): F1 (upper left, y), F2 (middle, x), F3 (upper right, y).

@@ -23,6 +23,9 @@ struct CompactTensionSpec {
   double thickness = 0.010;            ///< B
   double initial_crack = 0.3 * 0.050;  ///< a0, measured from the load line
   model::Material material{68e9, 0.33, 48.7e6};
+  /// The pins: 000 Sec. 6.1's stiff material (B1's documented numbers), or rigid-body
+  /// constraints (any ν; peritwin-calibrate's default).
+  mesh::RigidModel rigid_model = mesh::RigidModel::stiff_material;
 };
 
 /// The oracle of the tied fixture (CompactTensionShearSpec::rigid_fixtures): the pin forces of

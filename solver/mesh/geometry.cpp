@@ -201,6 +201,7 @@ core::Status DetailGeometry::validate() const {
   }
   if (!(thickness > 0)) return core::failure("thickness must be > 0");
   if (!(rigid_factor >= 1)) return core::failure("rigid_factor must be >= 1");
+  if (!(rigid_penalty >= 1)) return core::failure("rigid_penalty must be >= 1");
   return {};
 }
 

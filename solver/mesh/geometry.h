@@ -84,14 +84,30 @@ struct SurfacePlace {
   double distance = 0.0;
 };
 
+/// How a rigid region (a pin, a clamp, a load introduction) is modelled (issue 31).
+enum class RigidModel {
+  /// Its nodes follow one rigid motion: every bond between two nodes of the same region is tied
+  /// (statics::rigid_region_ties), the material inside it is the detail's own. No stiffness
+  /// factor enters the material, so the model is positive definite for every Poisson's ratio.
+  constraint,
+  /// 000 Sec. 6.1: material of E_rigid = rigid_factor·E. Kept to reproduce the paper's B1/B2
+  /// numbers; with the state-based model valid only where rigid_factor·(κ − 2μ)/μ ≥ −6
+  /// (model::check_stiff_rigid_material), e.g. ν ≥ 0.325 in plane stress at 200·E.
+  stiff_material,
+};
+
 struct DetailGeometry {
   std::vector<Region> outline;        ///< union of its entries = the body before holes
   std::vector<Region> holes;          ///< material removed (circles or polygons)
   std::vector<Notch> notches;         ///< cut every bond that crosses them
-  std::vector<Region> rigid_regions;  ///< material with E_rigid = rigid_factor * E (000 Sec. 6.1)
+  std::vector<Region> rigid_regions;  ///< rigid parts, modelled as `rigid_model` says
   std::vector<Region> no_fail_zones;  ///< bonds touching these never break (002 Sec. 7)
   double thickness = 1.0;             ///< plate thickness h (m)
-  double rigid_factor = 200.0;        ///< E_rigid / E (000 Sec. 6.1)
+  RigidModel rigid_model = RigidModel::constraint;
+  double rigid_factor = 200.0;  ///< stiff_material: E_rigid / E (000 Sec. 6.1)
+  /// constraint: a tie's stiffness over its bond's pair stiffness (the constraint's penalty; its
+  /// violation is the tie force over that stiffness, docs/solver.md "Rigid regions")
+  double rigid_penalty = 1000.0;
 
   [[nodiscard]] bool is_material(Point p) const;
   [[nodiscard]] Rectangle bounding_box() const;

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 
@@ -88,6 +89,35 @@ StateBasedConstants state_based_constants(const Material& material, PlaneConditi
   c.b = 3.0 * e / ((1.0 + nu) * pi * horizon * horizon * horizon);   // 000 Eq. (4b)
   c.d = 2.0 / (pi * thickness * horizon * horizon);                  // 000 Eq. (4c)
   return c;
+}
+
+double stiff_rigid_index(const Material& material, const ModelOptions& options,
+                         double rigid_factor) {
+  double nu = material.poisson_ratio;
+  if (options.plane == PlaneCondition::plane_strain) nu = nu / (1.0 - nu);
+  return rigid_factor * (3.0 * nu - 1.0) / (1.0 - nu);
+}
+
+core::Status check_stiff_rigid_material(const Material& material, const ModelOptions& options,
+                                        double rigid_factor) {
+  if (options.kind != ModelKind::state_based) return {};
+  const double index = stiff_rigid_index(material, options, rigid_factor);
+  if (index >= kStiffRigidIndexLimit) return {};
+  // The smallest ν this rigid_factor allows: rf·(3ν' − 1)/(1 − ν') = limit, ν' = ν/(1 − ν) in
+  // plane strain.
+  const double q = kStiffRigidIndexLimit / rigid_factor;
+  double nu_min = (1.0 + q) / (3.0 + q);
+  if (options.plane == PlaneCondition::plane_strain) nu_min = nu_min / (1.0 + nu_min);
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "rigid regions of stiff material (rigid_model = \"stiff_material\", E_rigid = "
+                "%g·E) make the state-based stiffness indefinite at nu = %g (%s): "
+                "rigid_factor·(3nu−1)/(1−nu) = %.3g is below %g, which needs nu >= %.4f; use "
+                "rigid_model = \"constraint\" (the default), which holds for every nu",
+                rigid_factor, material.poisson_ratio,
+                options.plane == PlaneCondition::plane_strain ? "plane strain" : "plane stress",
+                index, kStiffRigidIndexLimit, nu_min);
+  return core::failure(buf);
 }
 
 PdModel build_model(const mesh::Discretization& disc, const Material& material,

@@ -39,6 +39,21 @@ struct ModelOptions {
 /// OK, or a message naming the offending field.
 core::Status validate(const Material& material, const ModelOptions& options);
 
+/// Rigid regions of stiff material (000 Sec. 6.1, E_rigid = rigid_factor·E) in the state-based
+/// model: the index rigid_factor·(κ − 2μ)/μ = rigid_factor·(3ν − 1)/(1 − ν) (2D κ = E/(2(1 − ν)),
+/// μ = E/(2(1 + ν)); plane strain through E/(1 − ν²), ν/(1 − ν) as 000 Eq. 4). Below 0 the rigid
+/// nodes' dilatation term (000 Eq. 4a's a < 0, times rigid_factor) also weighs the bonds into the
+/// plate, whose pair terms are not stiffened: the stiffness turns indefinite. Measured on B1
+/// (Δx = 1 mm, docs/solver.md "Rigid regions"): sound at −9.6, spurious bond breaks at −11.8, no
+/// virgin solve at −14.9. The config refuses below kStiffRigidIndexLimit.
+double stiff_rigid_index(const Material& material, const ModelOptions& options,
+                         double rigid_factor);
+inline constexpr double kStiffRigidIndexLimit = -6.0;
+/// OK when stiff-material rigid regions are valid for this material and model (always for the
+/// bond-based model, whose pair terms are all positive), else why not and what to use instead.
+core::Status check_stiff_rigid_material(const Material& material, const ModelOptions& options,
+                                        double rigid_factor);
+
 /// Poisson's ratio the model actually represents: bond-based 2D fixes ν = 1/3 in plane stress and
 /// ν = 1/4 in plane strain; state-based represents the material's ν.
 double effective_poisson_ratio(const Material& material, const ModelOptions& options);
