@@ -1,11 +1,15 @@
 #include "outputs/damage_png.h"
 
-#include <png.h>
+#include <cairo.h>
+#include <pango/pangocairo.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <memory>
+#include <numbers>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -16,184 +20,266 @@ namespace peritwin::outputs {
 
 namespace {
 
-constexpr Rgb kWhite{255, 255, 255};
 constexpr Rgb kBlack{0, 0, 0};
 constexpr Rgb kGrid{225, 225, 225};
 constexpr Rgb kLine{31, 90, 180};
-constexpr int kMaxSide = 32768;
+constexpr Rgb kCrackPath{200, 0, 200};
+constexpr Rgb kEstimate{230, 110, 0};
+constexpr Rgb kCritical{120, 120, 120};
+constexpr int kMaxSide = 32767;  // cairo's largest image surface
 
-/// An 8-bit RGB raster, row 0 on top.
-struct Image {
-  int width, height;
-  std::vector<std::uint8_t> rgb;
-  Image(int w, int h, Rgb fill) : width(w), height(h), rgb(3 * std::size_t(w) * std::size_t(h)) {
-    for (std::size_t i = 0; i < rgb.size(); i += 3) {
-      rgb[i] = fill.r;
-      rgb[i + 1] = fill.g;
-      rgb[i + 2] = fill.b;
-    }
+// Spacing of the pictures, in pixels.
+constexpr int kMargin = 12;       // around the picture
+constexpr int kTick = 6;          // tick length
+constexpr int kTickGap = 4;       // tick to its label
+constexpr int kLabelGap = 12;     // least space between two tick labels along an axis
+constexpr int kSampleWidth = 30;  // a legend entry's sample of its line
+constexpr int kSampleGap = 6;     // sample to text
+constexpr int kEntryGap = 22;     // between legend entries of a row
+constexpr int kRowGap = 4;        // between legend rows
+
+// --- cairo and pango handles -----------------------------------------------------------------
+
+template <auto Release>
+struct Releaser {
+  template <class T>
+  void operator()(T* p) const {
+    Release(p);
   }
-  void set(int x, int y, Rgb c) {
-    if (x < 0 || y < 0 || x >= width || y >= height) return;
-    const std::size_t i = 3 * (std::size_t(y) * std::size_t(width) + std::size_t(x));
-    rgb[i] = c.r;
-    rgb[i + 1] = c.g;
-    rgb[i + 2] = c.b;
+};
+using SurfaceHandle = std::unique_ptr<cairo_surface_t, Releaser<cairo_surface_destroy>>;
+using ContextHandle = std::unique_ptr<cairo_t, Releaser<cairo_destroy>>;
+using LayoutHandle = std::unique_ptr<PangoLayout, Releaser<g_object_unref>>;
+using FontHandle = std::unique_ptr<PangoFontDescription, Releaser<pango_font_description_free>>;
+using FontOptionsHandle =
+    std::unique_ptr<cairo_font_options_t, Releaser<cairo_font_options_destroy>>;
+
+void check(cairo_t* cr, const char* what) {
+  const cairo_status_t status = cairo_status(cr);
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw PngError(std::string("cairo (") + what + "): " + cairo_status_to_string(status));
   }
-  void fill(int x0, int y0, int w, int h, Rgb c) {
-    for (int y = y0; y < y0 + h; ++y) {
-      for (int x = x0; x < x0 + w; ++x) set(x, y, c);
-    }
+}
+
+/// An RGB image surface of cairo, white, and its drawing context.
+struct Surface {
+  SurfaceHandle surface;
+  ContextHandle cr;
+  Surface(int width, int height)
+      : surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height)),
+        cr(cairo_create(surface.get())) {
+    check(cr.get(), "image surface");  // a failed surface makes a failed context
+    cairo_set_source_rgb(cr.get(), 1.0, 1.0, 1.0);
+    cairo_paint(cr.get());
   }
 };
 
-/// libpng's simplified write API (no setjmp); png_image_free releases what it holds on any path.
-class PngImage {
- public:
-  PngImage(int width, int height) {
-    image_.version = PNG_IMAGE_VERSION;
-    image_.width = static_cast<png_uint_32>(width);
-    image_.height = static_cast<png_uint_32>(height);
-    image_.format = PNG_FORMAT_RGB;
-  }
-  ~PngImage() { png_image_free(&image_); }
-  PngImage(const PngImage&) = delete;
-  PngImage& operator=(const PngImage&) = delete;
+// --- text ------------------------------------------------------------------------------------
 
-  std::string encode(const Image& img) {
-    const auto stride = static_cast<png_int_32>(3 * img.width);
-    png_alloc_size_t size = 0;
-    if (png_image_write_to_memory(&image_, nullptr, &size, 0, img.rgb.data(), stride, nullptr) ==
-        0) {
-      throw PngError(std::string("libpng: ") + image_.message);
-    }
-    std::string bytes(size, '\0');
-    if (png_image_write_to_memory(&image_, bytes.data(), &size, 0, img.rgb.data(), stride,
-                                  nullptr) == 0) {
-      throw PngError(std::string("libpng: ") + image_.message);
-    }
-    bytes.resize(size);
-    return bytes;
+/// The faces of the pictures' text: fontconfig's "Sans" (DejaVu Sans on Debian), sizes in pixels.
+enum class Face { text, title };
+constexpr int kTextPixels = 14, kTitlePixels = 17;
+
+struct Size {
+  int width = 0, height = 0;
+};
+
+/// Sets text with pango: measures it and draws it. Measures on a 1 x 1 surface of the pictures'
+/// kind with the same font options, so a size measured before a picture exists is the size drawn.
+class Typesetter {
+ public:
+  Typesetter() : measure_(1, 1) {
+    layout_.reset(pango_cairo_create_layout(measure_.cr.get()));
+    // Grey antialiasing (no colour fringes), slight hinting, whole-pixel advances: the same text
+    // the same pixels on every machine with the same font.
+    FontOptionsHandle options(cairo_font_options_create());
+    cairo_font_options_set_antialias(options.get(), CAIRO_ANTIALIAS_GRAY);
+    cairo_font_options_set_hint_style(options.get(), CAIRO_HINT_STYLE_SLIGHT);
+    cairo_font_options_set_hint_metrics(options.get(), CAIRO_HINT_METRICS_ON);
+    pango_cairo_context_set_font_options(pango_layout_get_context(layout_.get()), options.get());
+    pango_layout_context_changed(layout_.get());
+    text_font_.reset(pango_font_description_from_string("Sans"));
+    pango_font_description_set_absolute_size(text_font_.get(), kTextPixels * PANGO_SCALE);
+    title_font_.reset(pango_font_description_copy(text_font_.get()));
+    pango_font_description_set_absolute_size(title_font_.get(), kTitlePixels * PANGO_SCALE);
+    pango_font_description_set_weight(title_font_.get(), PANGO_WEIGHT_BOLD);
+  }
+
+  /// The width and height of `text` (its logical extents) in whole pixels; with `wrap` > 0 the
+  /// text is broken into lines of at most that many pixels.
+  Size size(std::string_view text, Face face, int wrap = 0) {
+    set(text, face, wrap);
+    const PangoRectangle r = extents();
+    return {r.width, r.height};
+  }
+
+  /// Draws `text` with the top-left corner of its extents at (left, top); returns its box.
+  Box draw(cairo_t* cr, int left, int top, std::string_view text, Face face, Rgb colour,
+           int wrap = 0) {
+    set(text, face, wrap);
+    const PangoRectangle r = extents();
+    cairo_save(cr);
+    pango_cairo_update_layout(cr, layout_.get());
+    cairo_set_source_rgb(cr, colour.r / 255.0, colour.g / 255.0, colour.b / 255.0);
+    cairo_move_to(cr, left - r.x, top - r.y);
+    pango_cairo_show_layout(cr, layout_.get());
+    cairo_restore(cr);
+    pango_cairo_update_layout(measure_.cr.get(), layout_.get());
+    return {left, top, r.width, r.height};
+  }
+
+  /// Draws `text` turned a quarter turn anticlockwise (reading upwards) with the top-left corner
+  /// of its box at (left, top); returns the box (as wide as the text is high).
+  Box draw_upwards(cairo_t* cr, int left, int top, std::string_view text, Face face, Rgb colour) {
+    set(text, face);
+    const PangoRectangle r = extents();
+    cairo_save(cr);
+    cairo_translate(cr, left, top + r.width);
+    cairo_rotate(cr, -0.5 * std::numbers::pi);
+    pango_cairo_update_layout(cr, layout_.get());
+    cairo_set_source_rgb(cr, colour.r / 255.0, colour.g / 255.0, colour.b / 255.0);
+    cairo_move_to(cr, -r.x, -r.y);
+    pango_cairo_show_layout(cr, layout_.get());
+    cairo_restore(cr);
+    pango_cairo_update_layout(measure_.cr.get(), layout_.get());
+    return {left, top, r.height, r.width};
   }
 
  private:
-  png_image image_{};
-};
-
-void save(const std::filesystem::path& path, const Image& img) {
-  PngImage png(img.width, img.height);
-  write_file_atomically(path, png.encode(img), false);
-}
-
-// --- 5x7 bitmap font: rows top to bottom, bit 4 = leftmost column ---------------------------
-
-struct Glyph {
-  char c;
-  std::array<std::uint8_t, 7> rows;
-};
-
-constexpr std::array<Glyph, 51> kFont{{
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
-    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
-    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
-    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
-    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
-    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
-    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
-    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
-    {'e', {0x00, 0x00, 0x0E, 0x11, 0x1F, 0x10, 0x0E}},
-    {'c', {0x00, 0x00, 0x0E, 0x10, 0x10, 0x11, 0x0E}},
-    {'y', {0x00, 0x00, 0x11, 0x11, 0x0F, 0x01, 0x0E}},
-    {'l', {0x0C, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'s', {0x00, 0x00, 0x0E, 0x10, 0x0E, 0x01, 0x1E}},
-    {'r', {0x00, 0x00, 0x16, 0x19, 0x10, 0x10, 0x10}},
-    {'a', {0x00, 0x00, 0x0E, 0x01, 0x0F, 0x11, 0x0F}},
-    {'k', {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12}},
-    {'n', {0x00, 0x00, 0x16, 0x19, 0x11, 0x11, 0x11}},
-    {'g', {0x00, 0x00, 0x0F, 0x11, 0x0F, 0x01, 0x0E}},
-    {'t', {0x08, 0x08, 0x1C, 0x08, 0x08, 0x09, 0x06}},
-    {'h', {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11}},
-    {'m', {0x00, 0x00, 0x1A, 0x15, 0x15, 0x11, 0x11}},
-    {'[', {0x0E, 0x08, 0x08, 0x08, 0x08, 0x08, 0x0E}},
-    {']', {0x0E, 0x02, 0x02, 0x02, 0x02, 0x02, 0x0E}},
-    {' ', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}},
-    {'b', {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x1E}},
-    {'d', {0x01, 0x01, 0x0D, 0x13, 0x11, 0x11, 0x0F}},
-    {'f', {0x06, 0x09, 0x08, 0x1C, 0x08, 0x08, 0x08}},
-    {'i', {0x04, 0x00, 0x0C, 0x04, 0x04, 0x04, 0x0E}},
-    {'j', {0x02, 0x00, 0x06, 0x02, 0x02, 0x12, 0x0C}},
-    {'o', {0x00, 0x00, 0x0E, 0x11, 0x11, 0x11, 0x0E}},
-    {'p', {0x00, 0x00, 0x1E, 0x11, 0x1E, 0x10, 0x10}},
-    {'q', {0x00, 0x00, 0x0D, 0x13, 0x0F, 0x01, 0x01}},
-    {'u', {0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0D}},
-    {'v', {0x00, 0x00, 0x11, 0x11, 0x11, 0x0A, 0x04}},
-    {'w', {0x00, 0x00, 0x11, 0x11, 0x15, 0x15, 0x0A}},
-    {'x', {0x00, 0x00, 0x11, 0x0A, 0x04, 0x0A, 0x11}},
-    {'z', {0x00, 0x00, 0x1F, 0x02, 0x04, 0x08, 0x1F}},
-    {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
-    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}},
-    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
-    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
-    {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
-    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
-    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-}};
-
-constexpr int kGlyphAdvance = 6;  // 5 columns + 1 of spacing
-
-int text_width(std::string_view s, int scale) {
-  return s.empty() ? 0 : (static_cast<int>(s.size()) * kGlyphAdvance - 1) * scale;
-}
-
-/// Draws `s` with its top-left corner at (x, y); characters without a glyph are left blank.
-/// An upper-case letter without a glyph of its own is drawn as its lower case.
-void draw_text(Image& img, int x, int y, std::string_view s, int scale, Rgb color) {
-  for (const char ch : s) {
-    auto it = std::find_if(kFont.begin(), kFont.end(), [ch](const Glyph& g) { return g.c == ch; });
-    if (it == kFont.end() && ch >= 'A' && ch <= 'Z') {
-      const char lower = static_cast<char>(ch - 'A' + 'a');
-      it = std::find_if(kFont.begin(), kFont.end(),
-                        [lower](const Glyph& g) { return g.c == lower; });
-    }
-    if (it != kFont.end()) {
-      for (int r = 0; r < 7; ++r) {
-        for (int c = 0; c < 5; ++c) {
-          if ((it->rows[static_cast<std::size_t>(r)] >> (4 - c)) & 1) {
-            img.fill(x + c * scale, y + r * scale, scale, scale, color);
-          }
-        }
-      }
-    }
-    x += kGlyphAdvance * scale;
-  }
-}
-
-/// Bresenham with a square pen of `pen` pixels.
-void draw_line(Image& img, int x0, int y0, int x1, int y1, int pen, Rgb color) {
-  const int dx = std::abs(x1 - x0), sx = x0 < x1 ? 1 : -1;
-  const int dy = -std::abs(y1 - y0), sy = y0 < y1 ? 1 : -1;
-  int err = dx + dy;
-  while (true) {
-    img.fill(x0 - pen / 2, y0 - pen / 2, pen, pen, color);
-    if (x0 == x1 && y0 == y1) break;
-    const int e2 = 2 * err;
-    if (e2 >= dy) {
-      err += dy;
-      x0 += sx;
-    }
-    if (e2 <= dx) {
-      err += dx;
-      y0 += sy;
+  void set(std::string_view text, Face face, int wrap = 0) {
+    pango_layout_set_font_description(layout_.get(),
+                                      face == Face::title ? title_font_.get() : text_font_.get());
+    pango_layout_set_wrap(layout_.get(), PANGO_WRAP_WORD_CHAR);
+    pango_layout_set_width(layout_.get(), wrap > 0 ? wrap * PANGO_SCALE : -1);
+    const auto n = static_cast<gssize>(text.size());
+    if (g_utf8_validate(text.data(), n, nullptr)) {
+      pango_layout_set_text(layout_.get(), text.data(), static_cast<int>(n));
+    } else {  // a detail id of other bytes: shown with replacement characters
+      std::unique_ptr<gchar, Releaser<g_free>> valid(g_utf8_make_valid(text.data(), n));
+      pango_layout_set_text(layout_.get(), valid.get(), -1);
     }
   }
+  PangoRectangle extents() {
+    PangoRectangle logical{};
+    pango_layout_get_pixel_extents(layout_.get(), nullptr, &logical);
+    return logical;
+  }
+
+  Surface measure_;
+  LayoutHandle layout_;
+  FontHandle text_font_, title_font_;
+};
+
+// --- drawing ---------------------------------------------------------------------------------
+
+void set_colour(cairo_t* cr, Rgb c) {
+  cairo_set_source_rgb(cr, c.r / 255.0, c.g / 255.0, c.b / 255.0);
 }
+
+/// Fills whole pixels: exactly `c` inside the box.
+void fill_box(cairo_t* cr, const Box& b, Rgb c) {
+  cairo_rectangle(cr, b.left, b.top, b.width, b.height);
+  set_colour(cr, c);
+  cairo_fill(cr);
+}
+
+/// A straight line `width` pixels wide; dash > 0: dashes and gaps of `dash` pixels. A horizontal
+/// or vertical line of an odd width on whole-pixel coordinates covers whole pixels (crisp).
+void line(cairo_t* cr, double x0, double y0, double x1, double y1, double width, Rgb c,
+          double dash = 0.0) {
+  const bool odd = std::fmod(width, 2.0) == 1.0;
+  if (odd && y0 == y1 && y0 == std::floor(y0)) y0 = y1 = y0 + 0.5;
+  if (odd && x0 == x1 && x0 == std::floor(x0)) x0 = x1 = x0 + 0.5;
+  cairo_save(cr);
+  cairo_set_line_width(cr, width);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+  if (dash > 0.0) cairo_set_dash(cr, &dash, 1, 0.0);
+  set_colour(cr, c);
+  cairo_move_to(cr, x0, y0);
+  cairo_line_to(cr, x1, y1);
+  cairo_stroke(cr);
+  cairo_restore(cr);
+}
+
+void dot(cairo_t* cr, double x, double y, double radius, Rgb c) {
+  cairo_new_sub_path(cr);
+  cairo_arc(cr, x, y, radius, 0.0, 2.0 * std::numbers::pi);
+  set_colour(cr, c);
+  cairo_fill(cr);
+}
+
+/// A diamond of half-diagonal `r` centred on (x, y).
+void diamond(cairo_t* cr, double x, double y, double r, Rgb c) {
+  cairo_move_to(cr, x, y - r);
+  cairo_line_to(cr, x + r, y);
+  cairo_line_to(cr, x, y + r);
+  cairo_line_to(cr, x - r, y);
+  cairo_close_path(cr);
+  set_colour(cr, c);
+  cairo_fill(cr);
+}
+
+/// A line through points, round joins; a non-finite point ends a piece, a piece of one point is
+/// a dot.
+class Polyline {
+ public:
+  Polyline(cairo_t* cr, double width, Rgb c, double dash = 0.0)
+      : cr_(cr), width_(width), colour_(c), dash_(dash) {}
+  void add(double x, double y) {
+    if (!std::isfinite(x) || !std::isfinite(y)) {
+      flush();
+      return;
+    }
+    piece_.push_back({x, y});
+  }
+  void flush() {
+    if (piece_.size() == 1) {
+      dot(cr_, piece_[0][0], piece_[0][1], 0.5 * width_ + 0.5, colour_);
+    } else if (piece_.size() > 1) {
+      cairo_save(cr_);
+      cairo_set_line_width(cr_, width_);
+      cairo_set_line_join(cr_, CAIRO_LINE_JOIN_ROUND);
+      cairo_set_line_cap(cr_, dash_ > 0.0 ? CAIRO_LINE_CAP_BUTT : CAIRO_LINE_CAP_ROUND);
+      if (dash_ > 0.0) cairo_set_dash(cr_, &dash_, 1, 0.0);
+      set_colour(cr_, colour_);
+      cairo_move_to(cr_, piece_[0][0], piece_[0][1]);
+      for (std::size_t i = 1; i < piece_.size(); ++i)
+        cairo_line_to(cr_, piece_[i][0], piece_[i][1]);
+      cairo_stroke(cr_);
+      cairo_restore(cr_);
+    }
+    piece_.clear();
+  }
+
+ private:
+  cairo_t* cr_;
+  double width_;
+  Rgb colour_;
+  double dash_;
+  std::vector<std::array<double, 2>> piece_;
+};
+
+/// The PNG of the surface, written atomically.
+void save(const Surface& s, const std::filesystem::path& path) {
+  check(s.cr.get(), "drawing");
+  cairo_surface_flush(s.surface.get());
+  std::string bytes;
+  auto append = [](void* closure, const unsigned char* data, unsigned int length) {
+    try {
+      static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+      return CAIRO_STATUS_SUCCESS;
+    } catch (...) {
+      return CAIRO_STATUS_NO_MEMORY;
+    }
+  };
+  const cairo_status_t status = cairo_surface_write_to_png_stream(s.surface.get(), append, &bytes);
+  if (status != CAIRO_STATUS_SUCCESS) {
+    throw PngError(std::string("cairo (PNG): ") + cairo_status_to_string(status));
+  }
+  write_file_atomically(path, bytes, false);
+}
+
+// --- axes ------------------------------------------------------------------------------------
 
 /// A 1-2-5 step giving about `target` intervals over [lo, hi].
 double nice_step(double lo, double hi, int target) {
@@ -207,10 +293,10 @@ struct Axis {
   double lo, hi, step;
 };
 
-/// An axis over [lo, hi] stretched to multiples of a 1-2-5 step (the a-N plot).
-Axis nice_axis(double lo, double hi) {
+/// An axis over [lo, hi] stretched to multiples of a 1-2-5 step (the plots' value axes).
+Axis nice_axis(double lo, double hi, int target) {
   if (!(hi > lo)) hi = lo + 1.0;
-  const double step = nice_step(lo, hi, 5);
+  const double step = nice_step(lo, hi, target);
   return {std::floor(lo / step + 1e-9) * step, std::ceil(hi / step - 1e-9) * step, step};
 }
 
@@ -231,90 +317,265 @@ std::vector<double> ticks(const Axis& axis) {
   return out;
 }
 
-/// The data rectangle of a plot in pixels and the ranges it maps (y up).
-struct Frame {
-  int left, top, width, height;
-  Axis x, y;
-  [[nodiscard]] int px(double v) const {
-    return left + static_cast<int>(std::lround((v - x.lo) / (x.hi - x.lo) * width));
-  }
-  [[nodiscard]] int py(double v) const {
-    return top + height - static_cast<int>(std::lround((v - y.lo) / (y.hi - y.lo) * height));
-  }
-};
-
-constexpr int kScale = 2;  // font scale: 10 x 14 pixel glyphs
-constexpr int kGlyphHeight = 7 * kScale;
-
-std::string tick_label(double v, const Axis& axis);
-
-/// Ticks with labels below and left of the frame, axis titles, and (with `grid`) grid lines
-/// across it; the frame's border in black.
-void draw_frame(Image& img, const Frame& f, std::string_view x_title, std::string_view y_title,
-                bool grid) {
-  for (const double v : ticks(f.x)) {
-    const int p = f.px(v);
-    if (grid) draw_line(img, p, f.top, p, f.top + f.height, 1, kGrid);
-    draw_line(img, p, f.top + f.height, p, f.top + f.height + 6, 1, kBlack);
-    const std::string label = tick_label(v, f.x);
-    draw_text(img, p - text_width(label, kScale) / 2, f.top + f.height + 10, label, kScale, kBlack);
-  }
-  for (const double v : ticks(f.y)) {
-    const int p = f.py(v);
-    if (grid) draw_line(img, f.left, p, f.left + f.width, p, 1, kGrid);
-    draw_line(img, f.left - 6, p, f.left, p, 1, kBlack);
-    const std::string label = tick_label(v, f.y);
-    draw_text(img, f.left - 10 - text_width(label, kScale), p - kGlyphHeight / 2, label, kScale,
-              kBlack);
-  }
-  const int right = f.left + f.width, bottom = f.top + f.height;
-  draw_line(img, f.left, f.top, f.left, bottom, 2, kBlack);
-  draw_line(img, f.left, bottom, right, bottom, 2, kBlack);
-  if (!grid) {  // a map: a closed box
-    draw_line(img, f.left, f.top, right, f.top, 1, kBlack);
-    draw_line(img, right, f.top, right, bottom, 1, kBlack);
-  }
-  draw_text(img, f.left + f.width / 2 - text_width(x_title, kScale) / 2, bottom + 20 + kGlyphHeight,
-            x_title, kScale, kBlack);
-  draw_text(img, f.left - text_width("-0.0", kScale), f.top - kGlyphHeight - 18, y_title, kScale,
-            kBlack);
-}
-
-/// A dashed line (dash and gap of `dash` pixels).
-void draw_dashed_line(Image& img, int x0, int y0, int x1, int y1, int pen, int dash, Rgb color) {
-  const double length = std::hypot(x1 - x0, y1 - y0);
-  const int pieces = std::max(1, static_cast<int>(length / dash));
-  for (int k = 0; k < pieces; k += 2) {
-    const double a = static_cast<double>(k) / pieces, b = static_cast<double>(k + 1) / pieces;
-    draw_line(img, x0 + static_cast<int>(std::lround(a * (x1 - x0))),
-              y0 + static_cast<int>(std::lround(a * (y1 - y0))),
-              x0 + static_cast<int>(std::lround(b * (x1 - x0))),
-              y0 + static_cast<int>(std::lround(b * (y1 - y0))), pen, color);
-  }
-}
-
 /// Tick labels of one axis share a format: fixed with the decimals the step needs, or, for
-/// |v| >= 1e6 (or tiny values), %.3g with a short exponent ("1.5e+06" -> "1.5e6").
+/// |v| >= 1e6 (or tiny values), %.3g with a short exponent ("1.5e+06" -> "1.5e6"); negative
+/// numbers with the minus sign U+2212 (as wide as a digit), not the hyphen.
 std::string tick_label(double v, const Axis& axis) {
   if (std::abs(v) < 1e-9 * axis.step) v = 0.0;
   const double big = std::max(std::abs(axis.lo), std::abs(axis.hi));
   char buf[40];
+  std::string s;
   if (big < 1e6 && axis.step >= 1e-4) {
     const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(axis.step) + 1e-9)));
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    return buf;
+    s = buf;
+  } else {
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    s = buf;
+    const auto e = s.find('e');
+    if (e != std::string::npos) {
+      std::string mant = s.substr(0, e), exp = s.substr(e + 1);
+      const bool neg = exp[0] == '-';
+      exp = exp.substr(1);
+      exp.erase(0, std::min(exp.find_first_not_of('0'), exp.size() - 1));
+      s = mant + "e" + (neg ? "-" : "") + exp;
+    }
   }
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  std::string s = buf;
-  const auto e = s.find('e');
-  if (e != std::string::npos) {
-    std::string mant = s.substr(0, e), exp = s.substr(e + 1);
-    const bool neg = exp[0] == '-';
-    exp = exp.substr(1);
-    exp.erase(0, std::min(exp.find_first_not_of('0'), exp.size() - 1));
-    s = mant + "e" + (neg ? "-" : "") + exp;
+  for (auto minus = s.find('-'); minus != std::string::npos; minus = s.find('-', minus)) {
+    s.replace(minus, 1, "\u2212");
   }
   return s;
+}
+
+/// How an axis is made for a number of intervals (nice_axis or exact_axis over the data).
+using AxisMaker = std::function<Axis(int target)>;
+
+/// The axes one may get, from `target` intervals down to 1.
+std::vector<Axis> candidate_axes(const AxisMaker& make, int target) {
+  std::vector<Axis> out;
+  for (int t = std::max(1, target); t >= 1; --t) out.push_back(make(t));
+  return out;
+}
+
+/// The first of the candidates whose tick labels, centred on their ticks along `pixels` of a
+/// horizontal axis, leave kLabelGap between neighbours (the last candidate if none does).
+Axis fit_x_axis(Typesetter& ts, const std::vector<Axis>& candidates, int pixels) {
+  for (const Axis& a : candidates) {
+    double prev_right = -1e300;
+    bool fits = true;
+    for (const double v : ticks(a)) {
+      const double p = (v - a.lo) / (a.hi - a.lo) * pixels;
+      const int w = ts.size(tick_label(v, a), Face::text).width;
+      if (p - 0.5 * w < prev_right + kLabelGap) fits = false;
+      prev_right = p + 0.5 * w;
+    }
+    if (fits) return a;
+  }
+  return candidates.back();
+}
+
+/// The first of the candidates whose ticks along `pixels` of a vertical axis are at least a
+/// label's height apart (plus a little).
+Axis fit_y_axis(Typesetter& ts, const std::vector<Axis>& candidates, int pixels) {
+  const int h = ts.size("0", Face::text).height;
+  for (const Axis& a : candidates) {
+    if (a.step / (a.hi - a.lo) * pixels >= h + 4) return a;
+  }
+  return candidates.back();
+}
+
+/// The widest tick label of any of the candidates.
+int widest_label(Typesetter& ts, const std::vector<Axis>& candidates) {
+  int w = 0;
+  for (const Axis& a : candidates) {
+    for (const double v : ticks(a)) w = std::max(w, ts.size(tick_label(v, a), Face::text).width);
+  }
+  return w;
+}
+
+/// The data rectangle of a plot in pixels and the ranges it maps (y up).
+struct Frame {
+  Box box;
+  Axis x, y;
+  [[nodiscard]] double px(double v) const {
+    return box.left + (v - x.lo) / (x.hi - x.lo) * box.width;
+  }
+  [[nodiscard]] double py(double v) const {
+    return box.bottom() - (v - y.lo) / (y.hi - y.lo) * box.height;
+  }
+};
+
+/// Ticks with their labels below and left of the frame, the axis titles (x centred below the
+/// labels, y upwards left of them, `y_title_left` its left edge), and (with `grid`) grid lines
+/// across it; the frame's border in black. Puts the label and title boxes into `text`.
+void draw_axes(cairo_t* cr, Typesetter& ts, const Frame& f, std::string_view x_title,
+               std::string_view y_title, int y_title_left, bool grid, PictureText& text) {
+  const Box& b = f.box;
+  int label_height = 0;
+  for (const double v : ticks(f.x)) {
+    const double p = std::round(f.px(v));
+    if (grid) line(cr, p, b.top, p, b.bottom(), 1, kGrid);
+    line(cr, p, b.bottom(), p, b.bottom() + kTick, 1, kBlack);
+    const std::string label = tick_label(v, f.x);
+    const Size s = ts.size(label, Face::text);
+    text.x_tick_labels.push_back(ts.draw(cr, static_cast<int>(p) - s.width / 2,
+                                         b.bottom() + kTick + kTickGap, label, Face::text, kBlack));
+    label_height = std::max(label_height, s.height);
+  }
+  for (const double v : ticks(f.y)) {
+    const double p = std::round(f.py(v));
+    if (grid) line(cr, b.left, p, b.right(), p, 1, kGrid);
+    line(cr, b.left - kTick, p, b.left, p, 1, kBlack);
+    const std::string label = tick_label(v, f.y);
+    const Size s = ts.size(label, Face::text);
+    text.y_tick_labels.push_back(ts.draw(cr, b.left - kTick - kTickGap - s.width,
+                                         static_cast<int>(p) - s.height / 2, label, Face::text,
+                                         kBlack));
+  }
+  if (grid) {  // a plot: the two axes
+    line(cr, b.left, b.top, b.left, b.bottom() + 1, 2, kBlack);
+    line(cr, b.left - 1, b.bottom(), b.right(), b.bottom(), 2, kBlack);
+  } else {  // a map: a closed box around it
+    cairo_rectangle(cr, b.left - 0.5, b.top - 0.5, b.width + 1, b.height + 1);
+    set_colour(cr, kBlack);
+    cairo_set_line_width(cr, 1.0);
+    cairo_stroke(cr);
+  }
+  const Size xs = ts.size(x_title, Face::text);
+  text.x_title =
+      ts.draw(cr, b.left + b.width / 2 - xs.width / 2,
+              b.bottom() + kTick + kTickGap + label_height + 6, x_title, Face::text, kBlack);
+  const Size ys = ts.size(y_title, Face::text);
+  text.y_title = ts.draw_upwards(cr, y_title_left, b.top + b.height / 2 - ys.width / 2, y_title,
+                                 Face::text, kBlack);
+}
+
+// --- legends ---------------------------------------------------------------------------------
+
+/// A legend entry to set: its text and how its sample is drawn into a box.
+struct LegendItem {
+  std::string label;
+  std::function<void(cairo_t*, const Box&)> sample;
+};
+
+/// Places the entries in rows inside `width` pixels from the top `top`: each entry as wide as its
+/// sample and its measured text, an entry goes to a new row when the row has no room for it; the
+/// rows flush right against `right` (align_right) or left against right - width.
+std::vector<LegendEntry> lay_out_legend(Typesetter& ts, const std::vector<LegendItem>& items,
+                                        int right, int width, int top, bool align_right) {
+  std::vector<LegendEntry> out;
+  std::vector<std::vector<std::size_t>> rows;
+  std::vector<int> row_width;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const Size s = ts.size(items[i].label, Face::text);
+    LegendEntry e;
+    e.label = items[i].label;
+    e.box = {0, 0, kSampleWidth + kSampleGap + s.width, s.height};
+    out.push_back(e);
+    if (rows.empty() || row_width.back() + kEntryGap + e.box.width > width) {
+      rows.emplace_back();
+      row_width.push_back(-kEntryGap);
+    }
+    rows.back().push_back(i);
+    row_width.back() += kEntryGap + e.box.width;
+  }
+  int y = top;
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    int x = align_right ? right - row_width[r] : right - width;
+    int height = 0;
+    for (const std::size_t i : rows[r]) {
+      LegendEntry& e = out[i];
+      e.box.left = x;
+      e.box.top = y;
+      e.sample = {x, y + 2, kSampleWidth, e.box.height - 4};
+      e.text = {x + kSampleWidth + kSampleGap, y, e.box.width - kSampleWidth - kSampleGap,
+                e.box.height};
+      x += e.box.width + kEntryGap;
+      height = std::max(height, e.box.height);
+    }
+    y += height + kRowGap;
+  }
+  return out;
+}
+
+/// The bottom of the legend's last row (`top` when it is empty).
+int legend_bottom(const std::vector<LegendEntry>& entries, int top) {
+  int bottom = top;
+  for (const auto& e : entries) bottom = std::max(bottom, e.box.bottom());
+  return bottom;
+}
+
+void draw_legend(cairo_t* cr, Typesetter& ts, const std::vector<LegendItem>& items,
+                 const std::vector<LegendEntry>& entries) {
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    cairo_save(cr);
+    items[i].sample(cr, entries[i].sample);
+    cairo_restore(cr);
+    ts.draw(cr, entries[i].text.left, entries[i].text.top, items[i].label, Face::text, kBlack);
+  }
+}
+
+/// A legend sample: a line across the middle of the box.
+std::function<void(cairo_t*, const Box&)> line_sample(Rgb c, double width, double dash = 0.0) {
+  return [=](cairo_t* cr, const Box& b) {
+    const double y = b.top + b.height / 2;
+    line(cr, b.left, y, b.right(), y, width, c, dash);
+  };
+}
+
+// --- plots -----------------------------------------------------------------------------------
+
+/// What a plot shows around its data.
+struct PlotText {
+  std::string title, x_title, y_title;
+  std::vector<LegendItem> legend;
+};
+
+/// Lays a plot out on a picture of the given size: the title on top (broken into lines when wider
+/// than the picture), the legend below it (right aligned, rows as needed), the frame below the
+/// legend with room left for the y tick labels and the y title and below for the x tick labels
+/// and the x title; draws all of it but the data.
+Frame draw_plot(cairo_t* cr, Typesetter& ts, int width, int height, const PlotText& t,
+                const AxisMaker& make_x, int x_target, const AxisMaker& make_y, PlotLayout& out) {
+  out.width = width;
+  out.height = height;
+  const Size y_title = ts.size(t.y_title, Face::text);
+  const Size x_title = ts.size(t.x_title, Face::text);
+  const int label_h = ts.size("0", Face::text).height;
+  const std::vector<Axis> ys = candidate_axes(make_y, 5);
+  const std::vector<Axis> xs = candidate_axes(make_x, x_target);
+  int last_label = 0;  // the last x label may sit on the frame's right edge: half of it sticks out
+  for (const Axis& a : xs) {
+    const auto tk = ticks(a);
+    if (!tk.empty())
+      last_label = std::max(last_label, ts.size(tick_label(tk.back(), a), Face::text).width);
+  }
+  Box frame;
+  frame.left = kMargin + y_title.height + 8 + widest_label(ts, ys) + kTickGap + kTick;
+  const int right = width - std::max(kMargin + 8, kMargin + last_label / 2);
+  frame.width = std::max(10, right - frame.left);
+  const int title_wrap = std::max(10, width - kMargin - frame.left);  // lines as wide as fit
+  const Size title = ts.size(t.title, Face::title, title_wrap);
+  const int legend_top = kMargin + (t.title.empty() ? 0 : title.height + 8);
+  out.text.legend = lay_out_legend(ts, t.legend, right, frame.width, legend_top, true);
+  frame.top = legend_bottom(out.text.legend, legend_top) + 10 + label_h / 2;
+  const int bottom = height - kMargin - x_title.height - 6 - label_h - kTickGap - kTick;
+  frame.height = std::max(10, bottom - frame.top);
+  out.frame = frame;
+  const Frame f{frame, fit_x_axis(ts, xs, frame.width), fit_y_axis(ts, ys, frame.height)};
+  if (!t.title.empty()) {
+    out.text.title = ts.draw(cr, frame.left, kMargin, t.title, Face::title, kBlack, title_wrap);
+  }
+  draw_axes(cr, ts, f, t.x_title, t.y_title, kMargin, true, out.text);
+  draw_legend(cr, ts, t.legend, out.text.legend);
+  return f;
+}
+
+void check_plot_size(const PlotOptions& options, const char* who) {
+  if (options.width < 200 || options.height < 150 || options.width > kMaxSide ||
+      options.height > kMaxSide) {
+    throw PngError(std::string(who) + ": image size out of range");
+  }
 }
 
 }  // namespace
@@ -378,13 +639,13 @@ DamageImageLayout grid_layout(std::span<const double> x, std::span<const double>
 
 /// Fills node i's square with colour(i), the raster's top-left corner at (left, top).
 template <class Colour>
-void draw_nodes(Image& img, const DamageImageLayout& layout, int left, int top,
+void draw_nodes(cairo_t* cr, const DamageImageLayout& layout, int left, int top,
                 std::span<const double> x, std::span<const double> y, double dx, Colour colour) {
   const int s = layout.node_pixels;
   for (std::size_t i = 0; i < x.size(); ++i) {
     const auto c = static_cast<int>(std::lround((x[i] - layout.x_min) / dx));
     const auto r = static_cast<int>(std::lround((layout.y_max - y[i]) / dx));
-    img.fill(left + c * s, top + r * s, s, s, colour(i));
+    fill_box(cr, {left + c * s, top + r * s, s, s}, colour(i));
   }
 }
 
@@ -394,9 +655,10 @@ DamageImageLayout write_damage_png(const std::filesystem::path& path, std::span<
                                    std::span<const double> y, std::span<const double> damage,
                                    double dx, const DamagePngOptions& options) {
   const DamageImageLayout layout = grid_layout(x, y, damage, dx, options);
-  Image img(layout.width, layout.height, kWhite);
-  draw_nodes(img, layout, 0, 0, x, y, dx, [&](std::size_t i) { return damage_color(damage[i]); });
-  save(path, img);
+  Surface s(layout.width, layout.height);
+  draw_nodes(s.cr.get(), layout, 0, 0, x, y, dx,
+             [&](std::size_t i) { return damage_color(damage[i]); });
+  save(s, path);
   return layout;
 }
 
@@ -405,12 +667,6 @@ Rgb notch_color(double damage) {
   const auto v = static_cast<std::uint8_t>(std::lround(200.0 - 160.0 * t));
   return {v, v, v};
 }
-
-namespace {
-constexpr Rgb kCrackPath{200, 0, 200};
-constexpr Rgb kEstimate{230, 110, 0};
-constexpr Rgb kCritical{120, 120, 120};
-}  // namespace
 
 DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::span<const double> x,
                                      std::span<const double> y, std::span<const double> damage,
@@ -422,97 +678,138 @@ DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::spa
     throw PngError("write_damage_map_png: notch_damage must have one value per node");
   }
   const DamageImageLayout& g = out.grid;
+  const bool have_notch = !map.notch_damage.empty();
+  Typesetter ts;
   // Axes in mm over the raster's extent: node centres ± dx/2.
   const double x_lo = 1e3 * (g.x_min - 0.5 * dx), x_hi = x_lo + 1e3 * dx * g.columns;
   const double y_hi = 1e3 * (g.y_max + 0.5 * dx), y_lo = y_hi - 1e3 * dx * g.rows;
-  const Axis ax = exact_axis(x_lo, x_hi, std::max(2, g.width / 120));
-  const Axis ay = exact_axis(y_lo, y_hi, std::max(2, g.height / 80));
+  const Axis ax = fit_x_axis(
+      ts, candidate_axes([&](int t) { return exact_axis(x_lo, x_hi, t); }, g.width / 120), g.width);
+  const Axis ay = fit_y_axis(
+      ts, candidate_axes([&](int t) { return exact_axis(y_lo, y_hi, t); }, g.height / 80),
+      g.height);
+  const Size title = ts.size(map.title, Face::title);
+  const Size y_title = ts.size("y [mm]", Face::text);
+  const int label_h = ts.size("0", Face::text).height;
+  out.left = kMargin + y_title.height + 8 + widest_label(ts, {ay}) + kTickGap + kTick;
+  out.top = kMargin + title.height + 12 + label_h / 2;
+  const Box raster{out.left, out.top, g.width, g.height};
+
+  // The column right of the map: the colour bar's title, the bar with its labels (φ from 0 at
+  // the bottom to 1 at the top, every 0.25), then the legend.
   constexpr int bar_width = 24;
-  const int label_w = std::max(text_width(tick_label(ay.lo, ay), kScale),
-                               text_width(tick_label(ay.hi, ay), kScale));
-  out.left = 30 + label_w;
-  out.top = 20 + 2 * kGlyphHeight + 30;
-  const int legend_left = out.left + g.width + 30;
-  out.width = legend_left + bar_width + 10 + text_width("notch", kScale) + 20;
-  out.height = out.top + std::max(g.height, 300) + 20 + 2 * kGlyphHeight + 30;
+  const int column = raster.right() + 28;
+  const Size bar_title = ts.size("damage φ", Face::text);
+  const int bar_top = raster.top + bar_title.height + 8 + label_h / 2;
+  const int bar_height = std::max(200, raster.bottom() - label_h / 2 - bar_top);
+  out.colour_bar = {column, bar_top, bar_width, bar_height};
+  int bar_labels_width = 0;
+  for (const char* label : {"0.00", "0.25", "0.50", "0.75", "1.00"}) {
+    bar_labels_width = std::max(bar_labels_width, ts.size(label, Face::text).width);
+  }
+  std::vector<LegendItem> legend;
+  if (std::any_of(map.notch_damage.begin(), map.notch_damage.end(), [](double phi) {
+        return phi > 0.0;
+      })) {  // the grey of notch-only nodes, light (φ = 0) to dark (φ = 1)
+    legend.push_back({"notch", [](cairo_t* cr, const Box& b) {
+                        for (int k = 0; k < b.width; ++k) {
+                          fill_box(cr, {b.left + k, b.top, 1, b.height},
+                                   notch_color(static_cast<double>(k) / b.width));
+                        }
+                      }});
+  }
+  legend.push_back({"crack", [](cairo_t* cr, const Box& b) {
+                      const double yc = b.top + 0.5 * b.height;
+                      line(cr, b.left, yc, b.right() - 4, yc, 3, kCrackPath);
+                      dot(cr, b.right() - 4.5, yc, 4.5, kCrackPath);
+                    }});
+  int entries_width = 0;
+  for (const auto& item : legend) {
+    entries_width =
+        std::max(entries_width, kSampleWidth + kSampleGap + ts.size(item.label, Face::text).width);
+  }
+  const int column_width =
+      std::max({bar_title.width, bar_width + kTick + kTickGap + bar_labels_width, entries_width});
+  const int legend_top = out.colour_bar.bottom() + label_h / 2 + 16;
+  out.text.legend =
+      lay_out_legend(ts, legend, column + column_width, column_width, legend_top, false);
+
+  out.width = std::max(column + column_width, out.left + title.width) + kMargin;
+  out.height = std::max(raster.bottom() + kTick + kTickGap + 2 * label_h + 6,
+                        legend_bottom(out.text.legend, legend_top)) +
+               kMargin;
   if (out.width > kMaxSide || out.height > kMaxSide) {
     throw PngError("write_damage_map_png: picture too large");
   }
-  Image img(out.width, out.height, kWhite);
-  const bool have_notch = !map.notch_damage.empty();
-  draw_nodes(img, g, out.left, out.top, x, y, dx, [&](std::size_t i) {
+
+  Surface s(out.width, out.height);
+  cairo_t* cr = s.cr.get();
+  cairo_set_antialias(cr, CAIRO_ANTIALIAS_NONE);  // the nodes: whole pixels, exact colours
+  draw_nodes(cr, g, out.left, out.top, x, y, dx, [&](std::size_t i) {
     if (have_notch && damage[i] > 0.0 && damage[i] <= map.notch_damage[i] + 1e-6) {
       return notch_color(damage[i]);
     }
     return damage_color(damage[i]);
   });
-  const Frame f{out.left, out.top, g.width, g.height, ax, ay};
-  auto polyline = [&](const std::vector<MapPoint>& line, int pen, Rgb colour) {
-    for (std::size_t k = 1; k < line.size(); ++k) {
-      draw_line(img, f.px(1e3 * line[k - 1].x), f.py(1e3 * line[k - 1].y), f.px(1e3 * line[k].x),
-                f.py(1e3 * line[k].y), pen, colour);
-    }
-  };
-  for (const auto& notch : map.notches) polyline(notch, 3, kBlack);
-  for (const auto& crack : map.crack_paths) {
-    polyline(crack, 3, kCrackPath);
-    if (!crack.empty()) {  // the tip now
-      img.fill(f.px(1e3 * crack.back().x) - 4, f.py(1e3 * crack.back().y) - 4, 9, 9, kCrackPath);
-    }
+  cairo_set_antialias(cr, CAIRO_ANTIALIAS_DEFAULT);
+  const Frame f{raster, ax, ay};
+  cairo_save(cr);
+  cairo_rectangle(cr, raster.left, raster.top, raster.width, raster.height);
+  cairo_clip(cr);
+  for (const auto& notch : map.notches) {
+    Polyline p(cr, 3, kBlack);
+    for (const auto& q : notch) p.add(f.px(1e3 * q.x), f.py(1e3 * q.y));
+    p.flush();
   }
-  draw_frame(img, f, "x [mm]", "y [mm]", false);
-  draw_text(img, out.left, 15, map.title, kScale, kBlack);
-  // The colour bar: φ from 0 (bottom) to 1 (top), ticks every 0.25.
-  const int bar_top = out.top + kGlyphHeight, bar_h = std::max(g.height, 300) - 3 * kGlyphHeight;
-  draw_text(img, legend_left, out.top - kGlyphHeight - 10, "damage", kScale, kBlack);
-  for (int r = 0; r < bar_h; ++r) {
-    const double phi = 1.0 - static_cast<double>(r) / (bar_h - 1);
-    img.fill(legend_left, bar_top + r, bar_width, 1, damage_color(phi));
+  for (const auto& crack : map.crack_paths) {
+    Polyline p(cr, 3, kCrackPath);
+    for (const auto& q : crack) p.add(f.px(1e3 * q.x), f.py(1e3 * q.y));
+    p.flush();
+    if (!crack.empty())
+      dot(cr, f.px(1e3 * crack.back().x), f.py(1e3 * crack.back().y), 4.5,
+          kCrackPath);  // the tip now
+  }
+  cairo_restore(cr);
+  draw_axes(cr, ts, f, "x [mm]", "y [mm]", kMargin, false, out.text);
+  out.text.title = ts.draw(cr, out.left, kMargin, map.title, Face::title, kBlack);
+
+  out.colour_bar_title = ts.draw(cr, column, raster.top, "damage φ", Face::text, kBlack);
+  const Box& bar = out.colour_bar;
+  for (int r = 0; r < bar.height; ++r) {
+    const double phi = 1.0 - static_cast<double>(r) / (bar.height - 1);
+    fill_box(cr, {bar.left, bar.top + r, bar.width, 1}, damage_color(phi));
   }
   for (int k = 0; k <= 4; ++k) {
-    const int p = bar_top + static_cast<int>(std::lround((1.0 - 0.25 * k) * (bar_h - 1)));
-    draw_line(img, legend_left + bar_width, p, legend_left + bar_width + 5, p, 1, kBlack);
+    const int p = bar.top + static_cast<int>(std::lround((1.0 - 0.25 * k) * (bar.height - 1)));
+    line(cr, bar.right(), p, bar.right() + kTick, p, 1, kBlack);
     char label[8];
     std::snprintf(label, sizeof label, "%.2f", 0.25 * k);
-    draw_text(img, legend_left + bar_width + 8, p - kGlyphHeight / 2, label, kScale, kBlack);
+    out.colour_bar_labels.push_back(
+        ts.draw(cr, bar.right() + kTick + kTickGap, p - label_h / 2, label, Face::text, kBlack));
   }
-  if (have_notch) {  // the grey swatch of notch-only nodes, the notch line, the crack path
-    const int y0 = bar_top + bar_h + 15;
-    for (int k = 0; k < bar_width; ++k) {
-      img.fill(legend_left + k, y0, 1, kGlyphHeight,
-               notch_color(static_cast<double>(k) / bar_width));
-    }
-    draw_text(img, legend_left + bar_width + 8, y0, "notch", kScale, kBlack);
-  }
-  const int y1 = bar_top + bar_h + 15 + kGlyphHeight + 12;
-  draw_line(img, legend_left, y1 + kGlyphHeight / 2, legend_left + bar_width, y1 + kGlyphHeight / 2,
-            3, kCrackPath);
-  draw_text(img, legend_left + bar_width + 8, y1, "crack", kScale, kBlack);
-  save(path, img);
+  draw_legend(cr, ts, legend, out.text.legend);
+  save(s, path);
   return out;
 }
 
-void write_crack_length_png(const std::filesystem::path& path, std::span<const double> cycles,
-                            std::span<const double> lengths_m, const PlotOptions& options) {
+PlotLayout write_crack_length_png(const std::filesystem::path& path, std::span<const double> cycles,
+                                  std::span<const double> lengths_m, const PlotOptions& options) {
   if (cycles.size() != lengths_m.size()) {
     throw PngError("write_crack_length_png: cycles and lengths differ in size");
   }
   CrackGrowthPlot plot;
   plot.cycles.assign(cycles.begin(), cycles.end());
   plot.lengths_m.assign(lengths_m.begin(), lengths_m.end());
-  write_crack_growth_png(path, plot, options);
+  return write_crack_growth_png(path, plot, options);
 }
 
-void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
-                            const PlotOptions& options) {
+PlotLayout write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
+                                  const PlotOptions& options) {
   const std::size_t n = plot.cycles.size();
   if (plot.lengths_m.size() != n) {
     throw PngError("write_crack_growth_png: cycles and lengths differ in size");
   }
-  if (options.width < 200 || options.height < 150 || options.width > kMaxSide ||
-      options.height > kMaxSide) {
-    throw PngError("write_crack_growth_png: image size out of range");
-  }
+  check_plot_size(options, "write_crack_growth_png");
   // Data range (lengths in mm, predictions included); the axes start at 0 unless data go below.
   double x_lo = 0.0, x_hi = 0.0, y_lo = 0.0, y_hi = 0.0;
   auto include_x = [&](double v) {
@@ -530,87 +827,76 @@ void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowth
   auto drawable = [](const LifePrediction& p) {
     return std::isfinite(p.cycles) && std::isfinite(p.length_m) && std::isfinite(p.remaining);
   };
+  bool estimates = false;
   for (const auto& p : plot.predictions) {
     if (!drawable(p)) continue;
+    estimates = true;
     for (const double r : {p.remaining, p.low, p.high}) include_x(p.cycles + r);
   }
-  if (std::isfinite(plot.critical_length_m)) y_hi = std::max(y_hi, 1e3 * plot.critical_length_m);
-  const Axis ax = nice_axis(x_lo, x_hi);
-  const Axis ay = nice_axis(y_lo, y_hi);
+  const bool critical = std::isfinite(plot.critical_length_m);
+  if (critical) y_hi = std::max(y_hi, 1e3 * plot.critical_length_m);
 
-  const int left = 20 + text_width("-0.00000", kScale), right = 30;
-  const int top = 20 + 3 * kGlyphHeight + 20, bottom = 20 + 2 * kGlyphHeight + 20;
-  const Frame f{left, top, options.width - left - right, options.height - top - bottom, ax, ay};
-  Image img(options.width, options.height, kWhite);
-  draw_frame(img, f, "cycles", "crack length [mm]", true);
-  draw_text(img, left - text_width("-0.0", kScale), 10, plot.title, kScale, kBlack);
-  if (std::isfinite(plot.critical_length_m)) {
-    const int p = f.py(1e3 * plot.critical_length_m);
-    draw_dashed_line(img, f.left, p, f.left + f.width, p, 1, 6, kCritical);
+  PlotText text{plot.title, "cycles", "crack length [mm]", {}};
+  text.legend.push_back({"crack length", line_sample(kLine, 3)});
+  if (estimates) {
+    text.legend.push_back({"predicted end (band)", [](cairo_t* cr, const Box& b) {
+                             const double yc = b.top + 0.5 * b.height, xc = b.left + 0.5 * b.width;
+                             line(cr, b.left + 2, yc, b.right() - 2, yc, 1, kEstimate);
+                             line(cr, b.left + 2, yc - 3, b.left + 2, yc + 4, 1, kEstimate);
+                             line(cr, b.right() - 3, yc - 3, b.right() - 3, yc + 4, 1, kEstimate);
+                             diamond(cr, xc, yc, 5, kEstimate);
+                           }});
+  }
+  if (critical) text.legend.push_back({"critical", line_sample(kCritical, 1, 6)});
+  if (plot.end_of_life_cycle >= 0)
+    text.legend.push_back({"end of life", line_sample(kCrackPath, 2)});
+
+  PlotLayout out;
+  Surface s(options.width, options.height);
+  cairo_t* cr = s.cr.get();
+  Typesetter ts;
+  const Frame f = draw_plot(
+      cr, ts, options.width, options.height, text, [&](int t) { return nice_axis(x_lo, x_hi, t); },
+      std::max(2, options.width / 100), [&](int t) { return nice_axis(y_lo, y_hi, t); }, out);
+  if (critical) {
+    const double p = std::round(f.py(1e3 * plot.critical_length_m));
+    line(cr, f.box.left, p, f.box.right(), p, 1, kCritical, 6);
   }
   // The estimates: band bar and a diamond at the central prediction; the latest one dashed.
   double latest = std::numeric_limits<double>::quiet_NaN();
   for (const auto& p : plot.predictions) {
     if (!drawable(p)) continue;
-    const int py = f.py(1e3 * p.length_m);
+    const double py = std::round(f.py(1e3 * p.length_m));
     if (std::isfinite(p.low) && std::isfinite(p.high)) {
-      const int a = f.px(p.cycles + p.low), b = f.px(p.cycles + p.high);
-      draw_line(img, a, py, b, py, 1, kEstimate);
-      draw_line(img, a, py - 3, a, py + 3, 1, kEstimate);
-      draw_line(img, b, py - 3, b, py + 3, 1, kEstimate);
+      const double a = std::round(f.px(p.cycles + p.low)), b = std::round(f.px(p.cycles + p.high));
+      line(cr, a, py, b, py, 1, kEstimate);
+      line(cr, a, py - 4, a, py + 5, 1, kEstimate);
+      line(cr, b, py - 4, b, py + 5, 1, kEstimate);
     }
-    const int cx = f.px(p.cycles + p.remaining);
-    for (int d = 0; d <= 4; ++d)
-      img.fill(cx - (4 - d), py - d, 2 * (4 - d) + 1, 2 * d + 1, kEstimate);
+    diamond(cr, f.px(p.cycles + p.remaining), py + 0.5, 5, kEstimate);
     latest = p.cycles + p.remaining;
   }
   if (std::isfinite(latest)) {
-    const int p = f.px(latest);
-    draw_dashed_line(img, p, f.top, p, f.top + f.height, 2, 8, kEstimate);
+    const double p = std::round(f.px(latest));
+    line(cr, p, f.box.top, p, f.box.bottom(), 2, kEstimate, 8);
   }
   if (plot.end_of_life_cycle >= 0) {
-    const int p = f.px(static_cast<double>(plot.end_of_life_cycle));
-    draw_line(img, p, f.top, p, f.top + f.height, 2, kCrackPath);
+    const double p = std::round(f.px(static_cast<double>(plot.end_of_life_cycle)));
+    line(cr, p, f.box.top, p, f.box.bottom(), 2, kCrackPath);
   }
-  // The curve; a non-finite point breaks it.
-  bool have_prev = false;
-  int prev_x = 0, prev_y = 0;
+  Polyline curve(cr, 3, kLine);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(plot.cycles[i]) || !std::isfinite(plot.lengths_m[i])) {
-      have_prev = false;
-      continue;
-    }
-    const int cx = f.px(plot.cycles[i]), cy = f.py(1e3 * plot.lengths_m[i]);
-    if (have_prev) {
-      draw_line(img, prev_x, prev_y, cx, cy, 3, kLine);
-    } else {
-      img.fill(cx - 1, cy - 1, 3, 3, kLine);
-    }
-    prev_x = cx;
-    prev_y = cy;
-    have_prev = true;
+    curve.add(std::isfinite(plot.cycles[i]) ? f.px(plot.cycles[i]) : plot.cycles[i],
+              f.py(1e3 * plot.lengths_m[i]));
   }
-  // Legend, top right, one row.
-  int lx = f.left + f.width;
-  const int ly = 10 + kGlyphHeight + 8;
-  auto legend = [&](std::string_view text, Rgb colour) {
-    lx -= text_width(text, kScale) + 40;
-    draw_line(img, lx, ly + kGlyphHeight / 2, lx + 22, ly + kGlyphHeight / 2, 3, colour);
-    draw_text(img, lx + 28, ly, text, kScale, kBlack);
-  };
-  if (plot.end_of_life_cycle >= 0) legend("end of life", kCrackPath);
-  if (std::isfinite(plot.critical_length_m)) legend("critical", kCritical);
-  legend("predicted end (band)", kEstimate);
-  legend("crack length", kLine);
-  save(path, img);
+  curve.flush();
+  save(s, path);
+  return out;
 }
 
-void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
-                         const PlotOptions& options) {
-  if (options.width < 200 || options.height < 150 || options.width > kMaxSide ||
-      options.height > kMaxSide) {
-    throw PngError("write_line_plot_png: image size out of range");
-  }
+PlotLayout write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
+                               const PlotOptions& options) {
+  check_plot_size(options, "write_line_plot_png");
   double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
   double y_lo = x_lo, y_hi = -x_lo;
   for (const auto& s : plot.series) {
@@ -629,44 +915,31 @@ void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot
     y_lo = plot.y_lo;
     y_hi = plot.y_hi;
   }
-  const Axis ax = exact_axis(x_lo, x_hi, 6);
-  const Axis ay = nice_axis(y_lo, y_hi);
-  const int left = 20 + text_width("-0.00000", kScale), right = 30;
-  const int top = 20 + 3 * kGlyphHeight + 20, bottom = 20 + 2 * kGlyphHeight + 20;
-  const Frame f{left, top, options.width - left - right, options.height - top - bottom, ax, ay};
-  Image img(options.width, options.height, kWhite);
-  draw_frame(img, f, plot.x_title, plot.y_title, true);
-  draw_text(img, left - text_width("-0.0", kScale), 10, plot.title, kScale, kBlack);
-  auto clamp_y = [&](double v) { return std::clamp(v, ay.lo, ay.hi); };
+  PlotText text{plot.title, plot.x_title, plot.y_title, {}};
   for (const auto& s : plot.series) {
-    bool have_prev = false;
-    int prev_x = 0, prev_y = 0;
+    text.legend.push_back({s.label, line_sample(s.color, 2, s.dashed ? 4.0 : 0.0)});
+  }
+  PlotLayout out;
+  Surface surface(options.width, options.height);
+  cairo_t* cr = surface.cr.get();
+  Typesetter ts;
+  const Frame f = draw_plot(
+      cr, ts, options.width, options.height, text, [&](int t) { return exact_axis(x_lo, x_hi, t); },
+      std::max(2, options.width / 100), [&](int t) { return nice_axis(y_lo, y_hi, t); }, out);
+  cairo_save(cr);
+  cairo_rectangle(cr, f.box.left, f.box.top, f.box.width, f.box.height);
+  cairo_clip(cr);
+  for (const auto& s : plot.series) {
+    Polyline p(cr, 2, s.color, s.dashed ? 4.0 : 0.0);
     for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) {
-        have_prev = false;
-        continue;
-      }
-      const int cx = f.px(s.x[i]), cy = f.py(clamp_y(s.y[i]));
-      if (have_prev) {
-        if (s.dashed) {
-          draw_dashed_line(img, prev_x, prev_y, cx, cy, 2, 4, s.color);
-        } else {
-          draw_line(img, prev_x, prev_y, cx, cy, 2, s.color);
-        }
-      }
-      prev_x = cx;
-      prev_y = cy;
-      have_prev = true;
+      p.add(std::isfinite(s.x[i]) ? f.px(s.x[i]) : s.x[i],
+            std::isfinite(s.y[i]) ? f.py(std::clamp(s.y[i], f.y.lo, f.y.hi)) : s.y[i]);
     }
+    p.flush();
   }
-  int lx = f.left + f.width;
-  const int ly = 10 + kGlyphHeight + 8;
-  for (auto it = plot.series.rbegin(); it != plot.series.rend(); ++it) {
-    lx -= text_width(it->label, kScale) + 40;
-    draw_line(img, lx, ly + kGlyphHeight / 2, lx + 22, ly + kGlyphHeight / 2, 3, it->color);
-    draw_text(img, lx + 28, ly, it->label, kScale, kBlack);
-  }
-  save(path, img);
+  cairo_restore(cr);
+  save(surface, path);
+  return out;
 }
 
 }  // namespace peritwin::outputs

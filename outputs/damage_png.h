@@ -1,9 +1,11 @@
 // PNG pictures of a detail for people: the damage map (nodes rasterized on their grid, colormapped,
 // white where there is no material; the annotated one with a title, axes in mm, a colour bar, the
 // notches and the crack paths) and the a-N plot (crack length against cycles with the
-// remaining-life estimates), with axes, ticks and tick labels in a built-in 5x7 bitmap font.
-// Encoded with libpng's simplified API and written atomically (temp file + rename). Units:
-// positions and dx in m, crack lengths in m (plotted in mm).
+// remaining-life estimates), with axes, ticks, tick labels and legends. Drawn with cairo, the text
+// set by pango in fontconfig's "Sans" (DejaVu Sans on Debian), the picture laid out by the
+// measured size of its text; encoded by cairo's PNG writer and written atomically (temp file +
+// rename). Each writer returns where it put things (boxes in pixels) so that a test can check the
+// layout. Units: positions and dx in m, crack lengths in m (plotted in mm).
 #pragma once
 
 #include <cstdint>
@@ -69,11 +71,44 @@ struct DamageMap {
 /// Grey of a notch-only node with damage φ: from light (φ = 0) to dark (φ = 1).
 Rgb notch_color(double damage);
 
+/// A rectangle of a picture in pixels: its top-left pixel and its size (row 0 on top).
+struct Box {
+  int left = 0, top = 0, width = 0, height = 0;
+  [[nodiscard]] int right() const { return left + width; }
+  [[nodiscard]] int bottom() const { return top + height; }
+  /// Whether the two share a pixel.
+  [[nodiscard]] bool overlaps(const Box& o) const {
+    return left < o.right() && o.left < right() && top < o.bottom() && o.top < bottom();
+  }
+  /// Whether `o` lies inside this box.
+  [[nodiscard]] bool contains(const Box& o) const {
+    return o.left >= left && o.top >= top && o.right() <= right() && o.bottom() <= bottom();
+  }
+};
+
+/// One entry of a legend: the sample of its line or colour, its text, and the box around both.
+struct LegendEntry {
+  std::string label;
+  Box sample, text, box;
+};
+
+/// Where a picture's text went: the title, the axis titles, the tick labels and the legend.
+struct PictureText {
+  Box title;
+  Box x_title, y_title;  ///< the y title reads upwards along the y axis
+  std::vector<Box> x_tick_labels, y_tick_labels;
+  std::vector<LegendEntry> legend;
+};
+
 /// Where the annotated map put things: the node raster (as write_damage_png) at (left, top).
 struct DamageMapLayout {
   DamageImageLayout grid;  ///< its width and height are the raster's
   int left = 0, top = 0;   ///< the raster's top-left pixel in the picture
   int width = 0, height = 0;
+  PictureText text;  ///< legend: the notch swatch (with notch damage) and the crack path
+  Box colour_bar;    ///< φ = 1 on its top row, φ = 0 on its bottom row
+  Box colour_bar_title;
+  std::vector<Box> colour_bar_labels;  ///< "0.00" at the bottom to "1.00" at the top
 };
 
 /// The damage map with a title, axes in mm with ticks, a colour bar for φ (and a grey swatch for
@@ -88,9 +123,17 @@ struct PlotOptions {
   int height = 500;
 };
 
+/// Where a plot put things: its size, the data rectangle (the frame) and the text.
+struct PlotLayout {
+  int width = 0, height = 0;
+  Box frame;
+  PictureText text;
+};
+
 /// Crack length (m, drawn in mm) against cycles; non-finite points break the line.
-void write_crack_length_png(const std::filesystem::path& path, std::span<const double> cycles,
-                            std::span<const double> lengths_m, const PlotOptions& options = {});
+PlotLayout write_crack_length_png(const std::filesystem::path& path, std::span<const double> cycles,
+                                  std::span<const double> lengths_m,
+                                  const PlotOptions& options = {});
 
 /// A remaining-life estimate made at a state with `cycles` applied and a crack of `length_m`.
 struct LifePrediction {
@@ -113,8 +156,11 @@ struct CrackGrowthPlot {
   double critical_length_m = std::numeric_limits<double>::quiet_NaN();
   std::int64_t end_of_life_cycle = -1;  ///< >= 0: the twin reached its end of life there
 };
-void write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
-                            const PlotOptions& options = {});
+/// The legend (its entries in this order, as many rows as their measured widths need, above the
+/// frame): "crack length", "predicted end (band)" (if there is an estimate), "critical" (if
+/// finite), "end of life" (if reached).
+PlotLayout write_crack_growth_png(const std::filesystem::path& path, const CrackGrowthPlot& plot,
+                                  const PlotOptions& options = {});
 
 /// One curve of a line plot: its points, legend text, colour and whether it is dashed.
 struct PlotSeries {
@@ -126,13 +172,13 @@ struct PlotSeries {
 
 /// A generic x-y line plot (validation figures: K(t) against Freund, ε(t) against the exact
 /// solution, ω(k) curves): a title, axis titles, 1-2-5 axes over the data (or the given range when
-/// y_lo < y_hi), one row of legend.
+/// y_lo < y_hi), a legend with one entry per series (rows as their measured widths need).
 struct LinePlot {
   std::string title, x_title, y_title;
   std::vector<PlotSeries> series;
   double y_lo = 0.0, y_hi = 0.0;  ///< y_lo < y_hi: fixed y range
 };
-void write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
-                         const PlotOptions& options = {});
+PlotLayout write_line_plot_png(const std::filesystem::path& path, const LinePlot& plot,
+                               const PlotOptions& options = {});
 
 }  // namespace peritwin::outputs

@@ -23,6 +23,10 @@ packages=(
   # Spy is a window (the full JRE's AWT), its message viewer and plots need jchart2d, and its test
   # runs it under Xvfb (xvfb-run needs xauth).
   default-jdk-headless default-jre libjchart2d-java xvfb xauth
+  # The PNG pictures (outputs/damage_png.cpp): drawn with cairo, text set by pango in fontconfig's
+  # Sans, which is DejaVu Sans on Debian (fonts-dejavu-core: the font exists on a fresh machine).
+  # libpng-dev above: the tests read the pictures back with libpng, not with cairo.
+  libcairo2-dev libpango1.0-dev fonts-dejavu-core
   # The rooms check (scripts/check-rooms.py, CTest rooms.*): docs/architecture.md's map enforced.
   python3
 )

@@ -764,6 +764,90 @@ std::vector<std::uint8_t> png_pixels(const fs::path& p, std::uint32_t& w, std::u
   return px;
 }
 
+/// A PNG read back with libpng: its size and pixels, and counts of pixels inside a box.
+struct Picture {
+  std::uint32_t width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+  explicit Picture(const fs::path& p) : rgb(png_pixels(p, width, height)) {}
+  [[nodiscard]] outputs::Rgb at(int x, int y) const {
+    const std::size_t i = 3 * (std::size_t(y) * width + std::size_t(x));
+    return {rgb[i], rgb[i + 1], rgb[i + 2]};
+  }
+  /// The pixels of the box (clipped to the picture) whose colour satisfies pred.
+  template <class Pred>
+  [[nodiscard]] std::size_t count(const outputs::Box& b, Pred pred) const {
+    std::size_t n = 0;
+    for (int y = std::max(0, b.top); y < std::min<int>(b.bottom(), int(height)); ++y) {
+      for (int x = std::max(0, b.left); x < std::min<int>(b.right(), int(width)); ++x) {
+        n += pred(at(x, y));
+      }
+    }
+    return n;
+  }
+  [[nodiscard]] std::size_t count(const outputs::Box& b, outputs::Rgb c) const {
+    return count(b, [c](outputs::Rgb p) { return p == c; });
+  }
+  /// Pixels of text: dark grey to black.
+  [[nodiscard]] std::size_t dark(const outputs::Box& b) const {
+    return count(b, [](outputs::Rgb p) { return p.r < 110 && p.g < 110 && p.b < 110; });
+  }
+  [[nodiscard]] outputs::Box all() const { return {0, 0, int(width), int(height)}; }
+};
+
+/// The named boxes lie inside the picture and no two share a pixel.
+void expect_apart(const std::vector<std::pair<std::string, outputs::Box>>& boxes,
+                  const outputs::Box& picture) {
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const auto& [name, b] = boxes[i];
+    if (b.width == 0 && b.height == 0) continue;  // nothing there (an empty title)
+    EXPECT_GT(b.width, 0) << name;
+    EXPECT_GT(b.height, 0) << name;
+    EXPECT_TRUE(picture.contains(b)) << name << " at " << b.left << "," << b.top << " size "
+                                     << b.width << "x" << b.height << " is outside the picture";
+    for (std::size_t j = 0; j < i; ++j) {
+      EXPECT_FALSE(b.overlaps(boxes[j].second)) << name << " overlaps " << boxes[j].first;
+    }
+  }
+}
+
+/// Every box of a picture's text and legend, named, for expect_apart.
+std::vector<std::pair<std::string, outputs::Box>> text_boxes(const outputs::PictureText& t) {
+  std::vector<std::pair<std::string, outputs::Box>> out{
+      {"title", t.title}, {"x title", t.x_title}, {"y title", t.y_title}};
+  for (std::size_t i = 0; i < t.x_tick_labels.size(); ++i) {
+    out.emplace_back("x tick label " + std::to_string(i), t.x_tick_labels[i]);
+  }
+  for (std::size_t i = 0; i < t.y_tick_labels.size(); ++i) {
+    out.emplace_back("y tick label " + std::to_string(i), t.y_tick_labels[i]);
+  }
+  for (const auto& e : t.legend) out.emplace_back("legend " + e.label, e.box);
+  return out;
+}
+
+/// Text was drawn where the layout says: dark pixels in every text box, more in longer ones, and
+/// letters at least as tall as the old 14-pixel bitmap font; each legend entry holds its sample
+/// and its text side by side.
+void expect_text_drawn(const Picture& pic, const outputs::PictureText& t) {
+  EXPECT_GT(pic.dark(t.title), 150u);
+  EXPECT_GE(t.title.height, 16);
+  EXPECT_GT(pic.dark(t.x_title), 40u);
+  EXPECT_GT(pic.dark(t.y_title), 40u);
+  EXPECT_GT(t.y_title.height, t.y_title.width);  // reads upwards
+  for (const auto& b : t.x_tick_labels) {
+    EXPECT_GT(pic.dark(b), 10u);
+    EXPECT_GE(b.height, 14);
+  }
+  for (const auto& b : t.y_tick_labels) EXPECT_GT(pic.dark(b), 10u);
+  ASSERT_FALSE(t.x_tick_labels.empty());
+  ASSERT_FALSE(t.y_tick_labels.empty());
+  for (const auto& e : t.legend) {
+    EXPECT_GT(pic.dark(e.text), 5u * e.label.size()) << e.label;
+    EXPECT_TRUE(e.box.contains(e.sample)) << e.label;
+    EXPECT_TRUE(e.box.contains(e.text)) << e.label;
+    EXPECT_LE(e.sample.right(), e.text.left) << e.label;
+  }
+}
+
 TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
   // 20 x 10 nodes at cell centres (dx = 1 mm), a 4 x 4 hole, one fully damaged node at (5, 2).
   const double dx = 1e-3;
@@ -782,12 +866,10 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
   EXPECT_EQ(layout.node_pixels, 40);
   EXPECT_EQ(png_header(p), std::make_pair(800u, 400u));
 
-  std::uint32_t w = 0, h = 0;
-  const auto px = png_pixels(p, w, h);
-  ASSERT_EQ(w, 800u);
+  const Picture pic(p);
+  ASSERT_EQ(pic.width, 800u);
   auto at = [&](int col, int row) {  // centre pixel of grid cell (col, row from the top)
-    const std::size_t i = 3 * (std::size_t(row * 40 + 20) * w + std::size_t(col * 40 + 20));
-    return outputs::Rgb{px[i], px[i + 1], px[i + 2]};
+    return pic.at(col * 40 + 20, row * 40 + 20);
   };
   const outputs::Rgb red = at(5, 9 - 2);
   EXPECT_EQ(red, outputs::damage_color(1.0));
@@ -798,6 +880,9 @@ TEST_F(OutputsTest, DamagePngHasExpectedSizeAndColours) {
   EXPECT_GT(outputs::damage_color(0.0).b, outputs::damage_color(0.0).r);
   EXPECT_EQ(at(13, 9 - 4), (outputs::Rgb{255, 255, 255}));  // inside the hole: no material
   EXPECT_EQ(outputs::damage_color(0.5), (outputs::Rgb{250, 220, 40}));
+  // A node is its colour to the edge of its square: 40 x 40 pixels exactly.
+  EXPECT_EQ(pic.count({5 * 40, 7 * 40, 40, 40}, red), 1600u);
+  EXPECT_EQ(pic.count(pic.all(), red), 1600u);
 
   EXPECT_THROW(outputs::write_damage_png(p, x, y, std::vector<double>(3, 0.0), dx),
                outputs::PngError);
@@ -828,49 +913,118 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   EXPECT_GT(layout.left, 0);  // room for the y axis, its ticks and labels
   EXPECT_GT(layout.top, 0);   // and the title
   EXPECT_GT(layout.width, layout.left + layout.grid.width);  // and the colour bar
-  std::uint32_t w = 0, h = 0;
-  const auto px = png_pixels(p, w, h);
-  ASSERT_EQ(w, static_cast<std::uint32_t>(layout.width));
-  ASSERT_EQ(h, static_cast<std::uint32_t>(layout.height));
+  const Picture pic(p);
+  ASSERT_EQ(pic.width, static_cast<std::uint32_t>(layout.width));
+  ASSERT_EQ(pic.height, static_cast<std::uint32_t>(layout.height));
   auto at = [&](int col, int row_from_top, int dy = 20) {
-    const auto i = 3 * (std::size_t(layout.top + row_from_top * 40 + dy) * w +
-                        std::size_t(layout.left + col * 40 + 20));
-    return outputs::Rgb{px[i], px[i + 1], px[i + 2]};
+    return pic.at(layout.left + col * 40 + 20, layout.top + row_from_top * 40 + dy);
   };
   EXPECT_EQ(at(5, 9 - 4, 5),
             outputs::notch_color(0.42));  // off the notch line drawn through the row
   EXPECT_EQ(outputs::notch_color(0.42).r, outputs::notch_color(0.42).b);  // a grey
   EXPECT_EQ(at(6, 9 - 4, 5), outputs::damage_color(0.48));
   EXPECT_EQ(at(15, 0), outputs::damage_color(0.0));
-  std::size_t magenta = 0, dark = 0;
-  for (std::size_t i = 0; i < px.size(); i += 3) {
-    magenta += px[i] == 200 && px[i + 1] == 0 && px[i + 2] == 200;
-    dark += px[i] == 0 && px[i + 1] == 0 && px[i + 2] == 0;
+  const outputs::Rgb magenta{200, 0, 200}, black{0, 0, 0};
+  const outputs::Box raster{layout.left, layout.top, layout.grid.width, layout.grid.height};
+  // The crack path, 6.3 mm at 40 px/mm and 3 px wide (antialiased: pixels near its colour), and
+  // its tip; the notch line, 5.5 mm at 3 px (two of its rows wholly black).
+  EXPECT_GT(pic.count(raster, [](outputs::Rgb c) { return c.r > 150 && c.g < 80 && c.b > 150; }),
+            600u);
+  EXPECT_GT(pic.count(raster, black), 400u);
+
+  // The layout: nothing shares a pixel with anything else; the text is there.
+  auto boxes = text_boxes(layout.text);
+  boxes.emplace_back("raster", raster);
+  boxes.emplace_back("colour bar", layout.colour_bar);
+  boxes.emplace_back("colour bar title", layout.colour_bar_title);
+  for (std::size_t i = 0; i < layout.colour_bar_labels.size(); ++i) {
+    boxes.emplace_back("colour bar label " + std::to_string(i), layout.colour_bar_labels[i]);
   }
-  EXPECT_GT(magenta, 300u);  // the crack path (6 mm at 3 px) and its legend
-  EXPECT_GT(dark, 1000u);    // text, ticks, frame, the notch line
+  expect_apart(boxes, pic.all());
+  expect_text_drawn(pic, layout.text);
+  EXPECT_LE(layout.text.title.bottom(), raster.top);
+  EXPECT_GT(pic.dark(layout.colour_bar_title), 40u);
+  ASSERT_EQ(layout.colour_bar_labels.size(), 5u);  // 0.00, 0.25, 0.50, 0.75, 1.00
+  for (const auto& b : layout.colour_bar_labels) EXPECT_GT(pic.dark(b), 20u);
+  EXPECT_GT(layout.colour_bar_labels.front().top, layout.colour_bar_labels.back().top);  // 0 below
+  // The bar is the colour scale: φ = 1 on top, 0 at the bottom, 0.5 half way.
+  const outputs::Box& bar = layout.colour_bar;
+  const int mid = bar.left + bar.width / 2;
+  EXPECT_EQ(pic.at(mid, bar.top), outputs::damage_color(1.0));
+  EXPECT_EQ(pic.at(mid, bar.bottom() - 1), outputs::damage_color(0.0));
+  EXPECT_EQ(pic.count({bar.left, bar.top, bar.width, 1}, outputs::damage_color(1.0)),
+            static_cast<std::size_t>(bar.width));
+  const int half = (bar.height - 1) / 2;
+  EXPECT_EQ(pic.at(mid, bar.top + half),
+            outputs::damage_color(1.0 - static_cast<double>(half) / (bar.height - 1)));
+  // The legend: the grey swatch of notch-only nodes, then the crack path.
+  ASSERT_EQ(layout.text.legend.size(), 2u);
+  EXPECT_EQ(layout.text.legend[0].label, "notch");
+  EXPECT_EQ(layout.text.legend[1].label, "crack");
+  const outputs::Box swatch = layout.text.legend[0].sample;
+  EXPECT_EQ(pic.at(swatch.left, swatch.top + swatch.height / 2), outputs::notch_color(0.0));
+  EXPECT_GT(pic.count(layout.text.legend[1].sample, magenta), 40u);
+
+  // A detail without notches: no notch entry.
+  map.notch_damage.assign(d.size(), 0.0);
+  const auto plain = outputs::write_damage_map_png(p, x, y, d, dx, map);
+  ASSERT_EQ(plain.text.legend.size(), 1u);
+  EXPECT_EQ(plain.text.legend[0].label, "crack");
   map.notch_damage = {0.1};  // not one per node
   EXPECT_THROW(outputs::write_damage_map_png(p, x, y, d, dx, map), outputs::PngError);
 }
 
 TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {
   outputs::CrackGrowthPlot plot;
-  plot.title = "ct-1";
+  plot.title = "ct-1   crack length and predicted end of life";
   for (int k = 0; k <= 20; ++k) {
     plot.cycles.push_back(1e3 * k);
     plot.lengths_m.push_back(1e-4 * k);
   }
   plot.predictions = {{5e3, 5e-4, 2e4, 1.5e4, 2.5e4}, {1e4, 1e-3, 1.6e4, kNaN, kNaN}};
   plot.critical_length_m = 3e-3;
+  plot.end_of_life_cycle = 20000;
   const fs::path p = dir_ / "an.png";
-  outputs::write_crack_growth_png(p, plot);
-  std::uint32_t w = 0, h = 0;
-  const auto px = png_pixels(p, w, h);
-  std::size_t orange = 0;
-  for (std::size_t i = 0; i < px.size(); i += 3) {
-    orange += px[i] == 230 && px[i + 1] == 110 && px[i + 2] == 0;
-  }
-  EXPECT_GT(orange, 200u);  // diamonds, the band bar, the dashed latest prediction, the legend
+  const outputs::PlotLayout layout = outputs::write_crack_growth_png(p, plot);
+  const Picture pic(p);
+  ASSERT_EQ(pic.width, 800u);
+  ASSERT_EQ(pic.height, 500u);
+  EXPECT_EQ(layout.width, 800);
+  EXPECT_EQ(layout.height, 500);
+  const outputs::Rgb orange{230, 110, 0}, blue{31, 90, 180}, grey{120, 120, 120},
+      magenta{200, 0, 200};
+  // Diamonds, the band bar, the dashed latest prediction (2 px over the frame's height).
+  EXPECT_GT(pic.count(layout.frame, orange), 300u);
+  EXPECT_GT(pic.count(layout.frame, blue), 500u);  // the curve, 3 px wide
+  // The legend: its four entries in order, each with its sample in its colour, none overlapping
+  // another or anything else of the picture.
+  const auto& legend = layout.text.legend;
+  ASSERT_EQ(legend.size(), 4u);
+  EXPECT_EQ(legend[0].label, "crack length");
+  EXPECT_EQ(legend[1].label, "predicted end (band)");
+  EXPECT_EQ(legend[2].label, "critical");
+  EXPECT_EQ(legend[3].label, "end of life");
+  EXPECT_GT(pic.count(legend[0].sample, blue), 40u);
+  EXPECT_GT(pic.count(legend[1].sample, orange), 30u);
+  EXPECT_GT(pic.count(legend[2].sample, grey), 10u);
+  EXPECT_GT(pic.count(legend[3].sample, magenta), 40u);
+  auto boxes = text_boxes(layout.text);
+  boxes.emplace_back("frame", layout.frame);
+  expect_apart(boxes, pic.all());
+  expect_text_drawn(pic, layout.text);
+  for (const auto& e : legend) EXPECT_LE(e.box.right(), layout.frame.right()) << e.label;
+
+  // A narrow picture: the same legend no longer fits one row and takes two, still apart.
+  const outputs::PlotLayout narrow = outputs::write_crack_growth_png(p, plot, {.width = 420});
+  const Picture small(p);
+  ASSERT_EQ(small.width, 420u);
+  ASSERT_EQ(narrow.text.legend.size(), 4u);
+  EXPECT_GT(narrow.text.legend.back().box.top, narrow.text.legend.front().box.top);
+  auto narrow_boxes = text_boxes(narrow.text);
+  narrow_boxes.emplace_back("frame", narrow.frame);
+  expect_apart(narrow_boxes, small.all());
+  expect_text_drawn(small, narrow.text);
+
   plot.lengths_m.pop_back();
   EXPECT_THROW(outputs::write_crack_growth_png(p, plot), outputs::PngError);
 }
@@ -894,27 +1048,43 @@ TEST_F(OutputsTest, LinePlotDrawsEverySeries) {
   }
   plot.series = {sine, zero};
   const fs::path p = dir_ / "lines.png";
-  outputs::write_line_plot_png(p, plot, outputs::PlotOptions{640, 400});
-  std::uint32_t w = 0, h = 0;
-  const auto px = png_pixels(p, w, h);
-  ASSERT_EQ(w, 640u);
-  ASSERT_EQ(h, 400u);
-  std::size_t red = 0, green = 0;
-  std::vector<std::size_t> green_rows(h, 0);
-  for (std::size_t i = 0; i < px.size(); i += 3) {
-    red += px[i] == 200 && px[i + 1] == 40 && px[i + 2] == 40;
-    if (px[i] == 30 && px[i + 1] == 150 && px[i + 2] == 60) {
-      ++green;
-      ++green_rows[(i / 3) / w];
+  const outputs::PlotLayout layout =
+      outputs::write_line_plot_png(p, plot, outputs::PlotOptions{640, 400});
+  const Picture pic(p);
+  ASSERT_EQ(pic.width, 640u);
+  ASSERT_EQ(pic.height, 400u);
+  const outputs::Rgb red{200, 40, 40}, green{30, 150, 60};
+  // The sine over 10 units at 2 px (antialiased: pixels near its colour).
+  EXPECT_GT(
+      pic.count(layout.frame, [](outputs::Rgb c) { return c.r > 150 && c.g < 130 && c.b < 130; }),
+      700u);
+  // Dashed: about half of a 2 px line across the frame.
+  EXPECT_GT(
+      pic.count(layout.frame, [](outputs::Rgb c) { return c.g > 110 && c.r < 130 && c.b < 130; }),
+      350u);
+  // The zero line: its green pixels sit in the frame's middle rows.
+  const outputs::Box& f = layout.frame;
+  std::size_t best = 0;
+  int best_row = -1;
+  for (int row = f.top; row < f.bottom(); ++row) {
+    const std::size_t n = pic.count({f.left, row, f.width, 1}, green);
+    if (n > best) {
+      best = n;
+      best_row = row;
     }
   }
-  EXPECT_GT(red, 500u);    // the sine over 10 units at 2 px
-  EXPECT_GT(green, 300u);  // dashed: about half of a 2 px line across the frame
-  // The zero line: the green pixels (legend aside) sit in two adjacent rows near the middle.
-  const auto row = static_cast<std::size_t>(std::max_element(green_rows.begin(), green_rows.end()) -
-                                            green_rows.begin());
-  EXPECT_GT(row, h / 4);
-  EXPECT_LT(row, 3 * h / 4);
+  EXPECT_NEAR(best_row, f.top + f.height / 2, 2);
+  EXPECT_GT(best, static_cast<std::size_t>(f.width) / 3);
+  ASSERT_EQ(layout.text.legend.size(), 2u);
+  EXPECT_EQ(layout.text.legend[0].label, "sine");
+  EXPECT_GT(pic.count(layout.text.legend[0].sample, red), 40u);
+  EXPECT_GT(pic.count(layout.text.legend[1].sample, green), 20u);
+  auto boxes = text_boxes(layout.text);
+  boxes.emplace_back("frame", layout.frame);
+  expect_apart(boxes, pic.all());
+  // One-letter titles: fewer dark pixels than expect_text_drawn asks of a title.
+  EXPECT_GT(pic.dark(layout.text.title), 40u);
+  for (const auto& b : layout.text.x_tick_labels) EXPECT_GT(pic.dark(b), 10u);
   plot.series[0].y.pop_back();
   EXPECT_THROW(outputs::write_line_plot_png(p, plot), outputs::PngError);
 }
@@ -927,13 +1097,32 @@ TEST_F(OutputsTest, CrackLengthPlotIsAPng) {
   }
   a[20] = kNaN;  // breaks the line, must not break the plot
   const fs::path p = dir_ / "crack.png";
-  outputs::write_crack_length_png(p, n, a);
+  const outputs::PlotLayout layout = outputs::write_crack_length_png(p, n, a);
   EXPECT_EQ(png_header(p), std::make_pair(800u, 500u));
-  std::uint32_t w = 0, h = 0;
-  const auto px = png_pixels(p, w, h);
-  std::size_t dark = 0;
-  for (std::size_t i = 0; i < px.size(); i += 3) dark += px[i] < 100 && px[i + 2] > 150;
-  EXPECT_GT(dark, 500u);  // the blue curve is there
+  const Picture pic(p);
+  // The blue curve is there, in two pieces: between the columns it covers, one gap (the missing
+  // point, 4e4 cycles wide: about 4 % of the frame) with none of it.
+  auto blue = [](outputs::Rgb c) { return c.r < 100 && c.b > 150; };
+  EXPECT_GT(pic.count(layout.frame, blue), 500u);
+  const outputs::Box& f = layout.frame;
+  std::vector<int> gaps;  // widths of the runs of columns without blue between columns with it
+  int last = -1;
+  for (int col = f.left; col < f.right(); ++col) {
+    if (pic.count({col, f.top, 1, f.height}, blue) == 0) continue;
+    if (last >= 0 && col - last > 1) gaps.push_back(col - last - 1);
+    last = col;
+  }
+  ASSERT_EQ(gaps.size(), 1u);
+  EXPECT_GT(gaps[0], f.width / 50);
+  EXPECT_LT(gaps[0], f.width / 20);
+  // No estimates, no critical length, no end of life: the curve's legend entry alone.
+  ASSERT_EQ(layout.text.legend.size(), 1u);
+  EXPECT_EQ(layout.text.legend[0].label, "crack length");
+  // The x axis: 0 to 1e6 cycles; its tick labels ("2e5" style) are apart.
+  ASSERT_GE(layout.text.x_tick_labels.size(), 3u);
+  auto boxes = text_boxes(layout.text);
+  boxes.emplace_back("frame", layout.frame);
+  expect_apart(boxes, pic.all());
   outputs::write_crack_length_png(dir_ / "empty.png", {}, {}, {.width = 400, .height = 300});
   EXPECT_EQ(png_header(dir_ / "empty.png"), std::make_pair(400u, 300u));
 }
