@@ -80,6 +80,12 @@
 //                        on a coarser grid of the same detail, the fine crack mapped onto it and
 //                        its A2 calibrated to the fine model's recent da/dN (docs/design.md,
 //                        "Remaining life on a coarser grid")
+//   [detail.uncertainty] (optional; issue 32, docs/prognostics.md) particles 64 (1-4096), seed 1
+//                        (>= 0), a2 {median (default: [detail.fatigue] A2), cov 0 (0-3)} and
+//                        load_scale {median 1, cov 0}: lognormal priors (laws strain_range and
+//                        energy for a2), percentiles [5, 50, 95] (increasing, in (0, 100)),
+//                        horizon_cycles 0 (>= 0: P(end of life within it) published; 0 = not),
+//                        resample_ess_fraction 0.5 (in (0, 1])
 //   [detail.stress_intensity]
 //                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
 //                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
@@ -231,6 +237,31 @@ struct LifeConfig {
   [[nodiscard]] bool empirical_spectrum() const { return reference_spectrum.empty(); }
 };
 
+/// A lognormal prior given as its median and coefficient of variation (prognostics/).
+struct LognormalPrior {
+  double median = 1.0;
+  double cov = 0.0;  ///< 0: the parameter is known (no spread)
+};
+
+/// [detail.uncertainty] (issue 32): the uncertain parameters' priors and the particle ensemble
+/// that updates them from observations (twin/ensemble.h, docs/prognostics.md).
+struct UncertaintyConfig {
+  bool enabled = false;  ///< the table is present
+  std::int64_t particles = 64;
+  std::uint64_t seed = 1;
+  /// A2 (phase II coefficient, 000 Eq. 15) in the law's units; median default: the calibrated
+  /// [detail.fatigue] A2.
+  LognormalPrior a2;
+  /// Factor on every received P_max (the sensors' or the spectrum's bias).
+  LognormalPrior load_scale;
+  /// Percentiles of the end-of-life cycle published (in (0, 100), increasing).
+  std::vector<double> percentiles{5.0, 50.0, 95.0};
+  /// P(end of life within the next horizon_cycles) is published; 0 = not.
+  double horizon_cycles = 0.0;
+  /// Resample when the effective sample size falls below this fraction of the particles.
+  double resample_ess_fraction = 0.5;
+};
+
 enum class StressIntensityMethod { extrapolation, compact_tension };
 
 /// How K_I and K_II at the main crack tip are reported (STATE, results).
@@ -280,6 +311,7 @@ struct DetailConfig {
   std::vector<SupportSpec> supports;
   OutputConfig output;
   LifeConfig life;
+  UncertaintyConfig uncertainty;
   StressIntensityConfig stress_intensity;
   CheckpointConfig checkpoint;
   LimitsConfig limits;

@@ -645,6 +645,54 @@ const toml::source_region& source_of(const toml::table& t, std::string_view key)
   return n != nullptr ? n->source() : t.source();
 }
 
+/// Reads a lognormal prior {median, cov} at `key` of [detail.uncertainty].
+void read_prior(Context& ctx, TableReader& r, std::string_view key, LognormalPrior& prior) {
+  const toml::table* t = r.table(key, false);
+  if (t == nullptr) return;
+  TableReader pr(ctx, *t, r.path_of(key));
+  prior.median = pr.number("median", prior.median);
+  pr.check("median", prior.median > 0, "must be > 0 (a lognormal median)");
+  prior.cov = pr.number("cov", prior.cov);
+  pr.check("cov", prior.cov >= 0 && prior.cov <= 3,
+           "must lie in [0, 3] (the coefficient of variation; 0 = known)");
+  pr.finish();
+}
+
+/// [detail.uncertainty] (issue 32).
+void read_uncertainty(Context& ctx, const toml::table& t, const std::string& path,
+                      const DetailConfig& d, UncertaintyConfig& u) {
+  TableReader r(ctx, t, path);
+  u.enabled = true;
+  u.particles = r.integer("particles", u.particles);
+  r.check("particles", u.particles >= 1 && u.particles <= 4096, "must lie in [1, 4096]");
+  const std::int64_t seed = r.integer("seed", 1);
+  r.check("seed", seed >= 0, "must be >= 0");
+  u.seed = static_cast<std::uint64_t>(seed);
+  u.a2.median = d.fatigue.strain.A2;
+  read_prior(ctx, r, "a2", u.a2);
+  if (r.has("a2")) {
+    r.check("a2", fatigue::law_entry(d.fatigue.law).calibrated_a2,
+            "an uncertain A2 needs fatigue law \"strain_range\" or \"energy\"");
+  }
+  read_prior(ctx, r, "load_scale", u.load_scale);
+  if (const toml::array* a = r.array("percentiles", false)) {
+    u.percentiles.clear();
+    bool ok = !a->empty();
+    for (const auto& e : *a) {
+      const auto v = e.value<double>();
+      ok = ok && v && *v > 0 && *v < 100 && (u.percentiles.empty() || *v > u.percentiles.back());
+      if (v) u.percentiles.push_back(*v);
+    }
+    r.check("percentiles", ok, "must be a non-empty array of increasing numbers in (0, 100)");
+  }
+  u.horizon_cycles = r.number("horizon_cycles", u.horizon_cycles);
+  r.check("horizon_cycles", u.horizon_cycles >= 0, "must be >= 0 (0 = not published)");
+  u.resample_ess_fraction = r.number("resample_ess_fraction", u.resample_ess_fraction);
+  r.check("resample_ess_fraction", u.resample_ess_fraction > 0 && u.resample_ess_fraction <= 1,
+          "must lie in (0, 1]");
+  r.finish();
+}
+
 /// Reads one [[detail]]; `estimate` gets its resources when its geometry and grid are valid.
 DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& path,
                          std::optional<ResourceEstimate>* estimate) {
@@ -718,6 +766,9 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     read_checkpoint(ctx, *c, r.path_of("checkpoint"), d.checkpoint);
   }
   if (const auto* l = r.table("limits", false)) read_limits(ctx, *l, r.path_of("limits"), d.limits);
+  if (const auto* u = r.table("uncertainty", false)) {
+    read_uncertainty(ctx, *u, r.path_of("uncertainty"), d, d.uncertainty);
+  }
   if (const auto* s = r.table("sensor", false)) read_sensor(ctx, *s, r.path_of("sensor"), d.sensor);
   r.finish();
   if (sized) *estimate = estimate_resources(d);

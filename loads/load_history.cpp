@@ -288,6 +288,66 @@ ReadResult<std::vector<core::LoadBlock>> read_cycles_csv(std::istream& in,
   return blocks;
 }
 
+ReadResult<std::vector<messages::Observation>> read_observations_csv(std::istream& in,
+                                                                     const std::string& name) {
+  constexpr std::string_view kHeaders[] = {
+      "cycle,kind,origin,length_m,sigma_m,pod_a50_m,pod_slope"};
+  constexpr std::string_view kNames[] = {"cycle",   "kind",      "origin",   "length_m",
+                                         "sigma_m", "pod_a50_m", "pod_slope"};
+  std::vector<messages::Observation> out;
+  std::size_t header = 0;
+  auto error = scan_csv(
+      in, name, kHeaders, nullptr, header,
+      [&](std::size_t, const std::vector<std::string_view>& f) -> std::optional<std::string> {
+        messages::Observation o;
+        std::int64_t cycle = 0;
+        const auto [end, ec] = std::from_chars(f[0].data(), f[0].data() + f[0].size(), cycle);
+        if (f[0].empty() || ec != std::errc() || end != f[0].data() + f[0].size() || cycle < 0) {
+          return cat({"'cycle' must be an integer >= 0, got '", f[0], "'"});
+        }
+        o.cycle = cycle;
+        if (!out.empty() && cycle < out.back().cycle) {
+          return cat({"'cycle' ", f[0], " is before the previous row's: rows in cycle order"});
+        }
+        if (f[1] == "crack_length") {
+          o.kind = messages::ObservationKind::crack_length;
+        } else if (f[1] == "no_crack") {
+          o.kind = messages::ObservationKind::no_crack;
+        } else {
+          return cat({"'kind' must be crack_length or no_crack, got '", f[1], "'"});
+        }
+        o.origin = f[2].empty() ? "longest" : std::string(f[2]);
+        const bool crack = o.kind == messages::ObservationKind::crack_length;
+        double* targets[] = {&o.length_m, &o.sigma_m, &o.pod_a50_m, &o.pod_slope};
+        for (std::size_t k = 3; k < 7; ++k) {
+          const bool used = crack == (k < 5);
+          if (!used) {
+            if (!f[k].empty()) {
+              return cat({"'", kNames[k], "' must be empty for kind ", f[1]});
+            }
+            continue;
+          }
+          auto v = parse_number(f[k], kNames[k]);
+          if (v.index() != 0) return std::get<1>(std::move(v));
+          *targets[k - 3] = std::get<0>(v);
+        }
+        if (const core::Status st = messages::check_observation(o); !st) {
+          return "'" + st.error().field + "' " + st.error().reason;
+        }
+        out.push_back(std::move(o));
+        return std::nullopt;
+      });
+  if (error) return std::move(*error);
+  return out;
+}
+
+ReadResult<std::vector<messages::Observation>> read_observations_csv(
+    const std::filesystem::path& file) {
+  return read_file<std::vector<messages::Observation>>(
+      file,
+      [](std::istream& in, const std::string& name) { return read_observations_csv(in, name); });
+}
+
 ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name) {
   Spectrum spectrum;
   if (auto error = scan_blocks(in, name, &spectrum.repeat, spectrum.blocks)) {

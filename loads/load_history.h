@@ -38,6 +38,7 @@
 #include "core/load_block.h"
 #include "loads/cycle_blocks.h"
 #include "loads/rainflow.h"
+#include "messages/observation.h"
 
 namespace peritwin::loads {
 
@@ -109,6 +110,17 @@ struct Spectrum {
 [[nodiscard]] ReadResult<std::vector<core::LoadBlock>> read_cycles_csv(std::istream& in,
                                                                        const std::string& name);
 [[nodiscard]] ReadResult<Spectrum> read_spectrum_csv(std::istream& in, const std::string& name);
+
+/// An observations file (issue 32, fed by peritwin-replay --observations): header
+/// `cycle,kind,origin,length_m,sigma_m,pod_a50_m,pod_slope`, one inspection per row in
+/// non-decreasing cycle order; kind `crack_length` (length_m, sigma_m given, the POD fields empty)
+/// or `no_crack` (pod_a50_m, pod_slope given, length_m and sigma_m empty); origin `longest` or a
+/// crack origin as STATE reports it (empty = longest). Each row checked by
+/// messages::check_observation; the error names the line and field.
+[[nodiscard]] ReadResult<std::vector<messages::Observation>> read_observations_csv(
+    const std::filesystem::path& file);
+[[nodiscard]] ReadResult<std::vector<messages::Observation>> read_observations_csv(
+    std::istream& in, const std::string& name);
 
 enum class HistoryFormat { series, cycles, spectrum };
 

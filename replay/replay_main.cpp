@@ -53,6 +53,7 @@
 #include "messages/auth.h"
 #include "messages/transport.h"
 #include "outputs/detail_outputs.h"
+#include "replay/learning.h"
 #include "replay/replay_tool.h"
 #include "twin/in_process_twin.h"
 
@@ -73,6 +74,7 @@ struct Options {
   bool append = false, resume = false;
   std::string residue = "half";
   std::string results_dir;
+  std::string observations;  ///< --observations: inspections for the learning ensemble
   loads::SeriesRules series_rules;
   loads::BatchingOptions batching;
   loads::ReplayOptions replay;
@@ -104,6 +106,11 @@ void add_options(CLI::App& app, Options& o) {
   app.add_option("--results", o.results_dir,
                  "with --in-process: write the daemon's results files (HDF5 + XDMF, PNGs with "
                  "[detail.output] png) to this directory")
+      ->needs(in_process_opt);
+  app.add_option("--observations", o.observations,
+                 "with --in-process: inspections (CSV: cycle,kind,origin,length_m,sigma_m,"
+                 "pod_a50_m,pod_slope) taken in at their cycles by the detail's learning "
+                 "ensemble ([detail.uncertainty]); prints its remaining-life percentiles")
       ->needs(in_process_opt);
   loads::add_key_options(app, o.keys);
   auto* generate_opt =
@@ -314,6 +321,39 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
   return core::kExitOk;
 }
 
+/// --in-process --observations: the twin and its learning ensemble (replay/learning.h).
+int run_learning(const Options& o, const config::DetailConfig& detail,
+                 const std::vector<messages::Batch>& batches, replay::StatePrinter& printer) {
+  if (!detail.uncertainty.enabled) {
+    std::cerr << "peritwin-replay: --observations: detail " << detail.id
+              << " has no [detail.uncertainty] (the priors the observations update)\n";
+    return core::kExitUsage;
+  }
+  auto observations = loads::read_observations_csv(o.observations);
+  if (!observations) {
+    std::cerr << "peritwin-replay: " << observations.error().message() << "\n";
+    return core::kExitUsage;
+  }
+  std::vector<std::int64_t> cycles;
+  for (const auto& obs : *observations) cycles.push_back(obs.cycle);
+  const auto split = replay::split_batches_at(batches, cycles);
+  std::cerr << "peritwin-replay: " << o.observations << ": " << observations->size()
+            << " observations; " << detail.uncertainty.particles << " particles\n";
+  const auto r = replay::run_learning_in_process(
+      detail, split, *observations, o.json, printer.callback(),
+      [](const std::string& line) { std::cout << line << std::endl; });
+  if (!r.error.empty()) {
+    std::cerr << "peritwin-replay: " << r.error << "\n";
+    return core::kExitUsage;
+  }
+  if (o.json && r.final_state && r.final_estimate) {
+    std::cout << replay::summary_with_ensemble(messages::summary_json(*r.final_state),
+                                               *r.final_estimate)
+              << std::endl;
+  }
+  return core::kExitOk;
+}
+
 /// The replay of `o` (after --generate-key-file and the required options); the exit code.
 int run(Options o) {
   const auto loaded = replay::load_producer_config(o.config_file, o.in_process);
@@ -339,6 +379,7 @@ int run(Options o) {
   report_history(o, *detail, history, batches.size());
 
   replay::StatePrinter printer(o.json);
+  if (!o.observations.empty()) return run_learning(o, *detail, batches, printer);
   std::optional<peritwin_msgs::damage_state_t> final_state;
   const int rc = o.in_process ? replay_in_process(o, *detail, batches, printer, final_state)
                               : replay_over_lcm(o, *detail, history, std::move(batches),

@@ -323,6 +323,16 @@ double criterion_crack_length(const DetailModel& model, const std::vector<double
   return longest;
 }
 
+double observed_crack_length(const DetailModel& model, const fatigue::FatigueEngine& engine,
+                             const std::string& origin) {
+  const bool any = origin.empty() || origin == "longest";
+  double longest = 0.0;
+  for (const auto& c : model.finder().find(engine.node_damage(), engine.solver().intact()).cracks) {
+    if (any || origin_name(model, c) == origin) longest = std::max(longest, c.length);
+  }
+  return longest;
+}
+
 Failure end_of_life(const DetailModel& model, const fatigue::FatigueEngine& engine) {
   if (engine.failed()) return Failure::singular;
   const config::LifeConfig& life = model.config().life;

@@ -130,6 +130,12 @@ double criterion_crack_length(const DetailModel& model, const std::vector<double
 /// damage_state_t FAILURE_* codes.
 enum class Failure : std::int8_t { none = 0, end_criterion = 1, singular = 2 };
 
+/// The length (m, along its path) of the longest crack of the engine's state whose origin is
+/// `origin` ("longest" or "": any crack; else a notch's name, "hole <index>", "outline" as STATE
+/// reports it); 0 when there is none. What an inspection of that crack is compared with.
+double observed_crack_length(const DetailModel& model, const fatigue::FatigueEngine& engine,
+                             const std::string& origin);
+
 /// Whether the engine's state meets the end criterion of the detail's life config
 /// (crack_length: the criterion's crack, criterion_crack_length(), >= critical; phase3: any bond
 /// broken by overload; connectivity: final failure). A singular stiffness (final failure) is
