@@ -68,10 +68,14 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
              });
   // The mesh and the newest complete field: 404 for an unknown detail or none yet.
   using Getter = std::optional<std::string> (Store::*)(const std::string&) const;
-  for (const auto& [route, getter, what] :
+  for (const auto& entry :
        {std::tuple<const char*, Getter, const char*>{"mesh", &Store::mesh_json, "mesh"},
         std::tuple<const char*, Getter, const char*>{"field", &Store::field_json,
                                                      "complete field"}}) {
+    // Named copies, not structured bindings: clang (the fuzz build) cannot capture those.
+    const char* const route = std::get<0>(entry);
+    const Getter getter = std::get<1>(entry);
+    const char* const what = std::get<2>(entry);
     server.Get(std::string(R"(/api/details/([A-Za-z0-9_-]+)/)") + route,
                [&store, getter, what](const httplib::Request& req, httplib::Response& res) {
                  const std::string id = req.matches[1];
