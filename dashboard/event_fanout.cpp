@@ -193,13 +193,18 @@ void EventFanout::run() {
     }
     return true;
   };
-  // Queues `piece` for `c` (and sends what its socket takes); false when it must be closed.
-  const auto queue = [&](Client& c, const Piece& piece, SteadyClock::time_point now) {
+  // Queues `piece` for `c` and sends what its socket takes; the stream is closed when its client
+  // is gone, or as slow when more than max_pending_bytes wait behind the piece being sent (one
+  // piece alone, e.g. a new stream's catch-up of up to 1000 events, may be larger: the stall
+  // timeout bounds how long it waits).
+  const auto deliver = [&](Client& c, const Piece& piece, SteadyClock::time_point now) {
     if (c.queue.empty()) c.progress = now;
     c.queue.push_back(piece);
     c.pending += piece->size();
     c.last_queued = now;
-    return c.pending <= limits_.max_pending_bytes;
+    if (!flush(c, now)) return doom(c.sock, false);
+    const std::size_t in_progress = c.queue.empty() ? 0 : c.queue.front()->size() - c.offset;
+    if (c.pending - in_progress > limits_.max_pending_bytes) doom(c.sock, true);
   };
 
   for (;;) {
@@ -228,18 +233,12 @@ void EventFanout::run() {
       c.sock = a.sock;
       c.cursor = std::max(a.after, cursor);
       c.last_queued = now;
-      bool ok = true;
       if (a.after < cursor) {
         const auto events = store_.events_after(a.after, std::chrono::milliseconds(0));
         std::uint64_t count = 0;
         const std::string text = format(events, a.after, cursor, count);
-        if (!text.empty()) ok = queue(c, chunk(text), now);
+        if (!text.empty()) deliver(c, chunk(text), now);
         events_sent_.fetch_add(count);
-      }
-      if (!ok) {
-        doom(a.sock, true);
-      } else if (!flush(c, now)) {
-        doom(a.sock, false);
       }
     }
     close_doomed();
@@ -263,11 +262,7 @@ void EventFanout::run() {
             sent += all_count;
           }
           c.cursor = last;
-          if (!queue(c, piece, now)) {
-            doom(sock, true);
-          } else if (!flush(c, now)) {
-            doom(sock, false);
-          }
+          deliver(c, piece, now);
         }
         close_doomed();
         events_sent_.fetch_add(sent);
@@ -284,11 +279,7 @@ void EventFanout::run() {
         if (!c.queue.empty() && now - c.progress >= limits_.stall_timeout) {
           doom(sock, true);
         } else if (now - c.last_queued >= limits_.keep_alive) {
-          if (!queue(c, keep_alive, now)) {
-            doom(sock, true);
-          } else if (!flush(c, now)) {
-            doom(sock, false);
-          }
+          deliver(c, keep_alive, now);
         }
       }
       close_doomed();

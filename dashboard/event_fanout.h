@@ -7,7 +7,8 @@
 // From then on this thread owns the socket: it polls every stream (epoll), writes each event
 // (chunked transfer coding, as httplib started it) to every stream without blocking, and closes
 // a stream whose client hung up (noticed at once: EPOLLRDHUP), or reads too slowly: more than
-// `max_pending_bytes` queued for it, or queued data that made no progress for `stall_timeout`.
+// `max_pending_bytes` queued for it behind what is being sent, or queued data that made no
+// progress for `stall_timeout`.
 // Events are formatted and framed once per write and shared by every stream (a stream's queue
 // holds shared pieces): a slow reader costs its queue's pointers, not a copy of the events.
 //
@@ -35,7 +36,8 @@ constexpr std::size_t kDefaultMaxEventStreams = 4096;
 struct FanoutLimits {
   /// Open (or reserved) streams at most; one more is refused (the route answers 503).
   std::size_t max_streams = kDefaultMaxEventStreams;
-  /// Bytes queued for one stream at most (beyond its socket's send buffer): a client that reads
+  /// Bytes queued for one stream at most behind the piece being sent (beyond its socket's send
+  /// buffer; a new stream's catch-up is one piece, which may be larger): a client that reads
   /// slower than the events come is closed beyond this (it reconnects with Last-Event-ID).
   std::size_t max_pending_bytes = std::size_t{1} << 20;
   /// A stream whose queued bytes made no progress for this long is closed.
