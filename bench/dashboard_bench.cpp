@@ -41,12 +41,28 @@
 // tail latency is mostly other processes' time slices. Exit 0 when measured (whatever the goals
 // say: timings depend on the machine), 3 on a runtime failure (hub, dashboard, a dashboard that
 // does not count the warm-up states).
+//
+// Issue 30 item 4, a dashboard that cannot be locked out: --streams N holds N more event streams
+// open through the window (each counts the events it receives) and --idle M holds M idle
+// connections (every other one has sent half a request line; one the dashboard closes after its
+// header timeout is opened again), all on one thread of the bench, while GET / and GET
+// /api/details are fetched every --fetch-period-ms (100) on a new connection each. The line then
+// has "lockout": {"streams","streams_open" (answered 200),"streams_with_events",
+// "stream_events_min","streams_closed_by_dashboard","idle","idle_reopened","connect_failures",
+// "fetch_period_ms","page_ms":{n,p50,p99,max},"api_details_ms":{…},"fetch_failures",
+// "threads_before","threads_max" (the dashboard's, /proc/<pid>/status, before the connections
+// and at most during the window),"goal_p99_ms":50,"pass"}: pass when every stream was answered
+// 200 and received events, no fetch failed and both p99 are at most 50 ms. With many streams the
+// events are written to each of them: keep the rate modest (e.g. --details 10 --rate 1; at 1100
+// events/s the 1000 streams would be 2 GB/s). --max-event-streams N is passed to the dashboard.
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/epoll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/time.h>
 #include <sys/wait.h>
@@ -60,7 +76,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <numeric>
@@ -438,6 +456,191 @@ class ReferenceSubscriber {
   std::string error_;
 };
 
+/// --streams event streams on /api/events and --idle idle connections (every other one has sent
+/// half a request line), all held on one thread (epoll) for the window: each stream's status and
+/// the events it received are counted; an idle connection the dashboard closes (its header
+/// timeout) is opened again at once, so that --idle are open all the time.
+class HeldConnections {
+ public:
+  HeldConnections(int port, int streams, int idle) : port_(port) {
+    epoll_ = epoll_create1(EPOLL_CLOEXEC);
+    for (int i = 0; i < streams; ++i) open(true, i);
+    for (int i = 0; i < idle; ++i) open(false, i);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~HeldConnections() {
+    stop();
+    for (auto& [fd, c] : conns_) close(fd);
+    if (epoll_ >= 0) close(epoll_);
+  }
+  HeldConnections(const HeldConnections&) = delete;
+  HeldConnections& operator=(const HeldConnections&) = delete;
+
+  /// Waits until every stream was answered (its status line read), `timeout_s` at most.
+  bool wait_answered(std::size_t streams, double timeout_s) const {
+    for (const auto t0 = Clock::now(); since(t0) < timeout_s;) {
+      if (answered_.load() >= streams) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return answered_.load() >= streams;
+  }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  /// After stop(): per stream, events received (-1: not answered 200).
+  [[nodiscard]] std::vector<std::int64_t> stream_events() const {
+    std::vector<std::int64_t> out;
+    for (const auto& [fd, c] : conns_) {
+      if (c.stream) out.push_back(c.status == 200 ? c.events : -1);
+    }
+    return out;
+  }
+  [[nodiscard]] std::int64_t streams_closed() const { return streams_closed_; }
+  [[nodiscard]] std::int64_t idle_reopened() const { return idle_reopened_; }
+  [[nodiscard]] std::int64_t open_failures() const { return open_failures_; }
+
+ private:
+  struct Conn {
+    bool stream = false;
+    int status = 0;    // of a stream's answer; 0 before its status line
+    std::string head;  // a stream's bytes until its headers are complete
+    std::string tail;  // the last bytes of its body (an event marker split between reads)
+    std::int64_t events = 0;
+  };
+
+  void open(bool stream, int i) {
+    const int s = connect_loopback(port_, 30.0);
+    if (s < 0) {
+      ++open_failures_;
+      return;
+    }
+    const bool sent = stream ? send_all(s,
+                                        "GET /api/events HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                                        "Accept: text/event-stream\r\n\r\n")
+                             : (i % 2 == 0 || send_all(s, "GET / HT"));
+    epoll_event e{};
+    e.events = EPOLLIN | EPOLLRDHUP;
+    e.data.fd = s;
+    if (!sent || fcntl(s, F_SETFL, fcntl(s, F_GETFL) | O_NONBLOCK) != 0 ||
+        epoll_ctl(epoll_, EPOLL_CTL_ADD, s, &e) != 0) {
+      close(s);
+      ++open_failures_;
+      return;
+    }
+    conns_[s].stream = stream;
+  }
+
+  void run() {
+    std::vector<epoll_event> ready(512);
+    std::vector<char> buffer(1 << 16);
+    static const std::string kMarker = "\nevent: ";
+    while (!stop_) {
+      const int n = epoll_wait(epoll_, ready.data(), static_cast<int>(ready.size()), 100);
+      for (int k = 0; k < n; ++k) {
+        const int fd = ready[static_cast<std::size_t>(k)].data.fd;
+        auto it = conns_.find(fd);
+        if (it == conns_.end()) continue;
+        Conn& c = it->second;
+        bool gone = false;
+        for (;;) {
+          const auto got = recv(fd, buffer.data(), buffer.size(), 0);
+          if (got == 0 || (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+            gone = true;
+            break;
+          }
+          if (got < 0) break;
+          std::string text(buffer.data(), static_cast<std::size_t>(got));
+          if (!c.stream) continue;  // an idle connection's answer (none expected): dropped
+          if (c.status == 0) {
+            c.head += text;
+            const auto end = c.head.find("\r\n\r\n");
+            if (end == std::string::npos) continue;
+            c.status = c.head.rfind("HTTP/1.1 ", 0) == 0 ? std::atoi(c.head.c_str() + 9) : -1;
+            ++answered_;
+            text = c.head.substr(end + 4);
+            c.head.clear();
+          }
+          // Every event has one "\nevent: " line (data is JSON: no raw newline in it).
+          const std::string seen = c.tail + text;
+          for (auto p = seen.find(kMarker); p != std::string::npos; p = seen.find(kMarker, p + 1)) {
+            ++c.events;
+          }
+          c.tail = seen.substr(seen.size() - std::min(seen.size(), kMarker.size() - 1));
+        }
+        if (!gone) continue;
+        epoll_ctl(epoll_, EPOLL_CTL_DEL, fd, nullptr);
+        close(fd);
+        const bool stream = c.stream;
+        if (stream) {
+          ++streams_closed_;
+          closed_streams_.push_back(std::move(c));
+        }
+        conns_.erase(it);
+        if (!stream) {
+          ++idle_reopened_;
+          open(false, static_cast<int>(idle_reopened_));
+        }
+      }
+    }
+    for (auto& c : closed_streams_) conns_[-1 - static_cast<int>(conns_.size())] = std::move(c);
+    closed_streams_.clear();
+  }
+
+  int port_;
+  int epoll_ = -1;
+  std::map<int, Conn> conns_;         // by socket (closed streams: negative keys, after stop)
+  std::vector<Conn> closed_streams_;  // streams the dashboard closed (their counts kept)
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::size_t> answered_{0};
+  std::int64_t streams_closed_ = 0, idle_reopened_ = 0, open_failures_ = 0;
+};
+
+/// The page and the API fetched over and over (a new connection each time, as a browser opening
+/// the dashboard), every `period`: the time of each answer, and the dashboard's threads.
+class Fetcher {
+ public:
+  Fetcher(int port, pid_t dashboard, std::chrono::milliseconds period)
+      : port_(port), pid_(std::to_string(dashboard)), period_(period) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~Fetcher() { stop(); }
+  Fetcher(const Fetcher&) = delete;
+  Fetcher& operator=(const Fetcher&) = delete;
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+  }
+  std::vector<double> page_ms, api_ms;
+  std::int64_t failures = 0, threads_max = -1;
+
+ private:
+  void run() {
+    auto next = Clock::now();
+    while (!stop_) {
+      for (const auto& [path, times] :
+           {std::pair<const char*, std::vector<double>*>{"/", &page_ms},
+            std::pair<const char*, std::vector<double>*>{"/api/details", &api_ms}}) {
+        const auto t0 = Clock::now();
+        if (http_get(port_, path)) {
+          times->push_back(1e3 * since(t0));
+        } else {
+          ++failures;
+        }
+      }
+      threads_max = std::max(threads_max, core::proc_status_kb("Threads", pid_));
+      next += period_;
+      std::this_thread::sleep_until(next);
+    }
+  }
+  int port_;
+  std::string pid_;
+  std::chrono::milliseconds period_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+};
+
 /// The command line.
 struct Options {
   int details = 100;
@@ -448,6 +651,9 @@ struct Options {
       (fs::read_symlink("/proc/self/exe").parent_path() / "peritwin-dashboard").string();
   bool keep = false, sse_quickack = false, reference = false;
   int sse_clients = 1;
+  int streams = 0, idle = 0;  // held open during the window (issue 30 item 4)
+  int fetch_period_ms = 100;
+  int max_event_streams = 0;  // > 0: passed to the dashboard
 };
 
 void add_options(CLI::App& app, Options& o) {
@@ -473,6 +679,22 @@ void add_options(CLI::App& app, Options& o) {
   app.add_flag("--lcm-reference", o.reference,
                "also time each STATE to a second LCM subscriber in this process (the hub's share "
                "of the latency; the hub then relays every STATE twice)");
+  app.add_option("--streams", o.streams,
+                 "event streams held open during the window, each counting its events, while "
+                 "the page and the API are fetched (default 0)")
+      ->check(CLI::Range(0, 100000));
+  app.add_option("--idle", o.idle,
+                 "idle connections held open during the window (every other one sent half a "
+                 "request line; reopened when the dashboard closes them), while the page and "
+                 "the API are fetched (default 0)")
+      ->check(CLI::Range(0, 100000));
+  app.add_option("--fetch-period-ms", o.fetch_period_ms,
+                 "with --streams or --idle: GET / and GET /api/details every this many ms "
+                 "(default 100)")
+      ->check(CLI::Range(1, 60000));
+  app.add_option("--max-event-streams", o.max_event_streams,
+                 "passed to the dashboard (default: its own default)")
+      ->check(CLI::Range(1, 1 << 20));
   app.add_flag("--keep", o.keep, "keep the work directory (hub and dashboard logs)");
 }
 
@@ -490,9 +712,24 @@ struct Window {
   std::int64_t status_events = 0;
   std::vector<double> latencies, lcm_latencies;
   int dashboard_exit = -1;
+  // --streams / --idle
+  std::vector<std::int64_t> stream_events;  // per stream (-1: not answered 200)
+  std::int64_t streams_closed = 0, idle_reopened = 0, open_failures = 0, threads_max = -1;
+  std::int64_t threads_before = -1, fetch_failures = 0;
+  std::vector<double> page_ms, api_ms;
 };
 
 constexpr double kGoalP99Ms = 20.0, kGoalCpu = 0.10, kGoalRssMb = 200.0;
+/// Issue 30 item 4: the page and the API with --streams and --idle open.
+constexpr double kGoalFetchP99Ms = 50.0;
+
+/// {"n", "p50", "p99", "max"} of `ms`.
+core::JsonLine fetch_times(const std::vector<double>& ms) {
+  return {{"n", static_cast<std::int64_t>(ms.size())},
+          {"p50", core::fixed(core::percentile(ms, 0.50), 2)},
+          {"p99", core::fixed(core::percentile(ms, 0.99), 2)},
+          {"max", core::fixed(core::percentile(ms, 1.0), 2)}};
+}
 
 /// The JSON line of the run.
 core::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& m) {
@@ -563,6 +800,37 @@ core::JsonLine dashboard_line(const Options& o, const Warmup& w, const Window& m
                                             : core::JsonLine(nullptr)},
                   {"cpu", cpu_fraction <= kGoalCpu},
                   {"rss", peak_mb <= kGoalRssMb}};
+  if (o.streams > 0 || o.idle > 0) {
+    const auto& ev = m.stream_events;
+    const auto open = std::count_if(ev.begin(), ev.end(), [](std::int64_t e) { return e >= 0; });
+    const auto with_events =
+        std::count_if(ev.begin(), ev.end(), [](std::int64_t e) { return e > 0; });
+    std::int64_t min_events = -1;
+    for (const auto e : ev) {
+      if (e >= 0) min_events = min_events < 0 ? e : std::min(min_events, e);
+    }
+    const double page_p99 = core::percentile(m.page_ms, 0.99);
+    const double api_p99 = core::percentile(m.api_ms, 0.99);
+    const bool pass = open == o.streams && with_events == o.streams && m.fetch_failures == 0 &&
+                      !m.page_ms.empty() && !m.api_ms.empty() && page_p99 <= kGoalFetchP99Ms &&
+                      api_p99 <= kGoalFetchP99Ms;
+    line["lockout"] = {{"streams", o.streams},
+                       {"streams_open", static_cast<std::int64_t>(open)},
+                       {"streams_with_events", static_cast<std::int64_t>(with_events)},
+                       {"stream_events_min", min_events},
+                       {"streams_closed_by_dashboard", m.streams_closed},
+                       {"idle", o.idle},
+                       {"idle_reopened", m.idle_reopened},
+                       {"connect_failures", m.open_failures},
+                       {"fetch_period_ms", o.fetch_period_ms},
+                       {"page_ms", fetch_times(m.page_ms)},
+                       {"api_details_ms", fetch_times(m.api_ms)},
+                       {"fetch_failures", m.fetch_failures},
+                       {"threads_before", m.threads_before},
+                       {"threads_max", m.threads_max},
+                       {"goal_p99_ms", kGoalFetchP99Ms},
+                       {"pass", pass}};
+  }
   line["load_average_1min"] = m.load_average;
   line["sse_quickack"] = o.sse_quickack;
   line["dashboard_exit"] = m.dashboard_exit;
@@ -628,9 +896,12 @@ std::optional<int> Run::start() {
     o_.lcm_url = "tcpq://127.0.0.1:" + std::to_string(port);
   }
   const fs::path out_file = work_ / "dashboard.out", log_file = work_ / "dashboard.log";
-  dashboard_ = spawn(
-      {o_.dashboard_bin, "--lcm-url", o_.lcm_url, "--listen", "127.0.0.1:0", "--log-level", "info"},
-      out_file.string(), log_file.string());
+  std::vector<std::string> args{o_.dashboard_bin, "--lcm-url",   o_.lcm_url, "--listen",
+                                "127.0.0.1:0",    "--log-level", "info"};
+  if (o_.max_event_streams > 0) {
+    args.insert(args.end(), {"--max-event-streams", std::to_string(o_.max_event_streams)});
+  }
+  dashboard_ = spawn(args, out_file.string(), log_file.string());
   if (dashboard_ < 0) return fail("cannot start " + o_.dashboard_bin);
   for (const auto t0 = Clock::now(); since(t0) < 60.0 && dashboard_alive();) {
     std::smatch m;
@@ -731,6 +1002,18 @@ std::optional<int> Run::measure(Window& m) {
     }
     if (!sse.back()->connected()) return fail("no answer on /api/events");
   }
+  // --streams / --idle: held open through the window while the page and the API are fetched.
+  std::unique_ptr<HeldConnections> held;
+  std::unique_ptr<Fetcher> fetcher;
+  if (o_.streams > 0 || o_.idle > 0) {
+    m.threads_before = core::proc_status_kb("Threads", std::to_string(dashboard_));
+    held = std::make_unique<HeldConnections>(http_port_, o_.streams, o_.idle);
+    if (!held->wait_answered(static_cast<std::size_t>(o_.streams), 120.0)) {
+      return fail("the event streams were not all answered within 120 s");
+    }
+    fetcher = std::make_unique<Fetcher>(http_port_, dashboard_,
+                                        std::chrono::milliseconds(o_.fetch_period_ms));
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const double state_period_s = 1.0 / (o_.rate * static_cast<double>(details));
   const double status_period_s = 1.0 / static_cast<double>(details);
@@ -776,6 +1059,20 @@ std::optional<int> Run::measure(Window& m) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   m.latencies = matcher.latencies_ms();
+  if (fetcher) {
+    fetcher->stop();
+    m.page_ms = fetcher->page_ms;
+    m.api_ms = fetcher->api_ms;
+    m.fetch_failures = fetcher->failures;
+    m.threads_max = fetcher->threads_max;
+  }
+  if (held) {
+    held->stop();
+    m.stream_events = held->stream_events();
+    m.streams_closed = held->streams_closed();
+    m.idle_reopened = held->idle_reopened();
+    m.open_failures = held->open_failures();
+  }
   ref.reset();
   m.lcm_latencies = lcm_matcher.latencies_ms();
   const bool alive = dashboard_alive();
@@ -809,6 +1106,12 @@ int main(int argc, char** argv) {
   if (const auto rc =
           peritwin::core::parse_options(app, argc, argv, peritwin::core::ParseErrors::cli11)) {
     return *rc;
+  }
+  // --streams and --idle hold a socket each.
+  rlimit files{};
+  if (getrlimit(RLIMIT_NOFILE, &files) == 0 && files.rlim_cur < files.rlim_max) {
+    files.rlim_cur = files.rlim_max;
+    setrlimit(RLIMIT_NOFILE, &files);
   }
   return run(std::move(o));
 }

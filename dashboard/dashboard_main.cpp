@@ -2,13 +2,15 @@
 // "Dashboard", and dashboard/store.h, dashboard/server.h.
 //
 //   peritwin-dashboard --lcm-url URL [--listen 127.0.0.1:8080] [--results DIR]
-//                      [--max-event-streams 64] [--log-level L]
+//                      [--max-event-streams 4096] [--log-level L]
 //
 // It publishes one thing only: a mesh_request_t on PERITWIN_<DETAIL>_MESH_REQUEST for a detail it
 // has no mesh of (every 5 s at most per detail), which its daemon answers on the MESH channel.
 // --results DIR back-fills each detail's history from the daemon's results files under DIR.
-// --max-event-streams N caps the open /api/events streams (503 beyond); the server has N + 8
-// workers, so the page and the API are always answered (dashboard/http_server.h).
+// --max-event-streams N caps the open /api/events streams (503 beyond). They are all written by one
+// thread (dashboard/event_fanout.h); the server's 8 workers answer requests only, so the page and
+// the API are always answered (dashboard/http_server.h). N is lowered (with a warning) when the
+// file-descriptor limit, raised to its hard limit at start, leaves no room for it.
 //
 // Prints "peritwin-dashboard: http://HOST:PORT/" on stdout once it serves (port 0: any free
 // port, the one chosen is printed). Exit codes: 0 clean stop (SIGTERM/SIGINT, also while waiting
@@ -32,6 +34,7 @@
 #include "core/program.h"
 #include "core/stop_signal.h"
 #include "dashboard/backfill.h"
+#include "dashboard/event_fanout.h"
 #include "dashboard/http_server.h"
 #include "dashboard/server.h"
 #include "dashboard/store.h"
@@ -105,9 +108,9 @@ int main(int argc, char** argv) {
                  "(<DIR>/<id>.h5 or <DIR>/*/<id>.h5)");
   std::size_t max_event_streams = peritwin::dashboard::kDefaultMaxEventStreams;
   app.add_option("--max-event-streams", max_event_streams,
-                 "open /api/events streams at most, each holding a thread; HTTP 503 beyond "
-                 "(default 64)")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{4096}));
+                 "open /api/events streams at most (one thread writes them all); HTTP 503 "
+                 "beyond (default 4096)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1} << 20));
   app.add_option("--log-level", log_level, "trace|debug|info|warn|error|critical|off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
   if (const auto rc = peritwin::core::parse_options(app, argc, argv)) return *rc;
@@ -126,13 +129,11 @@ int main(int argc, char** argv) {
   signal(SIGPIPE, SIG_IGN);
 
   peritwin::dashboard::Store store;
-  // Workers: one per event stream at the cap, and kReserveWorkers more for the page and the API.
-  constexpr std::size_t kReserveWorkers = 8;
   peritwin::dashboard::ServerLimits limits;
-  limits.workers = max_event_streams + kReserveWorkers;
-  // Connections waiting for their headers hold a file descriptor each: their number stays below
-  // the descriptor limit (raised to the hard limit if it can be), leaving room for the streams,
-  // the requests being answered, LCM and files, so that accept() does not fail with EMFILE.
+  // Every open stream, every connection waiting for its headers and every request being answered
+  // holds a file descriptor: their number stays below the descriptor limit (raised to the hard
+  // limit if it can be), leaving room for LCM and files, so that accept() does not fail with
+  // EMFILE. The streams get at most half of the room, the waiting connections the rest.
   rlimit files{};
   if (getrlimit(RLIMIT_NOFILE, &files) == 0) {
     if (files.rlim_cur < files.rlim_max) {
@@ -143,12 +144,28 @@ int main(int argc, char** argv) {
     const rlim_t room = files.rlim_cur > limits.workers + kOtherFiles
                             ? files.rlim_cur - limits.workers - kOtherFiles
                             : 0;
-    limits.max_waiting = std::max<std::size_t>(16, std::min<rlim_t>(limits.max_waiting, room));
+    if (max_event_streams > room / 2) {
+      const std::size_t lowered = std::max<std::size_t>(1, room / 2);
+      spdlog::warn(
+          "--max-event-streams {} lowered to {}: the file-descriptor limit is {} (raise it, "
+          "e.g. ulimit -n, for more)",
+          max_event_streams, lowered, static_cast<unsigned long long>(files.rlim_cur));
+      max_event_streams = lowered;
+    }
+    limits.max_waiting = std::max<std::size_t>(
+        16, std::min<rlim_t>(limits.max_waiting,
+                             room > max_event_streams ? room - max_event_streams : 0));
   }
-  spdlog::info("HTTP: {} event streams at most, {} workers, {} connections waiting at most",
-               max_event_streams, limits.workers, limits.max_waiting);
+  spdlog::info(
+      "HTTP: {} event streams at most (one thread), {} workers, {} connections waiting "
+      "at most",
+      max_event_streams, limits.workers, limits.max_waiting);
+  peritwin::dashboard::FanoutLimits fanout_limits;
+  fanout_limits.max_streams = max_event_streams;
+  // Declared before the server, whose routes use it: destroyed after the server stopped.
+  peritwin::dashboard::EventFanout events(store, fanout_limits);
   peritwin::dashboard::BoundedServer server(limits);
-  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS, max_event_streams);
+  peritwin::dashboard::install_routes(server, store, PERITWIN_CHARTJS, events);
   // httplib's default also sets SO_REUSEPORT, which lets a second dashboard share a port in use
   // (requests then go to either): SO_REUSEADDR only, so that is refused.
   server.set_socket_options([](int sock) {
@@ -268,6 +285,10 @@ int main(int argc, char** argv) {
   store.close();
   server.stop();
   http.join();
+  events.stop();
+  const auto streams = events.stats();
+  spdlog::info("event streams: {} served, {} closed as slow readers, {} refused (503)",
+               streams.adopted, streams.closed_slow, streams.refused);
   if (http_failed) rc = peritwin::core::kExitRuntime;
   return rc;
 }

@@ -22,6 +22,13 @@ using SteadyClock = std::chrono::steady_clock;
 /// The largest request body read (no route takes one).
 constexpr std::size_t kMaxPayload = 64 * 1024;
 
+/// The connection a worker is answering, and whether a route took it (take_connection).
+struct Answering {
+  socket_t sock = INVALID_SOCKET;
+  bool taken = false;
+};
+thread_local Answering answering;
+
 void close_connection(socket_t sock) {
   ::shutdown(sock, SHUT_RDWR);
   ::close(sock);
@@ -54,8 +61,8 @@ class SocketStream final : public httplib::Stream {
         std::chrono::ceil<std::chrono::milliseconds>(read_deadline_ - SteadyClock::now());
     return left.count() > 0 && poll_one(sock_, POLLIN, left) > 0;
   }
-  /// False once the client is gone (it hung up or reset): httplib asks before each piece of a
-  /// chunked response, so an event stream whose client closed ends and frees its worker and slot.
+  /// False once the client is gone (it hung up or reset), or takes nothing for the write timeout
+  /// (DataSink::is_writable of a content provider).
   bool is_writable() const override {
     const int r = poll_one(sock_, POLLOUT | POLLRDHUP, write_timeout_);
     return r > 0 && (r & (POLLRDHUP | POLLHUP | POLLERR | POLLNVAL)) == 0;
@@ -108,6 +115,12 @@ class SocketStream final : public httplib::Stream {
 };
 
 }  // namespace
+
+int take_connection() {
+  if (answering.sock == INVALID_SOCKET || answering.taken) return -1;
+  answering.taken = true;
+  return answering.sock;
+}
 
 /// The server's task queue: httplib's accept loop "enqueues" each new connection, which is handed
 /// to the gate at once on the accept thread (never waiting for a worker); the gate gives a
@@ -303,7 +316,11 @@ void BoundedServer::serve(socket_t sock, std::size_t served) {
   SocketStream stream(sock, limits_);
   const bool last = served + 1 >= limits_.keep_alive_max_count;
   bool closed = false;
+  answering = {sock, false};
   const bool ok = process_request(stream, last, closed, nullptr);
+  const bool taken = answering.taken;
+  answering = {};
+  if (taken) return;  // an event stream: the fan-out thread owns it now
   Pool* pool = pool_.load();
   if (ok && !closed && !last && pool != nullptr && svr_sock_ != INVALID_SOCKET) {
     return pool->wait_for_request(sock, SteadyClock::now() + limits_.keep_alive_timeout,

@@ -7,9 +7,11 @@
 // once "\r\n\r\n" has arrived does a worker read and answer it, and between keep-alive requests it
 // goes back to the gate. A connection whose headers do not arrive within `header_timeout` (idle,
 // or a slowloris dribbling half a request line) is closed there, as is one idle for
-// `keep_alive_timeout` after a request. So workers are held only by requests being answered and by
-// event streams (each one worker while open; their number is capped by the routes, server.h):
-// with `workers` = the cap + a reserve, the page and the API are always answered.
+// `keep_alive_timeout` after a request. An event stream holds no worker either: once its
+// response headers are written, the route takes the connection from the server
+// (take_connection) and gives it to the one thread that writes every stream (event_fanout.h).
+// So workers are held only by requests being answered, and a few of them always answer the page
+// and the API, whatever number of streams and idle connections is open.
 #pragma once
 
 #include <httplib.h>
@@ -21,8 +23,8 @@
 namespace peritwin::dashboard {
 
 struct ServerLimits {
-  /// Worker threads: the event-stream cap + a reserve for the page and API requests.
-  std::size_t workers = 64 + 8;
+  /// Worker threads: requests being answered (an event stream only until its headers are out).
+  std::size_t workers = 8;
   /// A new connection's request headers must have arrived within this, or it is closed.
   std::chrono::milliseconds header_timeout{10000};
   /// A connection idle this long after a request (keep-alive) is closed.
@@ -36,6 +38,12 @@ struct ServerLimits {
   std::chrono::seconds read_timeout{5};
   std::chrono::seconds write_timeout{5};
 };
+
+/// Inside a route's content provider, on a BoundedServer worker: the connection being answered is
+/// taken from the server, which then neither reads, writes nor closes it (the provider returns
+/// false: httplib writes nothing more). Its socket, whose response headers are written; -1 when
+/// not called on a BoundedServer worker, or a second time.
+[[nodiscard]] int take_connection();
 
 class BoundedServer : public httplib::Server {
  public:

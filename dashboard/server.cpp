@@ -1,19 +1,16 @@
 #include "dashboard/server.h"
 
-#include <atomic>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
-#include <thread>
 #include <tuple>
+
+#include "dashboard/http_server.h"
 
 namespace peritwin::dashboard {
 namespace {
-
-/// How long an event stream gathers events after a write before the next one.
-constexpr std::chrono::milliseconds kEventCoalesce{5};
 
 /// Retry-After of the 503 to an event stream beyond the cap, in seconds.
 constexpr int kStreamRetryAfterS = 10;
@@ -38,7 +35,7 @@ void json(httplib::Response& res, const std::string& body) {
 }  // namespace
 
 void install_routes(httplib::Server& server, Store& store, const std::string& chartjs,
-                    std::size_t max_event_streams) {
+                    EventFanout& events) {
   server.Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(kPageHtml, "text/html; charset=utf-8");
   });
@@ -71,10 +68,14 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
              });
   // The mesh and the newest complete field: 404 for an unknown detail or none yet.
   using Getter = std::optional<std::string> (Store::*)(const std::string&) const;
-  for (const auto& [route, getter, what] :
+  for (const auto& entry :
        {std::tuple<const char*, Getter, const char*>{"mesh", &Store::mesh_json, "mesh"},
         std::tuple<const char*, Getter, const char*>{"field", &Store::field_json,
                                                      "complete field"}}) {
+    // Named copies, not structured bindings: clang (the fuzz build) cannot capture those.
+    const char* const route = std::get<0>(entry);
+    const Getter getter = std::get<1>(entry);
+    const char* const what = std::get<2>(entry);
     server.Get(std::string(R"(/api/details/([A-Za-z0-9_-]+)/)") + route,
                [&store, getter, what](const httplib::Request& req, httplib::Response& res) {
                  const std::string id = req.matches[1];
@@ -86,25 +87,37 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                  json(res, *body);
                });
   }
-  // The open event streams, each holding a worker while open: at most max_event_streams, so that
-  // the workers beyond them (dashboard_main.cpp) always serve the page and the API.
-  auto open_streams = std::make_shared<std::atomic<std::size_t>>(0);
-  server.Get("/api/events", [&store, open_streams, max_event_streams](const httplib::Request& req,
-                                                                      httplib::Response& res) {
+  // An event stream: a slot of the fan-out (none left: 503), the SSE headers written by httplib,
+  // then the connection handed to the fan-out's thread, which writes every event to it. No worker
+  // is held beyond that.
+  server.Get("/api/events", [&store, &events](const httplib::Request& req, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
-    if (open_streams->fetch_add(1) >= max_event_streams) {
-      open_streams->fetch_sub(1);
-      // Answered at once, holding no worker beyond this answer (an EventSource stops on a 503).
+    if (!events.reserve()) {
+      // Answered at once (an EventSource stops on a 503).
       res.status = 503;
       res.set_header("Retry-After", std::to_string(kStreamRetryAfterS));
-      res.set_content("too many open event streams (" + std::to_string(max_event_streams) +
+      res.set_content("too many open event streams (" + std::to_string(events.max_streams()) +
                           ", --max-event-streams): try again later\n",
                       "text/plain; charset=utf-8");
       return;
     }
-    // The slot, given back when httplib drops the content provider holding it (the stream
-    // ended: client gone, a write failed or timed out, the dashboard stopping).
-    std::shared_ptr<void> slot(nullptr, [open_streams](void*) { open_streams->fetch_sub(1); });
+    // The slot, given back when httplib drops the content provider holding it unless the
+    // connection went to the fan-out (which gives it back when the stream closes): a HEAD, or
+    // headers that could not be written.
+    class Slot {
+     public:
+      explicit Slot(EventFanout& fanout) : fanout_(fanout) {}
+      ~Slot() {
+        if (!adopted) fanout_.release();
+      }
+      Slot(const Slot&) = delete;
+      Slot& operator=(const Slot&) = delete;
+      bool adopted = false;
+
+     private:
+      EventFanout& fanout_;
+    };
+    auto slot = std::make_shared<Slot>(events);
     // Events after the one a reconnecting EventSource names (Last-Event-ID), else after ?after=ID
     // (the X-Last-Event-Id of the /api/details snapshot the page drew), else after the newest at
     // connection time. An id this process has not reached yet (another dashboard's) counts as
@@ -116,30 +129,15 @@ void install_routes(httplib::Server& server, Store& store, const std::string& ch
                               : req.has_param("after") ? req.get_param_value("after")
                                                        : std::string();
     if (const auto id = parse_event_id(named); id && *id < newest) start = *id;
-    struct Stream {
-      std::uint64_t cursor;
-      bool wrote_events = false;
-    };
-    auto stream = std::make_shared<Stream>(Stream{start});
     res.set_chunked_content_provider(
-        "text/event-stream", [&store, stream, slot](std::size_t, httplib::DataSink& sink) {
-          if (store.closed()) return false;
-          // After a write of events, the next ones are gathered for kEventCoalesce first: one
-          // wake-up and one send per 5 ms at most instead of one per event (at 1100 events/s
-          // the wake-ups, futexes and sends were a third of the dashboard's CPU,
-          // docs/benchmarks.md "Dashboard"). An event after a quiet spell goes out at once.
-          if (stream->wrote_events) std::this_thread::sleep_for(kEventCoalesce);
-          const auto events = store.events_after(stream->cursor, std::chrono::milliseconds(1000));
-          if (store.closed()) return false;
-          std::string out;
-          for (const auto& e : events) {
-            out +=
-                "id: " + std::to_string(e.id) + "\nevent: " + e.kind + "\ndata: " + e.data + "\n\n";
-            stream->cursor = e.id;
+        "text/event-stream", [&events, slot, start](std::size_t, httplib::DataSink&) {
+          // Called once the response headers are written: the connection goes to the fan-out.
+          const int sock = take_connection();
+          if (sock >= 0) {
+            slot->adopted = true;
+            events.adopt(sock, start);
           }
-          stream->wrote_events = !out.empty();
-          if (out.empty()) out = ": keep-alive\n\n";  // notices a client that went away
-          return sink.write(out.data(), out.size());
+          return false;  // httplib writes nothing more; the server lets go of the connection
         });
   });
   server.set_error_handler([](const httplib::Request&, httplib::Response& res) {

@@ -9,15 +9,16 @@
 //   /api/events               Server-Sent Events: one per STATE/STATUS/REJECT, complete MESH/FIELD
 //                             after the event Last-Event-ID or ?after=ID names (X-Last-Event-Id of
 //                             /api/details: the newest its snapshot includes), else from now;
-//                             at most max_event_streams open at once, 503 (text/plain reason,
+//                             written by one thread for all (event_fanout.h); at most the
+//                             fan-out's max_streams open at once, 503 (text/plain reason,
 //                             Retry-After) beyond
 #pragma once
 
 #include <httplib.h>
 
-#include <cstddef>
 #include <string>
 
+#include "dashboard/event_fanout.h"
 #include "dashboard/store.h"
 
 namespace peritwin::dashboard {
@@ -25,11 +26,9 @@ namespace peritwin::dashboard {
 /// The page (generated from dashboard/page.html at build time).
 extern const char* const kPageHtml;
 
-/// The default cap on open event streams (--max-event-streams).
-constexpr std::size_t kDefaultMaxEventStreams = 64;
-
-/// Installs the routes on `server`; `chartjs` is the path of chart.min.js.
+/// Installs the routes on `server` (a BoundedServer: /api/events hands its connections to
+/// `events`, take_connection); `chartjs` is the path of chart.min.js.
 void install_routes(httplib::Server& server, Store& store, const std::string& chartjs,
-                    std::size_t max_event_streams = kDefaultMaxEventStreams);
+                    EventFanout& events);
 
 }  // namespace peritwin::dashboard

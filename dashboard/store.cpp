@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <utility>
 
 #include "messages/channels.h"
 #include "messages/codec.h"
@@ -527,6 +528,7 @@ void Store::push_event(const std::string& kind, const std::string& detail, Clock
   events_.push_back({next_event_++, kind, std::move(text)});
   while (events_.size() > kMaxEvents) events_.pop_front();
   changed_.notify_all();
+  if (event_listener_) event_listener_();
 }
 
 std::string Store::detail_json_locked(const std::string& id, const DetailRecord& d,
@@ -798,6 +800,11 @@ std::deque<Event> Store::events_after(std::uint64_t after, std::chrono::millisec
 std::uint64_t Store::last_event_id() const {
   const std::lock_guard lock(mutex_);
   return next_event_ - 1;
+}
+
+void Store::set_event_listener(std::function<void()> listener) {
+  const std::lock_guard lock(mutex_);
+  event_listener_ = std::move(listener);
 }
 
 void Store::close() {

@@ -37,6 +37,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -243,6 +244,9 @@ class Store {
   std::deque<Event> events_after(std::uint64_t after, std::chrono::milliseconds wait) const;
   /// Id of the newest event (0 before the first).
   [[nodiscard]] std::uint64_t last_event_id() const;
+  /// `listener` (or none: nullptr) is called after every new event, under the store's lock: it
+  /// must be quick and must not call the store (EventFanout's wakes its thread).
+  void set_event_listener(std::function<void()> listener);
   /// Wakes every waiter for good (shutdown).
   void close();
   [[nodiscard]] bool closed() const;
@@ -267,6 +271,7 @@ class Store {
   messages::MeshAssembler meshes_;
   std::deque<Event> events_;  // the newest kMaxEvents
   std::uint64_t next_event_ = 1;
+  std::function<void()> event_listener_;
   bool closed_ = false;
 };
 
