@@ -60,8 +60,10 @@ std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& 
     }
     pos += static_cast<std::size_t>(len);
   }
-  if (auto e = need(12, "seq and num_blocks"); !e.empty()) return e;
-  pos += 8;
+  if (auto e = need(3 * 8 + 4, "seq, history, history_start and num_blocks"); !e.empty()) {
+    return e;
+  }
+  pos += 3 * 8;
   const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
   pos += 4;
   if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
@@ -149,14 +151,15 @@ bool state_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   std::int32_t sources = 0, cracks = 0, tag = 0;
   if (!w.fingerprint(peritwin_msgs::damage_state_t::getHash()) || !w.skip(8) || !w.string() ||
-      !w.skip(8) || !w.count(4 + 1 + 8 + 8, sources)) {
+      !w.skip(8) || !w.count(4 + 1 + 4 * 8, sources)) {
     return false;
   }
   for (std::int32_t i = 0; i < sources; ++i) {
     if (!w.string()) return false;
   }
-  // total_cycles, broken_bonds, max_damage, crack_count, crack_length_m, then the cracks.
-  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8 + 4 + 8) ||
+  // applied_seq, checkpointed_seq, history, history_start; total_cycles, broken_bonds,
+  // max_damage, crack_count, crack_length_m, then the cracks.
+  if (!w.skip(4 * 8 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8 + 4 + 8) ||
       !w.count(kMinCrackBytes, cracks)) {
     return false;
   }
@@ -355,6 +358,8 @@ Decoded decode_batch(const void* data, std::size_t size) {
   b.detail_id = msg.detail_id;
   b.source_id = msg.source_id;
   b.seq = msg.seq;
+  b.history = static_cast<std::uint64_t>(msg.history);
+  b.history_start = msg.history_start;
   b.blocks.reserve(msg.blocks.size());
   for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
   out.auth_tag = std::move(msg.auth_tag);
@@ -462,6 +467,8 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
   m.detail_id = batch.detail_id;
   m.source_id = batch.source_id;
   m.seq = batch.seq;
+  m.history = static_cast<std::int64_t>(batch.history);
+  m.history_start = batch.history_start;
   for (const auto& b : batch.blocks) {
     peritwin_msgs::load_block_t k;
     k.p_max = b.p_max;
@@ -495,6 +502,18 @@ std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::
     if (state.source_ids[i] == source) return state.applied_seq[i];
   }
   return 0;
+}
+
+SourceHistory source_history(const peritwin_msgs::damage_state_t& state,
+                             const std::string& source) {
+  for (std::size_t i = 0;
+       i < state.source_ids.size() && i < state.history.size() && i < state.history_start.size();
+       ++i) {
+    if (state.source_ids[i] == source) {
+      return {static_cast<std::uint64_t>(state.history[i]), state.history_start[i]};
+    }
+  }
+  return {};
 }
 
 std::string state_json(const peritwin_msgs::damage_state_t& s) {

@@ -119,7 +119,14 @@ peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::
 double crack_length(const peritwin_msgs::damage_state_t& state);
 /// Last applied seq of `source` in a state message (0 when the source is unknown).
 std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source);
-
+/// The history of a source's last applied batch (damage_state_t.history, .history_start).
+struct SourceHistory {
+  std::uint64_t fingerprint = 0;  ///< 0: none (a stream, or the source is unknown)
+  std::int64_t start = 0;         ///< seq of that history's first batch
+  bool operator==(const SourceHistory&) const = default;
+};
+/// What a state message says of `source` ({0, 0} when the source is unknown).
+SourceHistory source_history(const peritwin_msgs::damage_state_t& state, const std::string& source);
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
 /// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high,
 /// remaining_life_seq, failure, end_of_life_cycle, state_hash, engine_hash. Non-finite numbers are

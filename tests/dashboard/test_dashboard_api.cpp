@@ -577,6 +577,8 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
     m.source_ids = {"gauge"};
     m.applied_seq = {seq};
     m.checkpointed_seq = {0};
+    m.history = {0};
+    m.history_start = {0};
     m.total_cycles = cycles;
     m.k_i = m.k_ii = std::nan("");
     m.remaining_cycles = 38373.0;

@@ -120,6 +120,8 @@ void state_seeds(const fs::path& dir) {
   s.source_ids = {"gauge", "replay"};
   s.applied_seq = {3, 9};
   s.checkpointed_seq = {0, 8};
+  s.history = {0, 0x2f6e1d0b9c4a8e57};
+  s.history_start = {0, 1};
   s.num_sources = 2;
   s.total_cycles = 12000;
   s.broken_bonds = 36;

@@ -33,6 +33,53 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Issue 30: a history's fingerprint is that of its batches (blocks and where the batches are
+// cut), whatever they are numbered from and whoever sends them; every batch carries it with the
+// history's first seq, within the rule check_batch applies.
+TEST(ReplayBatches, TheHistoryFingerprintIsTheBatchesNotTheirIdsOrSeqs) {
+  std::vector<core::LoadBlock> blocks;
+  for (int i = 0; i < 10; ++i) blocks.push_back({4000.0 + 10.0 * i, 0.1, 0.0, 600});
+  auto batches = loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 1000});
+  ASSERT_EQ(batches.size(), 5u);
+  loads::mark_history(batches);
+  const std::uint64_t fingerprint = batches.front().history;
+  EXPECT_NE(fingerprint, 0u);
+  EXPECT_EQ(fingerprint, loads::history_fingerprint(batches));
+  for (const auto& b : batches) {
+    EXPECT_EQ(b.history, fingerprint);
+    EXPECT_EQ(b.history_start, 1);
+    EXPECT_TRUE(messages::check_batch(b, "b1-ct").applied());
+  }
+  // Appended at seq 6 by another source: the same history.
+  auto appended = loads::make_twin_batches(blocks, "b1-ct", "gauge", {16, 1000}, 6);
+  loads::mark_history(appended);
+  EXPECT_EQ(appended.back().history, fingerprint);
+  EXPECT_EQ(appended.back().history_start, 6);
+  EXPECT_TRUE(messages::check_batch(appended.back(), "b1-ct").applied());
+  // Cut otherwise, or one load otherwise: another history.
+  EXPECT_NE(
+      loads::history_fingerprint(loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 2000})),
+      fingerprint);
+  blocks[7].p_max += 1e-9;
+  EXPECT_NE(
+      loads::history_fingerprint(loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 1000})),
+      fingerprint);
+  // history_start: 1..seq with a history, 0 without.
+  messages::Batch b = batches[2];  // seq 3
+  for (const std::int64_t start : {std::int64_t{0}, std::int64_t{4}, std::int64_t{-1}}) {
+    b.history_start = start;
+    const auto o = messages::check_batch(b, "b1-ct");
+    EXPECT_EQ(o.verdict, messages::Verdict::invalid) << start;
+    EXPECT_EQ(o.what, "history_start");
+    EXPECT_EQ(o.why, "history_start = " + std::to_string(start) + " must be 1 to seq = 3");
+  }
+  b.history = 0;
+  b.history_start = 1;
+  EXPECT_EQ(messages::check_batch(b, "b1-ct").why, "history_start = 1 must be 0 without a history");
+  b.history_start = 0;
+  EXPECT_TRUE(messages::check_batch(b, "b1-ct").applied());
+}
+
 TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
   std::vector<peritwin::core::LoadBlock> blocks;
   for (int i = 0; i < 40; ++i) blocks.push_back({4000, 0.1, 0, 1});
@@ -448,6 +495,8 @@ class FakeDaemon {
     s.source_ids = {source};
     s.applied_seq = {applied_};
     s.checkpointed_seq = {0};
+    s.history = {0};
+    s.history_start = {0};
     s.num_sources = 1;
     s.total_cycles = 1000 * applied_;
     s.k_i = s.k_ii = std::numeric_limits<double>::quiet_NaN();

@@ -351,6 +351,86 @@ TEST_F(CrossProcess, SecondHistoryOnTheSameSourceIsRefusedThenAppendedWithContin
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
 }
 
+// Issue 30 item 6: --resume checks that the batches the daemon holds of the source are this
+// history's (every batch carries the history's fingerprint, kept per source with its applied seq
+// and published in STATE) and refuses another history, or the same file batched otherwise (exit 2,
+// nothing sent); the same history is finished (exit 0), and again once it is complete.
+TEST_F(CrossProcess, ResumeFinishesTheSameHistoryAndRefusesAnother) {
+  const auto write_rows = [&](const std::string& name, const char* load, int rows) {
+    std::ofstream h(dir_ / name);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < rows; ++i) h << load << ",0.1,0,1000\n";
+    return (dir_ / name).string();
+  };
+  const std::string same = write_rows("same.csv", "4000", 8);
+  const std::string other = write_rows("other.csv", "4200", 8);
+  history_ = same;
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+  ASSERT_NE(reference.back().find("\"cycles\":8000,"), std::string::npos) << reference.back();
+
+  auto d = daemon("daemon.log");
+  // The history, interrupted (SIGINT) once its second state is out; on a loaded machine the
+  // replay may have ended before the signal: the rest holds either way.
+  {
+    auto first = replay(false);
+    std::int64_t seen = -1;
+    while (seen < 2) {
+      const auto line = first->read_line(kWaitS);
+      ASSERT_TRUE(line.has_value()) << read_file(dir_ / "replay.log");
+      seen = std::max(seen, state_seq_of(*line));
+    }
+    first->signal(SIGINT);
+    lines_to_end(*first);
+    ASSERT_TRUE(first->wait_for(kWaitS).has_value());
+  }
+  // The replays' stderr goes to one file (appended): `log` is what the last run wrote.
+  std::string log;
+  const auto run_to_end = [&](const std::string& history, const std::vector<std::string>& extra,
+                              int* exit_code) {
+    history_ = history;
+    const std::size_t before = read_file(dir_ / "replay.log").size();
+    auto r = replay(false, {}, extra);
+    auto lines = lines_to_end(*r);
+    const auto status = r->wait_for(kWaitS);
+    *exit_code = status && WIFEXITED(*status) ? WEXITSTATUS(*status) : -1;
+    log = read_file(dir_ / "replay.log").substr(before);
+    return lines;
+  };
+  int code = -1;
+  run_to_end(other, {"--resume"}, &code);
+  EXPECT_EQ(code, 2) << log;
+  EXPECT_NE(log.find("peritwin-replay: --resume: source 'replay' has batches up to seq "),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find(" of another history applied on detail b1-ct"), std::string::npos) << log;
+  EXPECT_NE(log.find("use --continue to append this history after them, or a new --source"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("batch messages published"), std::string::npos) << log;  // nothing sent
+  // The same file cut into other batches is another sequence of batches: refused too.
+  run_to_end(same, {"--resume", "--batch-cycles", "2000"}, &code);
+  EXPECT_EQ(code, 2) << log;
+  EXPECT_NE(log.find(" of another history applied on detail b1-ct"), std::string::npos) << log;
+
+  auto lines = run_to_end(same, {"--resume"}, &code);
+  ASSERT_EQ(code, 0) << log;
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());      // every cycle of the history, once
+  lines = run_to_end(same, {"--resume"}, &code);  // complete: nothing more to send
+  ASSERT_EQ(code, 0) << log;
+  EXPECT_NE(log.find("peritwin-replay: --resume: all 8 batches of "), std::string::npos) << log;
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());
+  for (const auto& line : lines) {
+    if (line.find("\"state_seq\":") != std::string::npos) {
+      EXPECT_EQ(state_seq_of(line), 8) << line;
+    }
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+}
+
 /// `key` of a summary line: the text after "key": up to the next ',' or '}'.
 std::string json_value(const std::string& json, const std::string& key) {
   const auto p = json.find("\"" + key + "\":");
