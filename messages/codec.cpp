@@ -60,10 +60,10 @@ std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& 
     }
     pos += static_cast<std::size_t>(len);
   }
-  if (auto e = need(3 * 8 + 4, "seq, history, history_start and num_blocks"); !e.empty()) {
+  if (auto e = need(4 * 8 + 4, "seq, nonce, history, history_start and num_blocks"); !e.empty()) {
     return e;
   }
-  pos += 3 * 8;
+  pos += 4 * 8;
   const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
   pos += 4;
   if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
@@ -167,9 +167,9 @@ bool state_layout(const unsigned char* p, std::size_t size) {
     if (!crack_layout(w)) return false;
   }
   // k_i, k_ii, the remaining life and its seq, its source, failure, end_of_life_cycle,
-  // state_hash, engine_hash, the tag.
+  // state_hash, engine_hash, echo_source, echo_nonce, the tag.
   if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1 + 8) || !w.string() || !w.string() ||
-      !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+      !w.string() || !w.skip(8) || !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
   return w.at_end();
@@ -178,8 +178,9 @@ bool state_layout(const unsigned char* p, std::size_t size) {
 bool reject_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   std::int32_t tag = 0;
+  // utime, detail_id, source_id, seq, nonce, code, what, why, the tag.
   return w.fingerprint(peritwin_msgs::reject_t::getHash()) && w.skip(8) && w.string() &&
-         w.string() && w.skip(8 + 1) && w.string() && w.string() && w.count(1, tag) &&
+         w.string() && w.skip(8 + 8 + 1) && w.string() && w.string() && w.count(1, tag) &&
          w.skip(static_cast<std::size_t>(tag)) && w.at_end();
 }
 
@@ -358,6 +359,7 @@ Decoded decode_batch(const void* data, std::size_t size) {
   b.detail_id = msg.detail_id;
   b.source_id = msg.source_id;
   b.seq = msg.seq;
+  b.nonce = static_cast<std::uint64_t>(msg.nonce);
   b.history = static_cast<std::uint64_t>(msg.history);
   b.history_start = msg.history_start;
   b.blocks.reserve(msg.blocks.size());
@@ -467,6 +469,7 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
   m.detail_id = batch.detail_id;
   m.source_id = batch.source_id;
   m.seq = batch.seq;
+  m.nonce = static_cast<std::int64_t>(batch.nonce);
   m.history = static_cast<std::int64_t>(batch.history);
   m.history_start = batch.history_start;
   for (const auto& b : batch.blocks) {
@@ -482,13 +485,14 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
 }
 
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
-                                       std::int64_t seq, const Outcome& outcome,
-                                       std::int64_t utime) {
+                                       std::int64_t seq, const Outcome& outcome, std::int64_t utime,
+                                       std::uint64_t nonce) {
   peritwin_msgs::reject_t m{};
   m.utime = utime;
   m.detail_id = detail_id;
   m.source_id = source;
   m.seq = seq;
+  m.nonce = static_cast<std::int64_t>(nonce);
   m.code = static_cast<std::int8_t>(outcome.verdict);
   m.what = outcome.what;
   m.why = outcome.why;
@@ -514,6 +518,12 @@ SourceHistory source_history(const peritwin_msgs::damage_state_t& state,
     }
   }
   return {};
+}
+
+bool answers(const peritwin_msgs::damage_state_t& state, const std::string& source,
+             std::uint64_t nonce) {
+  return nonce != 0 && state.echo_source == source &&
+         static_cast<std::uint64_t>(state.echo_nonce) == nonce;
 }
 
 std::string state_json(const peritwin_msgs::damage_state_t& s) {

@@ -110,10 +110,11 @@ std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std:
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 
-/// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).
+/// REJECT for a batch that was not applied (source "" / seq -1 / nonce 0 when it did not
+/// decode); `nonce` is the batch's (load_batch_t.nonce), echoed for its producer.
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
-                                       std::int64_t seq, const Outcome& outcome,
-                                       std::int64_t utime);
+                                       std::int64_t seq, const Outcome& outcome, std::int64_t utime,
+                                       std::uint64_t nonce = 0);
 
 /// Length (m) of the longest crack of a state message (crack_length_m; 0 without cracks).
 double crack_length(const peritwin_msgs::damage_state_t& state);
@@ -127,6 +128,11 @@ struct SourceHistory {
 };
 /// What a state message says of `source` ({0, 0} when the source is unknown).
 SourceHistory source_history(const peritwin_msgs::damage_state_t& state, const std::string& source);
+/// Whether a state message answers a batch of the producer run with this nonce (its echo_source
+/// is `source` and its echo_nonce `nonce`, not 0): it was published after that run's start.
+bool answers(const peritwin_msgs::damage_state_t& state, const std::string& source,
+             std::uint64_t nonce);
+
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
 /// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high,
 /// remaining_life_seq, failure, end_of_life_cycle, state_hash, engine_hash. Non-finite numbers are

@@ -354,6 +354,11 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
   }
   std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
             << " resend(s)\n";
+  if (r.stale_states > 0) {
+    std::cerr << "peritwin-replay: " << r.stale_states
+              << " STATE message(s) answering no batch of this run not taken as its progress "
+                 "(another producer's, a restarted daemon's first, or old ones published again)\n";
+  }
   if (!r.ok) {
     std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
               << "\n";

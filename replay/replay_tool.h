@@ -78,8 +78,9 @@ struct ReplayResult {
   /// the first batch not applied (BatchSender::end_of_life()).
   std::string end_of_life;
   std::optional<peritwin_msgs::damage_state_t> final_state;
-  std::int64_t published = 0;  ///< batch messages sent (resends included)
-  std::int64_t rewinds = 0;    ///< times sending restarted at applied + 1
+  std::int64_t published = 0;     ///< batch messages sent (resends included)
+  std::int64_t rewinds = 0;       ///< times sending restarted at applied + 1
+  std::int64_t stale_states = 0;  ///< STATEs not answering this run (BatchSender::stale_states)
 };
 
 class LcmReplayer {

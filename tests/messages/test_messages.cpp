@@ -287,6 +287,8 @@ msgs::damage_state_t make_state() {
   m.remaining_life_source = "replay";
   m.failure = msgs::damage_state_t::FAILURE_SINGULAR;
   m.state_hash = "0123456789abcdef0123456789abcdef";
+  m.echo_source = "replay";
+  m.echo_nonce = std::numeric_limits<std::int64_t>::min();
   m.auth_tag.assign(32, 0xA5);
   m.tag_length = 32;
   return m;

@@ -386,21 +386,22 @@ TEST_F(TwinTest, CheckpointResumeIsBitIdentical) {
 }
 
 // Issue 30: the twin keeps the history (fingerprint, first seq) of each source's last applied
-// batch, publishes it in STATE and checkpoints it; it does not enter the state hash (the same
-// batches with other histories give bit-identical states), and a checkpoint written before the
-// histories existed restores with none.
+// batch, publishes it in STATE and checkpoints it; neither it nor the producer's nonce enters the
+// state hash (the same batches with other histories and nonces give bit-identical states), and a
+// checkpoint written before the histories existed restores with none.
 TEST_F(TwinTest, HistoriesArePublishedAndCheckpointedButNotHashed) {
   const auto marked = [](std::int64_t seq, const std::string& source, std::uint64_t history,
-                         std::int64_t start) {
+                         std::int64_t start, std::uint64_t nonce) {
     messages::Batch b = batch(seq, {{4000, 0.1, 0, 2000}}, source);
     b.history = history;
     b.history_start = start;
+    b.nonce = nonce;
     return b;
   };
   auto twin = make_twin(model_);
-  ASSERT_TRUE(twin->apply(marked(1, "replay", 0xfeedull, 1)).applied());
-  ASSERT_TRUE(twin->apply(marked(2, "replay", 0xbeefull, 2)).applied());  // --continue
-  ASSERT_TRUE(twin->apply(marked(1, "stream", 0, 0)).applied());
+  ASSERT_TRUE(twin->apply(marked(1, "replay", 0xfeedull, 1, 7)).applied());
+  ASSERT_TRUE(twin->apply(marked(2, "replay", 0xbeefull, 2, 8)).applied());  // --continue
+  ASSERT_TRUE(twin->apply(marked(1, "stream", 0, 0, 9)).applied());
   auto plain = make_twin(model_);
   ASSERT_TRUE(plain->apply(batch(1, {{4000, 0.1, 0, 2000}}, "replay")).applied());
   ASSERT_TRUE(plain->apply(batch(2, {{4000, 0.1, 0, 2000}}, "replay")).applied());
@@ -416,6 +417,8 @@ TEST_F(TwinTest, HistoriesArePublishedAndCheckpointedButNotHashed) {
   EXPECT_EQ(m.history_start, (std::vector<std::int64_t>{2, 0}));
   EXPECT_EQ(messages::source_history(m, "replay"), (messages::SourceHistory{0xbeef, 2}));
   EXPECT_EQ(messages::source_history(m, "nobody"), messages::SourceHistory{});
+  EXPECT_EQ(m.echo_source, "");  // the daemon sets the echo
+  EXPECT_EQ(m.echo_nonce, 0);
 
   const CheckpointData data = twin->to_checkpoint();
   auto restored = make_twin(model_);
