@@ -189,6 +189,8 @@ peritwin_msgs::damage_state_t state_message(int i, std::int64_t seq) {
   s.source_ids = {"gauge-1"};
   s.applied_seq = {seq};
   s.checkpointed_seq = {seq - seq % 100};
+  s.history = {0};
+  s.history_start = {0};
   s.total_cycles = cycles_of(i, seq);
   const double growth = 1e-7 * static_cast<double>(seq);  // 0.1 µm per batch: 1 mm per 10^4
   s.broken_bonds = 40 + seq / 50;

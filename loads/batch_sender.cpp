@@ -60,6 +60,9 @@ std::string printable(const std::string& text) {
 
 /// The seq of probe_applied()'s batch: never applied (it skips ahead of any source).
 constexpr std::int64_t kProbeSeq = std::numeric_limits<std::int64_t>::max();
+/// A STATE that answers no batch of this run and disagrees with it prompts a probe at most this
+/// often (a flood of old STATEs costs one small batch a second).
+constexpr double kReprobeAfterS = 1.0;
 
 /// A reject no resend can cure: the batch itself (INVALID), the daemon's keys (AUTH), its limits
 /// (LIMIT) or the detail's end (FAILED) refuse it, and would refuse it again. DUPLICATE and GAP
@@ -103,6 +106,7 @@ BatchSender::BatchSender(lcm::LCM& lcm, std::string detail_id, std::string sourc
       source_id_(std::move(source_id)),
       options_(options),
       auth_(std::move(auth)),
+      nonce_(messages::random_nonce()),
       last_progress_(std::chrono::steady_clock::now()),
       last_send_(last_progress_),
       resend_after_(options.resend_after_s) {
@@ -143,7 +147,16 @@ void BatchSender::on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string
   }
   // Unverified (no key) or verified: decoded only after its layout is checked.
   const auto state = messages::decode_state(rbuf->data, size);
-  if (state && state->detail_id == detail_id_) inbox_.push_back(*state);
+  if (!state || state->detail_id != detail_id_) return;
+  if (messages::answers(*state, source_id_, nonce_)) {
+    inbox_.push_back(*state);
+    return;
+  }
+  // Not an answer to this run (published before it started, again, or to another run): not
+  // progress. When it disagrees with what this run knows (e.g. a restarted daemon's start-up
+  // STATE), a probe asks for a STATE that answers this run.
+  ++stale_states_;
+  if (applied_ >= 0 && messages::applied_seq(*state, source_id_) != applied_) reprobe_ = true;
 }
 
 void BatchSender::on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -167,7 +180,11 @@ void BatchSender::on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::strin
     }
   }
   const auto reject = messages::decode_reject(rbuf->data, size);
-  if (!reject || reject->source_id != source_id_) return;
+  // Only the rejects of this run's batches: their nonce is this run's.
+  if (!reject || reject->source_id != source_id_ ||
+      static_cast<std::uint64_t>(reject->nonce) != nonce_) {
+    return;
+  }
   // Only a reject of one of this run's batches (or of the probe) says something about this run:
   // another producer on the same source id gets its own.
   const bool ours = reject->seq == kProbeSeq ||
@@ -197,6 +214,7 @@ void BatchSender::on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::strin
 
 void BatchSender::publish(const messages::Batch& batch) {
   auto m = messages::batch_message(batch, messages::now_utime());
+  m.nonce = static_cast<std::int64_t>(nonce_);
   if (auth_.batch_key) messages::sign(m, *auth_.batch_key);
   lcm_.publish(load_channel_, &m);
   ++published_;
@@ -251,19 +269,22 @@ void BatchSender::take_states() {
   }
 }
 
+void BatchSender::publish_probe() {
+  const messages::Batch probe{
+      detail_id_, source_id_, kProbeSeq, {core::LoadBlock{1.0, 0.0, 0.0, 1}}};
+  publish(probe);
+  --published_;  // not a batch of the run
+  last_probe_ = std::chrono::steady_clock::now();
+}
+
 core::Expected<std::int64_t> BatchSender::probe_applied(const std::function<bool()>& idle) {
-  const messages::Batch probe{detail_id_,
-                              source_id_,
-                              std::numeric_limits<std::int64_t>::max(),
-                              {core::LoadBlock{1.0, 0.0, 0.0, 1}}};
   const auto start = std::chrono::steady_clock::now();
   std::optional<std::chrono::steady_clock::time_point> sent;
   double resend_after = options_.resend_after_s;
   while (applied_ < 0) {
     if ((!sent || since(*sent) > resend_after) && messages::transport_up(lcm_)) {
       if (sent) resend_after = std::min(2 * resend_after, 30.0);
-      publish(probe);
-      --published_;  // not a batch of the run
+      publish_probe();
       sent = std::chrono::steady_clock::now();
     }
     if (!receive(20)) return core::failure(error_);
@@ -322,6 +343,10 @@ BatchSender::Progress BatchSender::pump(int timeout_ms) {
   }
   if (!receive(timeout_ms)) return Progress::failed;
   take_states();
+  if (reprobe_ && since(last_probe_) > kReprobeAfterS && messages::transport_up(lcm_)) {
+    reprobe_ = false;
+    publish_probe();
+  }
   if (finished_ && applied_ >= 0 && applied_ >= last_seq_) return Progress::done;
   if (failed_seq_ > 0) {
     if (failed_seq_ - 1 >= first_seq_) {  // this run's batches reached the end of life: done

@@ -26,10 +26,23 @@
 // reject of one of our batches ends it too (signed or not: the daemon refuses what we send).
 // Without keys nothing is signed or checked, and anyone on the bus can forge the states reported.
 //
+// Freshness (issue 30; messages/README.md, "Authentication"): a tag proves who made a message,
+// not when. Every sender draws a random 64-bit nonce at construction (messages::random_nonce)
+// and puts it in every batch it publishes, the probe included; the daemon echoes the nonce of
+// the last batch it took in every STATE (damage_state_t.echo_source, echo_nonce, signed with the
+// rest) and the rejected batch's in every REJECT (reject_t.nonce). The sender takes as progress,
+// reports to on_state() and keeps as last_state() only the STATEs that echo (its source, its
+// nonce), and acts only on the rejects that carry its nonce: a STATE or REJECT signed before
+// this run started, published again, is ignored (counted, stale_states()). A STATE that answers
+// no batch of this run but shows another applied seq of the source than the sender knows (a
+// restarted daemon's start-up STATE, or an old one) prompts a probe (at most one a second),
+// whose answer tells.
+//
 // probe_applied(): what the daemon has applied of this source before anything is sent. It
 // publishes a probe batch (one 1-cycle block) with seq 2^63 - 1, which no daemon applies (it
-// skips ahead: the daemon answers with a GAP reject and its STATE), until the first STATE arrives
-// (every STATE carries the applied seq of every source, so the daemon's start-up STATE does too).
+// skips ahead: the daemon answers with a GAP reject and its STATE, echoing the probe's nonce),
+// until a STATE that answers this run arrives (every STATE carries the applied seq of every
+// source).
 #pragma once
 
 #include <chrono>
@@ -74,8 +87,13 @@ class BatchSender {
   BatchSender(const BatchSender&) = delete;
   BatchSender& operator=(const BatchSender&) = delete;
 
-  /// Called with every STATE of the detail (verified when a daemon key is set).
+  /// Called with every STATE of the detail that answers this run (verified when a daemon key is
+  /// set; see "Freshness" above).
   void on_state(StateFn fn) { on_state_ = std::move(fn); }
+  /// This run's nonce (load_batch_t.nonce of every batch it publishes).
+  [[nodiscard]] std::uint64_t nonce() const { return nonce_; }
+  /// STATEs of the detail that answered no batch of this run, not taken (see "Freshness").
+  [[nodiscard]] std::int64_t stale_states() const { return stale_states_; }
 
   /// The daemon's applied seq of this source before anything is sent (see the top of the file);
   /// an error after give_up_after_s without a STATE, on a lost transport or an auth failure.
@@ -111,6 +129,7 @@ class BatchSender {
   void on_state_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void on_reject_msg(const lcm::ReceiveBuffer* rbuf, const std::string& channel);
   void publish(const messages::Batch& batch);
+  void publish_probe();
   /// LCM for up to timeout_ms; false (error_ set) on a failure of LCM, the transport or auth.
   bool receive(int timeout_ms);
   void take_states();
@@ -120,6 +139,7 @@ class BatchSender {
   std::string detail_id_, source_id_, load_channel_;
   ReplayOptions options_;
   ReplayAuth auth_;
+  std::uint64_t nonce_;  ///< this run's (messages::random_nonce)
   StateFn on_state_;
   std::string fatal_;  ///< set by a handler: a message that must end the run (auth)
   std::string error_;
@@ -138,7 +158,9 @@ class BatchSender {
   std::string failed_why_, end_of_life_;
   std::int64_t published_ = 0;
   std::int64_t rewinds_ = 0;
-  std::chrono::steady_clock::time_point last_progress_, last_send_;
+  std::int64_t stale_states_ = 0;
+  bool reprobe_ = false;  ///< a STATE not answering this run disagreed with it: probe
+  std::chrono::steady_clock::time_point last_progress_, last_send_, last_probe_{};
   double resend_after_;
 };
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "core/fnv1a.h"
+
 namespace peritwin::loads {
 
 Batcher::Batcher(std::string detail_id, std::string source_id, std::int64_t first_seq,
@@ -69,6 +71,31 @@ std::vector<messages::Batch> make_twin_batches(const std::vector<core::LoadBlock
   for (const auto& b : blocks) batcher.add(b, out);
   batcher.flush(out);
   return out;
+}
+
+std::uint64_t history_fingerprint(std::span<const messages::Batch> batches) {
+  core::Fnv1a64 h;
+  h.integer(static_cast<std::int64_t>(batches.size()));
+  for (const messages::Batch& batch : batches) {
+    h.integer(static_cast<std::int64_t>(batch.blocks.size()));
+    for (const core::LoadBlock& b : batch.blocks) {
+      h.real(b.p_max);
+      h.real(b.r);
+      h.real(b.alpha);
+      h.integer(b.count);
+    }
+  }
+  return h.get() == 0 ? 1 : h.get();
+}
+
+void mark_history(std::vector<messages::Batch>& batches) {
+  if (batches.empty()) return;
+  const std::uint64_t fingerprint = history_fingerprint(batches);
+  const std::int64_t start = batches.front().seq;
+  for (messages::Batch& b : batches) {
+    b.history = fingerprint;
+    b.history_start = start;
+  }
 }
 
 }  // namespace peritwin::loads

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -66,5 +67,14 @@ std::vector<messages::Batch> make_twin_batches(const std::vector<core::LoadBlock
                                                const std::string& source_id,
                                                const BatchingOptions& options,
                                                std::int64_t first_seq = 1);
+
+/// The fingerprint of a recorded history as the batches it was cut into (load_batch_t.history):
+/// word-wise FNV-1a 64 (core/fnv1a.h) over the number of batches and, per batch, its number of
+/// blocks and each block's p_max, r and alpha (bits) and count; not the ids, not the seqs. So the
+/// same file read and batched the same way has the same fingerprint wherever it is numbered
+/// from, and another file, conversion (series rules) or batching another. Never 0 (0 = none).
+std::uint64_t history_fingerprint(std::span<const messages::Batch> batches);
+/// Puts history_fingerprint(batches) and the first batch's seq (history_start) into every batch.
+void mark_history(std::vector<messages::Batch>& batches);
 
 }  // namespace peritwin::loads

@@ -298,6 +298,13 @@ std::vector<std::string> KeyRing::ids() const {
   return out;
 }
 
+std::uint64_t random_nonce() {
+  ensure_sodium();
+  std::uint64_t nonce = 0;
+  while (nonce == 0) randombytes_buf(&nonce, sizeof nonce);
+  return nonce;
+}
+
 core::Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids) {
   ensure_sodium();
   const std::string name = file.string();

@@ -69,6 +69,10 @@ class KeyRing {
 /// invalid or repeated id. The file is complete or absent.
 core::Status write_key_file(const std::filesystem::path& file, std::span<const std::string> ids);
 
+/// A producer run's nonce (load_batch_t.nonce): 64 random bits from libsodium's
+/// randombytes_buf, never 0 (0 means none).
+std::uint64_t random_nonce();
+
 /// HMAC-SHA256 (libsodium crypto_auth_hmacsha256) of bytes [data, data + size).
 AuthTag auth_tag(const AuthKey& key, const std::uint8_t* data, std::size_t size);
 /// HMAC-SHA256 with a key of any length (RFC 2104; what auth_tag computes for 32-byte keys). For

@@ -29,6 +29,13 @@ Outcome check_batch(const Batch& batch, std::string_view detail_id) {
                                     " printable ASCII characters without blanks");
   }
   if (batch.seq < 1) return invalid("seq", "seq = " + std::to_string(batch.seq) + " must be >= 1");
+  if (batch.history == 0 ? batch.history_start != 0
+                         : batch.history_start < 1 || batch.history_start > batch.seq) {
+    return invalid("history_start",
+                   "history_start = " + std::to_string(batch.history_start) +
+                       (batch.history == 0 ? " must be 0 without a history"
+                                           : " must be 1 to seq = " + std::to_string(batch.seq)));
+  }
   if (batch.blocks.empty()) return invalid("num_blocks", "num_blocks = 0 must be >= 1");
   if (batch.blocks.size() > kMaxBlocksPerBatch) {
     return invalid("num_blocks", "num_blocks = " + std::to_string(batch.blocks.size()) +

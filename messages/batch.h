@@ -13,12 +13,18 @@
 
 namespace peritwin::messages {
 
-/// One load batch (the fields of peritwin_msgs::load_batch_t the model uses).
+/// One load batch: the fields of peritwin_msgs::load_batch_t but utime and the tag. The model
+/// uses detail_id, source_id, seq and blocks; the twin keeps history and history_start per
+/// source (bookkeeping for a resumed replay, no hash covers them); nonce is the producer run's,
+/// echoed in the daemon's answers (load_batch_t.lcm).
 struct Batch {
   std::string detail_id;
   std::string source_id;
   std::int64_t seq = 0;
   std::vector<core::LoadBlock> blocks;
+  std::uint64_t nonce = 0;         ///< the producer run's nonce; 0 = none
+  std::uint64_t history = 0;       ///< fingerprint of the history it belongs to; 0 = none
+  std::int64_t history_start = 0;  ///< seq of that history's first batch; 0 without a history
 };
 
 /// What became of a batch; the values of the rejections are reject_t's CODE_* constants.

@@ -60,8 +60,10 @@ std::string check_layout(const unsigned char* p, std::size_t size, std::size_t& 
     }
     pos += static_cast<std::size_t>(len);
   }
-  if (auto e = need(12, "seq and num_blocks"); !e.empty()) return e;
-  pos += 8;
+  if (auto e = need(4 * 8 + 4, "seq, nonce, history, history_start and num_blocks"); !e.empty()) {
+    return e;
+  }
+  pos += 4 * 8;
   const auto blocks = static_cast<std::int32_t>(read_be(p + pos, 4));
   pos += 4;
   if (blocks < 0) return "malformed num_blocks " + std::to_string(blocks);
@@ -149,14 +151,15 @@ bool state_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   std::int32_t sources = 0, cracks = 0, tag = 0;
   if (!w.fingerprint(peritwin_msgs::damage_state_t::getHash()) || !w.skip(8) || !w.string() ||
-      !w.skip(8) || !w.count(4 + 1 + 8 + 8, sources)) {
+      !w.skip(8) || !w.count(4 + 1 + 4 * 8, sources)) {
     return false;
   }
   for (std::int32_t i = 0; i < sources; ++i) {
     if (!w.string()) return false;
   }
-  // total_cycles, broken_bonds, max_damage, crack_count, crack_length_m, then the cracks.
-  if (!w.skip(16 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8 + 4 + 8) ||
+  // applied_seq, checkpointed_seq, history, history_start; total_cycles, broken_bonds,
+  // max_damage, crack_count, crack_length_m, then the cracks.
+  if (!w.skip(4 * 8 * static_cast<std::size_t>(sources)) || !w.skip(3 * 8 + 4 + 8) ||
       !w.count(kMinCrackBytes, cracks)) {
     return false;
   }
@@ -164,9 +167,9 @@ bool state_layout(const unsigned char* p, std::size_t size) {
     if (!crack_layout(w)) return false;
   }
   // k_i, k_ii, the remaining life and its seq, its source, failure, end_of_life_cycle,
-  // state_hash, engine_hash, the tag.
+  // state_hash, engine_hash, echo_source, echo_nonce, the tag.
   if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1 + 8) || !w.string() || !w.string() ||
-      !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+      !w.string() || !w.skip(8) || !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
   return w.at_end();
@@ -175,8 +178,9 @@ bool state_layout(const unsigned char* p, std::size_t size) {
 bool reject_layout(const unsigned char* p, std::size_t size) {
   LayoutWalker w(p, size);
   std::int32_t tag = 0;
+  // utime, detail_id, source_id, seq, nonce, code, what, why, the tag.
   return w.fingerprint(peritwin_msgs::reject_t::getHash()) && w.skip(8) && w.string() &&
-         w.string() && w.skip(8 + 1) && w.string() && w.string() && w.count(1, tag) &&
+         w.string() && w.skip(8 + 8 + 1) && w.string() && w.string() && w.count(1, tag) &&
          w.skip(static_cast<std::size_t>(tag)) && w.at_end();
 }
 
@@ -355,6 +359,9 @@ Decoded decode_batch(const void* data, std::size_t size) {
   b.detail_id = msg.detail_id;
   b.source_id = msg.source_id;
   b.seq = msg.seq;
+  b.nonce = static_cast<std::uint64_t>(msg.nonce);
+  b.history = static_cast<std::uint64_t>(msg.history);
+  b.history_start = msg.history_start;
   b.blocks.reserve(msg.blocks.size());
   for (const auto& k : msg.blocks) b.blocks.push_back({k.p_max, k.r, k.alpha, k.count});
   out.auth_tag = std::move(msg.auth_tag);
@@ -462,6 +469,9 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
   m.detail_id = batch.detail_id;
   m.source_id = batch.source_id;
   m.seq = batch.seq;
+  m.nonce = static_cast<std::int64_t>(batch.nonce);
+  m.history = static_cast<std::int64_t>(batch.history);
+  m.history_start = batch.history_start;
   for (const auto& b : batch.blocks) {
     peritwin_msgs::load_block_t k;
     k.p_max = b.p_max;
@@ -475,13 +485,14 @@ peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime
 }
 
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
-                                       std::int64_t seq, const Outcome& outcome,
-                                       std::int64_t utime) {
+                                       std::int64_t seq, const Outcome& outcome, std::int64_t utime,
+                                       std::uint64_t nonce) {
   peritwin_msgs::reject_t m{};
   m.utime = utime;
   m.detail_id = detail_id;
   m.source_id = source;
   m.seq = seq;
+  m.nonce = static_cast<std::int64_t>(nonce);
   m.code = static_cast<std::int8_t>(outcome.verdict);
   m.what = outcome.what;
   m.why = outcome.why;
@@ -495,6 +506,24 @@ std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::
     if (state.source_ids[i] == source) return state.applied_seq[i];
   }
   return 0;
+}
+
+SourceHistory source_history(const peritwin_msgs::damage_state_t& state,
+                             const std::string& source) {
+  for (std::size_t i = 0;
+       i < state.source_ids.size() && i < state.history.size() && i < state.history_start.size();
+       ++i) {
+    if (state.source_ids[i] == source) {
+      return {static_cast<std::uint64_t>(state.history[i]), state.history_start[i]};
+    }
+  }
+  return {};
+}
+
+bool answers(const peritwin_msgs::damage_state_t& state, const std::string& source,
+             std::uint64_t nonce) {
+  return nonce != 0 && state.echo_source == source &&
+         static_cast<std::uint64_t>(state.echo_nonce) == nonce;
 }
 
 std::string state_json(const peritwin_msgs::damage_state_t& s) {

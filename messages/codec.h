@@ -110,15 +110,28 @@ std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std:
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 
-/// REJECT for a batch that was not applied (source "" / seq -1 when it did not decode).
+/// REJECT for a batch that was not applied (source "" / seq -1 / nonce 0 when it did not
+/// decode); `nonce` is the batch's (load_batch_t.nonce), echoed for its producer.
 peritwin_msgs::reject_t reject_message(const std::string& detail_id, const std::string& source,
-                                       std::int64_t seq, const Outcome& outcome,
-                                       std::int64_t utime);
+                                       std::int64_t seq, const Outcome& outcome, std::int64_t utime,
+                                       std::uint64_t nonce = 0);
 
 /// Length (m) of the longest crack of a state message (crack_length_m; 0 without cracks).
 double crack_length(const peritwin_msgs::damage_state_t& state);
 /// Last applied seq of `source` in a state message (0 when the source is unknown).
 std::int64_t applied_seq(const peritwin_msgs::damage_state_t& state, const std::string& source);
+/// The history of a source's last applied batch (damage_state_t.history, .history_start).
+struct SourceHistory {
+  std::uint64_t fingerprint = 0;  ///< 0: none (a stream, or the source is unknown)
+  std::int64_t start = 0;         ///< seq of that history's first batch
+  bool operator==(const SourceHistory&) const = default;
+};
+/// What a state message says of `source` ({0, 0} when the source is unknown).
+SourceHistory source_history(const peritwin_msgs::damage_state_t& state, const std::string& source);
+/// Whether a state message answers a batch of the producer run with this nonce (its echo_source
+/// is `source` and its echo_nonce `nonce`, not 0): it was published after that run's start.
+bool answers(const peritwin_msgs::damage_state_t& state, const std::string& source,
+             std::uint64_t nonce);
 
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
 /// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high,

@@ -18,8 +18,12 @@
 // Over LCM it first learns what the daemon has applied of --source (BatchSender::probe_applied):
 // when that is seq > 0 it refuses to run (exit 2, naming the source, the seq and the detail)
 // unless --continue (this history's batches are numbered from applied + 1: it is appended) or
-// --resume (numbered from 1 as before: the applied ones are dropped as duplicates, i.e. an
-// interrupted replay of the same history is finished exactly once).
+// --resume (an interrupted replay of the same history is finished exactly once: numbered from
+// where that history started, 1 or its --continue seq, the applied ones are dropped as
+// duplicates). Every batch carries the history's fingerprint (loads::history_fingerprint: its
+// batches' blocks, not the ids or seqs) and first seq; the daemon keeps those of each source's
+// last applied batch and publishes them in STATE, and --resume refuses (exit 2) a source whose
+// last applied batch was of another history, or of none (docs/design.md, "Resuming a replay").
 // --format series: samples -> rainflow (loads/rainflow.h) -> blocks (loads/cycle_blocks.h) with
 // --gate (hysteresis, N), --residue (half: ASTM E1049-85, the default; whole: each residue range
 // a whole cycle, conservative; keep: the residue is dropped, not applied), --alpha-bin (rad) and
@@ -37,9 +41,10 @@
 // reason: INVALID, AUTH, LIMIT exit 3; FAILED after a batch of this run was applied is the end of
 // life reached (the reason on stderr, exit 0), before any exit 3.
 // Exit codes (core/exit_codes.h): 0 done (kExitOk), 2 (kExitUsage) bad usage/config/history, a
-// history above the configured max_p or a source that already has batches (without
-// --continue/--resume), 3 (kExitRuntime) runtime failure (LCM, no progress, a batch the daemon
-// refuses for good; a tcpq hub unreachable at start or lost during the run, named in one line).
+// history above the configured max_p, a source that already has batches (without
+// --continue/--resume) or batches of another history (--resume), 3 (kExitRuntime) runtime failure
+// (LCM, no progress, a batch the daemon refuses for good; a tcpq hub unreachable at start or lost
+// during the run, named in one line).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
@@ -47,6 +52,7 @@
 
 #include "core/cli_checks.h"
 #include "core/exit_codes.h"
+#include "core/fnv1a.h"
 #include "core/program.h"
 #include "core/stop_signal.h"
 #include "loads/producer_keys.h"
@@ -134,7 +140,8 @@ void add_options(CLI::App& app, Options& o) {
       "the daemon already has batches of --source: number this history's after them (append)");
   app.add_flag("--resume", o.resume,
                "the daemon already has batches of --source from this same history: number them "
-               "from 1 again, the applied ones are duplicates (finish an interrupted replay)")
+               "as before, the applied ones are duplicates (finish an interrupted replay; another "
+               "history is refused)")
       ->excludes(continue_opt);
   app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress before failing (default 120)")
@@ -250,6 +257,50 @@ int replay_in_process(const Options& o, const config::DetailConfig& detail,
   return core::kExitOk;
 }
 
+/// --resume with `applied` > 0 batches of --source applied, the last of them from the history
+/// `held`: refused (exit 2) unless that is this history (the same fingerprint), whose batches are
+/// then numbered from the seq it started at (1, or where a --continue appended it).
+std::optional<int> check_resume(const Options& o, const config::DetailConfig& detail,
+                                std::int64_t applied, const messages::SourceHistory& held,
+                                const replay::HistoryBlocks& history,
+                                std::vector<messages::Batch>& batches) {
+  const std::uint64_t mine = batches.empty() ? 0 : batches.front().history;
+  if (held.fingerprint == 0) {
+    std::cerr << "peritwin-replay: --resume: source '" << o.source_id << "' has batches up to seq "
+              << applied << " applied on detail " << detail.id
+              << ", and the daemon holds no history fingerprint for them (they came from "
+                 "peritwin-stream, from a producer before message set version 8, or from a "
+                 "checkpoint written before it): nothing tells they are "
+              << o.history
+              << "'s; use --continue to append this history after them, or a new --source\n";
+    return core::kExitUsage;
+  }
+  if (held.fingerprint != mine) {
+    std::cerr << "peritwin-replay: --resume: source '" << o.source_id << "' has batches up to seq "
+              << applied << " of another history applied on detail " << detail.id << " (history "
+              << core::hex64(held.fingerprint) << " from seq " << held.start << "; " << o.history
+              << " as batched here is " << core::hex64(mine)
+              << "): --resume finishes an interrupted replay of the same history (the same "
+                 "file, format, conversion and batching); use --continue to append this history "
+                 "after them, or a new --source\n";
+    return core::kExitUsage;
+  }
+  if (held.start != 1) {
+    batches =
+        loads::make_twin_batches(history.blocks, detail.id, o.source_id, o.batching, held.start);
+    loads::mark_history(batches);
+  }
+  const std::int64_t last = held.start + static_cast<std::int64_t>(batches.size()) - 1;
+  if (applied >= last) {
+    std::cerr << "peritwin-replay: --resume: all " << batches.size() << " batches of " << o.history
+              << " (seqs " << held.start << " to " << last << ") are applied already\n";
+  } else {
+    std::cerr << "peritwin-replay: --resume: seqs " << held.start << " to " << applied
+              << " of this history are applied already, sending from " << applied + 1 << "\n";
+  }
+  return std::nullopt;
+}
+
 /// Over LCM: what the daemon has applied of --source decides the numbering (--continue,
 /// --resume), then the batches are published; the final state, or an exit code.
 int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
@@ -274,6 +325,7 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
   bool lost = false;
   {  // ends before the summary: without a hub, LCM's unsubscribe complains on stderr
     std::int64_t applied = 0;
+    messages::SourceHistory held;  ///< the history of the source's last applied batch
     {
       loads::BatchSender probe(lcm, detail.id, o.source_id, o.replay, auth);
       probe.on_state(printer.callback());
@@ -285,6 +337,7 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
         return core::kExitRuntime;
       }
       applied = *learned;
+      if (probe.last_state()) held = messages::source_history(*probe.last_state(), o.source_id);
     }
     if (applied > 0 && !o.append && !o.resume) {
       std::cerr << "peritwin-replay: source '" << o.source_id << "' already has batches up to seq "
@@ -296,11 +349,11 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
     if (applied > 0 && o.append) {
       batches =
           loads::make_twin_batches(history.blocks, detail.id, o.source_id, o.batching, applied + 1);
+      loads::mark_history(batches);
       std::cerr << "peritwin-replay: --continue: batches numbered " << applied + 1 << " to "
                 << applied + static_cast<std::int64_t>(batches.size()) << "\n";
     } else if (applied > 0) {
-      std::cerr << "peritwin-replay: --resume: seqs 1 to " << applied
-                << " are already applied, sending from " << applied + 1 << "\n";
+      if (auto rc = check_resume(o, detail, applied, held, history, batches)) return *rc;
     }
     replay::LcmReplayer replayer(lcm, std::move(batches), o.replay, std::move(auth));
     r = replayer.run(printer.callback(), core::keep_running);
@@ -308,6 +361,11 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
   }
   std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
             << " resend(s)\n";
+  if (r.stale_states > 0) {
+    std::cerr << "peritwin-replay: " << r.stale_states
+              << " STATE message(s) answering no batch of this run not taken as its progress "
+                 "(another producer's, a restarted daemon's first, or old ones published again)\n";
+  }
   if (!r.ok) {
     std::cerr << "peritwin-replay: " << (lost ? "LCM hub " + lcm_url + ": " : "") << r.error
               << "\n";
@@ -376,6 +434,7 @@ int run(Options o) {
   loads::ReplayAuth auth;
   if (auto rc = load_keys(o, auth)) return *rc;
   auto batches = loads::make_twin_batches(history.blocks, detail->id, o.source_id, o.batching);
+  loads::mark_history(batches);
   report_history(o, *detail, history, batches.size());
 
   replay::StatePrinter printer(o.json);

@@ -147,6 +147,7 @@ ReplayResult LcmReplayer::run(
   sender_.on_state({});
   result.published = sender_.published();
   result.rewinds = sender_.rewinds();
+  result.stale_states = sender_.stale_states();
   return result;
 }
 

@@ -2,10 +2,11 @@
 // over LCM to a daemon (LcmReplayer) or in-process (run_in_process, twin/in_process_twin.h). See
 // replay/replay_main.cpp.
 //
-// Batching: loads/batcher.h (make_twin_batches). Seq numbers are 1, 2, 3, ... per run by
-// default, so a daemon that already applied some of them drops those as duplicates and a replay is
-// exactly-once across restarts of either side (peritwin-replay --resume); --continue numbers them
-// after what the daemon has applied of the source.
+// Batching: loads/batcher.h (make_twin_batches, mark_history). Seq numbers are 1, 2, 3, ... per
+// run by default, so a daemon that already applied some of them drops those as duplicates and a
+// replay is exactly-once across restarts of either side (peritwin-replay --resume, which checks
+// the history's fingerprint against the daemon's); --continue numbers them after what the daemon
+// has applied of the source.
 //
 // Over LCM (LcmReplayer): a thin user of BatchSender (loads/batch_sender.h: lockstep/window,
 // resend after a daemon restart, authentication) with every batch given up front.
@@ -77,8 +78,9 @@ struct ReplayResult {
   /// the first batch not applied (BatchSender::end_of_life()).
   std::string end_of_life;
   std::optional<peritwin_msgs::damage_state_t> final_state;
-  std::int64_t published = 0;  ///< batch messages sent (resends included)
-  std::int64_t rewinds = 0;    ///< times sending restarted at applied + 1
+  std::int64_t published = 0;     ///< batch messages sent (resends included)
+  std::int64_t rewinds = 0;       ///< times sending restarted at applied + 1
+  std::int64_t stale_states = 0;  ///< STATEs not answering this run (BatchSender::stale_states)
 };
 
 class LcmReplayer {

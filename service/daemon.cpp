@@ -134,6 +134,10 @@ struct Daemon::Detail : DetailQueue {
   std::map<std::string, std::int64_t> unlogged_by_kind;
   double max_batch_seconds = 60.0;
   double max_rejects_per_second = 10.0;
+  /// The batch the STATEs answer (damage_state_t.echo_source, echo_nonce): the last one decoded
+  /// and authenticated ("" / 0 before any since the start).
+  std::string echo_source;
+  std::uint64_t echo_nonce = 0;
 
   // Shared between the LCM thread and the workers, under DetailQueue::mutex.
   std::deque<Clock::time_point> reject_times;  ///< rejects of the last kRejectRateWindowS
@@ -432,8 +436,10 @@ void Daemon::run_turn(Detail& d, const Received* batch) {
   if (!failed()) worker_chores(d);
 }
 
-void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
-                    const messages::Outcome& outcome) {
+void Daemon::reject(Detail& d, const Ingested& ingested) {
+  const std::string& source = ingested.source;
+  const std::int64_t seq = ingested.seq;
+  const messages::Outcome& outcome = ingested.outcome;
   if (outcome.verdict != messages::Verdict::duplicate) {
     ++d.errors;
     if (outcome.verdict == messages::Verdict::auth) ++d.auth_rejects;
@@ -455,7 +461,8 @@ void Daemon::reject(Detail& d, const std::string& source, std::int64_t seq,
   } else {
     spdlog::debug("[{}] duplicate: {}", d.id, outcome.why);
   }
-  auto m = messages::reject_message(d.id, source, seq, outcome, messages::now_utime());
+  auto m =
+      messages::reject_message(d.id, source, seq, outcome, messages::now_utime(), ingested.nonce);
   if (ingest_.daemon_key() != nullptr) messages::sign(m, *ingest_.daemon_key());
   outbox_.push({d.reject_channel, encode(m), 0});
 }
@@ -464,13 +471,16 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   twin::Twin& twin = *d.twin;
   const Ingested ingested = ingest_.run(twin, r);
   if (ingested.step == Ingested::Step::rejected) {
-    reject(d, ingested.source, ingested.seq, ingested.outcome);
+    reject(d, ingested);
     return;
   }
+  // Decoded and authenticated: the STATEs from now on answer this batch's producer run.
+  d.echo_source = ingested.source;
+  d.echo_nonce = ingested.nonce;
   if (ingested.step == Ingested::Step::threw) {
     // The engine threw half-way through the batch: the model can no longer be trusted. Stop
     // without checkpointing it; a restart resumes from the last checkpoint.
-    reject(d, ingested.source, ingested.seq, ingested.outcome);
+    reject(d, ingested);
     fail("[" + d.id + "] internal error applying seq " + std::to_string(ingested.seq) + " of \"" +
          ingested.source + "\": " + ingested.outcome.why);
     return;
@@ -479,7 +489,7 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   d.duplicates = twin.counters().duplicates;
   d.gaps = twin.counters().gaps;
   if (!outcome.applied()) {
-    reject(d, ingested.source, ingested.seq, outcome);
+    reject(d, ingested);
     // Duplicates and gaps: tell the producer where to resume.
     if (outcome.verdict == messages::Verdict::duplicate ||
         outcome.verdict == messages::Verdict::gap) {
@@ -520,6 +530,8 @@ void Daemon::apply_received(Detail& d, const Received& r) {
 
 void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {
   auto m = twin::state_message(*d.twin, messages::now_utime(), d.checkpoints->checkpointed());
+  m.echo_source = d.echo_source;
+  m.echo_nonce = static_cast<std::int64_t>(d.echo_nonce);
   if (ingest_.daemon_key() != nullptr) messages::sign(m, *ingest_.daemon_key());
   outbox_.push({d.state_channel, encode(m), recv_utime});
 }

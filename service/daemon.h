@@ -142,8 +142,8 @@ class Daemon {
   /// One turn of a detail on a worker (Scheduler::Turn): the batch if any, then its chores.
   void run_turn(Detail& d, const Received* batch);
   void apply_received(Detail& d, const Received& r);
-  void reject(Detail& d, const std::string& source, std::int64_t seq,
-              const messages::Outcome& outcome);
+  /// REJECT of a batch not applied (its source, seq and nonce echoed), counted and logged.
+  void reject(Detail& d, const Ingested& ingested);
   void worker_chores(Detail& d);
   void log_reject_summary(Detail& d);
   void publish_state(Detail& d, std::int64_t recv_utime = 0);

@@ -69,19 +69,20 @@ messages::Outcome Ingest::authenticate(const Received& r, const messages::Decode
 
 Ingested Ingest::run(twin::Twin& twin, const Received& r) const {
   const messages::Decoded decoded = messages::decode_batch(r.bytes.data(), r.bytes.size());
-  if (!decoded.batch) return {Ingested::Step::rejected, "", -1, decoded.error};
+  if (!decoded.batch) return {Ingested::Step::rejected, "", -1, 0, decoded.error};
   const messages::Batch& batch = *decoded.batch;
   if (keys_) {
     if (messages::Outcome denied = authenticate(r, decoded); !denied.applied()) {
-      return {Ingested::Step::rejected, batch.source_id, batch.seq, std::move(denied)};
+      return {Ingested::Step::rejected, batch.source_id, batch.seq, batch.nonce, std::move(denied)};
     }
   }
   try {
-    return {Ingested::Step::applied, batch.source_id, batch.seq, twin.apply(batch)};
+    return {Ingested::Step::applied, batch.source_id, batch.seq, batch.nonce, twin.apply(batch)};
   } catch (const std::exception& e) {
     return {Ingested::Step::threw,
             batch.source_id,
             batch.seq,
+            batch.nonce,
             {messages::Verdict::internal, "message", e.what()}};
   }
 }

@@ -31,6 +31,7 @@ struct Ingested {
   Step step = Step::rejected;
   std::string source;         ///< the batch's source_id ("" when it did not decode)
   std::int64_t seq = -1;      ///< the batch's seq (−1 when it did not decode)
+  std::uint64_t nonce = 0;    ///< the batch's nonce (load_batch_t.nonce; 0 when it did not decode)
   messages::Outcome outcome;  ///< threw: Verdict::internal with the exception's message as `why`
 };
 

@@ -114,6 +114,10 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
     m.applied_seq.push_back(seq);
     const auto durable = checkpointed.find(source);
     m.checkpointed_seq.push_back(durable == checkpointed.end() ? 0 : durable->second);
+    const auto history = twin.histories().find(source);
+    const SourceHistory h = history == twin.histories().end() ? SourceHistory{} : history->second;
+    m.history.push_back(static_cast<std::int64_t>(h.fingerprint));
+    m.history_start.push_back(h.start);
   }
   m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
   const fatigue::FatigueEngine& engine = twin.engine();

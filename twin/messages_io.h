@@ -17,9 +17,10 @@ namespace peritwin::twin {
 /// Last seq per source of the newest checkpoint on disk (damage_state_t.checkpointed_seq).
 using SeqBySource = std::map<std::string, std::int64_t>;
 
-/// STATE of the twin's current state: cycles, bonds, cracks, K, remaining life, applied seq and
-/// checkpointed seq per source (a source missing from `checkpointed` has 0), state_hash (fields:
-/// messages/README.md). Unsigned (tag_length 0).
+/// STATE of the twin's current state: cycles, bonds, cracks, K, remaining life, applied seq,
+/// checkpointed seq (a source missing from `checkpointed` has 0) and history per source,
+/// state_hash (fields: messages/README.md). No echo (echo_source "", echo_nonce 0: the daemon
+/// sets them); unsigned (tag_length 0).
 peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime,
                                             const SeqBySource& checkpointed = {});
 

@@ -172,6 +172,7 @@ messages::Outcome Twin::apply(const messages::Batch& batch) {
     if (status != fatigue::EngineStatus::ok) break;
   }
   applied_[batch.source_id] = batch.seq;
+  histories_[batch.source_id] = {batch.history, batch.history_start};
   ++state_seq_;
   last_source_ = batch.source_id;
   last_seq_ = batch.seq;
@@ -196,6 +197,15 @@ void hash_field(Hash& h, const std::map<std::string, std::int64_t>& applied) {
   for (const auto& [source, seq] : applied) {
     h.packed(source);
     h.integer(seq);
+  }
+}
+template <class Hash>
+void hash_field(Hash& h, const HistoryBySource& histories) {  // not hashed (Hashed::no)
+  h.integer(static_cast<std::int64_t>(histories.size()));
+  for (const auto& [source, history] : histories) {
+    h.packed(source);
+    h.word(history.fingerprint);
+    h.integer(history.start);
   }
 }
 template <class Hash>

@@ -60,6 +60,15 @@ double first_break_load(const DetailModel& model, const fatigue::FatigueEngine& 
 /// beyond any overload the detail survives, more likely a units slip (kN for N) than a load.
 inline constexpr double kDefaultMaxPOverFirstBreak = 10.0;
 
+/// The history of a source's last applied batch (load_batch_t.history, .history_start): what
+/// peritwin-replay --resume checks its own history against. Bookkeeping of the producers, not of
+/// the model: no hash covers it.
+struct SourceHistory {
+  std::uint64_t fingerprint = 0;  ///< 0: none (a stream)
+  std::int64_t start = 0;         ///< seq of that history's first batch
+};
+using HistoryBySource = std::map<std::string, SourceHistory>;
+
 /// Counters since this Twin object was created (not part of the state, not checkpointed).
 struct TwinCounters {
   std::int64_t applied = 0;
@@ -113,6 +122,9 @@ class Twin {
   /// Last applied seq per source (sorted by source id).
   [[nodiscard]] const std::map<std::string, std::int64_t>& applied() const { return applied_; }
   [[nodiscard]] std::int64_t applied_seq(const std::string& source) const;
+  /// The history of each source's last applied batch (sorted by source id; a source whose
+  /// batches carried none has {0, 0}).
+  [[nodiscard]] const HistoryBySource& histories() const { return histories_; }
   /// (source, seq) of the batch that produced the current state ("" / -1 for the virgin state).
   [[nodiscard]] const std::string& last_source() const { return last_source_; }
   [[nodiscard]] std::int64_t last_seq() const { return last_seq_; }
@@ -189,6 +201,7 @@ class Twin {
     visit("last_block", self.last_block_, Hashed::yes);
     visit("failure", self.failure_, Hashed::yes);
     visit("spectrum", self.spectrum_, Hashed::yes);
+    visit("history", self.histories_, Hashed::no);
     visit("life_central", self.life_.central, Hashed::no);
     visit("life_low", self.life_.low, Hashed::no);
     visit("life_high", self.life_.high, Hashed::no);
@@ -207,6 +220,7 @@ class Twin {
   std::unique_ptr<fatigue::FatigueEngine> engine_;
   std::int64_t state_seq_ = 0;
   std::map<std::string, std::int64_t> applied_;
+  HistoryBySource histories_;
   std::string last_source_;
   std::int64_t last_seq_ = -1;
   /// Engine cycles before the batch that made the current state (life.every_cycles); not part

@@ -9,6 +9,11 @@
 //   vector<BreakEvent>                -> i64 arrays <key>_cycle, <key>_bond, u8 array <key>_cause
 //   map<string, int64> (seq by source)-> string <key>_ids (ids joined by '\n'; ids are printable
 //                                        ASCII without blanks) and i64 array <key>_seq
+//   HistoryBySource                   -> string <key>_ids as above, i64 arrays
+//                                        <key>_fingerprint (the bits) and <key>_start; optional:
+//                                        a checkpoint written before them (message set version 7)
+//                                        restores with no histories (same format_version, whose
+//                                        other keys mean what they meant)
 //   RollingSpectrum                   -> f64 arrays <key>_p_max, <key>_r, <key>_alpha, i64
 //   <key>_count
 // plus the header: strings detail_id and blas_kernel (not restored: the daemon compares it on
@@ -25,6 +30,16 @@ namespace {
 
 std::string key_of(std::string_view key, std::string_view suffix) {
   return std::string(key) + std::string(suffix);
+}
+
+/// The ids of a <key>_ids string (joined by '\n').
+std::vector<std::string> split_ids(const std::string& ids) {
+  std::vector<std::string> split;
+  if (!ids.empty()) {
+    std::istringstream in(ids);
+    for (std::string id; std::getline(in, id, '\n');) split.push_back(id);
+  }
+  return split;
 }
 
 /// Puts every field it visits into a CheckpointData under the keys of the file comment.
@@ -77,6 +92,19 @@ struct CheckpointWriter {
     }
     put(key_of(key, "_ids"), ids);
     put(key_of(key, "_seq"), seqs);
+  }
+  void put(std::string_view key, const HistoryBySource& histories) {
+    std::string ids;
+    std::vector<std::int64_t> fingerprints, starts;
+    for (const auto& [id, history] : histories) {
+      if (!ids.empty()) ids += '\n';
+      ids += id;
+      fingerprints.push_back(std::bit_cast<std::int64_t>(history.fingerprint));
+      starts.push_back(history.start);
+    }
+    put(key_of(key, "_ids"), ids);
+    put(key_of(key, "_fingerprint"), fingerprints);
+    put(key_of(key, "_start"), starts);
   }
   void put(std::string_view key, const RollingSpectrum& spectrum) {
     std::vector<double> p, r, a;
@@ -165,17 +193,31 @@ struct CheckpointReader {
     std::vector<std::int64_t> seqs;
     get(key_of(key, "_ids"), ids);
     get(key_of(key, "_seq"), seqs);
-    std::vector<std::string> split;
-    if (!ids.empty()) {
-      std::istringstream in(ids);
-      for (std::string id; std::getline(in, id, '\n');) split.push_back(id);
-    }
+    const std::vector<std::string> split = split_ids(ids);
     if (split.size() != seqs.size()) {
       bad = std::string(key) + "_ids and " + std::string(key) + "_seq disagree";
       return;
     }
     applied.clear();
     for (std::size_t k = 0; k < split.size(); ++k) applied[split[k]] = seqs[k];
+  }
+  void get(std::string_view key, HistoryBySource& histories) {
+    histories.clear();
+    if (!d.strings.contains(key_of(key, "_ids"))) return;  // written before them: none known
+    std::string ids;
+    std::vector<std::int64_t> fingerprints, starts;
+    get(key_of(key, "_ids"), ids);
+    get(key_of(key, "_fingerprint"), fingerprints);
+    get(key_of(key, "_start"), starts);
+    const std::vector<std::string> split = split_ids(ids);
+    if (split.size() != fingerprints.size() || split.size() != starts.size()) {
+      bad = std::string(key) + "_ids, " + std::string(key) + "_fingerprint and " +
+            std::string(key) + "_start disagree";
+      return;
+    }
+    for (std::size_t k = 0; k < split.size(); ++k) {
+      histories[split[k]] = {std::bit_cast<std::uint64_t>(fingerprints[k]), starts[k]};
+    }
   }
   void get(std::string_view key, RollingSpectrum& spectrum) {
     std::vector<double> p, r, a;

@@ -38,6 +38,8 @@ peritwin_msgs::damage_state_t state(std::int64_t seq, std::int64_t cycles, doubl
   s.source_ids = {"replay"};
   s.applied_seq = {seq};
   s.checkpointed_seq = {0};
+  s.history = {0};
+  s.history_start = {0};
   s.total_cycles = cycles;
   s.broken_bonds = 7 * seq;
   s.max_damage = 0.25;
@@ -556,6 +558,8 @@ TEST(DashboardStore, EstimateStateIsFoundAmongInterleavedSourcesOrLeftUnanchored
     s.source_ids = {"a", "b"};
     s.applied_seq = {a, b};
     s.checkpointed_seq = {0, 0};
+    s.history = {0, 0};
+    s.history_start = {0, 0};
     return s;
   };
   feed(store, ch, encode(two(0, 0, 0, 0, nan, "", -1)));

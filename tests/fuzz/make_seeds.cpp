@@ -120,6 +120,8 @@ void state_seeds(const fs::path& dir) {
   s.source_ids = {"gauge", "replay"};
   s.applied_seq = {3, 9};
   s.checkpointed_seq = {0, 8};
+  s.history = {0, 0x2f6e1d0b9c4a8e57};
+  s.history_start = {0, 1};
   s.num_sources = 2;
   s.total_cycles = 12000;
   s.broken_bonds = 36;
@@ -140,6 +142,8 @@ void state_seeds(const fs::path& dir) {
   s.remaining_cycles_high = std::numeric_limits<double>::infinity();
   s.remaining_life_seq = 10;
   s.remaining_life_source = "replay";
+  s.echo_source = "replay";
+  s.echo_nonce = 0x1d5c9e0b7a3f4260;
   write(dir / "two-sources.bin", encode_message(s));
   peritwin::messages::sign(s, fuzz_key());
   write(dir / "signed.bin", encode_message(s));
@@ -149,7 +153,8 @@ void reject_seeds(const fs::path& dir) {
   fs::create_directories(dir);
   peritwin::messages::Outcome why{peritwin::messages::Verdict::invalid, "blocks[3].r",
                                   "r = 1.2 must be < 1"};
-  auto r = peritwin::messages::reject_message("b1-ct", "replay", 7, why, 1'700'000'000'000'000);
+  auto r = peritwin::messages::reject_message("b1-ct", "replay", 7, why, 1'700'000'000'000'000,
+                                              0x1d5c9e0b7a3f4260);
   write(dir / "invalid.bin", encode_message(r));
   peritwin::messages::sign(r, fuzz_key());
   write(dir / "signed.bin", encode_message(r));

@@ -87,6 +87,8 @@ peritwin_msgs::damage_state_t sample_state() {
   s.source_ids = {"gauge-3", "replay"};
   s.applied_seq = {4, 8};
   s.checkpointed_seq = {4, 4};
+  s.history = {0, 0x5eed};
+  s.history_start = {0, 1};
   s.num_sources = 2;
   s.total_cycles = 12000;
   s.broken_bonds = 36;

@@ -134,6 +134,8 @@ void expect_equal(const msgs::damage_state_t& a, const msgs::damage_state_t& b) 
   EXPECT_EQ(a.source_ids, b.source_ids);
   EXPECT_EQ(a.applied_seq, b.applied_seq);
   EXPECT_EQ(a.checkpointed_seq, b.checkpointed_seq);
+  EXPECT_EQ(a.history, b.history);
+  EXPECT_EQ(a.history_start, b.history_start);
   EXPECT_EQ(a.total_cycles, b.total_cycles);
   EXPECT_EQ(a.broken_bonds, b.broken_bonds);
   EXPECT_SAME_FIELD(a, b, max_damage);
@@ -266,6 +268,8 @@ msgs::damage_state_t make_state() {
   m.source_ids = {"", "live", "replay"};
   m.applied_seq = {0, kI64Max, 16};
   m.checkpointed_seq = {0, kI64Max - 1, 0};
+  m.history = {0, -1, std::numeric_limits<std::int64_t>::min()};
+  m.history_start = {0, 1, kI64Max};
   m.num_sources = static_cast<std::int32_t>(m.source_ids.size());
   m.total_cycles = 9'876'543'210;
   m.broken_bonds = 4321;
@@ -283,6 +287,8 @@ msgs::damage_state_t make_state() {
   m.remaining_life_source = "replay";
   m.failure = msgs::damage_state_t::FAILURE_SINGULAR;
   m.state_hash = "0123456789abcdef0123456789abcdef";
+  m.echo_source = "replay";
+  m.echo_nonce = std::numeric_limits<std::int64_t>::min();
   m.auth_tag.assign(32, 0xA5);
   m.tag_length = 32;
   return m;

@@ -11,6 +11,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -32,6 +33,53 @@ namespace peritwin::replay {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Issue 30: a history's fingerprint is that of its batches (blocks and where the batches are
+// cut), whatever they are numbered from and whoever sends them; every batch carries it with the
+// history's first seq, within the rule check_batch applies.
+TEST(ReplayBatches, TheHistoryFingerprintIsTheBatchesNotTheirIdsOrSeqs) {
+  std::vector<core::LoadBlock> blocks;
+  for (int i = 0; i < 10; ++i) blocks.push_back({4000.0 + 10.0 * i, 0.1, 0.0, 600});
+  auto batches = loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 1000});
+  ASSERT_EQ(batches.size(), 5u);
+  loads::mark_history(batches);
+  const std::uint64_t fingerprint = batches.front().history;
+  EXPECT_NE(fingerprint, 0u);
+  EXPECT_EQ(fingerprint, loads::history_fingerprint(batches));
+  for (const auto& b : batches) {
+    EXPECT_EQ(b.history, fingerprint);
+    EXPECT_EQ(b.history_start, 1);
+    EXPECT_TRUE(messages::check_batch(b, "b1-ct").applied());
+  }
+  // Appended at seq 6 by another source: the same history.
+  auto appended = loads::make_twin_batches(blocks, "b1-ct", "gauge", {16, 1000}, 6);
+  loads::mark_history(appended);
+  EXPECT_EQ(appended.back().history, fingerprint);
+  EXPECT_EQ(appended.back().history_start, 6);
+  EXPECT_TRUE(messages::check_batch(appended.back(), "b1-ct").applied());
+  // Cut otherwise, or one load otherwise: another history.
+  EXPECT_NE(
+      loads::history_fingerprint(loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 2000})),
+      fingerprint);
+  blocks[7].p_max += 1e-9;
+  EXPECT_NE(
+      loads::history_fingerprint(loads::make_twin_batches(blocks, "b1-ct", "replay", {16, 1000})),
+      fingerprint);
+  // history_start: 1..seq with a history, 0 without.
+  messages::Batch b = batches[2];  // seq 3
+  for (const std::int64_t start : {std::int64_t{0}, std::int64_t{4}, std::int64_t{-1}}) {
+    b.history_start = start;
+    const auto o = messages::check_batch(b, "b1-ct");
+    EXPECT_EQ(o.verdict, messages::Verdict::invalid) << start;
+    EXPECT_EQ(o.what, "history_start");
+    EXPECT_EQ(o.why, "history_start = " + std::to_string(start) + " must be 1 to seq = 3");
+  }
+  b.history = 0;
+  b.history_start = 1;
+  EXPECT_EQ(messages::check_batch(b, "b1-ct").why, "history_start = 1 must be 0 without a history");
+  b.history_start = 0;
+  EXPECT_TRUE(messages::check_batch(b, "b1-ct").applied());
+}
 
 TEST(ReplayBatches, ByBlocksAndCyclesWithSequentialSeq) {
   std::vector<peritwin::core::LoadBlock> blocks;
@@ -383,7 +431,14 @@ enum class Answer {
   invalid_reject,    ///< REJECT CODE_INVALID (p_max above max_p) for every batch, signed
   failed_reject,     ///< REJECT CODE_FAILED for every batch: a detail that had ended before
   end_of_life,       ///< seq 1 applied and the end of life reached, CODE_FAILED for the others
+  /// signed_states, each after a genuine signed STATE of an earlier run (source "replay" at seq
+  /// 3, hash "old-3", echoing that run's nonce) and its CODE_FAILED reject of the batch's seq,
+  /// published again (issue 30: a tag proves who made a message, not when)
+  old_answers_first,
 };
+
+/// The nonce of the earlier run whose answers Answer::old_answers_first publishes again.
+constexpr std::uint64_t kEarlierRunNonce = 0x0123456789abcdefULL;
 
 /// Answers every batch on b1-ct's LOAD channel of `lcm` like a daemon would, after checking its
 /// tag on the received bytes with tag_matches(source key, bytes, signed_size, auth_tag) — the
@@ -412,6 +467,8 @@ class FakeDaemon {
     const bool ok = messages::tag_matches(source_key_, bytes, d.signed_size, d.auth_tag);
     if (ok) ++verified_;
     const std::string& source = d.batch->source_id;
+    const std::uint64_t nonce = d.batch->nonce;  // echoed in every answer, as the daemon does
+    if (answer_ == Answer::old_answers_first) publish_old_answers(d.batch->seq);
     if (answer_ == Answer::auth_reject || answer_ == Answer::unsigned_reject) {
       auto r = messages::reject_message(
           "b1-ct", source, d.batch->seq,
@@ -419,7 +476,7 @@ class FakeDaemon {
               ? messages::Outcome{messages::Verdict::auth, "auth_tag",
                                   "wrong tag for source \"" + source + "\""}
               : messages::Outcome{messages::Verdict::gap, "seq", "forged gap"},
-          messages::now_utime());
+          messages::now_utime(), nonce);
       if (answer_ == Answer::auth_reject) messages::sign(r, daemon_key_);
       lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
       return;
@@ -434,36 +491,60 @@ class FakeDaemon {
                                      "it applies no more cycles"}
                  : messages::Outcome{messages::Verdict::invalid, "blocks[0].p_max",
                                      "p_max = 4e+06 N is above the detail's bound max_p = 40000 N"},
-          messages::now_utime());
+          messages::now_utime(), nonce);
       messages::sign(r, daemon_key_);
       lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
       return;
     }
-    if (!ok && answer_ == Answer::signed_states) return;  // a daemon with [auth] rejects it
+    const bool signs = answer_ == Answer::signed_states || answer_ == Answer::end_of_life ||
+                       answer_ == Answer::old_answers_first;
+    if (!ok && signs) return;  // a daemon with [auth] rejects it
     if (d.batch->seq == applied_ + 1) ++applied_;
-    peritwin_msgs::damage_state_t s{};
-    s.utime = messages::now_utime();
-    s.detail_id = "b1-ct";
-    s.state_seq = applied_;
-    s.source_ids = {source};
-    s.applied_seq = {applied_};
-    s.checkpointed_seq = {0};
-    s.num_sources = 1;
-    s.total_cycles = 1000 * applied_;
-    s.k_i = s.k_ii = std::numeric_limits<double>::quiet_NaN();
-    s.remaining_cycles = s.remaining_cycles_low = s.remaining_cycles_high = s.k_i;
-    s.remaining_life_seq = -1;
-    s.state_hash = "fake-" + std::to_string(applied_);
+    auto s = state(source, applied_, "fake-" + std::to_string(applied_), nonce);
     if (answer_ == Answer::end_of_life) s.failure = 1;
-    if (answer_ == Answer::signed_states || answer_ == Answer::end_of_life) {
-      messages::sign(s, daemon_key_);
-    }
+    if (signs) messages::sign(s, daemon_key_);
     if (answer_ == Answer::wrong_key_states) {
       messages::AuthKey other = daemon_key_;
       other.bytes[0] ^= 1;
       messages::sign(s, other);
     }
     lcm_.publish(messages::channel("b1-ct", messages::Kind::kState), &s);
+  }
+
+  static peritwin_msgs::damage_state_t state(const std::string& source, std::int64_t applied,
+                                             const std::string& hash, std::uint64_t nonce) {
+    peritwin_msgs::damage_state_t s{};
+    s.utime = messages::now_utime();
+    s.detail_id = "b1-ct";
+    s.state_seq = applied;
+    s.source_ids = {source};
+    s.applied_seq = {applied};
+    s.checkpointed_seq = {0};
+    s.history = {0};
+    s.history_start = {0};
+    s.num_sources = 1;
+    s.total_cycles = 1000 * applied;
+    s.k_i = s.k_ii = std::numeric_limits<double>::quiet_NaN();
+    s.remaining_cycles = s.remaining_cycles_low = s.remaining_cycles_high = s.k_i;
+    s.remaining_life_seq = -1;
+    s.state_hash = hash;
+    s.echo_source = source;
+    s.echo_nonce = static_cast<std::int64_t>(nonce);
+    return s;
+  }
+
+  /// What the daemon signed for an earlier run of source "replay": its final STATE (seq 3
+  /// applied) and a CODE_FAILED reject of batch `seq`.
+  void publish_old_answers(std::int64_t seq) {
+    auto s = state("replay", 3, "old-3", kEarlierRunNonce);
+    messages::sign(s, daemon_key_);
+    lcm_.publish(messages::channel("b1-ct", messages::Kind::kState), &s);
+    auto r = messages::reject_message(
+        "b1-ct", "replay", seq,
+        {messages::Verdict::failed, "message", "an earlier run's detail had ended"},
+        messages::now_utime(), kEarlierRunNonce);
+    messages::sign(r, daemon_key_);
+    lcm_.publish(messages::channel("b1-ct", messages::Kind::kReject), &r);
   }
 
   lcm::LCM& lcm_;
@@ -549,8 +630,27 @@ TEST(ReplayAuthMemq, UnsignedRejectAndAuthRejectEndTheRun) {
   EXPECT_EQ(unsigned_run.verified, 0);
 }
 
+// Issue 30: the answers the daemon signed for an earlier run, published again during this one,
+// are not this run's: its states (echoing its nonce) are taken, the old STATE (seq 3 applied,
+// which would have ended this three-batch run at once) and the old FAILED rejects are not.
+TEST(ReplayAuthMemq, AnEarlierRunsSignedAnswersPublishedAgainAreNotThisRunsProgress) {
+  const auto run = run_memq(Answer::old_answers_first, both_keys());
+  ASSERT_TRUE(run.result.ok) << run.result.error;
+  EXPECT_TRUE(run.result.end_of_life.empty()) << run.result.end_of_life;
+  ASSERT_TRUE(run.result.final_state);
+  EXPECT_EQ(run.result.final_state->state_hash, "fake-3");
+  // Each state of this run (one may come twice: the old STATE disagrees with the run, which then
+  // probes, and the probe's answer is the current state again), never the old one.
+  std::vector<std::string> hashes = run.hashes;
+  hashes.erase(std::unique(hashes.begin(), hashes.end()), hashes.end());
+  EXPECT_EQ(hashes, (std::vector<std::string>{"fake-1", "fake-2", "fake-3"}));
+  EXPECT_GE(run.result.stale_states, 3);  // one before the answer to each batch
+  EXPECT_EQ(run.verified, run.batches);
+}
+
 TEST(ReplayAuthMemq, WithoutKeysAForgedStateIsBelieved) {
-  // The documented limit of a run without --key-file: unsigned states are taken as they come.
+  // The documented limit of a run without --key-file: unsigned states are taken as they come
+  // (they echo the run's nonce, which anyone on the bus can read off its batches).
   const auto run = run_memq(Answer::unsigned_states, {});
   ASSERT_TRUE(run.result.ok) << run.result.error;
   EXPECT_EQ(run.result.final_state->state_hash, "fake-3");

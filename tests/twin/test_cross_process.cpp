@@ -12,11 +12,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <thread>
 
+#include "messages/codec.h"
 #include "tests/support/process.h"
 #include "tests/support/twin_fixtures.h"
 
@@ -349,6 +351,187 @@ TEST_F(CrossProcess, SecondHistoryOnTheSameSourceIsRefusedThenAppendedWithContin
   }
   history_ = all;
   ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+}
+
+// Issue 30 item 6: --resume checks that the batches the daemon holds of the source are this
+// history's (every batch carries the history's fingerprint, kept per source with its applied seq
+// and published in STATE) and refuses another history, or the same file batched otherwise (exit 2,
+// nothing sent); the same history is finished (exit 0), and again once it is complete.
+TEST_F(CrossProcess, ResumeFinishesTheSameHistoryAndRefusesAnother) {
+  const auto write_rows = [&](const std::string& name, const char* load, int rows) {
+    std::ofstream h(dir_ / name);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < rows; ++i) h << load << ",0.1,0,1000\n";
+    return (dir_ / name).string();
+  };
+  const std::string same = write_rows("same.csv", "4000", 8);
+  const std::string other = write_rows("other.csv", "4200", 8);
+  history_ = same;
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+  ASSERT_NE(reference.back().find("\"cycles\":8000,"), std::string::npos) << reference.back();
+
+  auto d = daemon("daemon.log");
+  // The history, interrupted (SIGINT) once its second state is out; on a loaded machine the
+  // replay may have ended before the signal: the rest holds either way.
+  {
+    auto first = replay(false);
+    std::int64_t seen = -1;
+    while (seen < 2) {
+      const auto line = first->read_line(kWaitS);
+      ASSERT_TRUE(line.has_value()) << read_file(dir_ / "replay.log");
+      seen = std::max(seen, state_seq_of(*line));
+    }
+    first->signal(SIGINT);
+    lines_to_end(*first);
+    ASSERT_TRUE(first->wait_for(kWaitS).has_value());
+  }
+  // The replays' stderr goes to one file (appended): `log` is what the last run wrote.
+  std::string log;
+  const auto run_to_end = [&](const std::string& history, const std::vector<std::string>& extra,
+                              int* exit_code) {
+    history_ = history;
+    const std::size_t before = read_file(dir_ / "replay.log").size();
+    auto r = replay(false, {}, extra);
+    auto lines = lines_to_end(*r);
+    const auto status = r->wait_for(kWaitS);
+    *exit_code = status && WIFEXITED(*status) ? WEXITSTATUS(*status) : -1;
+    log = read_file(dir_ / "replay.log").substr(before);
+    return lines;
+  };
+  int code = -1;
+  run_to_end(other, {"--resume"}, &code);
+  EXPECT_EQ(code, 2) << log;
+  EXPECT_NE(log.find("peritwin-replay: --resume: source 'replay' has batches up to seq "),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find(" of another history applied on detail b1-ct"), std::string::npos) << log;
+  EXPECT_NE(log.find("use --continue to append this history after them, or a new --source"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("batch messages published"), std::string::npos) << log;  // nothing sent
+  // The same file cut into other batches is another sequence of batches: refused too.
+  run_to_end(same, {"--resume", "--batch-cycles", "2000"}, &code);
+  EXPECT_EQ(code, 2) << log;
+  EXPECT_NE(log.find(" of another history applied on detail b1-ct"), std::string::npos) << log;
+
+  auto lines = run_to_end(same, {"--resume"}, &code);
+  ASSERT_EQ(code, 0) << log;
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());      // every cycle of the history, once
+  lines = run_to_end(same, {"--resume"}, &code);  // complete: nothing more to send
+  ASSERT_EQ(code, 0) << log;
+  EXPECT_NE(log.find("peritwin-replay: --resume: all 8 batches of "), std::string::npos) << log;
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines.back(), reference.back());
+  for (const auto& line : lines) {
+    if (line.find("\"state_seq\":") != std::string::npos) {
+      EXPECT_EQ(state_seq_of(line), 8) << line;
+    }
+  }
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon.log"));
+}
+
+// Issue 30 item 6: a genuine signed STATE of an earlier run (same daemon key), published again
+// on the bus during a --key-file replay, is not taken as the replay's progress: every STATE
+// echoes the nonce of the batch message it answers, and a producer takes only those that echo
+// its own run's. The replay completes with its own states (before: it stopped at the old state,
+// exit 0 with the old hash, after a few of its batches).
+TEST_F(CrossProcess, AnOldSignedStatePublishedAgainDuringAReplayIsNotItsProgress) {
+  ASSERT_NO_FATAL_FAILURE(authenticate());
+  const auto write_rows = [&](const std::string& name, const char* load, int rows) {
+    std::ofstream h(dir_ / name);
+    h << "p_max_N,r,angle_rad,count\n";
+    for (int i = 0; i < rows; ++i) h << load << ",0.1,0,1000\n";
+    return (dir_ / name).string();
+  };
+  const std::string earlier = write_rows("earlier.csv", "4000", 8);
+  const std::string now = write_rows("now.csv", "3800", 8);
+  // The earlier run, to its end; this process records the bytes of its last STATE off the bus.
+  lcm::LCM lcm(url_);
+  ASSERT_TRUE(lcm.good());
+  struct Recorder {
+    std::vector<std::uint8_t> bytes;  ///< read once the listener has stopped
+    std::atomic<std::int64_t> state_seq{-1};
+    void on(const lcm::ReceiveBuffer* rb, const std::string&) {
+      const auto s = messages::decode_state(rb->data, rb->data_size);
+      if (!s || s->state_seq < state_seq) return;
+      state_seq = s->state_seq;
+      const auto* p = static_cast<const std::uint8_t*>(rb->data);
+      bytes.assign(p, p + rb->data_size);
+    }
+  } recorder;
+  auto* sub =
+      lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Recorder::on, &recorder);
+  std::string old_hash;
+  {
+    auto d = daemon("daemon1.log", "state1");
+    history_ = earlier;
+    auto r = replay(false, keys_);
+    std::atomic<bool> done{false};
+    std::thread listen([&] {
+      while (!done) messages::handle_lcm(lcm, 50);
+    });
+    const auto lines = lines_to_end(*r);
+    const auto status = r->wait_for(kWaitS);
+    ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+        << read_file(dir_ / "replay.log");
+    ASSERT_FALSE(lines.empty());
+    old_hash = state_hash_of(lines.back());
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(kWaitS);
+    while (std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      if (recorder.state_seq >= 8) break;
+    }
+    done = true;
+    listen.join();
+    ASSERT_EQ(recorder.state_seq, 8);
+    ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon1.log"));
+  }
+  lcm.unsubscribe(sub);
+  ASSERT_FALSE(old_hash.empty());
+  const auto old = messages::decode_state(recorder.bytes.data(), recorder.bytes.size());
+  ASSERT_TRUE(old.has_value());
+  EXPECT_EQ(old->state_hash, old_hash);
+  EXPECT_EQ(old->tag_length, 32);  // signed by the daemon
+  EXPECT_EQ(messages::applied_seq(*old, "replay"), 8);
+
+  // Now another history on a fresh twin (same keys); the old STATE goes out again and again
+  // from the replay's first state on.
+  history_ = now;
+  auto reference_run = replay(true);
+  const auto reference = lines_to_end(*reference_run);
+  ASSERT_FALSE(reference.empty());
+  const std::string new_hash = state_hash_of(reference.back());
+  ASSERT_NE(new_hash, old_hash);
+  auto d = daemon("daemon2.log", "state2");
+  auto r = replay(false, keys_);
+  std::vector<std::string> lines;
+  while (lines.empty() || state_seq_of(lines.back()) < 1) {
+    const auto line = r->read_line(kWaitS);
+    ASSERT_TRUE(line.has_value()) << read_file(dir_ / "replay.log");
+    lines.push_back(*line);
+  }
+  std::atomic<bool> done{false};
+  std::thread forger([&] {
+    const std::string channel = messages::channel("b1-ct", messages::Kind::kState);
+    while (!done) {
+      lcm.publish(channel, recorder.bytes.data(), static_cast<unsigned>(recorder.bytes.size()));
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  });
+  for (auto& line : lines_to_end(*r)) lines.push_back(std::move(line));
+  const auto status = r->wait_for(kWaitS);
+  done = true;
+  forger.join();
+  ASSERT_TRUE(status && WIFEXITED(*status) && WEXITSTATUS(*status) == 0)
+      << read_file(dir_ / "replay.log");
+  EXPECT_EQ(lines.back(), reference.back()) << read_file(dir_ / "replay.log");
+  for (const auto& line : lines) EXPECT_EQ(line.find(old_hash), std::string::npos) << line;
+  ASSERT_NO_FATAL_FAILURE(expect_clean_stop(*d, "daemon2.log"));
+  EXPECT_NE(read_file(dir_ / "daemon2.log").find("state_hash " + new_hash), std::string::npos)
+      << read_file(dir_ / "daemon2.log");
 }
 
 /// `key` of a summary line: the text after "key": up to the next ',' or '}'.

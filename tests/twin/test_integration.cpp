@@ -705,11 +705,14 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   const messages::Batch real = history(1).front();
   auto unsigned_hijack = messages::batch_message(real, 0);
   unsigned_hijack.blocks[0].p_max *= 1.5;  // a different load under the real (source, seq)
+  unsigned_hijack.nonce = 101;
   auto forged = unsigned_hijack;
+  forged.nonce = 102;
   messages::AuthKey wrong;
   wrong.bytes.fill(0x42);
   messages::sign(forged, wrong);
   auto intruder = messages::batch_message({"b1-ct", "intruder", 1, real.blocks}, 0);
+  intruder.nonce = 103;
   messages::sign(intruder, replay_key);  // a stolen key does not make another source
   exchange(lcm, daemon, {unsigned_hijack, forged, intruder});
   ASSERT_EQ(seen.rejects.size(), 3u);
@@ -718,6 +721,7 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
     EXPECT_EQ(seen.rejects[k].code, peritwin_msgs::reject_t::CODE_AUTH) << k;
     EXPECT_EQ(seen.rejects[k].what, what[k]) << seen.rejects[k].why;
     EXPECT_TRUE(messages::verify(seen.rejects[k], daemon_key).ok()) << k;
+    EXPECT_EQ(seen.rejects[k].nonce, static_cast<std::int64_t>(101 + k));  // the batch's, echoed
   }
   EXPECT_NE(seen.rejects[0].why.find("unsigned"), std::string::npos);
   EXPECT_NE(seen.rejects[1].why.find("wrong tag"), std::string::npos);
@@ -725,11 +729,15 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   EXPECT_EQ(daemon.twin(0).applied_seq("replay"), 0);
 
   auto genuine = messages::batch_message(real, 0);
+  genuine.nonce = 104;
   messages::sign(genuine, replay_key);
   exchange(lcm, daemon, {genuine});
   ASSERT_FALSE(seen.states.empty());
   const auto& state = seen.states.back();
   EXPECT_EQ(state.state_seq, 1);
+  // A refused batch is not answered by STATE, nor is its nonce echoed in a later one.
+  EXPECT_EQ(state.echo_source, "replay");
+  EXPECT_EQ(state.echo_nonce, 104);
   EXPECT_EQ(messages::applied_seq(state, "replay"), 1);
   EXPECT_TRUE(messages::verify(state, daemon_key).ok());
   EXPECT_EQ(state.state_hash, in_process_hashes(config, {real}).at(1));
@@ -742,6 +750,58 @@ TEST_F(MemqTest, WithAuthAHijackerIsRefusedAndTheRealProducerGoesOn) {
   ASSERT_FALSE(seen.statuses.empty());
   EXPECT_EQ(seen.statuses.back().auth_rejects, 3);
   EXPECT_EQ(seen.statuses.back().errors, 3);
+  daemon.stop();
+}
+
+// Issue 30: every STATE echoes the source and nonce of the last batch the daemon took (the one
+// that produced it, or a duplicate or gap it answers: a producer's probe), every REJECT the
+// rejected batch's nonce; the start-up STATE echoes none. STATE also names each source's history
+// (the fingerprint and first seq of its last applied batch).
+TEST_F(MemqTest, StatesAndRejectsEchoTheNonceOfTheBatchTheyAnswer) {
+  const config::TwinConfig config = config_of(b1_text());
+  lcm::LCM lcm("memq://");
+  Observer seen;
+  seen.subscribe(lcm);
+  service::Daemon daemon(lcm, config, options_);
+  ASSERT_TRUE(daemon.start().ok());
+  exchange(lcm, daemon, {});
+  ASSERT_EQ(seen.states.size(), 1u);  // the start-up STATE
+  EXPECT_EQ(seen.states[0].echo_source, "");
+  EXPECT_EQ(seen.states[0].echo_nonce, 0);
+  auto batches = history(2);
+  ASSERT_EQ(batches.size(), 2u);
+  loads::mark_history(batches);
+  const auto sent = [](messages::Batch b, std::uint64_t nonce) {
+    b.nonce = nonce;
+    return messages::batch_message(b, 0);
+  };
+  messages::Batch gap = batches[1];
+  gap.seq = 5;
+  messages::Batch invalid = batches[1];
+  invalid.history_start = 7;                      // after its seq 2
+  exchange(lcm, daemon, {sent(batches[0], 11)});  // applied
+  exchange(lcm, daemon, {sent(batches[0], 22)});  // duplicate
+  exchange(lcm, daemon, {sent(gap, 33)});         // gap
+  exchange(lcm, daemon, {sent(invalid, 44)});     // invalid: no STATE
+  ASSERT_EQ(seen.states.size(), 4u);
+  for (std::size_t k = 1; k < 4; ++k) {
+    EXPECT_EQ(seen.states[k].state_seq, 1) << k;
+    EXPECT_EQ(seen.states[k].echo_source, "replay") << k;
+    EXPECT_EQ(messages::source_history(seen.states[k], "replay"),
+              (messages::SourceHistory{batches[0].history, 1}))
+        << k;
+  }
+  EXPECT_EQ(seen.states[1].echo_nonce, 11);
+  EXPECT_EQ(seen.states[2].echo_nonce, 22);
+  EXPECT_EQ(seen.states[3].echo_nonce, 33);
+  ASSERT_EQ(seen.rejects.size(), 3u);
+  EXPECT_EQ(seen.rejects[0].code, peritwin_msgs::reject_t::CODE_DUPLICATE);
+  EXPECT_EQ(seen.rejects[0].nonce, 22);
+  EXPECT_EQ(seen.rejects[1].code, peritwin_msgs::reject_t::CODE_GAP);
+  EXPECT_EQ(seen.rejects[1].nonce, 33);
+  EXPECT_EQ(seen.rejects[2].code, peritwin_msgs::reject_t::CODE_INVALID);
+  EXPECT_EQ(seen.rejects[2].what, "history_start");
+  EXPECT_EQ(seen.rejects[2].nonce, 44);
   daemon.stop();
 }
 
