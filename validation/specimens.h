@@ -91,8 +91,9 @@ CtsStressIntensity richard_cts_stress_intensity(const CompactTensionShearSpec& s
                                                 double alpha);
 
 /// `dx` itself, unless a node row would lie within dx/4 of the crack line y = 0 (then the nodes
-/// on the cut lose their bonds to both faces and come loose); in that case the nearest spacing
-/// with an even number of rows over the height, which puts y = 0 midway between two rows.
+/// on the cut lose their bonds to both faces: debris, their material lost); in that case the
+/// nearest spacing with an even number of rows over the height, which puts y = 0 midway between
+/// two rows.
 double compact_tension_shear_grid_spacing(const CompactTensionShearSpec& spec, double dx);
 
 statics::Specimen make_compact_tension_shear(const CompactTensionShearSpec& spec,

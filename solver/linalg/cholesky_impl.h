@@ -14,8 +14,9 @@
 namespace peritwin::linalg {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
-/// min(D) / max(D), above 1e-14 — else the model has come loose.
-core::Status check_after_downdate(const std::vector<double>& diagonal);
+/// min(D) / max(D), above 1e-14 — else the model has come loose. `first_bad`: the first column
+/// (factor order) whose D is at most 1e-14·max(D) when it fails, else −1.
+core::Status check_after_downdate(const std::vector<double>& diagonal, int& first_bad);
 
 /// The LDLᵀ factor after the first fused update, kept in the supernodal factor's storage instead
 /// of CHOLMOD's simplicial one (issue 18, item 5). CHOLMOD's conversion (cholmod_change_factor
@@ -55,6 +56,7 @@ struct SparseCholesky::Impl {
   std::vector<double> forward_y;  ///< n × columns of tracked_rhs, row-major, permuted
   std::vector<double> delta;      ///< n × 3 workspace of the forward update (zero between calls)
   bool forward_valid = false;
+  int weakest_row = -1;  ///< SparseCholesky::weakest_pivot_row()
 
   [[nodiscard]] bool packed_active() const { return packed.x != nullptr; }
   /// The factor is LDLᵀ (after an update): packed, or CHOLMOD's simplicial.
@@ -100,6 +102,15 @@ struct SparseCholesky::Impl {
   core::Status to_cholmod_simplicial();
   /// Makes the factor LDLᵀ: packed from supernodal (`packed_form`) or CHOLMOD's simplicial.
   core::Status to_ldlt(bool packed_form);
+  /// Column (in the factor's order) of the smallest |l_jj| of a supernodal numeric LLᵀ factor;
+  /// −1 for any other factor.
+  [[nodiscard]] int smallest_supernodal_pivot() const;
+  /// The matrix row of column j of the factor (Perm[j]); −1 for j outside it.
+  [[nodiscard]] int row_of(int j) const {
+    if (factor == nullptr || j < 0 || static_cast<std::size_t>(j) >= factor->n) return -1;
+    const auto* perm = static_cast<const int*>(factor->Perm);
+    return perm != nullptr ? perm[j] : j;
+  }
   void free_packed() {
     if (packed.x != nullptr) {
       cholmod_free(packed.xsize, sizeof(double), packed.x, &common);

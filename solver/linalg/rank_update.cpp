@@ -389,7 +389,10 @@ core::Status SparseCholesky::modify_fused(const std::vector<Column>& added,
     impl.diagonal[static_cast<std::size_t>(j)] = l.lx[l.lp[j]];
   }
   if (!removed.empty()) {
-    if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
+    if (auto r = check_after_downdate(impl.diagonal, impl.weakest_row); !r.ok()) {
+      impl.weakest_row = impl.row_of(impl.weakest_row);
+      return r;
+    }
   }
   return {};
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -20,7 +21,8 @@ namespace peritwin::linalg {
 
 /// After a downdate: D of LDLᵀ must stay positive, and rcond as cholmod_rcond computes it,
 /// min(D) / max(D), above 1e-14 — else the model has come loose.
-core::Status check_after_downdate(const std::vector<double>& diagonal) {
+core::Status check_after_downdate(const std::vector<double>& diagonal, int& first_bad) {
+  first_bad = -1;
   double d_min = diagonal.empty() ? 0.0 : diagonal.front();
   double d_max = d_min;
   bool positive = true;
@@ -29,17 +31,20 @@ core::Status check_after_downdate(const std::vector<double>& diagonal) {
     d_min = std::min(d_min, d);
     d_max = std::max(d_max, d);
   }
+  const double rcond = d_min / d_max;
+  if (positive && rcond > 1e-14) return {};
+  // The first bad pivot in the factor's order: the columns before it were updated exactly (up
+  // to round-off), those after it on its path took its noise.
+  for (std::size_t j = 0; j < diagonal.size() && first_bad < 0; ++j) {
+    if (!(diagonal[j] > 1e-14 * d_max)) first_bad = static_cast<int>(j);
+  }
   if (!positive) {
     return core::failure(
         "stiffness is not positive definite after breaking bonds: a part of the model has "
         "come loose");
   }
-  const double rcond = d_min / d_max;
-  if (!(rcond > 1e-14)) {
-    return core::failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
-                         "): a part of the model has come loose");
-  }
-  return {};
+  return core::failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
+                       "): a part of the model has come loose");
 }
 
 core::Status SparseCholesky::Impl::to_packed_ldlt() {
@@ -346,8 +351,10 @@ core::Status SparseCholesky::factorize(const SparseMatrix& upper) {
   impl_->schedule = {};
   impl_->diagonal.clear();
   impl_->forward_valid = false;
+  impl_->weakest_row = -1;
   const int ok = cholmod_factorize(&a, impl_->factor, &impl_->common);
   if (impl_->common.status == CHOLMOD_NOT_POSDEF) {
+    impl_->weakest_row = impl_->row_of(static_cast<int>(impl_->factor->minor));
     return core::failure("stiffness is not positive definite (pivot " +
                          std::to_string(impl_->factor->minor) +
                          "): a part of the model is unconstrained or has come loose");
@@ -358,10 +365,38 @@ core::Status SparseCholesky::factorize(const SparseMatrix& upper) {
   }
   const double rcond = cholmod_rcond(impl_->factor, &impl_->common);
   if (!(rcond > 1e-14)) {
+    impl_->weakest_row = impl_->row_of(impl_->smallest_supernodal_pivot());
     return core::failure("stiffness is numerically singular (rcond " + std::to_string(rcond) +
                          "): a part of the model is unconstrained or has come loose");
   }
   return {};
+}
+
+int SparseCholesky::weakest_pivot_row() const { return impl_->weakest_row; }
+
+int SparseCholesky::Impl::smallest_supernodal_pivot() const {
+  const cholmod_factor* l = factor;
+  if (l == nullptr || !l->is_super || !l->is_ll || l->xtype != CHOLMOD_REAL || l->x == nullptr) {
+    return -1;
+  }
+  const auto* super = static_cast<const int*>(l->super);
+  const auto* lpi = static_cast<const int*>(l->pi);
+  const auto* lpx = static_cast<const int*>(l->px);
+  const auto* lx = static_cast<const double*>(l->x);
+  int weakest = -1;
+  double smallest = 0.0;
+  for (std::size_t s = 0; s < l->nsuper; ++s) {
+    const int nsrow = lpi[s + 1] - lpi[s];
+    for (int j = super[s]; j < super[s + 1]; ++j) {
+      const int jj = j - super[s];
+      const double d = std::abs(lx[lpx[s] + jj * nsrow + jj]);
+      if (weakest < 0 || !(d >= smallest)) {  // a NaN pivot is the weakest
+        weakest = j;
+        smallest = d;
+      }
+    }
+  }
+  return weakest;
 }
 
 core::Status SparseCholesky::modify(const std::vector<Column>& columns, bool add) {
@@ -433,7 +468,10 @@ core::Status SparseCholesky::modify(const std::vector<Column>& columns, bool add
   }
   if (!add) {
     // LDLᵀ: D is the first entry of every column.
-    if (auto r = check_after_downdate(impl.diagonal); !r.ok()) return r;
+    if (auto r = check_after_downdate(impl.diagonal, impl.weakest_row); !r.ok()) {
+      impl.weakest_row = impl.row_of(impl.weakest_row);
+      return r;
+    }
   }
   return {};
 }

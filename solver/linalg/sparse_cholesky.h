@@ -45,6 +45,12 @@ class SparseCholesky {
   /// positive definite or numerically singular (reciprocal condition estimate below 1e-14, e.g.
   /// a piece of the model that came loose) as a typed failure.
   core::Status factorize(const SparseMatrix& upper);
+  /// After factorize() reported a matrix that is not positive definite or numerically singular:
+  /// the row (in the matrix's own numbering) of the pivot it stopped at, or of the smallest pivot
+  /// (min l_jj); after a modify() or modify_fused() that did: the row of the first pivot (in the
+  /// factor's order) at most 1e-14·max(D). −1 when no pivot is known. Where a StaticSolver looks
+  /// for a mechanism (docs/solver.md, "Mechanisms are pinned").
+  [[nodiscard]] int weakest_pivot_row() const;
   /// A sparse column in the analyzed matrix's (unpermuted) row numbering.
   struct Column {
     std::vector<int> rows;

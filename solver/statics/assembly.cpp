@@ -27,7 +27,10 @@ void StaticSolver::append_ground(std::vector<Eigen::Triplet<double, int>>& entri
     const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
     for (std::size_t c = 0; c < 2; ++c) {
       const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
-      if (f >= 0) entries.emplace_back(f, f, ground ? ground_stiffness_ : 0.0);
+      if (f >= 0) {  // a pinned DOF has the same spring (one, if its node is grounded too)
+        const bool spring = ground || pinned_[static_cast<std::size_t>(f)] != 0;
+        entries.emplace_back(f, f, spring ? ground_stiffness_ : 0.0);
+      }
     }
   }
 }
@@ -202,7 +205,10 @@ void StaticSolver::assemble_by_scatter(const std::vector<double>& factors) {
     const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
     for (std::size_t c = 0; c < 2; ++c) {
       const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
-      if (f >= 0) add_extra(f, f, ground ? ground_stiffness_ : 0.0);
+      if (f >= 0) {  // as append_ground: pins are the same springs
+        const bool spring = ground || pinned_[static_cast<std::size_t>(f)] != 0;
+        add_extra(f, f, spring ? ground_stiffness_ : 0.0);
+      }
     }
   }
   for (const Tie& tie : ties_) {

@@ -44,7 +44,10 @@ void StaticSolver::ground_isolated(const std::vector<mesh::NodeIndex>& nodes,
     grounded_[static_cast<std::size_t>(k)] = 1;
     for (std::size_t c = 0; c < 2; ++c) {
       const int f = free_index_[2 * static_cast<std::size_t>(k) + c];
-      if (f >= 0) added.push_back({{f}, {std::sqrt(ground_stiffness_)}});
+      // A pinned DOF has its spring already (the assembly adds one, not two).
+      if (f >= 0 && !pinned_[static_cast<std::size_t>(f)]) {
+        added.push_back({{f}, {std::sqrt(ground_stiffness_)}});
+      }
     }
   }
 }

@@ -3,6 +3,7 @@
 // factor, and releasing an idle factor's values.
 #include <algorithm>
 #include <chrono>
+#include <string>
 #include <vector>
 
 #include "solver/statics/solve_clock.h"
@@ -54,26 +55,58 @@ std::vector<int> StaticSolver::dof_ordering() const {
   return order;
 }
 
-core::Status StaticSolver::solve() {
-  auto t0 = std::chrono::steady_clock::now();
-  assemble(factor_);
-  timings_.assemble_s = seconds_since(t0);
-  if (!cholesky_.analyzed()) {
+core::Status StaticSolver::factorize_pinning(const std::vector<double>& factors) {
+  // Each round grounds or pins at least one DOF, so this ends; the bound only caps the work (a
+  // round is a factorization) on a model riddled with mechanisms.
+  constexpr int kMaxPinRounds = 256;
+  timings_.factor_s = 0.0;
+  for (int round = 0;; ++round) {
+    auto t0 = std::chrono::steady_clock::now();
+    assemble(factors);
+    timings_.assemble_s = seconds_since(t0);
+    if (!cholesky_.analyzed()) {
+      t0 = std::chrono::steady_clock::now();
+      const std::vector<int> permutation = dof_ordering();
+      if (auto r = cholesky_.analyze(upper_, &permutation); !r.ok()) return r;
+      timings_.analyze_s = seconds_since(t0);
+    }
     t0 = std::chrono::steady_clock::now();
-    const std::vector<int> permutation = dof_ordering();
-    if (auto r = cholesky_.analyze(upper_, &permutation); !r.ok()) return r;
-    timings_.analyze_s = seconds_since(t0);
+    core::Status report = cholesky_.factorize(upper_);
+    ++factorizations_;
+    timings_.factor_s += seconds_since(t0);
+    if (report.ok()) return report;
+    if (round == kMaxPinRounds) {
+      return core::failure(core::message_of(report) + "; more than " +
+                           std::to_string(kMaxPinRounds) + " rounds of pinning mechanisms");
+    }
+    // A piece that came loose is final failure (named), unless it is debris (grounded, and
+    // factorized again); then a mechanism at the weakest pivot is pinned. Their failures say what
+    // the factorization's cannot: what came loose, or why nothing can be pinned.
+    bool grounded = false;
+    if (auto loose = ground_loose_debris(grounded); !loose.ok()) return loose;
+    if (grounded) continue;
+    const int row = cholesky_.weakest_pivot_row();
+    if (row < 0) return report;
+    if (auto pinned = pin_mechanisms(node_of_unknown(row), factors, true); !pinned.ok()) {
+      return pinned;
+    }
   }
-  t0 = std::chrono::steady_clock::now();
-  auto report = cholesky_.factorize(upper_);
-  ++factorizations_;
+}
+
+mesh::NodeIndex StaticSolver::node_of_unknown(int row) const {
+  if (row >= num_free_) return static_cast<mesh::NodeIndex>(row - num_free_);  // w_k: node k
+  const auto dof = std::find(free_index_.begin(), free_index_.end(), row) - free_index_.begin();
+  return static_cast<mesh::NodeIndex>(dof / 2);
+}
+
+core::Status StaticSolver::solve() {
+  auto report = factorize_pinning(factor_);
   updated_ = false;
   released_ = false;
-  timings_.factor_s = seconds_since(t0);
   if (!report.ok()) return report;
   reference_ = factor_;
 
-  t0 = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
   solve_bases();
   timings_.solve_s = seconds_since(t0);
   // Incremental: the factor is read again only after a rank update, which turns it into LDLᵀ:
@@ -158,8 +191,19 @@ core::Status StaticSolver::update_resolve(
   core::Status r = cholesky_.modify_fused(added, removed);
   ++updates_;
   if (!r.ok()) {
+    // A downdate that leaves a pivot ≤ 0 or min(D)/max(D) < 1e-14 leaves a factor that is no
+    // use (the pivots after the bad one are noise): the verdict is the refactorization's, which
+    // grounds debris or pins a mechanism and goes on, or says what came loose (docs/solver.md,
+    // "Mechanisms are pinned"). Round-off carried by the updates alone no longer ends a life
+    // either. Debris and a mechanism at the first bad pivot are dealt with first, which spares
+    // the refactorization that would find them; what this misses, it finds.
     update_s_ += seconds_since(t0);
-    return r;
+    bool grounded = false;
+    const int row = cholesky_.weakest_pivot_row();
+    if (ground_loose_debris(grounded).ok() && !grounded && row >= 0) {
+      (void)pin_mechanisms(node_of_unknown(row), factor_, false);
+    }
+    return refactor_resolve();
   }
   solve_bases();
   update_s_ += seconds_since(t0);

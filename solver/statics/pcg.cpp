@@ -58,10 +58,12 @@ void StaticSolver::multiply(const std::vector<double>& factors, const double* x,
     }
   }
   for (mesh::NodeIndex node = 0; node < disc_.num_nodes(); ++node) {
-    if (!grounded_[static_cast<std::size_t>(node)]) continue;
+    const bool ground = grounded_[static_cast<std::size_t>(node)] != 0;
     for (std::size_t c = 0; c < 2; ++c) {
       const int f = free_index_[2 * static_cast<std::size_t>(node) + c];
-      if (f >= 0) y[f] += ground_stiffness_ * x[f];
+      if (f >= 0 && (ground || pinned_[static_cast<std::size_t>(f)])) {
+        y[f] += ground_stiffness_ * x[f];
+      }
     }
   }
   for (const Tie& tie : ties_) {
@@ -199,18 +201,9 @@ core::Status StaticSolver::preconditioned_resolve(bool broke) {
   // A new reference exactly when some bond's f_ref changed (a bond broke: its f_ref is 0 now, so
   // the ground springs, which change only then, are always current in the factor).
   if (!cholesky_.analyzed() || reference != reference_) {
-    auto t = std::chrono::steady_clock::now();
-    assemble(reference);
-    timings_.assemble_s = seconds_since(t);
-    if (!cholesky_.analyzed()) {
-      const std::vector<int> permutation = dof_ordering();
-      if (auto r = cholesky_.analyze(upper_, &permutation); !r.ok()) return r;
-    }
-    t = std::chrono::steady_clock::now();
-    core::Status report = cholesky_.factorize(upper_);
-    ++factorizations_;
-    ++pcg_.reference_factorizations;
-    timings_.factor_s = seconds_since(t);
+    const int before = factorizations_;
+    core::Status report = factorize_pinning(reference);
+    pcg_.reference_factorizations += factorizations_ - before;
     if (!report.ok()) {
       reference_.clear();
       return report;

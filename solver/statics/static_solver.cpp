@@ -71,6 +71,7 @@ StaticSolver::StaticSolver(const mesh::Discretization& disc, const model::PdMode
   ground_stiffness_ =
       model.bond_stiffness.empty() ? 1.0 : sum / static_cast<double>(model.bond_stiffness.size());
   grounded_.assign(static_cast<std::size_t>(disc.num_nodes()), 0);
+  pinned_.assign(static_cast<std::size_t>(num_free_), 0);
   if (mixed_ && disc.num_nodes() > 0) {
     // −A⁻¹ is in m⁶-ish units per N, the stiffness in N/m: on B1 its diagonal is 1e-3..0.2 against
     // 3e8..1e11 for u, and min/max of the pivots fell below the 1e-14 singularity threshold
@@ -83,6 +84,10 @@ StaticSolver::StaticSolver(const mesh::Discretization& disc, const model::PdMode
     const double family = 2.0 * static_cast<double>(disc.num_bonds()) / disc.num_nodes();
     w_scale_ = std::sqrt(ground_stiffness_ * std::max(family, 1.0) / inverse_alpha);
   }
+}
+
+std::int32_t StaticSolver::pinned_dofs() const {
+  return static_cast<std::int32_t>(std::count(pinned_.begin(), pinned_.end(), 1));
 }
 
 bool StaticSolver::isolated(mesh::NodeIndex k) const {

@@ -173,6 +173,13 @@ class StaticSolver {
   [[nodiscard]] bool factor_released() const { return released_; }
   /// Number of numeric factorizations done so far.
   [[nodiscard]] int factorizations() const { return factorizations_; }
+  /// Per free DOF: held by a pin, a ground spring on that one DOF against a mechanism — a part
+  /// of the model that moves without straining any intact bond although it is still attached
+  /// (e.g. nodes left with bonds along one line only). A pin changes no stretch: the mechanism's
+  /// loads are zero, so the pinned DOF's reaction is zero. Set when a factorization fails on a
+  /// mechanism (docs/solver.md, "Mechanisms are pinned"); never removed.
+  [[nodiscard]] const std::vector<std::uint8_t>& pinned() const { return pinned_; }
+  [[nodiscard]] std::int32_t pinned_dofs() const;
 
  private:
   /// Assembles upper_ with the given bond stiffness factors (factor_ or the reference): by
@@ -212,6 +219,21 @@ class StaticSolver {
   [[nodiscard]] bool isolated(mesh::NodeIndex k) const;
   /// Refactorizing re-solve after intact_/factor_ changed (grounds nodes that became isolated).
   core::Status refactor_resolve();
+  /// Assembles upper_ with `factors`, analyzes on first use and factorizes. A factorization that
+  /// fails is retried after pin_mechanisms() at the node of its weakest pivot, as long as that
+  /// pins something; otherwise its failure says what came loose.
+  core::Status factorize_pinning(const std::vector<double>& factors);
+  /// Pins the mechanisms of the stiffness with `factors` that lie within 2δ of `node` (else, if
+  /// `wide`, within 4δ) (mechanisms.cpp); a failure saying why it cannot: a mechanism carries
+  /// load, the stiffness is indefinite there, or no mechanism was found.
+  core::Status pin_mechanisms(mesh::NodeIndex node, const std::vector<double>& factors, bool wide);
+  /// The node of an unknown: a free DOF's node, or node k for w_k of the mixed form.
+  [[nodiscard]] mesh::NodeIndex node_of_unknown(int row) const;
+  /// The pieces that no intact bond or tie connects to a support: a failure naming the largest
+  /// ("a piece of N nodes came loose (x from .. to .. mm, y ..)") if one carries load or has as
+  /// many nodes as a full family; else grounds every node of the others (unloaded debris, like
+  /// isolated nodes) and says whether it grounded any.
+  core::Status ground_loose_debris(bool& grounded_any);
   /// Ground springs (added columns) for the nodes that became isolated.
   void ground_isolated(const std::vector<mesh::NodeIndex>& nodes,
                        std::vector<linalg::SparseCholesky::Column>& added);
@@ -256,6 +278,7 @@ class StaticSolver {
   PcgStats pcg_;
   double ground_stiffness_ = 0.0;
   std::vector<std::uint8_t> grounded_;
+  std::vector<std::uint8_t> pinned_;  ///< per free DOF, see pinned()
   double update_s_ = 0.0;
   int updates_ = 0;
   double basis_solve_s_ = 0.0;
