@@ -80,7 +80,7 @@
 //                        on a coarser grid of the same detail, the fine crack mapped onto it and
 //                        its A2 calibrated to the fine model's recent da/dN (docs/design.md,
 //                        "Remaining life on a coarser grid")
-//   [detail.uncertainty] (optional; issue 32, docs/prognostics.md) particles 64 (1-4096), seed 1
+//   [detail.uncertainty] (optional; issue 32, docs/prognostics.md) particles 64 (2-4096), seed 1
 //                        (>= 0), a2 {median (default: [detail.fatigue] A2), cov 0 (0-3)} and
 //                        load_scale {median 1, cov 0}: lognormal priors (laws strain_range and
 //                        energy for a2), percentiles [5, 50, 95] (increasing, in (0, 100)),

@@ -664,7 +664,7 @@ void read_uncertainty(Context& ctx, const toml::table& t, const std::string& pat
   TableReader r(ctx, t, path);
   u.enabled = true;
   u.particles = r.integer("particles", u.particles);
-  r.check("particles", u.particles >= 1 && u.particles <= 4096, "must lie in [1, 4096]");
+  r.check("particles", u.particles >= 2 && u.particles <= 4096, "must lie in [2, 4096]");
   const std::int64_t seed = r.integer("seed", 1);
   r.check("seed", seed >= 0, "must be >= 0");
   u.seed = static_cast<std::uint64_t>(seed);

@@ -61,7 +61,7 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
     return core::failure("[detail.uncertainty]: no parameter is uncertain (every cov is 0)");
   }
   prognostics::EnsembleSettings settings;
-  settings.particles = static_cast<std::size_t>(std::max<std::int64_t>(2, u.particles));
+  settings.particles = static_cast<std::size_t>(u.particles);  // >= 2 (the config's bound)
   settings.seed = u.seed;
   // Liu-West shrinkage (h = 0.14 at δ = 0.98): a jittered particle keeps its parent's damage, so
   // its parameters should move little (docs/prognostics.md).
