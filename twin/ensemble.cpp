@@ -88,10 +88,14 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
 
 void Ensemble::set_parameters(Particle& p, std::size_t i) const {
   const config::UncertaintyConfig& u = model_->config().uncertainty;
-  const double a2 = a2_column_ >= 0
-                        ? filter_.parameter_value(i, static_cast<std::size_t>(a2_column_))
-                        : u.a2.median;
-  p.a2_factor = a2 / model_->config().fatigue.strain.A2;
+  const double a2_config = model_->config().fatigue.strain.A2;
+  if (a2_column_ >= 0) {
+    p.a2_factor = filter_.parameter_value(i, static_cast<std::size_t>(a2_column_)) / a2_config;
+  } else {
+    // Known A2: the config's, or the prior's median when given (a law without an A2, e.g.
+    // bilinear, keeps its own coefficients: factor 1).
+    p.a2_factor = a2_config > 0 && u.a2.median > 0 ? u.a2.median / a2_config : 1.0;
+  }
   p.load_scale = load_scale_column_ >= 0
                      ? filter_.parameter_value(i, static_cast<std::size_t>(load_scale_column_))
                      : u.load_scale.median;

@@ -15,10 +15,14 @@
 namespace peritwin::twin {
 namespace {
 
-/// B1 at Δx = 2 mm with [detail.uncertainty]; `extra` replaces its default prior lines.
+/// B1 at Δx = 2 mm with `uncertainty` as its [detail.uncertainty] (the example's own prior, 64
+/// particles, replaced).
 std::shared_ptr<const DetailModel> coarse_b1(const std::string& uncertainty) {
-  const std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}}) +
-                           "\n[detail.uncertainty]\n" + uncertainty + "\n";
+  std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
+  const auto begin = text.find("[detail.uncertainty]");
+  EXPECT_NE(begin, std::string::npos);
+  if (begin != std::string::npos) text.erase(begin, text.find("\n[", begin) + 1 - begin);
+  text += "\n[detail.uncertainty]\n" + uncertainty + "\n";
   auto parsed = config::parse_config(text, "b1-uncertain.toml");
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
   auto model = DetailModel::build(parsed.config->details.at(0));
