@@ -937,6 +937,8 @@ TEST_F(DashboardApi, ManyEventStreamsShareOneThreadAndEachGetsEveryEvent) {
     m.source_ids = {"gauge"};
     m.applied_seq = {seq};
     m.checkpointed_seq = {0};
+    m.history = {0};  // message set version 8: one per source
+    m.history_start = {0};
     m.total_cycles = 1000 * seq;
     m.k_i = m.k_ii = std::nan("");
     m.remaining_cycles = m.remaining_cycles_low = m.remaining_cycles_high = std::nan("");

@@ -35,6 +35,8 @@ void push_state(Store& store, std::int64_t seq) {
   s.source_ids = {"gauge"};
   s.applied_seq = {seq};
   s.checkpointed_seq = {0};
+  s.history = {0};  // message set version 8: one per source
+  s.history_start = {0};
   s.total_cycles = 1000 * seq;
   s.remaining_life_seq = -1;
   s.end_of_life_cycle = -1;
