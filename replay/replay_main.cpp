@@ -387,6 +387,11 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
               << " has no [detail.uncertainty] (the priors the observations update)\n";
     return core::kExitUsage;
   }
+  if (!o.results_dir.empty()) {
+    std::cerr << "peritwin-replay: --observations does not write --results yet (the ensemble's "
+                 "percentiles have no place in the results file so far): run them apart\n";
+    return core::kExitUsage;
+  }
   auto observations = loads::read_observations_csv(o.observations);
   if (!observations) {
     std::cerr << "peritwin-replay: " << observations.error().message() << "\n";
