@@ -146,19 +146,15 @@ LearningResult run_learning_in_process(
     return result;
   }
   twin::InProcessTwin& t = **created;
-  auto model = twin::DetailModel::build(detail);
-  if (!model) {
-    result.error = model.error().message();
-    return result;
-  }
-  auto ensemble = twin::Ensemble::create(*model);
+  const std::shared_ptr<const twin::DetailModel> model = t.twin().shared_model();
+  auto ensemble = twin::Ensemble::create(model);
   if (!ensemble) {
     result.error = "the ensemble: " + ensemble.error().message();
     return result;
   }
   twin::Ensemble& e = **ensemble;
   twin::RollingSpectrum seen;  // for an "empirical" reference spectrum
-  auto spectrum = [&] { return twin::reference_spectrum(**model, seen); };
+  auto spectrum = [&] { return twin::reference_spectrum(*model, seen); };
   auto line = [&](const std::string& what, const twin::EnsembleEstimate& est,
                   const messages::Observation* o, const twin::ObservationUpdate* u) {
     if (on_line) on_line(json ? ensemble_json(what, est, o, u) : describe_ensemble(what, est));

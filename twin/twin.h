@@ -115,6 +115,8 @@ class Twin {
   [[nodiscard]] double first_break_load() const { return first_break_load_; }
 
   [[nodiscard]] const DetailModel& model() const { return *model_; }
+  /// The same model, shared (e.g. with the learning ensemble, twin/ensemble.h).
+  [[nodiscard]] std::shared_ptr<const DetailModel> shared_model() const { return model_; }
   [[nodiscard]] const std::string& detail_id() const { return model_->config().id; }
   [[nodiscard]] const Options& options() const { return options_; }
   /// Batches applied since the virgin state, all sources together (0 = virgin).
