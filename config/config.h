@@ -85,7 +85,11 @@
 //                        load_scale {median 1, cov 0}: lognormal priors (laws strain_range and
 //                        energy for a2), percentiles [5, 50, 95] (increasing, in (0, 100)),
 //                        horizon_cycles 0 (>= 0: P(end of life within it) published; 0 = not),
-//                        resample_ess_fraction 0.5 (in (0, 1])
+//                        resample_ess_fraction 0.5 (in (0, 1]), dx (m, > the grid's dx; default
+//                        [detail.life] dx, else the grid's: the particles' grid, A2 rescaled by
+//                        000 Eq. 29), every_batches 0 (>= 0: the particles' ends of life simulated
+//                        again every so many batches; 0 = at the start, at each observation and
+//                        at the end of life only)
 //   [detail.stress_intensity]
 //                        method "extrapolation" (001 Eq. 60-63 from the displacement jump at δ
 //                        and 2δ behind the main tip) | "compact_tension" (000 Eq. A2, ASTM E647,
@@ -260,6 +264,16 @@ struct UncertaintyConfig {
   double horizon_cycles = 0.0;
   /// Resample when the effective sample size falls below this fraction of the particles.
   double resample_ess_fraction = 0.5;
+  /// Grid spacing of the particles' models (m): 0 = [detail.life] dx when set, else the detail's
+  /// own. A coarser grid is the same detail with A2 rescaled by 000 Eq. (29) (twin/coarse_life.h
+  /// coarse_model); the filter learns A2 as a factor on that.
+  double dx = 0.0;
+  /// The particles' ends of life are simulated again every this many batches (besides the start,
+  /// every observation and the end of life); 0 = only then. In between, the remaining-cycle
+  /// percentiles follow the cycle count from the last simulated ends of life.
+  std::int64_t every_batches = 0;
+  /// The particles' grid spacing in force (m): dx, or [detail.life] dx, or 0 (the detail's own).
+  [[nodiscard]] double particle_dx(double life_dx) const { return dx > 0 ? dx : life_dx; }
 };
 
 enum class StressIntensityMethod { extrapolation, compact_tension };

@@ -690,6 +690,15 @@ void read_uncertainty(Context& ctx, const toml::table& t, const std::string& pat
   u.resample_ess_fraction = r.number("resample_ess_fraction", u.resample_ess_fraction);
   r.check("resample_ess_fraction", u.resample_ess_fraction > 0 && u.resample_ess_fraction <= 1,
           "must lie in (0, 1]");
+  if (r.has("dx")) {
+    u.dx = r.number("dx", 0.0);
+    r.check("dx", u.dx > d.dx, "must be > the grid's dx (the particles' coarser grid)");
+    r.check("dx", fatigue::law_entry(d.fatigue.law).calibrated_a2,
+            "a coarser grid for the particles needs fatigue law \"strain_range\" or \"energy\" "
+            "(A2 rescaled by 000 Eq. 29)");
+  }
+  u.every_batches = r.integer("every_batches", u.every_batches);
+  r.check("every_batches", u.every_batches >= 0, "must be >= 0 (0 = at observations only)");
   r.finish();
 }
 

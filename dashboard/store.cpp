@@ -313,7 +313,8 @@ void Store::on_message(const std::string& channel, const void* data, std::size_t
     case messages::Kind::kLoad:
     case messages::Kind::kSamples:
     case messages::Kind::kMeshRequest:
-      return;  // producers' and requesters' channels: not subscribed
+    case messages::Kind::kObservation:  // what the twin took in is in its STATE
+      return;                           // producers' and requesters' channels: not subscribed
   }
 }
 

@@ -393,6 +393,10 @@ void sign(peritwin_msgs::load_batch_t& m, const AuthKey& key) { sign_message(m, 
 void sign(peritwin_msgs::damage_state_t& m, const AuthKey& key) { sign_message(m, key); }
 void sign(peritwin_msgs::reject_t& m, const AuthKey& key) { sign_message(m, key); }
 void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key) { sign_message(m, key); }
+void sign(peritwin_msgs::observation_t& m, const AuthKey& key) { sign_message(m, key); }
+core::Status verify(const peritwin_msgs::observation_t& m, const AuthKey& key) {
+  return verify_message(m, key);
+}
 
 core::Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key) {
   return verify_message(m, key);

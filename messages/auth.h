@@ -15,6 +15,7 @@
 #include <peritwin_msgs/damage_state_t.hpp>
 #include <peritwin_msgs/load_batch_t.hpp>
 #include <peritwin_msgs/load_samples_t.hpp>
+#include <peritwin_msgs/observation_t.hpp>
 #include <peritwin_msgs/reject_t.hpp>
 #include <span>
 #include <string>
@@ -91,6 +92,7 @@ void sign(peritwin_msgs::load_batch_t& m, const AuthKey& key);
 void sign(peritwin_msgs::damage_state_t& m, const AuthKey& key);
 void sign(peritwin_msgs::reject_t& m, const AuthKey& key);
 void sign(peritwin_msgs::load_samples_t& m, const AuthKey& key);
+void sign(peritwin_msgs::observation_t& m, const AuthKey& key);
 
 /// Ok if `m` carries the tag `key` gives it; otherwise the error has field "auth_tag" and reason
 /// exactly "unsigned" (tag_length 0) or "wrong tag" (any other tag, of any length).
@@ -98,6 +100,7 @@ core::Status verify(const peritwin_msgs::load_batch_t& m, const AuthKey& key);
 core::Status verify(const peritwin_msgs::damage_state_t& m, const AuthKey& key);
 core::Status verify(const peritwin_msgs::reject_t& m, const AuthKey& key);
 core::Status verify(const peritwin_msgs::load_samples_t& m, const AuthKey& key);
+core::Status verify(const peritwin_msgs::observation_t& m, const AuthKey& key);
 
 /// verify() on the encoded bytes of a message of the type with fingerprint `fingerprint`, before
 /// decoding anything: field "message", reason "wrong fingerprint: not a <type_name> of this

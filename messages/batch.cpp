@@ -17,14 +17,17 @@ bool printable_ascii(std::string_view s) {
 
 }  // namespace
 
+bool is_valid_source_id(std::string_view id) {
+  return !id.empty() && id.size() <= kMaxSourceIdLength && printable_ascii(id);
+}
+
 Outcome check_batch(const Batch& batch, std::string_view detail_id) {
   if (batch.detail_id != detail_id) {
     return {Verdict::wrong_detail, "detail_id",
             "detail_id \"" + batch.detail_id + "\" does not match the channel's detail \"" +
                 std::string(detail_id) + "\""};
   }
-  if (batch.source_id.empty() || batch.source_id.size() > kMaxSourceIdLength ||
-      !printable_ascii(batch.source_id)) {
+  if (!is_valid_source_id(batch.source_id)) {
     return invalid("source_id", "source_id must be 1 to " + std::to_string(kMaxSourceIdLength) +
                                     " printable ASCII characters without blanks");
   }

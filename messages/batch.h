@@ -55,6 +55,9 @@ inline constexpr std::size_t kMaxSourceIdLength = 64;
 /// Length of an HMAC-SHA256 tag (load_batch_t.auth_tag and the daemon's messages).
 inline constexpr std::size_t kAuthTagBytes = 32;
 
+/// 1 to kMaxSourceIdLength printable ASCII characters without blanks.
+bool is_valid_source_id(std::string_view id);
+
 /// Everything about a batch that needs no bookkeeping: WRONG_DETAIL or INVALID, else applied.
 Outcome check_batch(const Batch& batch, std::string_view detail_id);
 

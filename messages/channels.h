@@ -20,11 +20,12 @@ enum class Kind {
   kSamples,      // raw load samples for peritwin-stream (peritwin_msgs::load_samples_t), v5
   kMesh,         // the discretization, chunked (peritwin_msgs::detail_mesh_t), v6
   kMeshRequest,  // asks the daemon for the mesh again (peritwin_msgs::mesh_request_t), v6
+  kObservation,  // inspections to the learning twin (peritwin_msgs::observation_t), v9
 };
 
-inline constexpr Kind kAllKinds[] = {Kind::kLoad,   Kind::kState,      Kind::kField,
-                                     Kind::kReject, Kind::kStatus,     Kind::kSamples,
-                                     Kind::kMesh,   Kind::kMeshRequest};
+inline constexpr Kind kAllKinds[] = {Kind::kLoad,   Kind::kState,       Kind::kField,
+                                     Kind::kReject, Kind::kStatus,      Kind::kSamples,
+                                     Kind::kMesh,   Kind::kMeshRequest, Kind::kObservation};
 
 inline constexpr std::string_view kChannelPrefix = "PERITWIN_";
 
@@ -53,6 +54,8 @@ constexpr std::string_view suffix(Kind kind) {
       return "MESH";
     case Kind::kMeshRequest:
       return "MESH_REQUEST";
+    case Kind::kObservation:
+      return "OBSERVATION";
   }
   return {};
 }

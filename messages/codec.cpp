@@ -167,9 +167,31 @@ bool state_layout(const unsigned char* p, std::size_t size) {
     if (!crack_layout(w)) return false;
   }
   // k_i, k_ii, the remaining life and its seq, its source, failure, end_of_life_cycle,
-  // state_hash, engine_hash, echo_source, echo_nonce, the tag.
-  if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1 + 8) || !w.string() || !w.string() ||
-      !w.string() || !w.skip(8) || !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+  // state_hash, engine_hash.
+  if (!w.skip(2 * 8 + 3 * 8 + 8) || !w.string() || !w.skip(1 + 8) || !w.string() || !w.string()) {
+    return false;
+  }
+  // The ensemble (version 9): num_particles, ensemble_estimate_cycle, effective_sample_size, the
+  // percentiles (3 doubles each), horizon and its probability, the parameters, the observations,
+  // the observation sources.
+  std::int32_t n = 0;
+  if (!w.skip(4 + 8 + 8) || !w.count(3 * 8, n) || !w.skip(3 * 8 * static_cast<std::size_t>(n)) ||
+      !w.skip(2 * 8) || !w.count(4 + 1 + 2 * 8, n)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < n; ++i) {
+    if (!w.string()) return false;
+  }
+  if (!w.skip(2 * 8 * static_cast<std::size_t>(n)) || !w.skip(4) || !w.count(8 + 1 + 4 * 8, n) ||
+      !w.skip((8 + 1 + 4 * 8) * static_cast<std::size_t>(n)) || !w.count(4 + 1 + 8, n)) {
+    return false;
+  }
+  for (std::int32_t i = 0; i < n; ++i) {
+    if (!w.string()) return false;
+  }
+  // observation_applied_seq, echo_source, echo_nonce, the tag.
+  if (!w.skip(8 * static_cast<std::size_t>(n)) || !w.string() || !w.skip(8) || !w.count(1, tag) ||
+      !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
   return w.at_end();
@@ -200,6 +222,31 @@ std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t
     if (!w.count(8, n) || !w.skip(8 * static_cast<std::size_t>(n))) {
       return std::string("malformed or truncated ") + array + " (its count exceeds the payload)";
     }
+  }
+  signed_size = w.pos();
+  std::int32_t tag = 0;
+  if (!w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+    return "malformed or truncated tag_length / auth_tag";
+  }
+  if (tag != 0 && tag != static_cast<std::int32_t>(kAuthTagBytes)) {
+    return "malformed tag_length " + std::to_string(tag) + " (0 or " +
+           std::to_string(kAuthTagBytes) + ")";
+  }
+  if (!w.at_end()) return "oversized payload: bytes after the message's end";
+  return {};
+}
+
+/// observation_t: the layout, and the size the tag covers; empty when it decodes safely.
+std::string observation_layout(const unsigned char* p, std::size_t size, std::size_t& signed_size) {
+  LayoutWalker w(p, size);
+  if (!w.fingerprint(peritwin_msgs::observation_t::getHash())) {
+    return size < 8 ? "truncated payload: " + std::to_string(size) + " bytes"
+                    : "wrong fingerprint: not a peritwin_msgs.observation_t of this version";
+  }
+  // utime, detail_id, source_id, seq, nonce, cycle, kind, origin, 4 doubles.
+  if (!w.skip(8) || !w.string() || !w.string() || !w.skip(3 * 8 + 1) || !w.string() ||
+      !w.skip(4 * 8)) {
+    return "malformed or truncated: a string length or the payload's end";
   }
   signed_size = w.pos();
   std::int32_t tag = 0;
@@ -333,6 +380,76 @@ std::int64_t now_utime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+DecodedObservation decode_observation(const void* data, std::size_t size) {
+  DecodedObservation out;
+  if (size > kMaxObservationPayload) {
+    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
+                             std::to_string(kMaxObservationPayload));
+    return out;
+  }
+  std::size_t signed_size = 0;
+  if (const std::string e =
+          observation_layout(static_cast<const unsigned char*>(data), size, signed_size);
+      !e.empty()) {
+    out.error = decode_error(e);
+    return out;
+  }
+  peritwin_msgs::observation_t m{};
+  if (m.decode(data, 0, static_cast<int>(size)) != static_cast<int>(size)) {
+    out.error = decode_error("not decodable as peritwin_msgs.observation_t");
+    return out;
+  }
+  if (m.kind != peritwin_msgs::observation_t::KIND_CRACK_LENGTH &&
+      m.kind != peritwin_msgs::observation_t::KIND_NO_CRACK) {
+    out.error = {Verdict::invalid, "observation.kind",
+                 "kind = " + std::to_string(m.kind) + " is neither KIND_CRACK_LENGTH (1) nor " +
+                     "KIND_NO_CRACK (2)"};
+    out.source_id = m.source_id;
+    out.seq = m.seq;
+    out.nonce = static_cast<std::uint64_t>(m.nonce);
+    return out;
+  }
+  Observation o;
+  o.detail_id = m.detail_id;
+  o.source_id = m.source_id;
+  o.seq = m.seq;
+  o.nonce = static_cast<std::uint64_t>(m.nonce);
+  o.cycle = m.cycle;
+  o.kind = m.kind == peritwin_msgs::observation_t::KIND_NO_CRACK ? ObservationKind::no_crack
+                                                                 : ObservationKind::crack_length;
+  o.origin = m.origin;
+  o.length_m = m.length_m;
+  o.sigma_m = m.sigma_m;
+  o.pod_a50_m = m.pod_a50_m;
+  o.pod_slope = m.pod_slope;
+  out.source_id = o.source_id;
+  out.seq = o.seq;
+  out.nonce = o.nonce;
+  out.observation = std::move(o);
+  out.signed_size = signed_size;
+  out.auth_tag = std::move(m.auth_tag);
+  return out;
+}
+
+peritwin_msgs::observation_t observation_message(const Observation& o, std::int64_t utime) {
+  peritwin_msgs::observation_t m{};
+  m.utime = utime;
+  m.detail_id = o.detail_id;
+  m.source_id = o.source_id;
+  m.seq = o.seq;
+  m.nonce = static_cast<std::int64_t>(o.nonce);
+  m.cycle = o.cycle;
+  m.kind = o.kind == ObservationKind::no_crack ? peritwin_msgs::observation_t::KIND_NO_CRACK
+                                               : peritwin_msgs::observation_t::KIND_CRACK_LENGTH;
+  m.origin = o.origin;
+  m.length_m = o.length_m;
+  m.sigma_m = o.sigma_m;
+  m.pod_a50_m = o.pod_a50_m;
+  m.pod_slope = o.pod_slope;
+  m.tag_length = 0;
+  return m;
 }
 
 Decoded decode_batch(const void* data, std::size_t size) {

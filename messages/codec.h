@@ -13,6 +13,7 @@
 #include <peritwin_msgs/damage_state_t.hpp>
 #include <peritwin_msgs/load_batch_t.hpp>
 #include <peritwin_msgs/load_samples_t.hpp>
+#include <peritwin_msgs/observation_t.hpp>
 #include <peritwin_msgs/reject_t.hpp>
 #include <peritwin_msgs/status_t.hpp>
 #include <string>
@@ -21,6 +22,7 @@
 
 #include "messages/batch.h"
 #include "messages/channels.h"
+#include "messages/observation.h"
 
 namespace peritwin::messages {
 
@@ -109,6 +111,27 @@ std::optional<peritwin_msgs::status_t> decode_status(const void* data, std::size
 std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std::size_t size);
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
+
+/// Largest observation_t payload accepted (two maximal ids, an origin of 64 characters, a tag).
+inline constexpr std::size_t kMaxObservationPayload = 1024;
+
+/// A decoded observation message (layout checked first; not yet checked by
+/// check_observation_message), or why not: verdict decode, or invalid for a kind that is none of
+/// the KIND_* constants (then source_id, seq and nonce are known). The signed bytes and the tag as
+/// Decoded.
+struct DecodedObservation {
+  std::optional<Observation> observation;
+  Outcome error;
+  std::string source_id;  ///< "" when it did not decode
+  std::int64_t seq = -1;
+  std::uint64_t nonce = 0;
+  std::size_t signed_size = 0;
+  std::vector<std::uint8_t> auth_tag;
+};
+DecodedObservation decode_observation(const void* data, std::size_t size);
+/// The message of an observation (unsigned: messages::sign it with the source's key).
+peritwin_msgs::observation_t observation_message(const Observation& observation,
+                                                 std::int64_t utime);
 
 /// REJECT for a batch that was not applied (source "" / seq -1 / nonce 0 when it did not
 /// decode); `nonce` is the batch's (load_batch_t.nonce), echoed for its producer.

@@ -1,7 +1,7 @@
 // An observation of a detail (issue 32): an inspection that measured a crack, or one that found
 // none, at a stated cycle count. What the twin's ensemble learns from (twin/ensemble.h); read from
-// a CSV file by loads/observations.h. (The bus message PERITWIN_<DETAIL>_OBSERVATION is still to
-// come: docs/prognostics.md, "What is left".)
+// a CSV file by loads::read_observations_csv, carried on PERITWIN_<DETAIL>_OBSERVATION as
+// observation_t (signed like a batch; messages/codec.h decode_observation).
 #pragma once
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/expected.h"
+#include "messages/batch.h"
 
 namespace peritwin::messages {
 
@@ -28,12 +29,21 @@ struct Observation {
   double sigma_m = std::numeric_limits<double>::quiet_NaN();    ///< crack_length: σ (m, > 0)
   double pod_a50_m = std::numeric_limits<double>::quiet_NaN();  ///< no_crack: a50 (m, > 0)
   double pod_slope = std::numeric_limits<double>::quiet_NaN();  ///< no_crack: slope (> 0)
+  // Who sent it (observation_t): exactly once per (source_id, seq), seq 1, 2, … per source in a
+  // sequence of its own (not the batches'); the producer run's nonce (0 = none).
+  std::string detail_id;
+  std::string source_id;
+  std::int64_t seq = 0;
+  std::uint64_t nonce = 0;
 };
 
 /// Ok, or the field that is wrong and why (the same rules as the CSV reader and the ensemble).
 inline core::Status check_observation(const Observation& o) {
   if (o.cycle < 0) return core::Error{"cycle", "must be >= 0"};
-  if (o.origin.empty()) return core::Error{"origin", "must be \"longest\" or a crack origin"};
+  if (o.origin.empty() || o.origin.size() > 64 ||
+      o.origin.find_first_of("\n\r\t") != std::string::npos) {
+    return core::Error{"origin", "must be \"longest\" or a crack origin (1 to 64 characters)"};
+  }
   if (o.kind == ObservationKind::crack_length) {
     if (!(std::isfinite(o.length_m) && o.length_m >= 0)) {
       return core::Error{"length_m", "must be a finite length >= 0"};
@@ -48,6 +58,29 @@ inline core::Status check_observation(const Observation& o) {
     if (!(std::isfinite(o.pod_slope) && o.pod_slope > 0)) {
       return core::Error{"pod_slope", "must be finite and > 0"};
     }
+  }
+  return {};
+}
+
+/// Everything about an observation message that needs no bookkeeping, as check_batch: WRONG_DETAIL
+/// or INVALID with the field path "observation.<field>", else applied.
+inline Outcome check_observation_message(const Observation& o, std::string_view detail_id) {
+  if (o.detail_id != detail_id) {
+    return {Verdict::wrong_detail, "observation.detail_id",
+            "detail_id \"" + o.detail_id + "\" does not match the channel's detail \"" +
+                std::string(detail_id) + "\""};
+  }
+  if (!is_valid_source_id(o.source_id)) {
+    return {Verdict::invalid, "observation.source_id",
+            "source_id must be 1 to " + std::to_string(kMaxSourceIdLength) +
+                " printable ASCII characters without blanks"};
+  }
+  if (o.seq < 1) {
+    return {Verdict::invalid, "observation.seq",
+            "seq = " + std::to_string(o.seq) + " must be >= 1"};
+  }
+  if (const core::Status st = check_observation(o); !st) {
+    return {Verdict::invalid, "observation." + st.error().field, st.error().reason};
   }
   return {};
 }

@@ -146,32 +146,28 @@ LearningResult run_learning_in_process(
     return result;
   }
   twin::InProcessTwin& t = **created;
-  const std::shared_ptr<const twin::DetailModel> model = t.twin().shared_model();
-  auto ensemble = twin::Ensemble::create(model);
-  if (!ensemble) {
-    result.error = "the ensemble: " + ensemble.error().message();
+  if (t.twin().ensemble() == nullptr) {
+    result.error = "detail " + detail.id + " has no [detail.uncertainty]: no ensemble to learn";
     return result;
   }
-  twin::Ensemble& e = **ensemble;
-  twin::RollingSpectrum seen;  // for an "empirical" reference spectrum
-  auto spectrum = [&] { return twin::reference_spectrum(*model, seen); };
-  auto line = [&](const std::string& what, const twin::EnsembleEstimate& est,
-                  const messages::Observation* o, const twin::ObservationUpdate* u) {
+  const twin::Ensemble& e = *t.twin().ensemble();
+  auto line = [&](const std::string& what, const messages::Observation* o,
+                  const twin::ObservationUpdate* u) {
+    const twin::EnsembleEstimate est = e.summary();
     if (on_line) on_line(json ? ensemble_json(what, est, o, u) : describe_ensemble(what, est));
   };
   if (on_state) on_state(t.state());
-  line("prior", e.estimate(spectrum()), nullptr, nullptr);
+  line("prior", nullptr, nullptr);
   std::size_t next = 0;
   auto take_observations = [&]() -> bool {
     while (next < observations.size() && observations[next].cycle <= e.total_cycles()) {
       const messages::Observation& o = observations[next++];
-      auto update = e.observe(o);
-      if (!update) {
-        result.error =
-            "observation at cycle " + std::to_string(o.cycle) + ": " + update.error().message();
+      if (const core::Status taken = t.observe(o); !taken) {
+        result.error = taken.error().message();
         return false;
       }
-      line("observation", e.estimate(spectrum()), &o, &*update);
+      if (on_state) on_state(t.state());
+      line("observation", &o, &e.observations().back().update);
     }
     return true;
   };
@@ -182,21 +178,19 @@ LearningResult run_learning_in_process(
       return result;
     }
     if (t.ended()) break;
-    (void)e.apply(b.blocks);
-    for (const auto& block : b.blocks) seen.add(block);
     if (on_state) on_state(t.state());
   }
-  if (!t.ended() && !take_observations()) return result;
+  if (!take_observations()) return result;
   if (next < observations.size()) {
     result.error = "observation at cycle " + std::to_string(observations[next].cycle) +
                    " is beyond the history (" + std::to_string(e.total_cycles()) +
                    " cycles applied" + (t.ended() ? ", the end of life reached" : "") + ")";
     return result;
   }
-  const twin::EnsembleEstimate final_estimate = e.estimate(spectrum());
-  line("final", final_estimate, nullptr, nullptr);
+  if (e.estimate_cycle() < e.total_cycles()) t.estimate_ensemble_now();
+  line("final", nullptr, nullptr);
   result.final_state = t.state();
-  result.final_estimate = final_estimate;
+  result.final_estimate = e.summary();
   return result;
 }
 

@@ -398,7 +398,13 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
     return core::kExitUsage;
   }
   std::vector<std::int64_t> cycles;
-  for (const auto& obs : *observations) cycles.push_back(obs.cycle);
+  for (std::size_t i = 0; i < observations->size(); ++i) {
+    messages::Observation& obs = (*observations)[i];
+    obs.detail_id = detail.id;
+    obs.source_id = o.source_id;
+    obs.seq = static_cast<std::int64_t>(i) + 1;
+    cycles.push_back(obs.cycle);
+  }
   const auto split = replay::split_batches_at(batches, cycles);
   std::cerr << "peritwin-replay: " << o.observations << ": " << observations->size()
             << " observations; " << detail.uncertainty.particles << " particles\n";

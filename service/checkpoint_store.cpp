@@ -19,6 +19,12 @@ constexpr std::size_t kCheckpointsKept = 3;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+std::int64_t observations_taken_in(const twin::Twin& twin) {
+  return twin.ensemble() != nullptr
+             ? static_cast<std::int64_t>(twin.ensemble()->observations().size())
+             : 0;
+}
+
 }  // namespace
 
 CheckpointStore::CheckpointStore(std::string id, std::filesystem::path dir, bool enabled)
@@ -50,6 +56,7 @@ core::Status CheckpointStore::resume(twin::Twin& twin, bool fresh_start) {
       return core::failure(file.path.string() + ": " + restored.error().message());
     }
     seq_ = twin.state_seq();
+    observations_ = observations_taken_in(twin);
     checkpointed_ = twin.applied();
     spdlog::info("[{}] resumed from {}: state_seq {}, {} cycles, state_hash {}", id_,
                  file.path.string(), twin.state_seq(), twin.engine().total_cycles(),
@@ -93,7 +100,10 @@ core::Status CheckpointStore::check_writable() const {
 
 core::Expected<bool> CheckpointStore::write(const twin::Twin& twin, const char* why) {
   last_ = Clock::now();
-  if (!enabled_ || seq_ == twin.state_seq()) return false;
+  // An observation changes the state without a batch: the same state_seq, written again (the file
+  // of that state_seq replaced atomically) when the count of observations taken in differs.
+  const std::int64_t observations = observations_taken_in(twin);
+  if (!enabled_ || (seq_ == twin.state_seq() && observations_ == observations)) return false;
   const auto path = outputs::checkpoint_path(dir_, kCheckpointPrefix,
                                              static_cast<std::uint64_t>(twin.state_seq()));
   try {
@@ -102,6 +112,7 @@ core::Expected<bool> CheckpointStore::write(const twin::Twin& twin, const char* 
     outputs::write_checkpoint(path, twin.to_checkpoint());
     outputs::prune_checkpoints(dir_, kCheckpointPrefix, kCheckpointsKept);
     seq_ = twin.state_seq();
+    observations_ = observations;
     checkpointed_ = twin.applied();
     spdlog::info("[{}] checkpoint ({}): {} in {:.3f} s", id_, why, path.string(),
                  seconds(Clock::now() - t0));

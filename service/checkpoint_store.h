@@ -46,6 +46,7 @@ class CheckpointStore {
   std::filesystem::path dir_;
   bool enabled_;
   std::int64_t seq_ = -1;
+  std::int64_t observations_ = 0;  ///< observations taken in at that checkpoint
   twin::SeqBySource checkpointed_;
   std::chrono::steady_clock::time_point last_;
 };

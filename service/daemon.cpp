@@ -121,6 +121,7 @@ struct Daemon::Detail : DetailQueue {
   std::unique_ptr<outputs::DetailOutputs> outputs;
   std::unique_ptr<LifeWorker> life;
   lcm::Subscription* subscription = nullptr;
+  lcm::Subscription* observation_subscription = nullptr;
   lcm::Subscription* mesh_subscription = nullptr;
   std::string id, state_channel, field_channel, reject_channel, status_channel, mesh_channel;
   // The mesh (immutable): its chunks, published at start and on request by the LCM thread only.
@@ -288,7 +289,7 @@ core::Expected<std::unique_ptr<Daemon::Detail>> Daemon::build_detail(
   if (!built) return core::failure(built.error().message());
   const std::shared_ptr<const twin::DetailModel> model = *built;
   const twin::Twin::Options twin_options{
-      options_.deterministic ? twin::LifeMode::synchronous : twin::LifeMode::external, true};
+      options_.deterministic ? twin::LifeMode::synchronous : twin::LifeMode::external, true, true};
   auto twin = twin::Twin::create(model, twin_options);
   if (!twin) return core::failure(twin.error().message());
   d->twin = std::move(*twin);
@@ -367,6 +368,17 @@ core::Status Daemon::subscribe_detail(Detail& d) {
       detail);
   if (d.subscription == nullptr) return core::failure("cannot subscribe to " + loads);
   d.subscription->setQueueCapacity(options_.queue_capacity);
+  const std::string observations = messages::channel(d.id, messages::Kind::kObservation);
+  d.observation_subscription = lcm_.subscribeFunction(
+      observations,
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Detail* target) {
+        target->daemon->on_load(*target, rbuf, true);
+      },
+      detail);
+  if (d.observation_subscription == nullptr) {
+    return core::failure("cannot subscribe to " + observations);
+  }
+  d.observation_subscription->setQueueCapacity(options_.queue_capacity);
   const std::string requests = messages::channel(d.id, messages::Kind::kMeshRequest);
   d.mesh_subscription = lcm_.subscribeFunction(
       requests,
@@ -378,10 +390,10 @@ core::Status Daemon::subscribe_detail(Detail& d) {
   return {};
 }
 
-void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
+void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf, bool observation) {
   if (failed()) return;
   const auto* data = static_cast<const std::uint8_t*>(rbuf->data);
-  if (scheduler_.receive(d, {{data, data + rbuf->data_size}, rbuf->recv_utime},
+  if (scheduler_.receive(d, {{data, data + rbuf->data_size}, rbuf->recv_utime, observation},
                          static_cast<std::size_t>(std::max(1, options_.queue_capacity)))) {
     return;
   }
@@ -390,8 +402,9 @@ void Daemon::on_load(Detail& d, const lcm::ReceiveBuffer* rbuf) {
     d.reject_times.push_back(Clock::now());
   }
   ++d.errors;
-  spdlog::warn("[{}] inbox full ({} batches): a batch of {} bytes is dropped", d.id,
-               options_.queue_capacity, rbuf->data_size);
+  spdlog::warn("[{}] inbox full ({} messages): {} of {} bytes is dropped", d.id,
+               options_.queue_capacity, observation ? "an observation" : "a batch",
+               rbuf->data_size);
 }
 
 void Daemon::on_mesh_request(Detail& d, const lcm::ReceiveBuffer* rbuf) {
@@ -488,6 +501,10 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   const messages::Outcome& outcome = ingested.outcome;
   d.duplicates = twin.counters().duplicates;
   d.gaps = twin.counters().gaps;
+  if (r.observation) {
+    taken_in(d, ingested, r.recv_utime);
+    return;
+  }
   if (!outcome.applied()) {
     reject(d, ingested);
     // Duplicates and gaps: tell the producer where to resume.
@@ -526,6 +543,36 @@ void Daemon::apply_received(Detail& d, const Received& r) {
   }
   if (d.outputs) d.outputs->record(twin);
   submit_life(d);
+}
+
+void Daemon::taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_utime) {
+  const twin::Twin& twin = *d.twin;
+  if (!ingested.outcome.applied()) {
+    reject(d, ingested);
+    // A duplicate or a gap: the STATE says the source's last observation seq.
+    if (ingested.outcome.verdict == messages::Verdict::duplicate ||
+        ingested.outcome.verdict == messages::Verdict::gap) {
+      publish_state(d);
+    }
+    return;
+  }
+  const auto& records = twin.ensemble()->observations();
+  const twin::ObservationRecord& rec = records.back();
+  const auto estimate = twin.ensemble_estimate();
+  spdlog::info(
+      "[{}] observation {}#{} at cycle {} taken in ({}): predicted median {:.3g} mm, "
+      "log evidence {:.3g}{}; end of life p50 {:.0f} cycles",
+      d.id, ingested.source, ingested.seq, rec.observation.cycle,
+      rec.observation.kind == messages::ObservationKind::crack_length ? "crack length"
+                                                                      : "no crack found",
+      rec.update.predicted_median_m * 1e3, rec.update.log_evidence,
+      rec.update.resampled ? ", resampled" : "",
+      estimate && estimate->end_of_life.size() > 1 ? estimate->end_of_life[1] : 0.0);
+  // Observations are few and cannot be recomputed from the loads: durable before the STATE says
+  // they were taken in.
+  checkpoint(d, "observation");
+  publish_state(d, recv_utime);
+  if (d.outputs) d.outputs->record(twin);
 }
 
 void Daemon::publish_state(Detail& d, std::int64_t recv_utime) {

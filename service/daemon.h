@@ -133,7 +133,7 @@ class Daemon {
   core::Expected<std::unique_ptr<Detail>> build_detail(const config::DetailConfig& config);
   /// LCM thread: the detail's channels and subscriptions.
   core::Status subscribe_detail(Detail& d);
-  void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf);
+  void on_load(Detail& d, const lcm::ReceiveBuffer* rbuf, bool observation = false);
   /// LCM thread: a mesh_request_t for this detail marks its mesh to be published again.
   void on_mesh_request(Detail& d, const lcm::ReceiveBuffer* rbuf);
   /// LCM thread: publishes the meshes asked for, once kMeshRepublishS has passed since the last.
@@ -142,6 +142,8 @@ class Daemon {
   /// One turn of a detail on a worker (Scheduler::Turn): the batch if any, then its chores.
   void run_turn(Detail& d, const Received* batch);
   void apply_received(Detail& d, const Received& r);
+  /// After an observation's ingest: REJECT, or log, checkpoint, STATE and results.
+  void taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_utime);
   /// REJECT of a batch not applied (its source, seq and nonce echoed), counted and logged.
   void reject(Detail& d, const Ingested& ingested);
   void worker_chores(Detail& d);

@@ -42,13 +42,17 @@ class Ingest {
   core::Status load_keys(const std::optional<config::AuthConfig>& auth);
   /// The key STATE and REJECT are signed with; nullptr without [auth].
   [[nodiscard]] const messages::AuthKey* daemon_key() const { return daemon_key_; }
-  /// Decodes, validates and applies one batch to `twin`.
+  /// Decodes, validates and applies one batch to `twin` (an observation when r.observation).
   [[nodiscard]] Ingested run(twin::Twin& twin, const Received& r) const;
 
  private:
-  /// With [auth]: the batch's source is allowed and its tag is the source key's; else AUTH.
-  [[nodiscard]] messages::Outcome authenticate(const Received& r,
-                                               const messages::Decoded& decoded) const;
+  /// The same for an observation_t: decode, authenticate, Twin::observe.
+  [[nodiscard]] Ingested run_observation(twin::Twin& twin, const Received& r) const;
+  /// With [auth]: the source is allowed and the message's tag over its first `signed_size` bytes
+  /// is the source key's; else AUTH.
+  [[nodiscard]] messages::Outcome authenticate(const Received& r, const std::string& source,
+                                               std::size_t signed_size,
+                                               const std::vector<std::uint8_t>& tag) const;
 
   std::optional<messages::KeyRing> keys_;          ///< [auth] key_file; none = unauthenticated
   const messages::AuthKey* daemon_key_ = nullptr;  ///< signs STATE and REJECT

@@ -18,10 +18,13 @@
 
 namespace peritwin::service {
 
-/// A batch as LCM delivered it.
+/// A batch (or an observation, message set version 9) as LCM delivered it.
 struct Received {
   std::vector<std::uint8_t> bytes;
   std::int64_t recv_utime = 0;  ///< LCM's receive time, us since the Unix epoch
+  /// From the detail's OBSERVATION channel (observation_t), not its LOAD channel: observations
+  /// and batches share the inbox, so the twin takes them in the order they arrived.
+  bool observation = false;
 };
 
 /// A detail's place in the scheduler, shared between the LCM thread and the workers under `mutex`.

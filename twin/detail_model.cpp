@@ -323,14 +323,31 @@ double criterion_crack_length(const DetailModel& model, const std::vector<double
   return longest;
 }
 
-double observed_crack_length(const DetailModel& model, const fatigue::FatigueEngine& engine,
-                             const std::string& origin) {
+double observed_crack_length(const DetailModel& model, const std::vector<double>& node_damage,
+                             const std::vector<std::uint8_t>& intact, const std::string& origin) {
   const bool any = origin.empty() || origin == "longest";
   double longest = 0.0;
-  for (const auto& c : model.finder().find(engine.node_damage(), engine.solver().intact()).cracks) {
+  for (const auto& c : model.finder().find(node_damage, intact).cracks) {
     if (any || origin_name(model, c) == origin) longest = std::max(longest, c.length);
   }
   return longest;
+}
+
+double observed_crack_length(const DetailModel& model, const fatigue::FatigueEngine& engine,
+                             const std::string& origin) {
+  return observed_crack_length(model, engine.node_damage(), engine.solver().intact(), origin);
+}
+
+bool is_crack_origin(const DetailModel& model, const std::string& origin) {
+  if (origin == "longest" || origin == "outline" || origin == "interior") return true;
+  const mesh::DetailGeometry& g = model.config().geometry;
+  for (const auto& n : g.notches) {
+    if (n.name == origin) return true;
+  }
+  for (std::size_t h = 0; h < g.holes.size(); ++h) {
+    if (origin == "hole " + std::to_string(h)) return true;
+  }
+  return false;
 }
 
 Failure end_of_life(const DetailModel& model, const fatigue::FatigueEngine& engine) {

@@ -135,6 +135,12 @@ enum class Failure : std::int8_t { none = 0, end_criterion = 1, singular = 2 };
 /// reports it); 0 when there is none. What an inspection of that crack is compared with.
 double observed_crack_length(const DetailModel& model, const fatigue::FatigueEngine& engine,
                              const std::string& origin);
+/// The same for a damage field and the bond state it came from.
+double observed_crack_length(const DetailModel& model, const std::vector<double>& node_damage,
+                             const std::vector<std::uint8_t>& intact, const std::string& origin);
+/// Whether `origin` names a place a crack of this detail can start from, as STATE reports it:
+/// "longest", a notch's name, "hole <index>" of an existing hole, "outline" or "interior".
+bool is_crack_origin(const DetailModel& model, const std::string& origin);
 
 /// Whether the engine's state meets the end criterion of the detail's life config
 /// (crack_length: the criterion's crack, criterion_crack_length(), >= critical; phase3: any bond

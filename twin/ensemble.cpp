@@ -8,6 +8,8 @@
 #include "core/fnv1a.h"
 #include "prognostics/observation_likelihood.h"
 #include "prognostics/weighted_statistics.h"
+#include "solver/model/pd_model.h"
+#include "twin/coarse_life.h"
 #include "twin/life.h"
 
 namespace peritwin::twin {
@@ -15,11 +17,63 @@ namespace peritwin::twin {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 }  // namespace
 
-Ensemble::Ensemble(std::shared_ptr<const DetailModel> model, prognostics::ParticleEnsemble filter)
-    : model_(std::move(model)), filter_(std::move(filter)) {}
+double crack_length_at(const DetailModel& model, const fatigue::FatigueEngine& engine,
+                       std::int64_t cycle, const std::string& origin) {
+  const auto& events = engine.break_events();
+  if (events.empty() || events.back().cycle <= cycle) {
+    return observed_crack_length(model, engine, origin);
+  }
+  std::vector<std::uint8_t> intact = engine.solver().intact();
+  for (auto e = events.rbegin(); e != events.rend() && e->cycle > cycle; ++e) {
+    intact[static_cast<std::size_t>(e->bond)] = 1;
+  }
+  std::vector<double> damage;
+  model::damage_index(model.disc(), intact, damage);
+  return observed_crack_length(model, damage, intact, origin);
+}
+
+core::Expected<std::shared_ptr<const DetailModel>> particle_surrogate(const DetailModel& fine,
+                                                                      double dx,
+                                                                      double* factor_out) {
+  auto coarse = coarse_model(fine, dx);
+  if (!coarse) return coarse.error();
+  if (factor_out != nullptr) *factor_out = 1.0;
+  const std::vector<core::LoadBlock> spectrum = reference_spectrum(fine, RollingSpectrum{});
+  if (spectrum.empty() || !can_fork(fine)) return coarse;
+  // The life of the virgin detail at the config's A2 on its own grid ...
+  const auto life_of = [&spectrum](const DetailModel& m, double a2_factor) {
+    const auto engine = m.make_engine(a2_factor);
+    if (!engine->initialize()) return std::numeric_limits<double>::quiet_NaN();
+    return simulate_life(m, engine->export_state(), spectrum, a2_factor, nullptr, engine.get());
+  };
+  const double fine_life = life_of(fine, 1.0);
+  if (!(std::isfinite(fine_life) && fine_life > 0)) return coarse;
+  // ... and the coarse grid's A2 factor that gives the same life: phase II lives fall in
+  // proportion to A2 (000 Eq. 17), so cycles scale as 1/A2; up to 4 runs, to 1 %.
+  double factor = 1.0;
+  for (int run = 0; run < 4; ++run) {
+    const double coarse_life = life_of(**coarse, factor);
+    if (!(std::isfinite(coarse_life) && coarse_life > 0)) return coarse;
+    const double ratio = coarse_life / fine_life;
+    if (std::abs(ratio - 1.0) <= 0.01) break;
+    factor *= ratio;
+  }
+  config::DetailConfig config = (*coarse)->config();
+  config.fatigue.strain.A2 *= factor;
+  if (factor_out != nullptr) *factor_out = factor;
+  return DetailModel::build(config);
+}
+
+Ensemble::Ensemble(std::shared_ptr<const DetailModel> model,
+                   std::shared_ptr<const DetailModel> particle_model,
+                   prognostics::ParticleEnsemble filter)
+    : model_(std::move(model)),
+      particle_model_(std::move(particle_model)),
+      filter_(std::move(filter)) {}
 
 template <typename F>
 void Ensemble::for_each_particle(F&& f) const {
@@ -69,7 +123,14 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   auto filter = prognostics::ParticleEnsemble::create(std::move(parameters), settings);
   if (!filter) return filter.error();
   filter->initialize(u.seed);
-  std::unique_ptr<Ensemble> e(new Ensemble(model, std::move(*filter)));
+  std::shared_ptr<const DetailModel> particle_model = model;
+  if (const double dx = u.particle_dx(model->config().life.dx); dx > 0) {
+    auto coarse = particle_surrogate(*model, dx);
+    if (!coarse) return coarse.error().within("uncertainty.dx: ");
+    particle_model = *coarse;
+  }
+  std::unique_ptr<Ensemble> e(new Ensemble(model, particle_model, std::move(*filter)));
+  e->predicted_end_.assign(settings.particles, kNaN);
   e->a2_column_ = a2_column;
   e->load_scale_column_ = load_column;
   e->particles_.resize(settings.particles);
@@ -77,7 +138,7 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   std::vector<int> ok(e->particles_.size(), 0);
   e->for_each_particle([&](std::size_t i) {
     Particle& p = e->particles_[i];
-    p.engine = e->model_->make_engine(p.a2_factor);
+    p.engine = e->particle_model_->make_engine(p.a2_factor);
     ok[i] = p.engine->initialize() ? 1 : 0;
   });
   if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
@@ -102,7 +163,8 @@ void Ensemble::set_parameters(Particle& p, std::size_t i) const {
 }
 
 core::Status Ensemble::apply(std::span<const core::LoadBlock> blocks) {
-  const fatigue::FatigueEngine::StopCheck stop = end_of_life_check(*model_);
+  const DetailModel& pm = *particle_model_;
+  const fatigue::FatigueEngine::StopCheck stop = end_of_life_check(pm);
   for_each_particle([&](std::size_t i) {
     Particle& p = particles_[i];
     for (const core::LoadBlock& block : blocks) {
@@ -110,7 +172,7 @@ core::Status Ensemble::apply(std::span<const core::LoadBlock> blocks) {
       core::LoadBlock scaled = block;
       scaled.p_max *= p.load_scale;
       p.engine->apply(scaled, stop);
-      if (end_of_life(*model_, *p.engine) != Failure::none) p.ended_at = p.engine->total_cycles();
+      if (end_of_life(pm, *p.engine) != Failure::none) p.ended_at = p.engine->total_cycles();
     }
   });
   for (const core::LoadBlock& block : blocks) total_cycles_ += block.count;
@@ -123,19 +185,24 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
     return core::Error{"cycle", "is in the future of the twin (" + std::to_string(o.cycle) + " > " +
                                     std::to_string(total_cycles_) + " cycles applied)"};
   }
-  if (o.cycle < total_cycles_) {
-    return core::Error{"cycle", "is in the past of the ensemble (" + std::to_string(o.cycle) +
-                                    " < " + std::to_string(total_cycles_) +
-                                    "): an observation is taken in at its own cycle count"};
+  if (!is_crack_origin(*model_, o.origin)) {
+    return core::Error{"origin", "\"" + o.origin +
+                                     "\" is no crack origin of this detail (\"longest\", a notch's "
+                                     "name, \"hole <index>\", \"outline\" or \"interior\")"};
   }
+  const DetailModel& pm = *particle_model_;
   std::vector<double> predicted(particles_.size());
   for_each_particle([&](std::size_t i) {
-    predicted[i] = observed_crack_length(*model_, *particles_[i].engine, o.origin);
+    predicted[i] = crack_length_at(pm, *particles_[i].engine, o.cycle, o.origin);
   });
   std::vector<double> log_likelihood;
   if (o.kind == messages::ObservationKind::crack_length) {
+    // The particle's length moves in steps of about its grid spacing: a uniform rounding error of
+    // variance Δx_p²/12 beside the measurement's (docs/prognostics.md, "The twin's ensemble").
+    const double rounding = pm.disc().dx / std::sqrt(12.0);
     log_likelihood = prognostics::log_likelihoods(
-        prognostics::CrackLengthObservation{o.length_m, o.sigma_m}, predicted);
+        prognostics::CrackLengthObservation{o.length_m, std::hypot(o.sigma_m, rounding)},
+        predicted);
   } else {
     log_likelihood = prognostics::log_likelihoods(
         prognostics::NoCrackObservation{prognostics::PodCurve{o.pod_a50_m, o.pod_slope}},
@@ -154,27 +221,29 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
   out.ess_before_resampling = filter_.effective_sample_size();
   const auto parents =
       filter_.resample_if_needed(model_->config().uncertainty.resample_ess_fraction);
-  if (!parents) return out;
-  out.resampled = true;
-  filter_.rejuvenate();
-  std::vector<Particle> next(particles_.size());
-  for (std::size_t i = 0; i < next.size(); ++i) set_parameters(next[i], i);
-  for_each_particle([&](std::size_t i) {
-    const Particle& parent = particles_[(*parents)[i]];
-    next[i].engine = parent.engine->fork(model_->engine_settings(next[i].a2_factor));
-    next[i].ended_at = parent.ended_at;
-  });
-  particles_ = std::move(next);
+  if (parents) {
+    out.resampled = true;
+    filter_.rejuvenate();
+    std::vector<Particle> next(particles_.size());
+    std::vector<double> next_end(particles_.size());
+    for (std::size_t i = 0; i < next.size(); ++i) {
+      set_parameters(next[i], i);
+      next_end[i] = predicted_end_[(*parents)[i]];
+    }
+    for_each_particle([&](std::size_t i) {
+      const Particle& parent = particles_[(*parents)[i]];
+      next[i].engine = parent.engine->fork(pm.engine_settings(next[i].a2_factor));
+      next[i].ended_at = parent.ended_at;
+    });
+    particles_ = std::move(next);
+    predicted_end_ = std::move(next_end);
+  }
+  observations_.push_back({o, total_cycles_, out});
   return out;
 }
 
-EnsembleEstimate Ensemble::estimate(const std::vector<core::LoadBlock>& spectrum) const {
-  const config::UncertaintyConfig& u = model_->config().uncertainty;
-  EnsembleEstimate out;
-  out.cycle = total_cycles_;
-  out.percentiles = u.percentiles;
-  out.horizon_cycles = u.horizon_cycles;
-  out.effective_sample_size = filter_.effective_sample_size();
+EnsembleEstimate Ensemble::estimate(const std::vector<core::LoadBlock>& spectrum) {
+  const DetailModel& pm = *particle_model_;
   std::vector<double> end(particles_.size(), kInf);
   for_each_particle([&](std::size_t i) {
     const Particle& p = particles_[i];
@@ -184,34 +253,107 @@ EnsembleEstimate Ensemble::estimate(const std::vector<core::LoadBlock>& spectrum
     }
     std::vector<core::LoadBlock> scaled = spectrum;
     for (auto& b : scaled) b.p_max *= p.load_scale;
-    const double life = simulate_life(*model_, p.engine->export_state(), scaled, p.a2_factor,
-                                      nullptr, p.engine.get());
+    const double life =
+        simulate_life(pm, p.engine->export_state(), scaled, p.a2_factor, nullptr, p.engine.get());
     // NaN (no spectrum, or the state cannot be imported) counts as not reached.
     end[i] = std::isnan(life) ? kInf : static_cast<double>(total_cycles_) + life;
   });
-  const auto w = filter_.weights();
-  std::vector<double> probabilities;
-  for (double q : u.percentiles) probabilities.push_back(q / 100.0);
-  if (auto q = prognostics::weighted_quantiles(end, w, probabilities)) out.end_of_life = *q;
+  predicted_end_ = std::move(end);
+  estimate_cycle_ = total_cycles_;
+  return summary();
+}
+
+EnsembleEstimate Ensemble::summary() const {
+  const config::UncertaintyConfig& u = model_->config().uncertainty;
+  EnsembleEstimate out;
+  out.cycle = total_cycles_;
+  out.percentiles = u.percentiles;
+  out.horizon_cycles = u.horizon_cycles;
+  out.effective_sample_size = filter_.effective_sample_size();
+  out.end_of_life.assign(u.percentiles.size(), kNaN);
+  out.remaining.assign(u.percentiles.size(), kNaN);
+  out.probability_within_horizon = kNaN;
   // A particle at its end of life has 0 remaining (its end may lie before the ensemble's count:
-  // it stops there while the load goes on).
-  std::vector<double> remaining(end.size());
-  for (std::size_t i = 0; i < end.size(); ++i) {
+  // it stops there while the load goes on); so has one whose simulated end has passed.
+  std::vector<double> end(particles_.size()), remaining(particles_.size());
+  bool simulated = estimate_cycle_ >= 0;
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    end[i] = particles_[i].ended_at >= 0 ? static_cast<double>(particles_[i].ended_at)
+                                         : predicted_end_[i];
+    simulated = simulated && !std::isnan(end[i]);
     remaining[i] = std::max(0.0, end[i] - static_cast<double>(total_cycles_));
   }
-  if (auto q = prognostics::weighted_quantiles(remaining, w, probabilities)) out.remaining = *q;
-  out.probability_within_horizon = std::numeric_limits<double>::quiet_NaN();
-  if (u.horizon_cycles > 0) {
-    if (auto pr = prognostics::probability_at_or_below(remaining, w, u.horizon_cycles)) {
-      out.probability_within_horizon = *pr;
+  const auto w = filter_.weights();
+  if (simulated) {
+    std::vector<double> probabilities;
+    for (double q : u.percentiles) probabilities.push_back(q / 100.0);
+    if (auto q = prognostics::weighted_quantiles(end, w, probabilities)) out.end_of_life = *q;
+    if (auto q = prognostics::weighted_quantiles(remaining, w, probabilities)) {
+      out.remaining = *q;
+    }
+    if (u.horizon_cycles > 0) {
+      if (auto pr = prognostics::probability_at_or_below(remaining, w, u.horizon_cycles)) {
+        out.probability_within_horizon = *pr;
+      }
     }
   }
+  const double a2_config = model_->config().fatigue.strain.A2;
   for (const auto& p : filter_.posterior()) {
     out.posterior.push_back({p.name, p.summary.median, p.summary.coefficient_of_variation});
   }
-  if (a2_column_ < 0) out.posterior.push_back({"a2", u.a2.median, 0.0});
+  if (a2_column_ < 0) out.posterior.push_back({"a2", a2_config * particles_[0].a2_factor, 0.0});
   if (load_scale_column_ < 0) out.posterior.push_back({"load_scale", u.load_scale.median, 0.0});
   return out;
+}
+
+EnsembleCheckpoint Ensemble::export_state() const {
+  EnsembleCheckpoint s;
+  s.filter = filter_.serialize();
+  for (const Particle& p : particles_) {
+    s.engines.push_back(p.engine->export_state());
+    s.a2_factor.push_back(p.a2_factor);
+    s.load_scale.push_back(p.load_scale);
+    s.ended_at.push_back(p.ended_at);
+  }
+  s.predicted_end = predicted_end_;
+  s.total_cycles = total_cycles_;
+  s.estimate_cycle = estimate_cycle_;
+  s.observations = observations_;
+  return s;
+}
+
+core::Status Ensemble::import_state(const EnsembleCheckpoint& s) {
+  const std::size_t n = particles_.size();
+  if (s.engines.size() != n || s.a2_factor.size() != n || s.load_scale.size() != n ||
+      s.ended_at.size() != n || s.predicted_end.size() != n) {
+    return core::failure("the ensemble holds " + std::to_string(s.engines.size()) +
+                         " particles, the config says " + std::to_string(n));
+  }
+  prognostics::ParticleEnsemble filter = filter_;
+  if (core::Status read = filter.deserialize(s.filter); !read) {
+    return core::failure("the ensemble's filter: " + read.error().message());
+  }
+  if (filter.size() != n || filter.dimension() != filter_.dimension()) {
+    return core::failure("the ensemble's filter does not fit the config's parameters");
+  }
+  filter_ = std::move(filter);
+  std::vector<int> ok(n, 0);
+  for_each_particle([&](std::size_t i) {
+    Particle& p = particles_[i];
+    p.a2_factor = s.a2_factor[i];
+    p.load_scale = s.load_scale[i];
+    p.ended_at = s.ended_at[i];
+    p.engine = particle_model_->make_engine(p.a2_factor);
+    ok[i] = p.engine->initialize() && p.engine->import_state(s.engines[i]) ? 1 : 0;
+  });
+  if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
+    return core::failure("a particle's engine state does not fit the particles' model");
+  }
+  predicted_end_ = s.predicted_end;
+  total_cycles_ = s.total_cycles;
+  estimate_cycle_ = s.estimate_cycle;
+  observations_ = s.observations;
+  return {};
 }
 
 std::uint64_t Ensemble::state_hash() const {
@@ -226,6 +368,15 @@ std::uint64_t Ensemble::state_hash() const {
   const std::vector<std::uint8_t> f = filter_.serialize();
   h.bytes(f.data(), f.size());
   h.bytes(&total_cycles_, sizeof total_cycles_);
+  for (const ObservationRecord& r : observations_) {
+    const messages::Observation& o = r.observation;
+    h.bytes(&o.cycle, sizeof o.cycle);
+    const auto kind = static_cast<std::int32_t>(o.kind);
+    h.bytes(&kind, sizeof kind);
+    h.bytes(o.origin.data(), o.origin.size());
+    for (double v : {o.length_m, o.sigma_m, o.pod_a50_m, o.pod_slope}) h.bytes(&v, sizeof v);
+    h.bytes(&r.taken_at, sizeof r.taken_at);
+  }
   return h.get();
 }
 

@@ -7,10 +7,17 @@
 //    spectrum's bias; lognormal, median 1). A parameter with CoV 0 is known and held at its
 //    median. A particle's engine is DetailModel::make_engine(A2/A2_config) and applies every block
 //    with P_max·s.
-//  * Observations (messages::Observation) at the ensemble's current cycle count: each particle's
-//    crack at the observed origin (observed_crack_length) is compared with the inspection,
-//    Gaussian in the measured length or 1 − POD for "no crack found"
-//    (prognostics/observation_likelihood.h); the weights are updated; when the effective sample
+//  * The particles' model: the detail's own, or the same detail on the coarser grid of
+//    [detail.uncertainty] dx (else [detail.life] dx), A2 rescaled by 000 Eq. (29) and calibrated
+//    to the detail's own virgin life (particle_surrogate); A2's factor is then a factor on that
+//    A2, and the posterior of "a2" is reported as factor × the config's A2.
+//  * Observations (messages::Observation) at any cycle count up to the ensemble's: each
+//    particle's crack at the observed origin at that cycle (crack_length_at: its state with the
+//    breaks after that cycle undone) is compared with the inspection, Gaussian in the measured
+//    length with the measurement's σ and the particle grid's own, Δx_p/√12 (the crack length of a
+//    particle moves in steps of about its grid spacing: a uniform rounding error), or 1 − POD for
+//    "no crack found" (prognostics/observation_likelihood.h); the weights are updated; when the
+//    effective sample
 //    size falls below resample_ess_fraction·N the particles are resampled (systematic) and
 //    rejuvenated (regularized kernel in log-parameter space; prognostics::ParticleEnsemble), each
 //    new particle a fork of its parent's engine (FatigueEngine::fork: same bonds, lives and
@@ -67,6 +74,24 @@ struct ObservationUpdate {
   double predicted_median_m = 0.0;  ///< weighted median of the particles' predicted lengths (prior)
 };
 
+/// An observation the ensemble took in, and what it did (kept for STATE and the results file).
+struct ObservationRecord {
+  messages::Observation observation;
+  std::int64_t taken_at = 0;  ///< the ensemble's cycle count when it was taken in
+  ObservationUpdate update;
+};
+
+/// What a checkpoint keeps of an ensemble (twin/twin_checkpoint.cpp writes it).
+struct EnsembleCheckpoint {
+  std::vector<std::uint8_t> filter;  ///< prognostics::ParticleEnsemble::serialize()
+  std::vector<fatigue::EngineState> engines;
+  std::vector<double> a2_factor, load_scale, predicted_end;
+  std::vector<std::int64_t> ended_at;
+  std::int64_t total_cycles = 0;
+  std::int64_t estimate_cycle = -1;
+  std::vector<ObservationRecord> observations;
+};
+
 class Ensemble {
  public:
   /// The particles of the detail's [detail.uncertainty], initialized (their first solve); an
@@ -76,13 +101,28 @@ class Ensemble {
   /// Applies the blocks to every particle (P_max × its load scale); a particle at its end of life
   /// stops there.
   core::Status apply(std::span<const core::LoadBlock> blocks);
-  /// Takes in an inspection made at the current cycle count (an error, nothing changed, for an
-  /// observation whose cycle is not the current one, an invalid one, or one no particle can
-  /// explain).
+  /// Takes in an inspection made at or before the current cycle count (an error, nothing
+  /// changed, for an observation in the ensemble's future, an invalid one, an origin the detail
+  /// does not have, or one no particle can explain). An observation before the current count is
+  /// compared with each particle's crack at its cycle; the resampling happens now.
   core::Expected<ObservationUpdate> observe(const messages::Observation& observation);
-  /// Remaining life under `spectrum` (the reference spectrum: each particle applies it with its
-  /// own P_max scale), forward simulations from forks of the particles' engines.
-  [[nodiscard]] EnsembleEstimate estimate(const std::vector<core::LoadBlock>& spectrum) const;
+  /// Simulates each particle's end of life under `spectrum` (the reference spectrum: each
+  /// particle applies it with its own P_max scale) from a fork of its engine, keeps them, and
+  /// returns summary().
+  EnsembleEstimate estimate(const std::vector<core::LoadBlock>& spectrum);
+  /// Remaining life at the current cycle count from the ends of life simulated last (the
+  /// percentiles of max(0, end − cycle); a particle that reached its end since counts 0); NaN
+  /// percentiles before any estimate.
+  [[nodiscard]] EnsembleEstimate summary() const;
+  /// The cycle count of the last estimate(), -1 before any.
+  [[nodiscard]] std::int64_t estimate_cycle() const { return estimate_cycle_; }
+  [[nodiscard]] const std::vector<ObservationRecord>& observations() const { return observations_; }
+  /// The model the particles run on (the detail's, or its coarser grid).
+  [[nodiscard]] const DetailModel& particle_model() const { return *particle_model_; }
+  /// Checkpoints: everything the ensemble's future depends on; import_state on an ensemble
+  /// created from the same config (an error, the ensemble unusable, when it does not fit).
+  [[nodiscard]] EnsembleCheckpoint export_state() const;
+  core::Status import_state(const EnsembleCheckpoint& state);
 
   [[nodiscard]] std::int64_t total_cycles() const { return total_cycles_; }
   [[nodiscard]] std::size_t size() const { return particles_.size(); }
@@ -93,7 +133,8 @@ class Ensemble {
   [[nodiscard]] const fatigue::FatigueEngine& engine(std::size_t i) const {
     return *particles_[i].engine;
   }
-  /// FNV-1a 64 over every particle's engine state, parameters and the filter's bytes.
+  /// FNV-1a 64 over every particle's engine state, parameters, the filter's bytes and the
+  /// observations taken in (not over the simulated ends of life).
   [[nodiscard]] std::uint64_t state_hash() const;
 
  private:
@@ -103,19 +144,39 @@ class Ensemble {
     double load_scale = 1.0;
     std::int64_t ended_at = -1;  ///< the cycle of its end of life, -1 while alive
   };
-  Ensemble(std::shared_ptr<const DetailModel> model, prognostics::ParticleEnsemble filter);
+  Ensemble(std::shared_ptr<const DetailModel> model,
+           std::shared_ptr<const DetailModel> particle_model, prognostics::ParticleEnsemble filter);
   /// The particle's parameters from the filter's row i (known parameters at their medians).
   void set_parameters(Particle& p, std::size_t i) const;
   /// Runs f(i) for every particle, on up to two threads (a static split: the same bits).
   template <typename F>
   void for_each_particle(F&& f) const;
 
-  std::shared_ptr<const DetailModel> model_;
+  std::shared_ptr<const DetailModel> model_;           ///< the detail's (its config)
+  std::shared_ptr<const DetailModel> particle_model_;  ///< what the particles run on
   prognostics::ParticleEnsemble filter_;
   int a2_column_ = -1;          ///< the filter's column of ln A2, -1 when A2 is known
   int load_scale_column_ = -1;  ///< the filter's column of ln s, -1 when s is known
   std::vector<Particle> particles_;
   std::int64_t total_cycles_ = 0;
+  /// Each particle's simulated end of life (cycle; +Inf: not reached) at estimate_cycle_.
+  std::vector<double> predicted_end_;
+  std::int64_t estimate_cycle_ = -1;
+  std::vector<ObservationRecord> observations_;
 };
+
+/// The particles' model on the coarser grid of spacing `dx`: coarse_model (A2 by 000 Eq. 29) with
+/// A2 calibrated so that the virgin detail's life under the reference spectrum equals the
+/// detail's own (one forward simulation on each grid; the coarse grid's growth is slower or
+/// faster than the fine one's in ways Eq. 29 does not capture). Without a reference spectrum, or
+/// a life that does not end, coarse_model's. `factor` (optional) receives the calibration factor.
+core::Expected<std::shared_ptr<const DetailModel>> particle_surrogate(const DetailModel& fine,
+                                                                      double dx,
+                                                                      double* factor = nullptr);
+
+/// The particle's crack at `origin` as it was at `cycle` (<= its cycle count): its state with the
+/// break events after `cycle` undone (observed_crack_length's measure).
+double crack_length_at(const DetailModel& model, const fatigue::FatigueEngine& engine,
+                       std::int64_t cycle, const std::string& origin);
 
 }  // namespace peritwin::twin

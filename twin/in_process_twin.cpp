@@ -6,7 +6,7 @@ core::Expected<std::unique_ptr<InProcessTwin>, std::string> InProcessTwin::creat
     const config::DetailConfig& detail) {
   auto model = twin::DetailModel::build(detail);
   if (!model) return model.error().message();
-  auto created = twin::Twin::create(*model, {twin::LifeMode::synchronous, true});
+  auto created = twin::Twin::create(*model, {twin::LifeMode::synchronous, true, true});
   if (!created) return created.error().message();
   auto t = std::make_unique<InProcessTwin>();
   t->twin_ = std::move(*created);
@@ -28,6 +28,22 @@ core::Status InProcessTwin::apply(const messages::Batch& batch) {
   }
   state_ = twin::state_message(*twin_, messages::now_utime());
   return {};
+}
+
+core::Status InProcessTwin::observe(const messages::Observation& observation) {
+  const auto outcome = twin_->observe(observation);
+  if (!outcome.applied()) {
+    return core::failure("observation " + std::to_string(observation.seq) + " at cycle " +
+                         std::to_string(observation.cycle) + ": " + outcome.what + ": " +
+                         outcome.why);
+  }
+  state_ = twin::state_message(*twin_, messages::now_utime());
+  return {};
+}
+
+void InProcessTwin::estimate_ensemble_now() {
+  twin_->estimate_ensemble_now();
+  state_ = twin::state_message(*twin_, messages::now_utime());
 }
 
 InProcessResult run_in_process(

@@ -30,6 +30,12 @@ class InProcessTwin {
   /// for another reason.
   core::Status apply(const messages::Batch& batch);
 
+  /// Takes an observation in (Twin::observe) and updates state(); the error "observation <seq>
+  /// at cycle <cycle>: <what>: <why>" when refused.
+  core::Status observe(const messages::Observation& observation);
+  /// Simulates the learning ensemble's ends of life now (Twin::estimate_ensemble_now).
+  void estimate_ensemble_now();
+
   [[nodiscard]] const peritwin_msgs::damage_state_t& state() const { return state_; }
   [[nodiscard]] const twin::Twin& twin() const { return *twin_; }
   /// The end of life was reached: no batch is applied any more.

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <peritwin_msgs/observation_t.hpp>
 
 namespace peritwin::twin {
 
@@ -182,6 +184,53 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
   m.remaining_life_source = life.source;
   m.failure = static_cast<std::int8_t>(twin.failure());
   m.end_of_life_cycle = twin.end_of_life_cycle();
+  m.ensemble_estimate_cycle = -1;
+  m.horizon_cycles = std::numeric_limits<double>::quiet_NaN();
+  m.probability_within_horizon = std::numeric_limits<double>::quiet_NaN();
+  if (const auto e = twin.ensemble_estimate()) {
+    const Ensemble& ensemble = *twin.ensemble();
+    m.num_particles = static_cast<std::int32_t>(ensemble.size());
+    m.ensemble_estimate_cycle = ensemble.estimate_cycle();
+    m.effective_sample_size = e->effective_sample_size;
+    m.percentiles = e->percentiles;
+    m.end_of_life_percentiles = e->end_of_life;
+    m.remaining_percentiles = e->remaining;
+    m.num_percentiles = static_cast<std::int32_t>(m.percentiles.size());
+    if (e->horizon_cycles > 0) {
+      m.horizon_cycles = e->horizon_cycles;
+      m.probability_within_horizon = e->probability_within_horizon;
+    }
+    for (const auto& p : e->posterior) {
+      m.parameter_names.push_back(p.name);
+      m.parameter_medians.push_back(p.median);
+      m.parameter_covs.push_back(p.coefficient_of_variation);
+    }
+    m.num_parameters = static_cast<std::int32_t>(m.parameter_names.size());
+    const auto& records = ensemble.observations();
+    m.observation_count = static_cast<std::int32_t>(records.size());
+    const std::size_t first =
+        records.size() -
+        std::min(records.size(),
+                 static_cast<std::size_t>(peritwin_msgs::damage_state_t::MAX_OBSERVATIONS));
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t k = first; k < records.size(); ++k) {
+      const messages::Observation& o = records[k].observation;
+      const bool crack = o.kind == messages::ObservationKind::crack_length;
+      m.observation_cycles.push_back(o.cycle);
+      m.observation_kinds.push_back(crack ? peritwin_msgs::observation_t::KIND_CRACK_LENGTH
+                                          : peritwin_msgs::observation_t::KIND_NO_CRACK);
+      m.observation_lengths_m.push_back(crack ? o.length_m : nan);
+      m.observation_sigmas_m.push_back(crack ? o.sigma_m : nan);
+      m.observation_pod_a50s_m.push_back(crack ? nan : o.pod_a50_m);
+      m.observation_predicted_m.push_back(records[k].update.predicted_median_m);
+    }
+    m.num_observations = static_cast<std::int32_t>(m.observation_cycles.size());
+    for (const auto& [source, seq] : twin.observed()) {
+      m.observation_source_ids.push_back(source);
+      m.observation_applied_seq.push_back(seq);
+    }
+    m.num_observation_sources = static_cast<std::int32_t>(m.observation_source_ids.size());
+  }
   const Twin::Hashes hashes = twin.hashes();
   m.state_hash = core::hex64(hashes.state);
   m.engine_hash = core::hex64(hashes.engine);

@@ -22,6 +22,15 @@ core::Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailM
                          ": the virgin model cannot be solved: " + twin->engine_->failure_reason());
   }
   twin->refresh();
+  if (options.learn && twin->model_->config().uncertainty.enabled) {
+    auto ensemble = Ensemble::create(twin->model_);
+    if (!ensemble) {
+      return core::failure("detail " + twin->detail_id() +
+                           ": [detail.uncertainty]: " + ensemble.error().message());
+    }
+    twin->ensemble_ = std::move(*ensemble);
+    twin->catch_up_ensemble(true);  // the prior's percentiles
+  }
   twin->first_break_load_ = ::peritwin::twin::first_break_load(*twin->model_, *twin->engine_);
   if (const auto& configured = twin->model_->config().limits.max_p) {
     twin->max_p_ = *configured;
@@ -162,12 +171,14 @@ messages::Outcome Twin::apply(const messages::Batch& batch) {
   // the rest of the batch is not applied (see "End of life" in twin.h).
   const fatigue::FatigueEngine::StopCheck stop = end_of_life_check(*model_);
   cycles_before_state_ = engine_->total_cycles();
+  std::vector<core::LoadBlock> applied_blocks;  // what the engine applied, for the ensemble
   for (const core::LoadBlock& block : batch.blocks) {
     const std::int64_t before = engine_->total_cycles();
     const fatigue::EngineStatus status = engine_->apply(block, stop);
     core::LoadBlock applied = block;
     applied.count = engine_->total_cycles() - before;
     if (applied.count > 0) spectrum_.add(applied);
+    if (applied.count > 0) applied_blocks.push_back(applied);
     if (applied.count > 0 || status != fatigue::EngineStatus::ok) last_block_ = block;
     if (status != fatigue::EngineStatus::ok) break;
   }
@@ -178,6 +189,10 @@ messages::Outcome Twin::apply(const messages::Batch& batch) {
   last_seq_ = batch.seq;
   ++counters_.applied;
   refresh();
+  if (ensemble_) {
+    (void)ensemble_->apply(applied_blocks);
+    catch_up_ensemble(false);
+  }
   if (failure_ != Failure::none) {
     // No simulation: the remaining life is 0. start_cycles (a diagnostic) says where it ended.
     LifeEstimate ended{0.0, 0.0, 0.0, state_seq_, last_seq_, last_source_};
@@ -187,6 +202,57 @@ messages::Outcome Twin::apply(const messages::Batch& batch) {
     catch_up_life();
   }
   return {};
+}
+
+messages::Outcome Twin::observe(const messages::Observation& o) {
+  const auto refuse = [this](messages::Verdict verdict, const std::string& field,
+                             std::string why) -> messages::Outcome {
+    if (verdict != messages::Verdict::duplicate) ++counters_.rejected;
+    return {verdict, "observation" + (field.empty() ? std::string() : "." + field), std::move(why)};
+  };
+  if (messages::Outcome checked = messages::check_observation_message(o, detail_id());
+      !checked.applied()) {
+    ++counters_.rejected;
+    return checked;
+  }
+  const auto it = observed_.find(o.source_id);
+  const std::int64_t last = it == observed_.end() ? 0 : it->second;
+  if (o.seq <= last) {
+    return refuse(messages::Verdict::duplicate, "seq",
+                  "observation seq " + std::to_string(o.seq) + " of source \"" + o.source_id +
+                      "\" is already taken in (last " + std::to_string(last) + ")");
+  }
+  if (o.seq > last + 1) {
+    return refuse(messages::Verdict::gap, "seq",
+                  "observation seq " + std::to_string(o.seq) + " of source \"" + o.source_id +
+                      "\" skips ahead: expected " + std::to_string(last + 1));
+  }
+  if (!ensemble_) {
+    return refuse(messages::Verdict::invalid, "",
+                  "detail " + detail_id() +
+                      " does not learn: it has no [detail.uncertainty] (the priors an observation "
+                      "updates)");
+  }
+  auto update = ensemble_->observe(o);
+  if (!update) {
+    return refuse(messages::Verdict::invalid, update.error().field, update.error().reason);
+  }
+  observed_[o.source_id] = o.seq;
+  catch_up_ensemble(true);
+  return {};
+}
+
+std::optional<EnsembleEstimate> Twin::ensemble_estimate() const {
+  if (!ensemble_) return std::nullopt;
+  return ensemble_->summary();
+}
+
+void Twin::catch_up_ensemble(bool force) {
+  const std::int64_t every = model_->config().uncertainty.every_batches;
+  const bool due =
+      force || ensemble_->estimate_cycle() < 0 || (every > 0 && state_seq_ % every == 0) ||
+      (failure_ != Failure::none && ensemble_->estimate_cycle() < ensemble_->total_cycles());
+  if (due) (void)ensemble_->estimate(reference_spectrum(*model_, spectrum_));
 }
 
 namespace {
@@ -238,12 +304,14 @@ std::uint64_t Twin::state_hash() const {
   // Equal hashes <=> bit-identical states (up to 64-bit collisions).
   core::Fnv1a64 h = own_fields_hash();
   engine_->hash_state(h);
+  if (ensemble_) h.word(ensemble_->state_hash());
   return h.get();
 }
 
 Twin::Hashes Twin::hashes() const {
   core::Fnv1a64Pair pair{own_fields_hash(), core::Fnv1a64{}};
   engine_->hash_state(pair);
+  if (ensemble_) pair.first.word(ensemble_->state_hash());
   return {pair.first.get(), pair.second.get()};
 }
 

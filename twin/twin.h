@@ -30,6 +30,15 @@
 //  * external (the daemon's worker thread): the owner takes life_job() snapshots, runs
 //    estimate_life() elsewhere and hands the result back with set_life().
 // The estimate is not part of state_hash(); it is published with the state it was computed on.
+//
+// Learning (issue 32, docs/prognostics.md): a detail with [detail.uncertainty] (and
+// Options::learn) has an ensemble (twin/ensemble.h) beside the engine: every applied block goes to
+// its particles too, observe() takes inspections in (exactly once per source and seq, like
+// batches, in a sequence of their own), and its remaining-life percentiles are published with
+// every state. The particles' ends of life are simulated (synchronously, in any LifeMode) at the
+// start, after every observation, every [detail.uncertainty] every_batches and at the end of
+// life; in between the percentiles follow the cycle count. The ensemble's state (not its
+// simulated ends of life) enters state_hash(), not engine_hash().
 #pragma once
 
 #include <cstdint>
@@ -44,6 +53,7 @@
 #include "solver/fatigue/fatigue_engine.h"
 #include "twin/checkpoint_data.h"
 #include "twin/detail_model.h"
+#include "twin/ensemble.h"
 #include "twin/life.h"
 
 namespace peritwin::twin {
@@ -98,6 +108,8 @@ class Twin {
   struct Options {
     LifeMode life = LifeMode::synchronous;
     bool parallel_band = true;  ///< the three band simulations on three threads
+    /// Run the learning ensemble when the detail has [detail.uncertainty].
+    bool learn = true;
   };
 
   /// Builds the engine on `model` and solves the virgin state; or why it cannot.
@@ -106,6 +118,22 @@ class Twin {
 
   /// Applies a batch, or says why not: check_batch, then check_limits, then exactly-once.
   messages::Outcome apply(const messages::Batch& batch);
+  /// Takes an observation in, or says why not (the model unchanged): its fields
+  /// (messages::check_observation, with the field path "observation.<field>"), the detail, the
+  /// source's next seq (duplicates and gaps as for batches, a sequence of its own per source), a
+  /// cycle not after the twin's, an origin of the detail, a detail that learns (INVALID without
+  /// [detail.uncertainty]); then the ensemble's update and a new estimate.
+  messages::Outcome observe(const messages::Observation& observation);
+  /// Simulates the ensemble's ends of life at the current state now (no-op without one).
+  void estimate_ensemble_now() {
+    if (ensemble_) catch_up_ensemble(true);
+  }
+  /// The learning ensemble; null without [detail.uncertainty] or Options::learn.
+  [[nodiscard]] const Ensemble* ensemble() const { return ensemble_.get(); }
+  /// The ensemble's remaining life at the current state (Ensemble::summary()); empty without one.
+  [[nodiscard]] std::optional<EnsembleEstimate> ensemble_estimate() const;
+  /// Last taken-in observation seq per source (sorted by source id).
+  [[nodiscard]] const std::map<std::string, std::int64_t>& observed() const { return observed_; }
   /// The detail's bounds ([detail.limits]): every p_max <= max_p() (INVALID), at most
   /// max_sources distinct sources (LIMIT for a new one beyond it).
   [[nodiscard]] messages::Outcome check_limits(const messages::Batch& batch) const;
@@ -204,6 +232,7 @@ class Twin {
     visit("failure", self.failure_, Hashed::yes);
     visit("spectrum", self.spectrum_, Hashed::yes);
     visit("history", self.histories_, Hashed::no);
+    visit("observed", self.observed_, Hashed::yes);
     visit("life_central", self.life_.central, Hashed::no);
     visit("life_low", self.life_.low, Hashed::no);
     visit("life_high", self.life_.high, Hashed::no);
@@ -215,6 +244,8 @@ class Twin {
  private:
   Twin(std::shared_ptr<const DetailModel> model, Options options);
   void refresh();  ///< crack report and failure from the engine
+  /// Simulates the ensemble's ends of life when due (state 0, every_batches, the end of life).
+  void catch_up_ensemble(bool force);
   [[nodiscard]] core::Fnv1a64 own_fields_hash() const;  ///< the twin's own hashed fields
 
   std::shared_ptr<const DetailModel> model_;
@@ -222,6 +253,8 @@ class Twin {
   std::unique_ptr<fatigue::FatigueEngine> engine_;
   std::int64_t state_seq_ = 0;
   std::map<std::string, std::int64_t> applied_;
+  std::map<std::string, std::int64_t> observed_;  ///< observations: last seq per source
+  std::unique_ptr<Ensemble> ensemble_;
   HistoryBySource histories_;
   std::string last_source_;
   std::int64_t last_seq_ = -1;

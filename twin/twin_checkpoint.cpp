@@ -16,6 +16,9 @@
 //                                        other keys mean what they meant)
 //   RollingSpectrum                   -> f64 arrays <key>_p_max, <key>_r, <key>_alpha, i64
 //   <key>_count
+// With a learning ensemble (Twin::ensemble(), twin/ensemble.h), its EnsembleCheckpoint under
+// "ensemble_*" keys (write_ensemble below) and each particle's EngineState under the engine's keys
+// prefixed "particle<i>_".
 // plus the header: strings detail_id and blas_kernel (not restored: the daemon compares it on
 // resume, the state's last bits depend on it), i64 signature (DetailModel::signature's bits).
 #include <bit>
@@ -236,6 +239,135 @@ struct CheckpointReader {
   }
 };
 
+/// The string <key> of ids joined by '\n' (each without one: check_observation_message).
+std::string join_lines(const std::vector<std::string>& lines) {
+  std::string joined;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    if (i > 0) joined += '\n';
+    joined += lines[i];
+  }
+  return joined;
+}
+
+std::string particle_key(std::size_t i, std::string_view key) {
+  return "particle" + std::to_string(i) + "_" + std::string(key);
+}
+
+void write_ensemble(CheckpointWriter& w, const EnsembleCheckpoint& e) {
+  w.put("ensemble_filter", e.filter);
+  w.put("ensemble_a2_factor", e.a2_factor);
+  w.put("ensemble_load_scale", e.load_scale);
+  w.put("ensemble_predicted_end", e.predicted_end);
+  w.put("ensemble_ended_at", e.ended_at);
+  w.put("ensemble_total_cycles", e.total_cycles);
+  w.put("ensemble_estimate_cycle", e.estimate_cycle);
+  std::vector<std::string> sources, origins;
+  std::vector<std::int64_t> seq, cycle, taken_at;
+  std::vector<std::uint8_t> kind, resampled;
+  std::vector<double> length, sigma, a50, slope, evidence, ess, predicted;
+  for (const ObservationRecord& r : e.observations) {
+    const messages::Observation& o = r.observation;
+    sources.push_back(o.source_id);
+    origins.push_back(o.origin);
+    seq.push_back(o.seq);
+    cycle.push_back(o.cycle);
+    taken_at.push_back(r.taken_at);
+    kind.push_back(static_cast<std::uint8_t>(o.kind));
+    resampled.push_back(r.update.resampled ? 1 : 0);
+    length.push_back(o.length_m);
+    sigma.push_back(o.sigma_m);
+    a50.push_back(o.pod_a50_m);
+    slope.push_back(o.pod_slope);
+    evidence.push_back(r.update.log_evidence);
+    ess.push_back(r.update.ess_before_resampling);
+    predicted.push_back(r.update.predicted_median_m);
+  }
+  w.put("observation_source", join_lines(sources));
+  w.put("observation_origin", join_lines(origins));
+  w.put("observation_seq", seq);
+  w.put("observation_cycle", cycle);
+  w.put("observation_taken_at", taken_at);
+  w.put("observation_kind", kind);
+  w.put("observation_resampled", resampled);
+  w.put("observation_length_m", length);
+  w.put("observation_sigma_m", sigma);
+  w.put("observation_pod_a50_m", a50);
+  w.put("observation_pod_slope", slope);
+  w.put("observation_log_evidence", evidence);
+  w.put("observation_ess", ess);
+  w.put("observation_predicted_m", predicted);
+  for (std::size_t i = 0; i < e.engines.size(); ++i) {
+    fatigue::for_each_field(e.engines[i], [&](std::string_view key, const auto& field) {
+      w.put(particle_key(i, key), field);
+    });
+  }
+}
+
+/// The ensemble of `particles` particles back from its keys; `r.missing`/`r.bad` say what failed.
+EnsembleCheckpoint read_ensemble(CheckpointReader& r, std::size_t particles) {
+  EnsembleCheckpoint e;
+  r.get("ensemble_filter", e.filter);
+  r.get("ensemble_a2_factor", e.a2_factor);
+  r.get("ensemble_load_scale", e.load_scale);
+  r.get("ensemble_predicted_end", e.predicted_end);
+  r.get("ensemble_ended_at", e.ended_at);
+  r.get("ensemble_total_cycles", e.total_cycles);
+  r.get("ensemble_estimate_cycle", e.estimate_cycle);
+  std::string sources, origins;
+  std::vector<std::int64_t> seq, cycle, taken_at;
+  std::vector<std::uint8_t> kind, resampled;
+  std::vector<double> length, sigma, a50, slope, evidence, ess, predicted;
+  r.get("observation_source", sources);
+  r.get("observation_origin", origins);
+  r.get("observation_seq", seq);
+  r.get("observation_cycle", cycle);
+  r.get("observation_taken_at", taken_at);
+  r.get("observation_kind", kind);
+  r.get("observation_resampled", resampled);
+  r.get("observation_length_m", length);
+  r.get("observation_sigma_m", sigma);
+  r.get("observation_pod_a50_m", a50);
+  r.get("observation_pod_slope", slope);
+  r.get("observation_log_evidence", evidence);
+  r.get("observation_ess", ess);
+  r.get("observation_predicted_m", predicted);
+  const std::vector<std::string> source_list = split_ids(sources);
+  const std::vector<std::string> origin_list = split_ids(origins);
+  const std::size_t n = seq.size();
+  for (std::size_t size : {source_list.size(), origin_list.size(), cycle.size(), taken_at.size(),
+                           kind.size(), resampled.size(), length.size(), sigma.size(), a50.size(),
+                           slope.size(), evidence.size(), ess.size(), predicted.size()}) {
+    if (size != n) r.bad = "observation arrays of different lengths";
+  }
+  if (r.bad.empty()) {
+    for (std::size_t k = 0; k < n; ++k) {
+      ObservationRecord rec;
+      messages::Observation& o = rec.observation;
+      o.source_id = source_list[k];
+      o.origin = origin_list[k];
+      o.seq = seq[k];
+      o.cycle = cycle[k];
+      o.kind = kind[k] == static_cast<std::uint8_t>(messages::ObservationKind::no_crack)
+                   ? messages::ObservationKind::no_crack
+                   : messages::ObservationKind::crack_length;
+      o.length_m = length[k];
+      o.sigma_m = sigma[k];
+      o.pod_a50_m = a50[k];
+      o.pod_slope = slope[k];
+      rec.taken_at = taken_at[k];
+      rec.update = {cycle[k], evidence[k], ess[k], resampled[k] != 0, predicted[k]};
+      e.observations.push_back(std::move(rec));
+    }
+  }
+  e.engines.resize(particles);
+  for (std::size_t i = 0; i < particles; ++i) {
+    fatigue::for_each_field(e.engines[i], [&](std::string_view key, auto& field) {
+      r.get(particle_key(i, key), field);
+    });
+  }
+  return e;
+}
+
 }  // namespace
 
 CheckpointData Twin::to_checkpoint() const {
@@ -250,6 +382,7 @@ CheckpointData Twin::to_checkpoint() const {
   const fatigue::EngineState engine = engine_->export_state();
   fatigue::for_each_field(engine,
                           [&](std::string_view key, const auto& field) { writer.put(key, field); });
+  if (ensemble_) write_ensemble(writer, ensemble_->export_state());
   return d;
 }
 
@@ -297,12 +430,30 @@ core::Status Twin::restore(const CheckpointData& d) {
                           [&](std::string_view key, auto& field) { reader.get(key, field); });
   for_each_own_field(*this,
                      [&](std::string_view key, auto& field, Hashed) { reader.get(key, field); });
-  if (!reader.missing.empty()) return fail("missing entries: " + reader.missing);
+  EnsembleCheckpoint ensemble;
+  if (ensemble_) ensemble = read_ensemble(reader, ensemble_->size());
+  if (!reader.missing.empty()) {
+    return fail("missing entries: " + reader.missing +
+                (ensemble_ && !d.u8_arrays.contains("ensemble_filter")
+                     ? " (written without [detail.uncertainty]: move it away to start the "
+                       "learning twin afresh)"
+                     : ""));
+  }
   if (!reader.bad.empty()) return fail(reader.bad);
   for (const auto& e : engine.events) {
     if (e.bond >= model_->disc().num_bonds()) return fail("event bond out of range");
   }
   if (!engine_->import_state(engine)) return fail("the engine state does not fit the model");
+  if (ensemble_) {
+    for (const auto& p : ensemble.engines) {
+      for (const auto& e : p.events) {
+        if (e.bond >= ensemble_->particle_model().disc().num_bonds()) {
+          return fail("a particle's event bond out of range");
+        }
+      }
+    }
+    if (core::Status st = ensemble_->import_state(ensemble); !st) return fail(st.error().message());
+  }
   const Failure stored = failure_;
   report_key_.reset();  // a new engine state: measured afresh
   refresh();

@@ -28,6 +28,11 @@ using Edits = std::vector<std::pair<std::string, std::string>>;
 inline std::string b1_text(const std::string& life_extra = "every_batches = 0",
                            const Edits& edits = {}) {
   std::string text = read_text(std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml");
+  // Without the example's learning ensemble ([detail.uncertainty], 64 particles): a test of the
+  // ensemble adds its own (tests/twin/test_ensemble.cpp, test_learning_twin.cpp).
+  if (const auto u = text.find("\n[detail.uncertainty]"); u != std::string::npos) {
+    text.erase(u + 1, text.find("\n[", u + 1) - u);
+  }
   const std::string anchor = "\nevery_batches = 10\n";
   text.replace(text.find(anchor), anchor.size(), "\n" + life_extra + "\n");
   for (const auto& [from, to] : edits) {
@@ -68,7 +73,7 @@ inline std::shared_ptr<const twin::DetailModel> b1_model(const config::DetailCon
 
 inline std::unique_ptr<twin::Twin> make_twin(const std::shared_ptr<const twin::DetailModel>& model,
                                              twin::LifeMode mode = twin::LifeMode::synchronous) {
-  auto twin = twin::Twin::create(model, {mode, true});
+  auto twin = twin::Twin::create(model, {mode, true, true});
   EXPECT_TRUE(twin.ok()) << twin.error().message();
   return twin ? std::move(*twin) : nullptr;
 }

@@ -19,9 +19,6 @@ namespace {
 /// particles, replaced).
 std::shared_ptr<const DetailModel> coarse_b1(const std::string& uncertainty) {
   std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
-  const auto begin = text.find("[detail.uncertainty]");
-  EXPECT_NE(begin, std::string::npos);
-  if (begin != std::string::npos) text.erase(begin, text.find("\n[", begin) + 1 - begin);
   text += "\n[detail.uncertainty]\n" + uncertainty + "\n";
   auto parsed = config::parse_config(text, "b1-uncertain.toml");
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
@@ -34,6 +31,16 @@ std::unique_ptr<Ensemble> make(const std::shared_ptr<const DetailModel>& model) 
   auto e = Ensemble::create(model);
   EXPECT_TRUE(e.ok()) << (e.ok() ? "" : e.error().message());
   return e.ok() ? std::move(*e) : nullptr;
+}
+
+/// An inspection that measured `length` ± `sigma` of the longest crack at `cycle`.
+messages::Observation crack(std::int64_t cycle, double length, double sigma) {
+  messages::Observation o;
+  o.cycle = cycle;
+  o.kind = messages::ObservationKind::crack_length;
+  o.length_m = length;
+  o.sigma_m = sigma;
+  return o;
 }
 
 const char* kPrior =
@@ -100,8 +107,7 @@ TEST(Ensemble, AnInspectionMovesThePosteriorTheWayThePhysicsSays) {
   ASSERT_GT(longest, shortest) << "no spread of crack lengths to learn from";
   const double prior_median = e->estimate({{4000, 0.1, 0, 1000}}).posterior[0].median;
 
-  messages::Observation longer{30000, messages::ObservationKind::crack_length, "longest", longest,
-                               0.25 * (longest - shortest)};
+  const messages::Observation longer = crack(30000, longest, 0.25 * (longest - shortest));
   ASSERT_TRUE(e->observe(longer).ok());
   EXPECT_GT(e->estimate({{4000, 0.1, 0, 1000}}).posterior[0].median, prior_median);
 
@@ -120,8 +126,7 @@ TEST(Ensemble, AnObservationInTheFutureOrInvalidIsRefusedAndChangesNothing) {
   ASSERT_TRUE(e);
   ASSERT_TRUE(e->apply(std::vector<core::LoadBlock>{{4000, 0.1, 0, 1000}}).ok());
   const std::uint64_t before = e->state_hash();
-  messages::Observation future{2000, messages::ObservationKind::crack_length, "longest", 0.001,
-                               0.0002};
+  const messages::Observation future = crack(2000, 0.001, 0.0002);
   auto r = e->observe(future);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().field, "cycle");
@@ -132,12 +137,56 @@ TEST(Ensemble, AnObservationInTheFutureOrInvalidIsRefusedAndChangesNothing) {
   r = e->observe(bad);
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.error().field, "sigma_m");
+  bad = crack(1000, 0.001, 0.0002);
+  bad.origin = "hole 3";  // B1 has no hole
+  r = e->observe(bad);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().field, "origin");
   EXPECT_EQ(e->state_hash(), before);
   // "No crack found" by a method that would have found any crack of this ensemble is taken in.
-  messages::Observation none{1000, messages::ObservationKind::no_crack, "longest"};
+  messages::Observation none;
+  none.cycle = 1000;
+  none.kind = messages::ObservationKind::no_crack;
   none.pod_a50_m = 0.001;
   none.pod_slope = 3;
   EXPECT_TRUE(e->observe(none).ok());
+}
+
+// An inspection reported late (its cycle before the ensemble's) is compared with each particle's
+// crack as it was at that cycle (its later breaks undone): the same predictions, evidence and
+// weights, bit for bit, as when it is taken in at its own cycle. (No resampling here: that happens
+// when the observation is taken in, on the particles as they are then.)
+TEST(Ensemble, ALateObservationIsComparedWithTheCrackAtItsCycle) {
+  const auto model = coarse_b1(
+      "particles = 8\nseed = 7\na2 = { median = 1301.0, cov = 0.3 }\n"
+      "resample_ess_fraction = 0.001");
+  auto on_time = make(model), late = make(model);
+  ASSERT_TRUE(on_time && late);
+  for (int k = 0; k < 26; ++k) {
+    ASSERT_TRUE(on_time->apply(std::vector<core::LoadBlock>{{4000, 0.1, 0, 1000}}).ok());
+  }
+  ASSERT_TRUE(late->apply(std::vector<core::LoadBlock>{{4000, 0.1, 0, 32000}}).ok());
+  // The particles' cracks grew between 26,000 and 32,000 cycles: the late one sees other lengths
+  // now, and the ones of 26,000 through its break history.
+  double grew = 0.0;
+  for (std::size_t i = 0; i < late->size(); ++i) {
+    grew += observed_crack_length(*model, late->engine(i), "longest") -
+            observed_crack_length(*model, on_time->engine(i), "longest");
+    EXPECT_EQ(crack_length_at(*model, late->engine(i), 26000, "longest"),
+              observed_crack_length(*model, on_time->engine(i), "longest"))
+        << "particle " << i;
+  }
+  ASSERT_GT(grew, 0.0);
+  const messages::Observation o = crack(26000, 0.004, 0.0005);
+  auto a = on_time->observe(o);
+  auto b = late->observe(o);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_FALSE(a->resampled);
+  EXPECT_EQ(a->log_evidence, b->log_evidence);
+  EXPECT_EQ(a->predicted_median_m, b->predicted_median_m);
+  const auto wa = on_time->weights().weights(), wb = late->weights().weights();
+  ASSERT_EQ(wa.size(), wb.size());
+  for (std::size_t i = 0; i < wa.size(); ++i) EXPECT_EQ(wa[i], wb[i]) << i;
 }
 
 }  // namespace
