@@ -41,7 +41,9 @@ TEST(SubgridCrack, DemoCrackLengthMovesBetweenNodeStepsMonotoneWithinHalfAGridSp
   for (std::size_t i = 0; i < samples.size(); ++i) {
     EXPECT_LE(std::abs(samples[i].length - samples[i].node_length), 0.5 * dx + 1e-15)
         << "cycle " << samples[i].cycle;
-    if (i > 0) EXPECT_GE(samples[i].length, samples[i - 1].length) << "cycle " << samples[i].cycle;
+    if (i > 0) {
+      EXPECT_GE(samples[i].length, samples[i - 1].length) << "cycle " << samples[i].cycle;
+    }
   }
 
   // Distinct published values per node step (one step of the node-based length, about Δx: 0.5,
@@ -53,7 +55,8 @@ TEST(SubgridCrack, DemoCrackLengthMovesBetweenNodeStepsMonotoneWithinHalfAGridSp
   double step_length = -1.0;
   for (const Sample& s : samples) {
     if (s.node_length <= 0.0) continue;
-    if (s.node_length != step_length) {
+    // (A tip on the other node row has the same length up to rounding.)
+    if (std::abs(s.node_length - step_length) > 1e-9) {
       steps.emplace_back();
       step_length = s.node_length;
     }
