@@ -89,40 +89,10 @@ std::size_t farthest(const PathTree& t) {
   return best;
 }
 
-/// Direction of growth at `tip`: the principal axis of the crack nodes whose path distance lies
-/// within `back` of the tip's, oriented from their centroid towards the tip. (The path itself
-/// zig-zags between the two node rows or columns either side of a crack line; the axis of the
-/// nodes does not.) 0 when the tip is the only such node.
+/// Direction of growth at `tip` (crack_tracker.h tip_line).
 mesh::Point tip_direction(const mesh::Discretization& disc, const PathTree& t, std::size_t tip,
                           double back) {
-  const double from = t.dist[tip] - back;
-  double cx = 0, cy = 0;
-  int count = 0;
-  for (std::size_t k = 0; k < t.dist.size(); ++k) {
-    if (std::isfinite(t.dist[k]) && t.dist[k] >= from) {
-      cx += disc.position[k].x;
-      cy += disc.position[k].y;
-      ++count;
-    }
-  }
-  if (count < 2) return {};
-  cx /= count;
-  cy /= count;
-  double sxx = 0, sxy = 0, syy = 0;
-  for (std::size_t k = 0; k < t.dist.size(); ++k) {
-    if (std::isfinite(t.dist[k]) && t.dist[k] >= from) {
-      const double dx = disc.position[k].x - cx, dy = disc.position[k].y - cy;
-      sxx += dx * dx;
-      sxy += dx * dy;
-      syy += dy * dy;
-    }
-  }
-  // Major axis of the 2x2 scatter matrix.
-  const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);
-  mesh::Point d{std::cos(angle), std::sin(angle)};
-  const mesh::Point p = disc.position[tip];
-  if ((p.x - cx) * d.x + (p.y - cy) * d.y < 0) d = {-d.x, -d.y};
-  return d;
+  return tip_line(disc, t.dist, tip, back).direction;
 }
 
 }  // namespace
@@ -250,7 +220,7 @@ CrackFindings CrackFinder::find(const std::vector<double>& node_damage,
     component[k] = label[r];
   }
   CrackFindings findings;
-  findings.cracks = measure_components(node_damage, component, next);
+  findings.cracks = measure_components(node_damage, intact, component, next);
   // A notch whose zone joined an earlier notch's crack is listed with that crack only.
   std::vector<std::uint8_t> absorbed_notch(notches, 0);
   for (std::size_t n = 0; n < notches; ++n) {
@@ -336,7 +306,7 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
     if (crack[k]) component[k] = index_of_id(id[sets.root(k)]);
   }
   const auto count = static_cast<std::int32_t>(notches + root_ids.size());
-  findings.cracks = measure_components(node_damage, component, count);
+  findings.cracks = measure_components(node_damage, replayed, component, count);
   // Ids, births and joins per crack; a notch whose crack joined another's is not listed.
   std::vector<std::uint8_t> listed(notches, 1);
   for (std::size_t n = 0; n < notches; ++n) {
@@ -363,13 +333,14 @@ CrackFindings CrackFinder::find_with_history(const std::vector<double>& node_dam
 }
 
 std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double>& node_damage,
+                                                        const std::vector<std::uint8_t>& intact,
                                                         const std::vector<std::int32_t>& component,
                                                         std::int32_t num_components) const {
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   const std::size_t notches = notch_tips_.size();
   std::vector<FoundCrack> cracks(static_cast<std::size_t>(num_components));
   // Notch cracks: CrackTracker's numbers, unchanged.
-  const auto metrics = tracker_.measure(node_damage);
+  const auto metrics = tracker_.measure(node_damage, intact);
   for (std::size_t n = 0; n < notches && n < cracks.size(); ++n) {
     const CrackMetrics& m = metrics[n];
     FoundCrack& c = cracks[n];
@@ -379,7 +350,8 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
     const double cs = std::cos(m.kink_angle), sn = std::sin(m.kink_angle);
     const mesh::Point d = notch_directions_[n];
     c.tips = {{m.tip, {cs * d.x - sn * d.y, sn * d.x + cs * d.y}}};
-    c.length = m.length;
+    c.length = m.subgrid_length;
+    c.node_length = m.length;
     c.projected_length = m.projected_length;
     c.kink_angle = m.kink_angle;
     c.nodes = m.nodes;
@@ -391,6 +363,12 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
     }
   }
   const double back = 2.0 * disc_.horizon;  // tip direction over the last 2δ of the path
+  // The cut beyond a tip along the crack's line there (0 while its direction is unknown).
+  const auto progress = [&](const PathTree& t, std::size_t tip) {
+    const CrackLine line = tip_line(disc_, t.dist, tip, back);
+    if (line.direction.x == 0.0 && line.direction.y == 0.0) return 0.0;
+    return front_progress(disc_, intact, disc_.position[tip], line);
+  };
   for (std::size_t ci = notches; ci < cracks.size(); ++ci) {
     FoundCrack& c = cracks[ci];
     const auto& nodes = members[ci];
@@ -408,7 +386,8 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
       const std::size_t tip = farthest(t);
       const mesh::Point m = disc_.position[mouth], p = disc_.position[tip];
       c.origin_point = m;
-      c.length = t.dist[tip] + c.mouth_depth;
+      c.node_length = t.dist[tip] + c.mouth_depth;
+      c.length = subgrid_crack_length(c.node_length, progress(t, tip), disc_.dx);
       c.projected_length = std::hypot(p.x - m.x, p.y - m.y) + c.mouth_depth;
       c.tips = {{p, tip_direction(disc_, t, tip, back)}};
       continue;
@@ -419,11 +398,12 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
     const std::size_t a = farthest(first);
     const PathTree t = shortest_paths(disc_, component, cid, a, link_);
     const std::size_t b = farthest(t);
-    c.length = t.dist[b];
+    c.node_length = t.dist[b];
     std::size_t middle = b;
     for (auto k = static_cast<std::int32_t>(b); k >= 0; k = t.parent[static_cast<std::size_t>(k)]) {
       const auto ku = static_cast<std::size_t>(k);
-      if (std::abs(t.dist[ku] - 0.5 * c.length) < std::abs(t.dist[middle] - 0.5 * c.length)) {
+      if (std::abs(t.dist[ku] - 0.5 * c.node_length) <
+          std::abs(t.dist[middle] - 0.5 * c.node_length)) {
         middle = ku;
       }
     }
@@ -432,6 +412,10 @@ std::vector<FoundCrack> CrackFinder::measure_components(const std::vector<double
     c.projected_length = std::hypot(pb.x - pa.x, pb.y - pa.y);
     // At a: the path from b reversed; the direction from the node `back` along it towards a.
     const PathTree from_b = shortest_paths(disc_, component, cid, b, link_);
+    // The front moves at both tips (the cut beyond b from a's tree, beyond a from b's) and each
+    // tip node lags its cut: subgrid_crack_length takes one lag off, the second one here.
+    c.length = subgrid_crack_length(
+        c.node_length, progress(t, b) + progress(from_b, a) - kSubgridLag * disc_.dx, disc_.dx);
     c.tips = {{pa, tip_direction(disc_, from_b, a, back)}, {pb, tip_direction(disc_, t, b, back)}};
   }
   return cracks;

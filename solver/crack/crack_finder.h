@@ -13,7 +13,11 @@
 // that path plus the mouth's depth below the surface. The tip node is the last node with φ ≥ φ0:
 // the damage at a cut's end is about half the face value, so it lies 1–2Δx behind the last broken
 // bond (as CrackTracker's does). A crack that touches no surface (its nearest node deeper than δ)
-// is an interior crack with two tips, the ends of its longest path.
+// is an interior crack with two tips, the ends of its longest path. That node-based length moves
+// in steps of about Δx; the published `length` is the sub-grid one (crack_tracker.h,
+// subgrid_crack_length: the node-based length plus the fraction of the bonds crossing the crack's
+// line ahead of the tip that are broken, less the tip node's mean lag, within Δx/2 of the
+// node-based length).
 //
 // Ids: notch n's crack is id n + 1 (fixed); other cracks are numbered from N_notches + 1 in the
 // order they were born, by replaying the engine's break events (find_with_history). Ids are
@@ -47,8 +51,11 @@ struct FoundCrack {
   int notch = -1;  ///< the notch it grows from (origin notch), else -1
   mesh::Point
       origin_point;  ///< the notch tip, the mouth node (surface) or the path's middle (interior)
-  std::vector<CrackTipState> tips;     ///< one (notch, surface) or two (interior) tips
-  double length = 0.0;                 ///< along the path (m); notch: CrackMetrics::length
+  std::vector<CrackTipState> tips;  ///< one (notch, surface) or two (interior) tips
+  /// Along the path to the sub-grid front (m): subgrid_crack_length() of node_length and the
+  /// front's progress at each tip; notch: CrackMetrics::subgrid_length. What the twin publishes.
+  double length = 0.0;
+  double node_length = 0.0;  ///< along the path to the tip node(s) (m); notch: CrackMetrics::length
   double projected_length = 0.0;       ///< notch: along the notch; else straight origin → tip (m)
   double kink_angle = 0.0;             ///< notch cracks: CrackMetrics::kink_angle; else 0
   double mouth_depth = 0.0;            ///< surface cracks: the mouth node's distance to the surface
@@ -107,11 +114,12 @@ class CrackFinder {
   /// Crack nodes: φ ≥ φ0 and a broken bond that no notch cut.
   [[nodiscard]] std::vector<std::uint8_t> crack_nodes(
       const std::vector<double>& node_damage, const std::vector<std::uint8_t>& intact) const;
-  /// Metrics of every component; `component[k]` = component index or -1, components
-  /// [0, N_notches) are the notches' (possibly empty).
+  /// Metrics of every component (`intact`: the bond state of the damage, for the sub-grid length);
+  /// `component[k]` = component index or -1, components [0, N_notches) are the notches' (possibly
+  /// empty).
   [[nodiscard]] std::vector<FoundCrack> measure_components(
-      const std::vector<double>& node_damage, const std::vector<std::int32_t>& component,
-      std::int32_t num_components) const;
+      const std::vector<double>& node_damage, const std::vector<std::uint8_t>& intact,
+      const std::vector<std::int32_t>& component, std::int32_t num_components) const;
 
   const mesh::Discretization& disc_;
   const CrackTracker& tracker_;

@@ -16,6 +16,16 @@ CrackTracker::CrackTracker(const mesh::Discretization& disc, std::vector<mesh::N
 }
 
 std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_damage) const {
+  return measure(node_damage, nullptr);
+}
+
+std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_damage,
+                                                const std::vector<std::uint8_t>& intact) const {
+  return measure(node_damage, &intact);
+}
+
+std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_damage,
+                                                const std::vector<std::uint8_t>* intact) const {
   std::vector<CrackMetrics> cracks;
   const auto nn = static_cast<std::size_t>(disc_.num_nodes());
   // Path steps join neighbouring damaged nodes: the diagonal neighbour (√2Δx) on the regular grid,
@@ -77,6 +87,20 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
       crack.length = dist[tip];
       crack.projected_length =
           (crack.tip.x - notch.b.x) * dir.x + (crack.tip.y - notch.b.y) * dir.y;
+      if (intact != nullptr) {
+        // The crack's line over its last 2δ; the notch's line while the crack is shorter (the
+        // principal axis of a few nodes on two rows is not the crack's).
+        const double back = 2.0 * disc_.horizon;
+        CrackLine line{notch.b, dir};
+        if (crack.length >= back) line = tip_line(disc_, dist, tip, back);
+        // A seed tip's path distance is its straight distance from the notch tip, partly across
+        // the crack line (Δx/2 at the first node): its front counts from its projection on the
+        // notch, as the cut does (else the front would step back at the first link).
+        const double base = parent[tip] < 0 ? crack.projected_length : crack.length;
+        crack.subgrid_length = subgrid_crack_length(
+            crack.length, base - crack.length + front_progress(disc_, *intact, crack.tip, line),
+            disc_.dx);
+      }
       const double at = std::min(options_.kink_distance, crack.length);
       // β is measured on the branch that leads to the tip: where the crack branches (near-pure
       // mode II grows one branch up and one down) the centroid of every node `at` along the path
@@ -109,6 +133,78 @@ std::vector<CrackMetrics> CrackTracker::measure(const std::vector<double>& node_
     cracks.push_back(crack);
   }
   return cracks;
+}
+
+CrackLine tip_line(const mesh::Discretization& disc, const std::vector<double>& dist,
+                   std::size_t tip, double back) {
+  const double from = dist[tip] - back;
+  double cx = 0, cy = 0;
+  int count = 0;
+  for (std::size_t k = 0; k < dist.size(); ++k) {
+    if (std::isfinite(dist[k]) && dist[k] >= from) {
+      cx += disc.position[k].x;
+      cy += disc.position[k].y;
+      ++count;
+    }
+  }
+  if (count < 2) return {disc.position[tip], {}};
+  cx /= count;
+  cy /= count;
+  double sxx = 0, sxy = 0, syy = 0;
+  for (std::size_t k = 0; k < dist.size(); ++k) {
+    if (std::isfinite(dist[k]) && dist[k] >= from) {
+      const double dx = disc.position[k].x - cx, dy = disc.position[k].y - cy;
+      sxx += dx * dx;
+      sxy += dx * dy;
+      syy += dy * dy;
+    }
+  }
+  // Major axis of the 2x2 scatter matrix.
+  const double angle = 0.5 * std::atan2(2 * sxy, sxx - syy);
+  mesh::Point d{std::cos(angle), std::sin(angle)};
+  const mesh::Point p = disc.position[tip];
+  if ((p.x - cx) * d.x + (p.y - cy) * d.y < 0) d = {-d.x, -d.y};
+  return {{cx, cy}, d};
+}
+
+double front_progress(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
+                      mesh::Point tip, const CrackLine& line) {
+  const double dx = disc.dx;
+  const mesh::Point d = line.direction, n{-d.y, d.x}, c = line.point;
+  const double from = (tip.x - c.x) * d.x + (tip.y - c.y) * d.y - dx;  // s_t − Δx
+  const auto bins = static_cast<std::size_t>(std::ceil((disc.horizon + 2.0 * dx) / dx - 1e-9));
+  std::vector<int> total(bins, 0), broken(bins, 0);
+  // A bond crossing the window has both ends within its reach of the window's nodes.
+  const double scan = 2.0 * disc.horizon + 3.0 * dx;
+  for (std::size_t k = 0; k < disc.position.size(); ++k) {
+    const mesh::Point pk = disc.position[k];
+    if (std::hypot(pk.x - tip.x, pk.y - tip.y) > scan) continue;
+    for (auto f = disc.family_offset[k]; f < disc.family_offset[k + 1]; ++f) {
+      const auto b = static_cast<std::size_t>(disc.family_bonds[static_cast<std::size_t>(f)]);
+      if (static_cast<std::size_t>(disc.bond_i[b]) != k) continue;  // each bond once
+      const mesh::Point pj = disc.position[static_cast<std::size_t>(disc.bond_j[b])];
+      const double ni = (pk.x - c.x) * n.x + (pk.y - c.y) * n.y;
+      const double nj = (pj.x - c.x) * n.x + (pj.y - c.y) * n.y;
+      if ((ni < 0.0) == (nj < 0.0)) continue;  // does not cross the line
+      const double si = (pk.x - c.x) * d.x + (pk.y - c.y) * d.y;
+      const double sj = (pj.x - c.x) * d.x + (pj.y - c.y) * d.y;
+      const double u = (si + (sj - si) * ni / (ni - nj) - from) / dx;
+      if (u < 0.0 || u >= static_cast<double>(bins)) continue;
+      const auto i = static_cast<std::size_t>(u);
+      ++total[i];
+      if (!intact[b]) ++broken[i];
+    }
+  }
+  double cut = 0.0;
+  for (std::size_t i = 0; i < bins; ++i) {
+    if (total[i] > 0) cut += dx * broken[i] / total[i];
+  }
+  return cut - dx;
+}
+
+double subgrid_crack_length(double node_length, double progress, double dx) {
+  const double a = std::max(node_length + progress - kSubgridLag * dx, node_length - 0.5 * dx);
+  return std::max(0.0, std::min(a, node_length + 0.5 * dx));
 }
 
 FaceNodePair extrapolation_face_nodes(const mesh::Discretization& disc, mesh::Point tip,

@@ -15,10 +15,13 @@
 namespace peritwin::crack {
 
 struct CrackMetrics {
-  int notch = 0;                  ///< index of the notch it grows from
-  mesh::Point origin;             ///< the notch tip
-  mesh::Point tip;                ///< the crack-path node farthest along the path
-  double length = 0.0;            ///< length along the path from the notch tip (m)
+  int notch = 0;        ///< index of the notch it grows from
+  mesh::Point origin;   ///< the notch tip
+  mesh::Point tip;      ///< the crack-path node farthest along the path
+  double length = 0.0;  ///< length along the path from the notch tip to the tip node (m)
+  /// The sub-grid length (subgrid_crack_length(), within Δx/2 of `length`): measure() with the
+  /// intact flags only, else 0. What the twin publishes.
+  double subgrid_length = 0.0;
   double projected_length = 0.0;  ///< (tip − origin)·notch direction (m)
   double kink_angle = 0.0;  ///< β: angle from the notch direction to the early path (rad, CCW +)
   std::int32_t nodes = 0;   ///< damaged nodes in the crack
@@ -39,12 +42,56 @@ class CrackTracker {
                CrackTrackerOptions options = {});
   /// One entry per notch, in notch order (length 0 when nothing has grown yet).
   [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage) const;
+  /// The same with each crack's subgrid_length from the intact flags the damage came from.
+  [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage,
+                                                  const std::vector<std::uint8_t>& intact) const;
 
  private:
+  [[nodiscard]] std::vector<CrackMetrics> measure(const std::vector<double>& node_damage,
+                                                  const std::vector<std::uint8_t>* intact) const;
   const mesh::Discretization& disc_;
   std::vector<mesh::Notch> notches_;
   CrackTrackerOptions options_;
 };
+
+/// A crack's line at a tip: a point on it and its direction of growth (unit; 0 when unknown).
+struct CrackLine {
+  mesh::Point point;
+  mesh::Point direction;
+};
+/// The line of the crack nodes whose path distance `dist` lies within `back` of the tip's: their
+/// centroid and principal axis, oriented from the centroid towards the tip (the path itself
+/// zig-zags between the two node rows or columns either side of a crack line; the axis of the
+/// nodes does not, and their centroid lies between the rows). Direction 0 when the tip is the only
+/// such node.
+CrackLine tip_line(const mesh::Discretization& disc, const std::vector<double>& dist,
+                   std::size_t tip, double back);
+
+/// Sub-grid crack length (docs/design.md "Sub-grid crack length"). The node-based length L (the
+/// path to the tip node, the last node with φ ≥ φ0) moves in steps of about Δx while the bonds
+/// ahead of the tip break one group after the other. Those bonds cross the crack's line: with s
+/// the coordinate along `line` (s_t at the tip node) and c(s) the fraction of the bonds crossing
+/// the line within the Δx-wide bin around s that are broken (notch cuts included), the cut ahead
+/// of the tip node is
+///   p = Σ_bins c_i·Δx − Δx,   bins of width Δx over [s_t − Δx, s_t + δ + Δx)
+/// (the bin behind the tip is cut through: p is the cut's extent beyond s_t, the equivalent
+/// sharp cut; about 19 bonds cross a Δx of line at δ = 3Δx, so p moves in steps of ~Δx/19).
+/// Computed over the bonds of the nodes within 2δ + 2Δx of the tip (cheap: ~100 nodes).
+double front_progress(const mesh::Discretization& disc, const std::vector<std::uint8_t>& intact,
+                      mesh::Point tip, const CrackLine& line);
+
+/// The published crack length from the node-based length L and the cut ahead of the tip p (the
+/// sum over the crack's tips when it has two):
+///   a = max(0, min(max(L + p − lag, L − Δx/2), L + Δx/2)),   lag = kSubgridLag·Δx.
+/// L + p, the path to the tip node plus the cut beyond it, rises with every break near the tip;
+/// the tip node lags the cut's end (a node reaches φ0 only once the cut runs past it, and the
+/// tip node is the last such node), so L + p − L is about `lag` on average over a node step
+/// (measured on the demo's break sequence: tests/twin/test_subgrid_crack.cpp). Subtracting it
+/// keeps a on L's mean (the criterion and the A2 calibration on L keep their meaning); the clamp
+/// keeps |a − L| ≤ Δx/2. L, p and the clamp bounds only grow as bonds break on a straight
+/// crack, so a is monotone there (tested on the demo; a new direction of the line can move p).
+inline constexpr double kSubgridLag = 1.2;
+double subgrid_crack_length(double node_length, double progress, double dx);
 
 /// Mode I and II stress intensity factors from the crack-face displacement jump at r1 < r2 behind
 /// a tip, 001 Eq. (62)-(63), for a crack running along `direction` (unit vector) with its faces
