@@ -6,18 +6,18 @@
 //  * the truth: its hidden parameters drawn from the detail's own prior ([detail.uncertainty]: A2
 //    and the load scale, lognormal) by a stream of its own (prognostics::Random(--seed), jumped t
 //    times: independent of the ensemble's stream and of the number of trials). A fatigue engine of
-//    the detail with the truth's A2 (DetailModel::make_engine(A2/A2_config)) applies the reference
-//    spectrum ([detail.life] reference_spectrum, pass after pass, the blocks as written) with
-//    P_max × the truth's load scale until its end of life (end_of_life_check: the exact cycle):
-//    the true end-of-life cycle T.
+//    the detail with the truth's A2 (DetailModel::make_engine(A2/A2_config)) applies the loads
+//    (the reference spectrum of [detail.life], or --history: pass after pass, the blocks as
+//    written) with P_max × the truth's load scale until its end of life (end_of_life_check: the
+//    exact cycle): the true end-of-life cycle T.
 //  * the inspections: --inspections at fixed intervals of --interval × a base life: the nominal
-//    life (default; the life of an engine at the prior's medians, what an operator schedules by,
-//    the same for every trial) or, --basis truth, each truth's own T. An inspection at or after T
-//    is not made (the detail has failed). What it reports: the truth's crack at the criterion's
-//    origin (observed_crack_length) + N(0, --sigma), clamped at 0; when the truth has no crack
-//    yet, "no crack found" with the POD curve (--pod-a50, --pod-slope). With --random-detection a
-//    crack is found only with probability POD(a) (else "no crack found"). Every inspection draws
-//    one uniform and one normal from the trial's stream, found or not.
+//    life (default; the life of an engine at the prior's medians under the same loads, what an
+//    operator schedules by, the same for every trial) or, --basis truth, each truth's own T. An
+//    inspection at or after T is not made (the detail has failed). What it reports: the truth's
+//    crack at the criterion's origin (observed_crack_length) + N(0, --sigma), clamped at 0; when
+//    the truth has no crack yet, "no crack found" with the POD curve (--pod-a50, --pod-slope). With
+//    --random-detection a crack is found only with probability POD(a) (else "no crack found").
+//    Every inspection draws one uniform and one normal from the trial's stream, found or not.
 //  * the twin: an Ensemble of the detail (seed [detail.uncertainty] seed + t, --particles) fed the
 //    same nominal blocks (it applies them × each particle's load scale), split at the inspection
 //    cycles; each inspection is taken in at its own cycle (Ensemble::observe), and an estimate
@@ -47,6 +47,7 @@
 #include "core/cli_checks.h"
 #include "core/json_line.h"
 #include "core/proc_files.h"
+#include "loads/load_history.h"
 #include "messages/observation.h"
 #include "prognostics/metrics.h"
 #include "prognostics/observation_likelihood.h"
@@ -71,7 +72,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 struct Options {
   std::string config = std::string(PERITWIN_EXAMPLES_DIR) + "/b1-ct-al6061.toml";
-  std::string detail;  ///< "" = the first detail
+  std::string detail;   ///< "" = the first detail
+  std::string history;  ///< "" = the reference spectrum is also the applied load
+  std::string history_format = "cycles";
   int trials = 20;
   std::int64_t particles = 0;  ///< 0 = the config's
   std::uint64_t seed = 2032;   ///< the truths' stream
@@ -229,7 +232,8 @@ core::JsonLine estimate_json(const Prediction& p, double truth) {
 
 struct Setup {
   config::DetailConfig config;
-  std::vector<core::LoadBlock> spectrum;
+  std::vector<core::LoadBlock> spectrum;  ///< the estimates' future loads (reference spectrum)
+  std::vector<core::LoadBlock> applied;   ///< the loads applied, pass after pass (--history)
   std::string origin;
   std::vector<prognostics::UncertainParameter> priors;  ///< the truths' (a2 and/or load_scale)
   double nominal_life = kInf;
@@ -264,7 +268,7 @@ TrialResult run_trial(const Setup& s, const Options& o, int trial, prognostics::
   const double cap = kTruthCapFactor * s.nominal_life;
 
   // The truth's life, then the schedule, then its cracks at the inspections.
-  TruthRun truth = run_truth(*model, s.spectrum, a2_factor, load_scale, {}, cap, s.origin);
+  TruthRun truth = run_truth(*model, s.applied, a2_factor, load_scale, {}, cap, s.origin);
   const double T = truth.end_of_life;
   double truth_s = truth.wall_s;
   core::JsonLine line;
@@ -281,7 +285,7 @@ TrialResult run_trial(const Setup& s, const Options& o, int trial, prognostics::
     if (c > 0 && static_cast<double>(c) < T && (at.empty() || c > at.back())) at.push_back(c);
   }
   if (!at.empty()) {
-    const TruthRun again = run_truth(*model, s.spectrum, a2_factor, load_scale, at, cap, s.origin);
+    const TruthRun again = run_truth(*model, s.applied, a2_factor, load_scale, at, cap, s.origin);
     truth.lengths = again.lengths;
     truth_s += again.wall_s;
   }
@@ -334,7 +338,7 @@ TrialResult run_trial(const Setup& s, const Options& o, int trial, prognostics::
   }
   twin::Ensemble& ensemble = **created;
   const double create_s = seconds_since(t0);
-  SpectrumCursor loads(s.spectrum);
+  SpectrumCursor loads(s.applied);
   std::vector<Prediction> predictions;
   int taken = 0;
   const auto predict = [&](const std::string& kind) {
@@ -508,6 +512,22 @@ int run(const Options& o) {
   u.percentiles.clear();
   for (int p = 1; p <= 99; ++p) u.percentiles.push_back(p);
   s.spectrum = c.life.reference_spectrum;
+  s.applied = s.spectrum;
+  if (!o.history.empty()) {
+    const auto format = o.history_format == "spectrum" ? loads::HistoryFormat::spectrum
+                        : o.history_format == "series" ? loads::HistoryFormat::series
+                                                       : loads::HistoryFormat::cycles;
+    loads::SeriesRules rules;
+    rules.gate = c.sensor.gate;
+    rules.alpha_bin = c.sensor.alpha_bin;
+    rules.compressed_bonds_fatigue = c.fatigue.compressed_bonds_fatigue;
+    auto read = loads::read_blocks(o.history, format, rules);
+    if (!read) {
+      std::fprintf(stderr, "peritwin-bench prognostics: %s\n", read.error().message().c_str());
+      return 2;
+    }
+    s.applied = std::move(read->blocks);
+  }
   s.origin = c.life.crack_origin.empty() ? "longest" : c.life.crack_origin;
   if (u.a2.cov > 0) {
     auto p = prognostics::UncertainParameter::lognormal("a2", u.a2.median, u.a2.cov);
@@ -530,7 +550,7 @@ int run(const Options& o) {
   // The nominal life: an engine at the prior's medians.
   const double a2_config = c.fatigue.strain.A2;
   const TruthRun nominal =
-      run_truth(**built, s.spectrum, a2_config > 0 ? u.a2.median / a2_config : 1.0,
+      run_truth(**built, s.applied, a2_config > 0 ? u.a2.median / a2_config : 1.0,
                 u.load_scale.median, {}, kInf, s.origin);
   s.nominal_life = nominal.end_of_life;
   if (!std::isfinite(s.nominal_life)) {
@@ -597,6 +617,7 @@ int run(const Options& o) {
   line["bench"] = "prognostics";
   line["config"] = o.config;
   line["detail"] = c.id;
+  line["history"] = o.history.empty() ? core::JsonLine(nullptr) : core::JsonLine(o.history);
   line["nodes"] = s.nodes;
   line["bonds"] = s.bonds;
   line["dx_m"] = core::significant(c.dx, 4);
@@ -660,6 +681,13 @@ int main(int argc, char** argv) {
   app.add_option("--config", o.config, "the detail's config (default: the B1 example)")
       ->check(CLI::ExistingFile);
   app.add_option("--detail", o.detail, "the detail's id (default: the first)");
+  app.add_option("--history", o.history,
+                 "the loads the truth and the twin get, repeated until the truth's end of life "
+                 "(default: the reference spectrum; the estimates always use it)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--format", o.history_format,
+                 "--history's format: cycles (default), spectrum, series")
+      ->check(CLI::IsMember({"cycles", "spectrum", "series"}));
   app.add_option("--trials", o.trials, "truths (default 20)")->check(CLI::Range(1, 100000));
   app.add_option("--particles", o.particles, "particles (default: the config's)")
       ->check(CLI::Range(std::int64_t{2}, std::int64_t{4096}));
