@@ -56,6 +56,7 @@
 #include "solver/fatigue/laws/strain_range.h"
 #include "twin/detail_model.h"
 #include "twin/ensemble.h"
+#include "twin/life.h"
 
 namespace {
 
@@ -549,10 +550,18 @@ int run(const Options& o) {
   s.bonds = static_cast<long long>((*built)->disc().num_bonds());
   // The nominal life: an engine at the prior's medians.
   const double a2_config = c.fatigue.strain.A2;
-  const TruthRun nominal =
-      run_truth(**built, s.applied, a2_config > 0 ? u.a2.median / a2_config : 1.0,
-                u.load_scale.median, {}, kInf, s.origin);
-  s.nominal_life = nominal.end_of_life;
+  // Sought as far as a truth: by passes until twin::kMaxSimulatedCycles (a pass without breaks
+  // doubles the next; the same as the truths' run for a constant-amplitude load).
+  {
+    const auto engine = (*built)->make_engine(a2_config > 0 ? u.a2.median / a2_config : 1.0);
+    if (!engine->initialize()) {
+      std::fprintf(stderr, "peritwin-bench prognostics: %s\n", engine->failure_reason().c_str());
+      return 3;
+    }
+    std::vector<core::LoadBlock> scaled = s.applied;
+    for (auto& b : scaled) b.p_max *= u.load_scale.median;
+    s.nominal_life = twin::run_to_end(*engine, scaled, twin::end_of_life_check(**built));
+  }
   if (!std::isfinite(s.nominal_life)) {
     std::fprintf(stderr, "peritwin-bench prognostics: no end of life at the prior's medians\n");
     return 3;
