@@ -94,8 +94,8 @@ struct Options {
   bool lambda_estimate = true;
 };
 
-/// The reference spectrum repeated pass after pass, handed out in blocks as written, a block split
-/// where a requested count ends (exact in the engine's block stepping).
+/// A load list (the reference spectrum, a history) repeated pass after pass, handed out in blocks
+/// as written, a block split where a requested count ends (exact in the engine's block stepping).
 class SpectrumCursor {
  public:
   explicit SpectrumCursor(std::vector<core::LoadBlock> spectrum) : spectrum_(std::move(spectrum)) {}
@@ -304,7 +304,7 @@ TrialResult run_trial(const Setup& s, const Options& o, int trial, prognostics::
   const prognostics::PodCurve pod{o.pod_a50, o.pod_slope};
   std::vector<messages::Observation> reports;
   core::JsonLine inspections = core::JsonLine::array();
-  for (std::size_t k = 0; k < at.size(); ++k) {
+  for (std::size_t k = 0; k < at.size() && k < truth.lengths.size(); ++k) {
     const double a = truth.lengths[k];
     const double u = random.uniform();
     const double z = random.standard_normal();
