@@ -582,12 +582,13 @@ int run_stream_rainflow(std::int64_t samples, double gate, bool noise) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // `peritwin-bench ingest|soak|stream ...` runs peritwin-bench-ingest|soak|stream (they need LCM
-  // and the twin library or daemon, which this solver benchmark does not link) from the same
-  // directory with the same arguments.
+  // `peritwin-bench ingest|soak|stream|dashboard|fleet|life|prognostics ...` runs
+  // peritwin-bench-<subcommand> (they need LCM and the twin library or daemon, which this solver
+  // benchmark does not link) from the same directory with the same arguments.
   if (argc >= 2 && (std::string(argv[1]) == "ingest" || std::string(argv[1]) == "soak" ||
                     std::string(argv[1]) == "stream" || std::string(argv[1]) == "dashboard" ||
-                    std::string(argv[1]) == "fleet" || std::string(argv[1]) == "life")) {
+                    std::string(argv[1]) == "fleet" || std::string(argv[1]) == "life" ||
+                    std::string(argv[1]) == "prognostics")) {
     const auto self = std::filesystem::read_symlink("/proc/self/exe");
     const std::string program =
         (self.parent_path() / ("peritwin-bench-" + std::string(argv[1]))).string();
