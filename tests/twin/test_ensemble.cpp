@@ -99,11 +99,20 @@ TEST(Ensemble, AnInspectionMovesThePosteriorTheWayThePhysicsSays) {
                                observed_crack_length(*model, e->engine(i), "longest"));
   }
   std::sort(a2_and_length.begin(), a2_and_length.end());
+  // The node-based length grows with A2; the published (sub-grid) one lies within Δx/2 of it
+  // (docs/design.md, "Sub-grid crack length"), so it may fall back by up to Δx/2 = 1 mm between
+  // two particles whose cracks took other nodes.
+  const double half_cell = 0.5 * model->disc().dx;
   for (std::size_t i = 1; i < a2_and_length.size(); ++i) {
-    EXPECT_GE(a2_and_length[i].second, a2_and_length[i - 1].second)
+    EXPECT_GE(a2_and_length[i].second, a2_and_length[i - 1].second - half_cell)
         << "A2 factor " << a2_and_length[i].first;
   }
-  const double shortest = a2_and_length.front().second, longest = a2_and_length.back().second;
+  EXPECT_GT(a2_and_length.back().second, a2_and_length.front().second);
+  double shortest = a2_and_length.front().second, longest = shortest;
+  for (const auto& [a2, length] : a2_and_length) {
+    shortest = std::min(shortest, length);
+    longest = std::max(longest, length);
+  }
   ASSERT_GT(longest, shortest) << "no spread of crack lengths to learn from";
   const double prior_median = e->estimate({{4000, 0.1, 0, 1000}}).posterior[0].median;
 
