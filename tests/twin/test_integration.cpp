@@ -20,6 +20,7 @@
 
 #include "messages/auth.h"
 #include "messages/channels.h"
+#include "messages/codec.h"
 #include "messages/mesh.h"
 #include "outputs/checkpoint_io.h"
 #include "replay/replay_tool.h"
@@ -169,6 +170,115 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   EXPECT_EQ(messages::applied_seq(states.back(), "p"), 1);
   EXPECT_EQ(daemon.twin(0).state_seq(), 1);
   daemon.stop();
+}
+
+// Issue 32: observations on the bus. The daemon takes an observation_t in from the detail's
+// OBSERVATION channel in arrival order with the batches, refuses a bad one with a REJECT whose
+// `what` names the observation's field, lists what it took in in STATE, checkpoints it at once,
+// and a restarted daemon resumes the learning twin with the same bits (equal to the in-process
+// twin fed the same batches and observations).
+TEST_F(MemqTest, ObservationsOnTheBusAreTakenInOnceRefusedWithReasonsAndSurviveARestart) {
+  std::string text = b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
+  text +=
+      "\n[detail.uncertainty]\nparticles = 4\nseed = 2\na2 = { median = 1301.0, cov = 0.3 "
+      "}\n";
+  const config::TwinConfig config = config_of(text);
+  const auto batches = history(12, 2000);  // 24,000 cycles
+  messages::Observation seen;
+  seen.detail_id = "b1-ct";
+  seen.source_id = "ndt";
+  seen.seq = 1;
+  seen.cycle = 20000;
+  seen.length_m = 0.0015;
+  seen.sigma_m = 0.0003;
+  // The in-process twin fed the same: the bits the daemon must reach.
+  auto model = testing::b1_model(config.details[0]);
+  auto expected = testing::make_twin(model);
+  for (const auto& b : batches) ASSERT_TRUE(expected->apply(b).applied());
+  ASSERT_TRUE(expected->observe(seen).applied());
+
+  lcm::LCM lcm("memq://");
+  std::vector<peritwin_msgs::reject_t> rejects;
+  std::vector<peritwin_msgs::damage_state_t> states;
+  struct Sink {
+    std::vector<peritwin_msgs::reject_t>* rejects;
+    std::vector<peritwin_msgs::damage_state_t>* states;
+    void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+      rejects->push_back(*m);
+    }
+    void state(const lcm::ReceiveBuffer*, const std::string&,
+               const peritwin_msgs::damage_state_t* m) {
+      states->push_back(*m);
+    }
+  } sink{&rejects, &states};
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Sink::reject, &sink);
+  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::state, &sink);
+  const std::string channel = messages::channel("b1-ct", messages::Kind::kObservation);
+  auto send = [&](const messages::Observation& o) {
+    const auto m = messages::observation_message(o, 0);
+    lcm.publish(channel, &m);
+  };
+  const auto wait_for = [&](service::Daemon& d, std::size_t n_rejects, std::size_t n_states) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(kGiveUpS);
+    while ((rejects.size() < n_rejects || states.size() < n_states) &&
+           std::chrono::steady_clock::now() < deadline) {
+      d.poll(20);
+    }
+    d.tick();
+  };
+  {
+    service::Daemon first(lcm, config, options_);
+    const core::Status started = first.start();
+    ASSERT_TRUE(started.ok()) << core::message_of(started);
+    replay::LcmReplayer replayer(lcm, batches, {true, 1, 3.0, kGiveUpS});
+    ASSERT_TRUE(replayer
+                    .run({},
+                         [&] {
+                           first.tick();
+                           return true;
+                         })
+                    .ok);
+    states.clear();
+    messages::Observation future = seen;
+    future.cycle = 30000;
+    messages::Observation unknown = seen;
+    unknown.origin = "hole 0";
+    const std::uint8_t garbage[] = {9, 8, 7};
+    send(future);                                   // in the twin's future
+    send(unknown);                                  // no hole on B1
+    lcm.publish(channel, garbage, sizeof garbage);  // does not decode
+    send(seen);                                     // taken in
+    send(seen);                                     // a duplicate
+    wait_for(first, 4, 2);
+    ASSERT_EQ(rejects.size(), 4u);
+    using R = peritwin_msgs::reject_t;
+    EXPECT_EQ(rejects[0].code, R::CODE_INVALID);
+    EXPECT_EQ(rejects[0].what, "observation.cycle");
+    EXPECT_EQ(rejects[1].what, "observation.origin");
+    EXPECT_EQ(rejects[2].code, R::CODE_DECODE);
+    EXPECT_EQ(rejects[2].what, "observation");
+    EXPECT_EQ(rejects[3].code, R::CODE_DUPLICATE);
+    EXPECT_EQ(rejects[3].what, "observation.seq");
+    for (const auto& r : rejects) EXPECT_FALSE(r.why.empty());
+    ASSERT_GE(states.size(), 1u);
+    const auto& taken = states.front();
+    EXPECT_EQ(taken.observation_count, 1);
+    ASSERT_EQ(taken.num_observation_sources, 1);
+    EXPECT_EQ(taken.observation_source_ids[0], "ndt");
+    EXPECT_EQ(taken.observation_applied_seq[0], 1);
+    EXPECT_EQ(taken.ensemble_estimate_cycle, 24000);
+    EXPECT_EQ(taken.state_hash, expected->state_hash_hex());
+    EXPECT_EQ(first.twin(0).state_hash_hex(), expected->state_hash_hex());
+    first.stop();
+  }
+  // Taken in means durable: the restart resumes with the observation and the same bits.
+  service::Daemon second(lcm, config, options_);
+  const core::Status started = second.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
+  EXPECT_EQ(second.twin(0).state_hash_hex(), expected->state_hash_hex());
+  EXPECT_EQ(second.twin(0).observed().at("ndt"), 1);
+  second.stop();
 }
 
 TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
