@@ -309,6 +309,23 @@ bool mesh_request_layout(const unsigned char* p, std::size_t size) {
          w.string() && w.at_end();
 }
 
+/// A signed message's payload against its size bound and its layout (`layout` returns why not, and
+/// the bytes the tag covers): the DECODE outcome, or nothing when the decoder can be given it.
+std::optional<Outcome> payload_error(const void* data, std::size_t size, std::size_t max_size,
+                                     std::string (*layout)(const unsigned char*, std::size_t,
+                                                           std::size_t&),
+                                     std::size_t& signed_size) {
+  if (size > max_size) {
+    return decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
+                        std::to_string(max_size));
+  }
+  if (std::string e = layout(static_cast<const unsigned char*>(data), size, signed_size);
+      !e.empty()) {
+    return decode_error(std::move(e));
+  }
+  return std::nullopt;
+}
+
 template <typename Message>
 std::optional<Message> decode_checked(const void* data, std::size_t size,
                                       bool (*layout)(const unsigned char*, std::size_t)) {
@@ -384,16 +401,9 @@ std::int64_t now_utime() {
 
 DecodedObservation decode_observation(const void* data, std::size_t size) {
   DecodedObservation out;
-  if (size > kMaxObservationPayload) {
-    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
-                             std::to_string(kMaxObservationPayload));
-    return out;
-  }
   std::size_t signed_size = 0;
-  if (const std::string e =
-          observation_layout(static_cast<const unsigned char*>(data), size, signed_size);
-      !e.empty()) {
-    out.error = decode_error(e);
+  if (auto e = payload_error(data, size, kMaxObservationPayload, observation_layout, signed_size)) {
+    out.error = std::move(*e);
     return out;
   }
   peritwin_msgs::observation_t m{};
@@ -454,16 +464,9 @@ peritwin_msgs::observation_t observation_message(const Observation& o, std::int6
 
 Decoded decode_batch(const void* data, std::size_t size) {
   Decoded out;
-  if (size > kMaxBatchPayload) {
-    out.error = decode_error("oversized payload: " + std::to_string(size) + " bytes > " +
-                             std::to_string(kMaxBatchPayload));
-    return out;
-  }
   std::size_t signed_size = 0;
-  if (const std::string e =
-          check_layout(static_cast<const unsigned char*>(data), size, signed_size);
-      !e.empty()) {
-    out.error = decode_error(e);
+  if (auto e = payload_error(data, size, kMaxBatchPayload, check_layout, signed_size)) {
+    out.error = std::move(*e);
     return out;
   }
   peritwin_msgs::load_batch_t msg{};

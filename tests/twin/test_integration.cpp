@@ -49,6 +49,23 @@ std::vector<messages::Batch> history(int n, std::int64_t cycles = 1500) {
   return loads::make_twin_batches(blocks, "b1-ct", "replay", {4, 1000});
 }
 
+/// Collects a detail's REJECTs and STATEs from the bus.
+struct BusSink {
+  std::vector<peritwin_msgs::reject_t>* rejects;
+  std::vector<peritwin_msgs::damage_state_t>* states;
+  void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
+    rejects->push_back(*m);
+  }
+  void state(const lcm::ReceiveBuffer*, const std::string&,
+             const peritwin_msgs::damage_state_t* m) {
+    states->push_back(*m);
+  }
+  void subscribe(lcm::LCM& lcm, const std::string& detail) {
+    lcm.subscribe(messages::channel(detail, messages::Kind::kReject), &BusSink::reject, this);
+    lcm.subscribe(messages::channel(detail, messages::Kind::kState), &BusSink::state, this);
+  }
+};
+
 class MemqTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -117,19 +134,8 @@ TEST_F(MemqTest, RejectsArePublishedWithTheirReasons) {
   ASSERT_TRUE(started.ok()) << core::message_of(started);
   std::vector<peritwin_msgs::reject_t> rejects;
   std::vector<peritwin_msgs::damage_state_t> states;
-  struct Sink {
-    std::vector<peritwin_msgs::reject_t>* rejects;
-    std::vector<peritwin_msgs::damage_state_t>* states;
-    void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
-      rejects->push_back(*m);
-    }
-    void state(const lcm::ReceiveBuffer*, const std::string&,
-               const peritwin_msgs::damage_state_t* m) {
-      states->push_back(*m);
-    }
-  } sink{&rejects, &states};
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Sink::reject, &sink);
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::state, &sink);
+  BusSink sink{&rejects, &states};
+  sink.subscribe(lcm, "b1-ct");
   const std::string load = messages::channel("b1-ct", messages::Kind::kLoad);
   auto send = [&](const messages::Batch& b) {
     const auto m = messages::batch_message(b, 0);
@@ -200,19 +206,8 @@ TEST_F(MemqTest, ObservationsOnTheBusAreTakenInOnceRefusedWithReasonsAndSurviveA
   lcm::LCM lcm("memq://");
   std::vector<peritwin_msgs::reject_t> rejects;
   std::vector<peritwin_msgs::damage_state_t> states;
-  struct Sink {
-    std::vector<peritwin_msgs::reject_t>* rejects;
-    std::vector<peritwin_msgs::damage_state_t>* states;
-    void reject(const lcm::ReceiveBuffer*, const std::string&, const peritwin_msgs::reject_t* m) {
-      rejects->push_back(*m);
-    }
-    void state(const lcm::ReceiveBuffer*, const std::string&,
-               const peritwin_msgs::damage_state_t* m) {
-      states->push_back(*m);
-    }
-  } sink{&rejects, &states};
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kReject), &Sink::reject, &sink);
-  lcm.subscribe(messages::channel("b1-ct", messages::Kind::kState), &Sink::state, &sink);
+  BusSink sink{&rejects, &states};
+  sink.subscribe(lcm, "b1-ct");
   const std::string channel = messages::channel("b1-ct", messages::Kind::kObservation);
   auto send = [&](const messages::Observation& o) {
     const auto m = messages::observation_message(o, 0);
