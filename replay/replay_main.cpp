@@ -60,6 +60,7 @@
 #include "messages/transport.h"
 #include "outputs/detail_outputs.h"
 #include "replay/learning.h"
+#include "replay/observation_sender.h"
 #include "replay/replay_tool.h"
 #include "twin/in_process_twin.h"
 
@@ -114,10 +115,10 @@ void add_options(CLI::App& app, Options& o) {
                  "[detail.output] png) to this directory")
       ->needs(in_process_opt);
   app.add_option("--observations", o.observations,
-                 "with --in-process: inspections (CSV: cycle,kind,origin,length_m,sigma_m,"
-                 "pod_a50_m,pod_slope) taken in at their cycles by the detail's learning "
-                 "ensemble ([detail.uncertainty]); prints its remaining-life percentiles")
-      ->needs(in_process_opt);
+                 "inspections (CSV: cycle,kind,origin,length_m,sigma_m,pod_a50_m,pod_slope) taken "
+                 "in at their cycles by the detail's learning ensemble ([detail.uncertainty]): "
+                 "in-process, or sent to the daemon on the detail's OBSERVATION channel after the "
+                 "batches up to their cycle are applied");
   loads::add_key_options(app, o.keys);
   auto* generate_opt =
       app.add_option("--generate-key-file", o.generate_key_file,
@@ -306,7 +307,8 @@ std::optional<int> check_resume(const Options& o, const config::DetailConfig& de
 int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
                     const replay::HistoryBlocks& history, std::vector<messages::Batch> batches,
                     loads::ReplayAuth auth, replay::StatePrinter& printer,
-                    std::optional<peritwin_msgs::damage_state_t>& final_state) {
+                    std::optional<peritwin_msgs::damage_state_t>& final_state,
+                    const std::vector<messages::Observation>& observations) {
   const std::string lcm_url = core::lcm_url_or_default(o.lcm_url);
   // A tcpq hub is probed first: LCM would only say so on stderr, three lines per attempt.
   const auto hub = messages::tcpq_hub(lcm_url);
@@ -355,8 +357,13 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
     } else if (applied > 0) {
       if (auto rc = check_resume(o, detail, applied, held, history, batches)) return *rc;
     }
-    replay::LcmReplayer replayer(lcm, std::move(batches), o.replay, std::move(auth));
-    r = replayer.run(printer.callback(), core::keep_running);
+    if (observations.empty()) {
+      replay::LcmReplayer replayer(lcm, std::move(batches), o.replay, std::move(auth));
+      r = replayer.run(printer.callback(), core::keep_running);
+    } else {
+      r = replay::replay_with_observations(lcm, batches, observations, o.replay, auth,
+                                           printer.callback(), core::keep_running);
+    }
     lost = !messages::transport_up(lcm);
   }
   std::cerr << "peritwin-replay: " << r.published << " batch messages published, " << r.rewinds
@@ -381,35 +388,16 @@ int replay_over_lcm(const Options& o, const config::DetailConfig& detail,
 
 /// --in-process --observations: the twin and its learning ensemble (replay/learning.h).
 int run_learning(const Options& o, const config::DetailConfig& detail,
-                 const std::vector<messages::Batch>& batches, replay::StatePrinter& printer) {
-  if (!detail.uncertainty.enabled) {
-    std::cerr << "peritwin-replay: --observations: detail " << detail.id
-              << " has no [detail.uncertainty] (the priors the observations update)\n";
-    return core::kExitUsage;
-  }
+                 const std::vector<messages::Batch>& split,
+                 const std::vector<messages::Observation>& observations,
+                 replay::StatePrinter& printer) {
   if (!o.results_dir.empty()) {
     std::cerr << "peritwin-replay: --observations does not write --results yet (the ensemble's "
                  "percentiles have no place in the results file so far): run them apart\n";
     return core::kExitUsage;
   }
-  auto observations = loads::read_observations_csv(o.observations);
-  if (!observations) {
-    std::cerr << "peritwin-replay: " << observations.error().message() << "\n";
-    return core::kExitUsage;
-  }
-  std::vector<std::int64_t> cycles;
-  for (std::size_t i = 0; i < observations->size(); ++i) {
-    messages::Observation& obs = (*observations)[i];
-    obs.detail_id = detail.id;
-    obs.source_id = o.source_id;
-    obs.seq = static_cast<std::int64_t>(i) + 1;
-    cycles.push_back(obs.cycle);
-  }
-  const auto split = replay::split_batches_at(batches, cycles);
-  std::cerr << "peritwin-replay: " << o.observations << ": " << observations->size()
-            << " observations; " << detail.uncertainty.particles << " particles\n";
   const auto r = replay::run_learning_in_process(
-      detail, split, *observations, o.json, printer.callback(),
+      detail, split, observations, o.json, printer.callback(),
       [](const std::string& line) { std::cout << line << std::endl; });
   if (!r.error.empty()) {
     std::cerr << "peritwin-replay: " << r.error << "\n";
@@ -445,15 +433,50 @@ int run(Options o) {
   loads::ReplayAuth auth;
   if (auto rc = load_keys(o, auth)) return *rc;
   auto batches = loads::make_twin_batches(history.blocks, detail->id, o.source_id, o.batching);
+  std::vector<messages::Observation> observations;
+  if (!o.observations.empty()) {
+    if (!detail->uncertainty.enabled) {
+      std::cerr << "peritwin-replay: --observations: detail " << detail->id
+                << " has no [detail.uncertainty] (the priors the observations update)\n";
+      return core::kExitUsage;
+    }
+    if (o.append) {
+      std::cerr << "peritwin-replay: --observations with --continue: the observations' cycles "
+                   "count from the history's start; replay them with the history from its start "
+                   "(--resume)\n";
+      return core::kExitUsage;
+    }
+    auto read = loads::read_observations_csv(o.observations);
+    if (!read) {
+      std::cerr << "peritwin-replay: " << read.error().message() << "\n";
+      return core::kExitUsage;
+    }
+    observations = std::move(*read);
+    std::vector<std::int64_t> cycles;
+    for (std::size_t i = 0; i < observations.size(); ++i) {
+      messages::Observation& obs = observations[i];
+      obs.detail_id = detail->id;
+      obs.source_id = o.source_id;
+      obs.seq = static_cast<std::int64_t>(i) + 1;
+      cycles.push_back(obs.cycle);
+    }
+    // Each observation is taken in at its own cycle count: the batches end there.
+    batches = replay::split_batches_at(batches, cycles);
+    std::cerr << "peritwin-replay: " << o.observations << ": " << observations.size()
+              << " observations; " << detail->uncertainty.particles << " particles\n";
+  }
   loads::mark_history(batches);
   report_history(o, *detail, history, batches.size());
 
   replay::StatePrinter printer(o.json);
-  if (!o.observations.empty()) return run_learning(o, *detail, batches, printer);
+  if (!o.observations.empty() && o.in_process) {
+    return run_learning(o, *detail, batches, observations, printer);
+  }
   std::optional<peritwin_msgs::damage_state_t> final_state;
-  const int rc = o.in_process ? replay_in_process(o, *detail, batches, printer, final_state)
-                              : replay_over_lcm(o, *detail, history, std::move(batches),
-                                                std::move(auth), printer, final_state);
+  const int rc = o.in_process
+                     ? replay_in_process(o, *detail, batches, printer, final_state)
+                     : replay_over_lcm(o, *detail, history, std::move(batches), std::move(auth),
+                                       printer, final_state, observations);
   if (rc != core::kExitOk) return rc;
   if (o.json && final_state) {
     std::vector<messages::SummaryObject> extra;

@@ -23,6 +23,8 @@
 #include "messages/codec.h"
 #include "messages/mesh.h"
 #include "outputs/checkpoint_io.h"
+#include "replay/learning.h"
+#include "replay/observation_sender.h"
 #include "replay/replay_tool.h"
 #include "service/daemon.h"
 #include "tests/support/twin_fixtures.h"
@@ -274,6 +276,69 @@ TEST_F(MemqTest, ObservationsOnTheBusAreTakenInOnceRefusedWithReasonsAndSurviveA
   EXPECT_EQ(second.twin(0).state_hash_hex(), expected->state_hash_hex());
   EXPECT_EQ(second.twin(0).observed().at("ndt"), 1);
   second.stop();
+}
+
+// peritwin-replay --observations over the bus (replay::replay_with_observations): the batches
+// split at the observations' cycles, each observation sent once the batches up to its cycle are
+// applied; the daemon's learning twin ends with the bits of the in-process learning run.
+TEST_F(MemqTest, ObservationsReplayedOverTheBusGiveTheInProcessLearningRun) {
+  std::string text = b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
+  text +=
+      "\n[detail.uncertainty]\nparticles = 4\nseed = 3\na2 = { median = 1301.0, cov = 0.3 "
+      "}\n";
+  const config::TwinConfig config = config_of(text);
+  std::vector<messages::Observation> observations(2);
+  for (std::size_t i = 0; i < 2; ++i) {
+    messages::Observation& o = observations[i];
+    o.detail_id = "b1-ct";
+    o.source_id = "replay";
+    o.seq = static_cast<std::int64_t>(i) + 1;
+    o.cycle = i == 0 ? 9000 : 23000;  // inside batches: they are split there
+    o.length_m = i == 0 ? 0.0 : 0.001;
+    o.sigma_m = 0.0003;
+  }
+  const auto batches =
+      replay::split_batches_at(history(12, 2000), {observations[0].cycle, observations[1].cycle});
+  const auto expected =
+      replay::run_learning_in_process(config.details[0], batches, observations, true, {}, {});
+  ASSERT_TRUE(expected.error.empty()) << expected.error;
+
+  lcm::LCM lcm("memq://");
+  service::Daemon daemon(lcm, config, options_);
+  const core::Status started = daemon.start();
+  ASSERT_TRUE(started.ok()) << core::message_of(started);
+  const auto r = replay::replay_with_observations(lcm, batches, observations,
+                                                  {true, 1, 3.0, kGiveUpS}, {}, {}, [&] {
+                                                    daemon.tick();
+                                                    return true;
+                                                  });
+  ASSERT_TRUE(r.ok) << r.error;
+  daemon.tick();
+  EXPECT_EQ(daemon.twin(0).observed().at("replay"), 2);
+  EXPECT_EQ(daemon.twin(0).state_hash_hex(), expected.final_state->state_hash);
+  // The same again (a resumed run): the batches are duplicates, the observations too, and
+  // nothing changes.
+  const auto again = replay::replay_with_observations(lcm, batches, observations,
+                                                      {true, 1, 3.0, kGiveUpS}, {}, {}, [&] {
+                                                        daemon.tick();
+                                                        return true;
+                                                      });
+  ASSERT_TRUE(again.ok) << again.error;
+  daemon.tick();
+  EXPECT_EQ(daemon.twin(0).state_hash_hex(), expected.final_state->state_hash);
+  // An observation the daemon refuses: the sender says why.
+  messages::Observation bad = observations[1];
+  bad.origin = "hole 2";
+  bad.source_id = "other";
+  bad.seq = 1;
+  const auto refused = replay::send_observation(lcm, bad, {true, 1, 3.0, kGiveUpS}, {}, {}, [&] {
+    daemon.tick();
+    return true;
+  });
+  ASSERT_FALSE(refused.ok());
+  const std::string why = refused.error().message();
+  EXPECT_NE(why.find("observation.origin"), std::string::npos) << why;
+  daemon.stop();
 }
 
 TEST_F(MemqTest, StopCheckpointsAndARestartResumesBitIdentically) {
