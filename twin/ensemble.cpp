@@ -36,36 +36,74 @@ double crack_length_at(const DetailModel& model, const fatigue::FatigueEngine& e
   return observed_crack_length(model, damage, intact, origin);
 }
 
-core::Expected<std::shared_ptr<const DetailModel>> particle_surrogate(const DetailModel& fine,
-                                                                      double dx,
-                                                                      double* factor_out) {
+double LengthMap::operator()(double coarse_length) const {
+  if (coarse.size() < 2 || !(coarse_length > 0.0)) return coarse_length;
+  if (coarse_length >= coarse.back()) return fine.back() + (coarse_length - coarse.back());
+  // The first sample at or beyond the length, then linear in between (the median cycle at which
+  // the coarse crack had this length), and the fine crack's length at that cycle.
+  const auto k = static_cast<std::size_t>(
+      std::lower_bound(coarse.begin(), coarse.end(), coarse_length) - coarse.begin());
+  if (k == 0) return fine.front();
+  const double t = (coarse_length - coarse[k - 1]) / (coarse[k] - coarse[k - 1]);
+  return fine[k - 1] + t * (fine[k] - fine[k - 1]);
+}
+
+core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx) {
   auto coarse = coarse_model(fine, dx);
   if (!coarse) return coarse.error();
-  if (factor_out != nullptr) *factor_out = 1.0;
+  Surrogate out{*coarse, 1.0, {}};
   const std::vector<core::LoadBlock> spectrum = reference_spectrum(fine, RollingSpectrum{});
-  if (spectrum.empty() || !can_fork(fine)) return coarse;
-  // The life of the virgin detail at the config's A2 on its own grid ...
-  const auto life_of = [&spectrum](const DetailModel& m, double a2_factor) {
-    const auto engine = m.make_engine(a2_factor);
-    if (!engine->initialize()) return std::numeric_limits<double>::quiet_NaN();
-    return simulate_life(m, engine->export_state(), spectrum, a2_factor, nullptr, engine.get());
+  if (spectrum.empty() || !can_fork(fine)) return out;
+  // The virgin detail to its end of life under the reference spectrum on a grid, at an A2 factor:
+  // the cycles and the engine at the end (its break events date every length on the way).
+  const auto run = [&spectrum](const DetailModel& m, double a2_factor) {
+    std::pair<double, std::unique_ptr<fatigue::FatigueEngine>> r{kNaN, m.make_engine(a2_factor)};
+    if (r.second->initialize()) r.first = run_to_end(*r.second, spectrum, end_of_life_check(m));
+    return r;
   };
-  const double fine_life = life_of(fine, 1.0);
-  if (!(std::isfinite(fine_life) && fine_life > 0)) return coarse;
-  // ... and the coarse grid's A2 factor that gives the same life: phase II lives fall in
-  // proportion to A2 (000 Eq. 17), so cycles scale as 1/A2; up to 4 runs, to 1 %.
+  auto [fine_life, fine_end] = run(fine, 1.0);
+  if (!(std::isfinite(fine_life) && fine_life > 0)) return out;
+  // The coarse grid's A2 factor that gives the same life: phase II lives fall in proportion to A2
+  // (000 Eq. 17), so cycles scale as 1/A2; up to 4 runs, to 1 %.
   double factor = 1.0;
-  for (int run = 0; run < 4; ++run) {
-    const double coarse_life = life_of(**coarse, factor);
-    if (!(std::isfinite(coarse_life) && coarse_life > 0)) return coarse;
+  std::unique_ptr<fatigue::FatigueEngine> coarse_end;
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    auto [coarse_life, engine] = run(**coarse, factor);
+    if (!(std::isfinite(coarse_life) && coarse_life > 0)) return out;
+    coarse_end = std::move(engine);
     const double ratio = coarse_life / fine_life;
     if (std::abs(ratio - 1.0) <= 0.01) break;
     factor *= ratio;
+    coarse_end.reset();
+  }
+  if (coarse_end == nullptr) {
+    auto [coarse_life, engine] = run(**coarse, factor);
+    if (!(std::isfinite(coarse_life) && coarse_life > 0)) return out;
+    coarse_end = std::move(engine);
+  }
+  // The two grids' cracks at the same cycles of that life (the particles compare an inspection
+  // with the fine crack their coarse one stands for: LengthMap), nondecreasing.
+  constexpr int kSamples = 200;
+  LengthMap map;
+  for (int k = 1; k <= kSamples; ++k) {
+    const auto cycle = static_cast<std::int64_t>(fine_life * k / kSamples);
+    double c = crack_length_at(**coarse, *coarse_end, cycle, "longest");
+    double f = crack_length_at(fine, *fine_end, cycle, "longest");
+    if (!map.coarse.empty()) {
+      c = std::max(c, map.coarse.back());
+      f = std::max(f, map.fine.back());
+      if (c == map.coarse.back()) {  // a plateau of the coarse length: keep its middle's fine one
+        continue;
+      }
+    }
+    map.coarse.push_back(c);
+    map.fine.push_back(f);
   }
   config::DetailConfig config = (*coarse)->config();
   config.fatigue.strain.A2 *= factor;
-  if (factor_out != nullptr) *factor_out = factor;
-  return DetailModel::build(config);
+  auto calibrated = DetailModel::build(config);
+  if (!calibrated) return calibrated.error();
+  return Surrogate{*calibrated, factor, std::move(map)};
 }
 
 Ensemble::Ensemble(std::shared_ptr<const DetailModel> model,
@@ -124,12 +162,15 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   if (!filter) return filter.error();
   filter->initialize(u.seed);
   std::shared_ptr<const DetailModel> particle_model = model;
+  LengthMap length_map;
   if (const double dx = u.particle_dx(model->config().life.dx); dx > 0) {
     auto coarse = particle_surrogate(*model, dx);
     if (!coarse) return coarse.error().within("uncertainty.dx: ");
-    particle_model = *coarse;
+    particle_model = coarse->model;
+    length_map = std::move(coarse->length_map);
   }
   std::unique_ptr<Ensemble> e(new Ensemble(model, particle_model, std::move(*filter)));
+  e->length_map_ = std::move(length_map);
   e->predicted_end_.assign(settings.particles, kNaN);
   e->a2_column_ = a2_column;
   e->load_scale_column_ = load_column;
@@ -193,7 +234,7 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
   const DetailModel& pm = *particle_model_;
   std::vector<double> predicted(particles_.size());
   for_each_particle([&](std::size_t i) {
-    predicted[i] = crack_length_at(pm, *particles_[i].engine, o.cycle, o.origin);
+    predicted[i] = length_map_(crack_length_at(pm, *particles_[i].engine, o.cycle, o.origin));
   });
   std::vector<double> log_likelihood;
   if (o.kind == messages::ObservationKind::crack_length) {

@@ -13,7 +13,8 @@
 //    A2, and the posterior of "a2" is reported as factor × the config's A2.
 //  * Observations (messages::Observation) at any cycle count up to the ensemble's: each
 //    particle's crack at the observed origin at that cycle (crack_length_at: its state with the
-//    breaks after that cycle undone) is compared with the inspection, Gaussian in the measured
+//    breaks after that cycle undone; on a coarser grid, mapped to the detail's own by LengthMap)
+//    is compared with the inspection, Gaussian in the measured
 //    length with the measurement's σ and the particle grid's own, Δx_p/√12 (the crack length of a
 //    particle moves in steps of about its grid spacing: a uniform rounding error), or 1 − POD for
 //    "no crack found" (prognostics/observation_likelihood.h); the weights are updated; when the
@@ -92,6 +93,17 @@ struct EnsembleCheckpoint {
   std::vector<ObservationRecord> observations;
 };
 
+/// What a coarse particle's crack length stands for on the detail's own grid: the fine crack's
+/// length at the cycle at which the coarse crack had that length, both run from the virgin state
+/// at the prior's median under the reference spectrum (particle_surrogate). Under a change of A2
+/// or of the load scale a particle's growth is, to first order, the median's in another time
+/// (000 Eq. 17: cycles ∝ 1/(A2·Δε^m)), so the same map serves every particle. Identity when empty
+/// (particles on the detail's own grid); 0 stays 0 (no crack); beyond the samples, shifted.
+struct LengthMap {
+  std::vector<double> coarse, fine;  ///< increasing coarse lengths and their fine ones (m)
+  [[nodiscard]] double operator()(double coarse_length) const;
+};
+
 class Ensemble {
  public:
   /// The particles of the detail's [detail.uncertainty], initialized (their first solve); an
@@ -163,16 +175,20 @@ class Ensemble {
   std::vector<double> predicted_end_;
   std::int64_t estimate_cycle_ = -1;
   std::vector<ObservationRecord> observations_;
+  LengthMap length_map_;  ///< the particles' crack lengths as the detail's (particle_surrogate)
 };
 
 /// The particles' model on the coarser grid of spacing `dx`: coarse_model (A2 by 000 Eq. 29) with
 /// A2 calibrated so that the virgin detail's life under the reference spectrum equals the
-/// detail's own (one forward simulation on each grid; the coarse grid's growth is slower or
-/// faster than the fine one's in ways Eq. 29 does not capture). Without a reference spectrum, or
-/// a life that does not end, coarse_model's. `factor` (optional) receives the calibration factor.
-core::Expected<std::shared_ptr<const DetailModel>> particle_surrogate(const DetailModel& fine,
-                                                                      double dx,
-                                                                      double* factor = nullptr);
+/// detail's own (one forward simulation on the detail's grid, up to four on the coarse one, to
+/// 1 %; the coarse grid grows its crack faster or slower than Eq. 29 says), and the LengthMap of
+/// the two runs. Without a reference spectrum, or a life that does not end, coarse_model's alone.
+struct Surrogate {
+  std::shared_ptr<const DetailModel> model;
+  double a2_calibration = 1.0;
+  LengthMap length_map;
+};
+core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx);
 
 /// The particle's crack at `origin` as it was at `cycle` (<= its cycle count): its state with the
 /// break events after `cycle` undone (observed_crack_length's measure).
