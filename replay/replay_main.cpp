@@ -387,11 +387,6 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
               << " has no [detail.uncertainty] (the priors the observations update)\n";
     return core::kExitUsage;
   }
-  if (!o.results_dir.empty()) {
-    std::cerr << "peritwin-replay: --observations does not write --results yet (the ensemble's "
-                 "percentiles have no place in the results file so far): run them apart\n";
-    return core::kExitUsage;
-  }
   auto observations = loads::read_observations_csv(o.observations);
   if (!observations) {
     std::cerr << "peritwin-replay: " << observations.error().message() << "\n";
@@ -408,9 +403,24 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
   const auto split = replay::split_batches_at(batches, cycles);
   std::cerr << "peritwin-replay: " << o.observations << ": " << observations->size()
             << " observations; " << detail.uncertainty.particles << " particles\n";
+  // --results: the daemon's results files, with the ensemble's rows and the observations.
+  config::DetailConfig run_detail = detail;
+  std::unique_ptr<outputs::DetailOutputs> outputs;
+  twin::TwinObserver on_twin;
+  if (!o.results_dir.empty()) {
+    run_detail.output.directory = o.results_dir;
+    on_twin = [&outputs](const twin::Twin& t, bool last) {
+      if (!outputs) {
+        outputs = std::make_unique<outputs::DetailOutputs>(t);
+      } else if (!last) {
+        outputs->record(t);
+      }
+      if (last) outputs->finish(t);
+    };
+  }
   const auto r = replay::run_learning_in_process(
-      detail, split, *observations, o.json, printer.callback(),
-      [](const std::string& line) { std::cout << line << std::endl; });
+      run_detail, split, *observations, o.json, printer.callback(),
+      [](const std::string& line) { std::cout << line << std::endl; }, on_twin);
   if (!r.error.empty()) {
     std::cerr << "peritwin-replay: " << r.error << "\n";
     return core::kExitUsage;
