@@ -671,10 +671,12 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   for (std::size_t k = 0; k < learn_cycles.size(); ++k) {
     auto m = testing::minimal_state(learn, static_cast<std::int64_t>(k), learn_cycles[k]);
     // The observations as taken in by the ensemble: none, the first, both.
-    testing::set_ensemble(
-        m, 64, learn_cycles[k], learn_eol[k], 50000.0, 0.05 * (k + 1), 60.0 - 10.0 * k,
-        {{1.2e-9 * (1 + 0.1 * k), 0.3 / (k + 1)}, {1.0, 0.05}},
-        std::vector<testing::StateObservation>(observed.begin(), observed.begin() + k));
+    const double kd = static_cast<double>(k);
+    testing::set_ensemble(m, 64, learn_cycles[k], learn_eol[k], 50000.0, 0.05 * (kd + 1),
+                          60.0 - 10.0 * kd,
+                          {{1.2e-9 * (1 + 0.1 * kd), 0.3 / (kd + 1)}, {1.0, 0.05}},
+                          std::vector<testing::StateObservation>(
+                              observed.begin(), observed.begin() + static_cast<std::ptrdiff_t>(k)));
     bus.publish(messages::channel(learn, messages::Kind::kState), &m);
   }
   const std::string learn_card = "document.querySelector('.card[data-detail=\"learn-demo\"]')";

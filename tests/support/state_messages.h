@@ -78,7 +78,9 @@ inline void set_ensemble(peritwin_msgs::damage_state_t& m, std::int32_t particle
   m.parameter_medians.clear();
   m.parameter_covs.clear();
   for (std::size_t i = 0; i < posterior.size(); ++i) {
-    m.parameter_names.push_back(i < names.size() ? names[i] : "p" + std::to_string(i));
+    std::string name = i < names.size() ? names[i] : std::string("p");
+    if (i >= names.size()) name += std::to_string(i);
+    m.parameter_names.push_back(name);
     m.parameter_medians.push_back(posterior[i].first);
     m.parameter_covs.push_back(posterior[i].second);
   }
