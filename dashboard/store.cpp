@@ -1,12 +1,14 @@
 #include "dashboard/store.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <peritwin_msgs/observation_t.hpp>
 #include <utility>
 
 #include "messages/channels.h"
@@ -50,6 +52,44 @@ Json integer(double v) {
   return Json(text);
 }
 bool exact_in_js(std::int64_t v) { return v > -kExactInJs && v < kExactInJs; }
+
+/// The learning ensemble of a STATE (null without one): its estimate and posterior.
+Json ensemble_json(const peritwin_msgs::damage_state_t& s) {
+  if (s.num_particles <= 0) return nullptr;
+  const auto numbers = [](const std::vector<double>& v) {
+    Json a = Json::array();
+    for (const double x : v) a.push_back(number(x));
+    return a;
+  };
+  Json posterior = Json::array();
+  const std::size_t n =
+      std::min({s.parameter_names.size(), s.parameter_medians.size(), s.parameter_covs.size()});
+  for (std::size_t i = 0; i < n; ++i) {
+    posterior.push_back({{"name", s.parameter_names[i]},
+                         {"median", number(s.parameter_medians[i])},
+                         {"cov", number(s.parameter_covs[i])}});
+  }
+  return {{"particles", s.num_particles},
+          {"estimate_cycle", integer(s.ensemble_estimate_cycle)},
+          {"effective_sample_size", number(s.effective_sample_size)},
+          {"percentiles", numbers(s.percentiles)},
+          {"end_of_life", numbers(s.end_of_life_percentiles)},
+          {"remaining", numbers(s.remaining_percentiles)},
+          {"horizon_cycles", number(s.horizon_cycles)},
+          {"probability_within_horizon", number(s.probability_within_horizon)},
+          {"posterior", std::move(posterior)},
+          {"observation_count", s.observation_count}};
+}
+
+/// The ensemble's predicted end of life at the first, middle and last of the STATE's percentiles
+/// (NaN without an ensemble).
+std::array<double, 3> ensemble_end_of_life(const peritwin_msgs::damage_state_t& s) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto n = s.end_of_life_percentiles.size();
+  if (s.num_particles <= 0 || n == 0) return {nan, nan, nan};
+  return {s.end_of_life_percentiles[0], s.end_of_life_percentiles[n / 2],
+          s.end_of_life_percentiles[n - 1]};
+}
 
 /// A producer's probe: a batch with seq 2^63 − 1 asking what the daemon has applied of its source
 /// (README, "Replay"); the daemon answers it with GAP.
@@ -247,9 +287,11 @@ void Store::on_message(const std::string& channel, const void* data, std::size_t
           low = c.low;
           high = c.high;
         }
+        const auto eol = ensemble_end_of_life(*state);
         d.history.push({static_cast<double>(state->total_cycles), state->crack_length_m, remaining,
-                        low, high, static_cast<double>(state->state_seq)});
+                        low, high, static_cast<double>(state->state_seq), eol[0], eol[1], eol[2]});
       }
+      on_state_ensemble(d, *state);
       ++d.states;
       const std::string id = state->detail_id;
       d.state = std::move(*state);
@@ -407,13 +449,54 @@ std::size_t Store::backfill(const std::string& id, const std::vector<HistoryPoin
   for (const auto& p : points) {
     if (live && static_cast<double>(p.state_seq) >= first_live) continue;
     merged.push({static_cast<double>(p.cycles), p.crack_length_m, p.remaining, p.low, p.high,
-                 static_cast<double>(p.state_seq)});
+                 static_cast<double>(p.state_seq), p.eol_low, p.eol_median, p.eol_high});
     ++taken;
   }
   for (const auto& row : d.history.rows()) merged.push(row);
   d.history = std::move(merged);
   d.backfilled += taken;
   return taken;
+}
+
+void Store::on_state_ensemble(DetailRecord& d, const peritwin_msgs::damage_state_t& s) {
+  if (s.num_particles <= 0) return;
+  if (const auto np = s.percentiles.size(); np > 0) {
+    d.eol_percentiles = {s.percentiles[0], s.percentiles[np / 2], s.percentiles[np - 1]};
+  }
+  const auto n = static_cast<std::size_t>(std::max(s.num_observations, 0));
+  if (s.observation_cycles.size() < n || s.observation_kinds.size() < n ||
+      s.observation_lengths_m.size() < n || s.observation_sigmas_m.size() < n ||
+      s.observation_pod_a50s_m.size() < n || s.observation_predicted_m.size() < n) {
+    return;  // (the codec's layout check makes this unreachable)
+  }
+  // The STATE carries the last n of observation_count: the i-th is number count − n + i.
+  const std::int64_t first =
+      static_cast<std::int64_t>(s.observation_count) - static_cast<std::int64_t>(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ObservationPoint o;
+    o.index = first + static_cast<std::int64_t>(i);
+    o.cycles = s.observation_cycles[i];
+    o.kind = s.observation_kinds[i];
+    o.length_m = s.observation_lengths_m[i];
+    o.sigma_m = s.observation_sigmas_m[i];
+    o.pod_a50_m = s.observation_pod_a50s_m[i];
+    o.predicted_m = s.observation_predicted_m[i];
+    if (o.index < 0) continue;
+    if (d.observations.empty() || o.index > d.observations.back().index) {
+      d.observations.push_back(o);
+      continue;
+    }
+    // Known already (every STATE repeats the last ones); a daemon restarted from an older
+    // checkpoint may say otherwise of it: its word is the newest.
+    for (auto it = d.observations.rbegin(); it != d.observations.rend(); ++it) {
+      if (it->index == o.index) {
+        *it = o;
+        break;
+      }
+      if (it->index < o.index) break;
+    }
+  }
+  while (d.observations.size() > kObservationMemory) d.observations.pop_front();
 }
 
 void Store::on_state_life(DetailRecord& d, const peritwin_msgs::damage_state_t& s) {
@@ -570,6 +653,7 @@ std::string Store::detail_json_locked(const std::string& id, const DetailRecord&
     }
     j["cracks"] = std::move(cracks);
     j["from_results"] = false;
+    j["ensemble"] = ensemble_json(s);
   } else if (d.file_state) {
     // No STATE since the dashboard started: the results file's last row, under state_json's keys
     // (what the file does not hold is null), so the card shows the detail as the file left it.
@@ -601,10 +685,12 @@ std::string Store::detail_json_locked(const std::string& id, const DetailRecord&
                                                                 : Json(nullptr);
     j["cracks"] = Json::array();
     j["from_results"] = true;
+    j["ensemble"] = nullptr;
   } else {
     j["detail"] = id;
     j["state_seq"] = nullptr;
     j["from_results"] = false;
+    j["ensemble"] = nullptr;
   }
   // Health: the daemon's own word, unless its heartbeat stopped (stale) or never came.
   const bool has_status = d.status.has_value();
@@ -712,17 +798,19 @@ std::optional<std::string> Store::history_json(const std::string& id) const {
   const auto it = details_.find(id);
   if (it == details_.end()) return std::nullopt;
   const auto& h = it->second.history;
-  static constexpr const char* kColumns[] = {"cycles", "crack_length_m", "remaining",
-                                             "low",    "high",           "state_seq"};
+  static constexpr const char* kColumns[] = {"cycles",  "crack_length_m", "remaining",
+                                             "low",     "high",           "state_seq",
+                                             "eol_low", "eol_median",     "eol_high"};
   Json j;
   j["detail"] = id;
   j["pushed"] = h.pushed();
   j["backfilled"] = it->second.backfilled;
-  for (std::size_t c = 0; c < 6; ++c) {
+  for (std::size_t c = 0; c < std::size(kColumns); ++c) {
     Json column = Json::array();
     for (const auto& row : h.rows()) {
-      // cycles and state_seq are integers (numbers below 2^53, strings above).
-      if (c == 0 || c == 5) {
+      // cycles, state_seq and the predicted ends of life are integers (numbers below 2^53,
+      // strings above).
+      if (c == 0 || c >= 5) {
         column.push_back(integer(row[c]));
       } else {
         column.push_back(number(row[c]));
@@ -730,6 +818,21 @@ std::optional<std::string> Store::history_json(const std::string& id) const {
     }
     j[kColumns[c]] = std::move(column);
   }
+  const auto& percentiles = it->second.eol_percentiles;
+  j["eol_percentiles"] = percentiles.empty() ? Json(nullptr) : Json(percentiles);
+  Json observations = Json::array();
+  for (const auto& o : it->second.observations) {
+    observations.push_back(
+        {{"index", integer(o.index)},
+         {"cycles", integer(o.cycles)},
+         {"kind",
+          o.kind == peritwin_msgs::observation_t::KIND_NO_CRACK ? "no_crack" : "crack_length"},
+         {"length_m", number(o.length_m)},
+         {"sigma_m", number(o.sigma_m)},
+         {"pod_a50_m", number(o.pod_a50_m)},
+         {"predicted_m", number(o.predicted_m)}});
+  }
+  j["observations"] = std::move(observations);
   return dump(j);
 }
 

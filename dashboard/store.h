@@ -17,9 +17,19 @@
 //                    64-bit integers (seq, cycles) are JSON numbers below 2^53 and decimal strings
 //                    from there on: a browser's JSON.parse reads doubles.
 //   details_json()   {"details": [detail_json of each, by id], "undecodable": total}
+//                    With the learning ensemble (num_particles > 0), "ensemble" {particles,
+//                    estimate_cycle, effective_sample_size, percentiles [], end_of_life [],
+//                    remaining [], horizon_cycles, probability_within_horizon, posterior [{name,
+//                    median, cov}], observation_count}; null without one.
 //   history_json(id) {"detail", "pushed", "backfilled", "cycles": [], "crack_length_m": [],
-//                    "remaining": [], "low": [], "high": [], "state_seq": []} (non-finite numbers
-//                    as null)
+//                    "remaining": [], "low": [], "high": [], "state_seq": [], "eol_low": [],
+//                    "eol_median": [], "eol_high": [], "eol_percentiles": [low, median, high] (of
+//                    the latest STATE with an ensemble; null before one), "observations": [{index,
+//                    cycles, kind ("crack_length"|"no_crack"), length_m, sigma_m, pod_a50_m,
+//                    predicted_m}]} (non-finite numbers as null). eol_*: the ensemble's predicted
+//                    end-of-life cycle at each state, at the first, middle and last of the
+//                    STATE's percentiles (5, 50, 95 by default); null without an ensemble or
+//                    beyond its simulated horizon.
 //   mesh_json(id)    the reassembled MESH: {"detail", "mesh_hash", "total_nodes", "dx", "horizon",
 //                    "box": [x_min, y_min, x_max, y_max], "x": [], "y": [], "polylines":
 //                    [{"kind": "outline"|"hole"|"notch", "index", "closed", "x": [], "y": []}]}
@@ -78,6 +88,24 @@ struct HistoryPoint {
   double remaining = 0.0;
   double low = 0.0;
   double high = 0.0;
+  /// The ensemble's predicted end-of-life cycle (low, median, high percentile); NaN without one.
+  double eol_low = std::numeric_limits<double>::quiet_NaN();
+  double eol_median = std::numeric_limits<double>::quiet_NaN();
+  double eol_high = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Observations kept per detail (the oldest dropped beyond).
+inline constexpr std::size_t kObservationMemory = 4096;
+
+/// An observation the detail's ensemble took in, as STATE carries it (observation_t.KIND_*).
+struct ObservationPoint {
+  std::int64_t index = 0;  ///< 0-based, in the order the ensemble took them in
+  std::int64_t cycles = 0;
+  std::int8_t kind = 0;
+  double length_m = std::numeric_limits<double>::quiet_NaN();
+  double sigma_m = std::numeric_limits<double>::quiet_NaN();
+  double pod_a50_m = std::numeric_limits<double>::quiet_NaN();
+  double predicted_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A remaining-life estimate seen at a later state. The STATE carries the estimate (central, low,
@@ -162,8 +190,9 @@ struct PartialField {
   std::map<std::int32_t, peritwin_msgs::damage_field_t> chunks;
 };
 
-/// History columns: cycles, crack_length_m, remaining, low, high, state_seq.
-using History = BoundedHistory<6>;
+/// History columns: cycles, crack_length_m, remaining, low, high, state_seq, eol_low, eol_median,
+/// eol_high.
+using History = BoundedHistory<9>;
 
 struct DetailRecord {
   std::optional<peritwin_msgs::damage_state_t> state;
@@ -189,7 +218,9 @@ struct DetailRecord {
   std::optional<FileState> file_state;     ///< the results file's last state (--results)
   std::int64_t fields = 0;
   History history{kHistoryPoints};
-  std::size_t backfilled = 0;  ///< points read from a results file
+  std::size_t backfilled = 0;                 ///< points read from a results file
+  std::deque<ObservationPoint> observations;  ///< by index, at most kObservationMemory
+  std::vector<double> eol_percentiles;        ///< the latest ensemble's (low, median, high)
   std::optional<messages::Mesh> mesh;
   std::string mesh_hash;       ///< of `mesh`
   std::string mesh_error;      ///< why the last refused MESH chunk was refused
@@ -259,6 +290,7 @@ class Store {
   void on_field(const std::string& id, DetailRecord& d, peritwin_msgs::damage_field_t field,
                 Clock::time_point now);
   static void on_state_life(DetailRecord& d, const peritwin_msgs::damage_state_t& s);
+  static void on_state_ensemble(DetailRecord& d, const peritwin_msgs::damage_state_t& s);
   static void match_file_field(DetailRecord& d);
   [[nodiscard]] std::string detail_json_locked(const std::string& id, const DetailRecord& d,
                                                Clock::time_point now) const;

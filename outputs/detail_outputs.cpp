@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
+#include <string>
 #include <system_error>
 
 #include "outputs/damage_png.h"
@@ -165,6 +167,7 @@ DetailOutputs::DetailOutputs(const twin::Twin& twin) : id_(twin.detail_id()) {
     const TimeSeriesRow row = results_row(twin);
     writer_->append(row);
     history_.add(row);
+    record_ensemble(twin);
     const auto every = config.output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
     spdlog::info("[{}] results: {} ({} rows)", id_, h5_path_.string(), writer_->rows());
@@ -210,12 +213,99 @@ void DetailOutputs::snapshot(const twin::Twin& twin) {
   pictures(twin);
 }
 
+namespace {
+/// "p05", "p50", "p95" (a whole percentile, two digits at least), else "p<%g>" with '.' as '_'.
+std::string percentile_key(double q) {
+  char buf[32];
+  if (q == std::floor(q) && q >= 0 && q < 100) {
+    std::snprintf(buf, sizeof buf, "p%02d", static_cast<int>(q));
+  } else {
+    std::snprintf(buf, sizeof buf, "p%g", q);
+  }
+  std::string key = buf;
+  std::replace(key.begin(), key.end(), '.', '_');
+  return key;
+}
+}  // namespace
+
+void DetailOutputs::record_ensemble(const twin::Twin& twin) {
+  const twin::Ensemble* ensemble = twin.ensemble();
+  const auto estimate = twin.ensemble_estimate();
+  if (ensemble == nullptr || !estimate) return;
+  NamedRow row;
+  row.ints = {{"state_seq", twin.state_seq()},
+              {"total_cycles", twin.engine().total_cycles()},
+              {"estimate_cycle", ensemble->estimate_cycle()},
+              {"observation_count", static_cast<std::int64_t>(ensemble->observations().size())},
+              {"particles", static_cast<std::int64_t>(ensemble->size())}};
+  row.doubles = {{"effective_sample_size", estimate->effective_sample_size},
+                 {"horizon_cycles", estimate->horizon_cycles},
+                 {"probability_within_horizon", estimate->probability_within_horizon}};
+  row.units = {
+      {"total_cycles", "cycles"}, {"estimate_cycle", "cycles"}, {"horizon_cycles", "cycles"}};
+  std::string percentiles;
+  for (std::size_t k = 0; k < estimate->percentiles.size(); ++k) {
+    const std::string key = percentile_key(estimate->percentiles[k]);
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", estimate->percentiles[k]);
+    percentiles += (k ? "," : "") + std::string(value);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    row.doubles.emplace_back("end_of_life_" + key,
+                             k < estimate->end_of_life.size() ? estimate->end_of_life[k] : nan);
+    row.doubles.emplace_back("remaining_" + key,
+                             k < estimate->remaining.size() ? estimate->remaining[k] : nan);
+    row.units.emplace_back("end_of_life_" + key, "cycles");
+    row.units.emplace_back("remaining_" + key, "cycles");
+  }
+  for (const auto& p : estimate->posterior) {
+    row.doubles.emplace_back(p.name + "_median", p.median);
+    row.doubles.emplace_back(p.name + "_cov", p.coefficient_of_variation);
+  }
+  writer_->append_named("ensemble", row, {{"percentiles", percentiles}});
+  // The observations taken in since the last row (all of them in a new file; after a rewind,
+  // those whose rows were dropped).
+  const auto& records = ensemble->observations();
+  for (auto i = static_cast<std::size_t>(writer_->named_rows("observations")); i < records.size();
+       ++i) {
+    const twin::ObservationRecord& r = records[i];
+    const messages::Observation& o = r.observation;
+    NamedRow obs;
+    obs.ints = {{"index", static_cast<std::int64_t>(i)},
+                {"state_seq", twin.state_seq()},
+                {"cycle", o.cycle},
+                {"taken_at", r.taken_at},
+                {"kind", o.kind == messages::ObservationKind::no_crack ? 2 : 1},
+                {"seq", o.seq},
+                {"resampled", r.update.resampled ? 1 : 0}};
+    obs.doubles = {{"length_m", o.length_m},
+                   {"sigma_m", o.sigma_m},
+                   {"pod_a50_m", o.pod_a50_m},
+                   {"pod_slope", o.pod_slope},
+                   {"predicted_median_m", r.update.predicted_median_m},
+                   {"log_evidence", r.update.log_evidence},
+                   {"ess_before_resampling", r.update.ess_before_resampling}};
+    obs.strings = {{"origin", o.origin}, {"source", o.source_id}};
+    obs.units = {{"cycle", "cycles"},   {"taken_at", "cycles"},
+                 {"length_m", "m"},     {"sigma_m", "m"},
+                 {"pod_a50_m", "m"},    {"predicted_median_m", "m"},
+                 {"log_evidence", "1"}, {"ess_before_resampling", "1"}};
+    writer_->append_named("observations", obs);
+  }
+}
+
 void DetailOutputs::record(const twin::Twin& twin) {
   if (!writer_) return;
   try {
+    // Again at the same state (after an observation, or a new estimate of the ensemble): the
+    // time series has it; the ensemble's row and the observations only.
+    if (!history_.state_seq.empty() && history_.state_seq.back() == twin.state_seq()) {
+      record_ensemble(twin);
+      return;
+    }
     const TimeSeriesRow row = results_row(twin);
     writer_->append(row);
     history_.add(row);
+    record_ensemble(twin);
     const auto every = twin.model().config().output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
   } catch (const std::exception& e) {

@@ -6,6 +6,11 @@
 // are logged and switch the outputs of that detail off; they never stop the twin. The daemon and
 // peritwin-replay --in-process --results both write through this class.
 //
+// With the learning ensemble ([detail.uncertainty]), every recorded state also gets a row of
+// /ensemble (its percentiles of the end of life and the remaining cycles, P(end of life within the
+// horizon), the effective sample size, each parameter's posterior median and CoV) and every
+// observation taken in a row of /observations (results_writer.h has the layout).
+//
 // A snapshot holds, per node: the damage φ; the displacement at the load of the state's last
 // block (P_max, α; before any block, the largest P_max of the life reference spectrum, else 1 N:
 // the step group's attributes load_p_max_n and load_alpha_rad say which), and, when the detail
@@ -41,7 +46,9 @@ class DetailOutputs {
   /// Opens or creates the results file. Resuming at state_seq k drops rows and snapshots after
   /// k − 1 and records state k again (a fresh start drops everything).
   explicit DetailOutputs(const twin::Twin& twin);
-  /// After every applied batch.
+  /// After every applied batch (a row of the time series; with the ensemble, a row of
+  /// /ensemble and the new observations), and after an observation or a new ensemble estimate
+  /// at the same state (no new time-series row: the ensemble's only).
   void record(const twin::Twin& twin);
   /// Last snapshot, close, pictures.
   void finish(const twin::Twin& twin);
@@ -52,6 +59,8 @@ class DetailOutputs {
 
  private:
   void snapshot(const twin::Twin& twin);
+  /// The learning ensemble's row of /ensemble and the observations not yet in /observations.
+  void record_ensemble(const twin::Twin& twin);
   void pictures(const twin::Twin& twin);
   /// At the initial state over a file with later states: keeps that file as <id>.run<N>.h5.
   void keep_an_earlier_history(const twin::Twin& twin);

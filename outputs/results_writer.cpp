@@ -248,6 +248,45 @@ std::string SnapshotInfo::group() const { return "/fields/" + step_name(index); 
 
 std::size_t NodeField::components() const { return components_of(kind); }
 
+/// The named-column tables (/ensemble, /observations).
+constexpr std::array<const char*, 2> kNamedTables{"ensemble", "observations"};
+
+std::vector<std::string> split_lines(const std::string& text) {
+  std::vector<std::string> out;
+  if (text.empty()) return out;
+  std::size_t start = 0;
+  for (;;) {
+    const auto end = text.find('\n', start);
+    out.push_back(text.substr(start, end - start));
+    if (end == std::string::npos) return out;
+    start = end + 1;
+  }
+}
+
+bool has_attribute(const h5::Object& o, const std::string& name) {
+  const auto names = o.attribute_names();
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+/// Rows of a named-column table: its shortest column (a crash between the appends of one row
+/// leaves some longer).
+std::uint64_t named_table_rows(const h5::Group& g) {
+  std::uint64_t n = std::numeric_limits<std::uint64_t>::max();
+  for (const auto& name : g.children()) n = std::min(n, g.open_dataset(name).size());
+  return n == std::numeric_limits<std::uint64_t>::max() ? 0 : n;
+}
+
+/// Appends the fill of its type (-1 or NaN) to `ds` until it holds n elements.
+void fill_to(h5::Dataset& ds, std::uint64_t n) {
+  while (ds.size() < n) {
+    if (ds.element_type() == h5::ElementType::i64) {
+      ds.append(std::int64_t{-1});
+    } else {
+      ds.append(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+}
+
 struct ResultsWriter::Impl {
   std::filesystem::path h5_path;
   std::filesystem::path xdmf_path;
@@ -549,6 +588,22 @@ void ResultsWriter::rewind_to(std::int64_t state_seq) {
     im.rows = keep;
   }
   im.trim_cracks_after(state_seq, std::numeric_limits<std::uint64_t>::max());
+  for (const char* table : kNamedTables) {
+    if (!im.file.exists(std::string(table) + "/state_seq")) continue;
+    h5::Group g = im.file.open_group(table);
+    const auto named_seqs = g.open_dataset("state_seq").read<std::int64_t>();
+    std::uint64_t named_keep = std::min<std::uint64_t>(named_table_rows(g), named_seqs.size());
+    for (std::uint64_t i = 0; i < named_keep; ++i) {
+      if (named_seqs[static_cast<std::size_t>(i)] > state_seq) {
+        named_keep = i;
+        break;
+      }
+    }
+    for (const auto& name : g.children()) {
+      auto ds = g.open_dataset(name);
+      if (ds.size() != named_keep) ds.resize(named_keep);
+    }
+  }
   const auto before = im.snapshots.size();
   std::erase_if(im.snapshots, [&](const SnapshotInfo& s) {
     if (s.state_seq <= state_seq) return false;
@@ -557,6 +612,61 @@ void ResultsWriter::rewind_to(std::int64_t state_seq) {
   });
   im.file.flush();
   if (im.snapshots.size() != before && im.nodes > 0) im.write_xdmf();
+}
+
+void ResultsWriter::append_named(
+    const std::string& group, const NamedRow& row,
+    const std::vector<std::pair<std::string, std::string>>& attributes) {
+  impl_->require_open("append_named");
+  h5::Group g = impl_->file.require_group(group);
+  const std::uint64_t n = named_table_rows(g);
+  for (const auto& name : g.children()) {  // drop a half-written row's tail
+    auto ds = g.open_dataset(name);
+    if (ds.size() != n) ds.resize(n);
+  }
+  const auto units = [&row](const std::string& name) {
+    for (const auto& [column, u] : row.units) {
+      if (column == name) return u;
+    }
+    return std::string("1");
+  };
+  const auto column = [&](const std::string& name, auto tag) {
+    using T = decltype(tag);
+    if (g.exists(name)) return g.open_dataset(name);
+    h5::Dataset ds = g.create_extendible<T>(name, 1024);
+    ds.set_attribute("units", std::string_view(units(name)));
+    fill_to(ds, n);  // a column new in this row: the rows before it hold the fill
+    return ds;
+  };
+  for (const auto& [name, value] : row.ints) column(name, std::int64_t{}).append(value);
+  for (const auto& [name, value] : row.doubles) column(name, double{}).append(value);
+  for (const auto& [name, value] : row.strings) {
+    // The value's index in the group's list "<name>s" (added to it when new).
+    const std::string list_name = name + "s";
+    auto list = has_attribute(g, list_name) ? split_lines(g.attribute_string(list_name))
+                                            : std::vector<std::string>{};
+    auto it = std::find(list.begin(), list.end(), value);
+    const auto index = static_cast<std::int64_t>(it - list.begin());
+    if (it == list.end()) {
+      list.push_back(value);
+      std::string text;
+      for (std::size_t i = 0; i < list.size(); ++i) text += (i ? "\n" : "") + list[i];
+      g.set_attribute(list_name, text);
+    }
+    column(name + "_index", std::int64_t{}).append(index);
+  }
+  for (const auto& name : g.children()) {  // columns this row does not have
+    auto ds = g.open_dataset(name);
+    fill_to(ds, n + 1);
+  }
+  for (const auto& [name, value] : attributes) g.set_attribute(name, value);
+  impl_->file.flush();
+}
+
+std::uint64_t ResultsWriter::named_rows(const std::string& group) const {
+  impl_->require_open("named_rows");
+  if (!impl_->file.exists(group)) return 0;
+  return named_table_rows(impl_->file.open_group(group));
 }
 
 std::uint64_t ResultsWriter::rows() const { return impl_->rows; }
@@ -640,6 +750,44 @@ std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path) {
   check_format(file);
   if (!file.exists("cracks/state_seq")) return {};  // a version-1 file
   return read_table(file, "cracks", kCrackIntColumns, kCrackDoubleColumns);
+}
+
+std::size_t NamedTable::rows() const {
+  if (!ints.empty()) return ints.begin()->second.size();
+  if (!doubles.empty()) return doubles.begin()->second.size();
+  return 0;
+}
+
+NamedTable read_named_table(const std::filesystem::path& h5_path, const std::string& group) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  NamedTable t;
+  if (!file.exists(group)) return t;
+  const h5::Group g = file.open_group(group);
+  const std::uint64_t n = named_table_rows(g);
+  for (const auto& name : g.children()) {
+    const auto ds = g.open_dataset(name);
+    if (ds.element_type() == h5::ElementType::i64) {
+      auto v = ds.read<std::int64_t>();
+      v.resize(static_cast<std::size_t>(n));
+      t.ints[name] = std::move(v);
+    } else {
+      auto v = ds.read<double>();
+      v.resize(static_cast<std::size_t>(n));
+      t.doubles[name] = std::move(v);
+    }
+  }
+  for (const auto& name : g.attribute_names()) {
+    const std::string value = g.attribute_string(name);
+    // "<x>s" listing the values of the index column "<x>_index".
+    if (name.size() > 1 && name.back() == 's' &&
+        t.ints.contains(name.substr(0, name.size() - 1) + "_index")) {
+      t.strings[name] = split_lines(value);
+    } else {
+      t.attributes[name] = value;
+    }
+  }
+  return t;
 }
 
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path) {

@@ -32,6 +32,33 @@
 //   /fields/step_<n>/<field>  float64[node_count] or [node_count][components]: the snapshot's
 //                         NodeFields (displacement, strain, ...); attribute "units"; the group
 //                         carries the NodeFields' scalar attributes (the load they belong to)
+//   /ensemble/<column>    (a detail with the learning ensemble, [detail.uncertainty]; issue 32)
+//                         extendible 1-D, one element per recorded state; attribute "units".
+//                         Columns: state_seq, total_cycles, estimate_cycle (the cycle count the
+//                         particles' ends of life were last simulated at, -1 before any),
+//                         observation_count, particles (int64); effective_sample_size,
+//                         horizon_cycles, probability_within_horizon (NaN without a horizon),
+//                         end_of_life_p<NN> and remaining_p<NN> for each configured percentile
+//                         (p05, p50, p95 by default: the end-of-life cycle and the remaining
+//                         cycles at it; +Inf beyond the simulated horizon, NaN before an
+//                         estimate), <parameter>_median and <parameter>_cov for each parameter of
+//                         the posterior (a2, load_scale) (float64). Group attribute
+//                         "percentiles": the percentiles, comma-separated.
+//   /observations/<column>  one element per observation the ensemble took in, in that order:
+//                         index (0, 1, ...), state_seq (the state recorded when it was taken in),
+//                         cycle (of the inspection), taken_at (the ensemble's cycle count then),
+//                         kind (observation_t.KIND_*: 1 crack length, 2 no crack found),
+//                         origin_index (into the group attribute "origins", the origin names
+//                         separated by newlines: "longest", a notch's name, ...), seq (the
+//                         observation's seq from its source), resampled (0/1) (int64); length_m,
+//                         sigma_m, pod_a50_m, pod_slope (NaN where they do not apply),
+//                         predicted_median_m (the ensemble's weighted median crack at that cycle
+//                         before it took it in), log_evidence, ess_before_resampling (float64).
+//                         Group attribute "sources": the source ids, newline-separated, indexed
+//                         by the column source_index (int64).
+//                         Both tables: a column that appears later (another percentile) has NaN
+//                         (float64) or -1 (int64) in the rows before it; rewind_to drops their
+//                         rows after the state like the time series'.
 //   <name>.xdmf           XDMF 3: a temporal collection (Time = total_cycles) of Polyvertex grids
 //                         (connectivity /mesh/vertices), Geometry XYZ from /mesh/xyz, node
 //                         attributes "damage" and every NodeField (Scalar, Vector, Tensor6)
@@ -40,6 +67,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
@@ -85,6 +113,27 @@ struct TimeSeriesRow {
   /// Every crack tip of the state (written to /cracks with this row's state_seq; not read back
   /// by read_time_series: see read_crack_rows).
   std::vector<CrackRow> cracks;
+};
+
+/// One row of a table of named columns (/ensemble, /observations): the row's int64 and float64
+/// columns by name, and its string attributes' values (an index column "<name>_index" into the
+/// group attribute "<name>s", a newline-separated list that grows as values appear). The
+/// table's rows are kept by their "state_seq" column (rewind_to).
+struct NamedRow {
+  std::vector<std::pair<std::string, std::int64_t>> ints;
+  std::vector<std::pair<std::string, double>> doubles;
+  std::vector<std::pair<std::string, std::string>> strings;
+  std::vector<std::pair<std::string, std::string>> units;  ///< column → units ("1" if absent)
+};
+
+/// A table of named columns as read back: int64 and float64 columns by name (all one length),
+/// the string lists of the group's attributes ("origins", "sources") by name.
+struct NamedTable {
+  std::map<std::string, std::vector<std::int64_t>> ints;
+  std::map<std::string, std::vector<double>> doubles;
+  std::map<std::string, std::vector<std::string>> strings;
+  std::map<std::string, std::string> attributes;  ///< the group's other string attributes
+  [[nodiscard]] std::size_t rows() const;
 };
 
 /// One more per-node array of a snapshot, beside the damage.
@@ -154,6 +203,12 @@ class ResultsWriter {
                       std::span<const float> damage, const SnapshotFields& extra = {});
   void write_snapshot(std::int64_t state_seq, std::int64_t total_cycles,
                       std::span<const double> damage, const SnapshotFields& extra = {});
+  /// Appends a row to the table of named columns /<group> ("ensemble", "observations");
+  /// `attributes` are set on the group (string attributes, e.g. "percentiles").
+  void append_named(const std::string& group, const NamedRow& row,
+                    const std::vector<std::pair<std::string, std::string>>& attributes = {});
+  /// Rows of /<group> (0 when it does not exist).
+  [[nodiscard]] std::uint64_t named_rows(const std::string& group) const;
   /// Drops every row and snapshot with state_seq > `state_seq` (resume from a checkpoint).
   void rewind_to(std::int64_t state_seq);
 
@@ -186,6 +241,8 @@ std::vector<CrackRow> read_crack_rows(const std::filesystem::path& h5_path);
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path);
 std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot);
+/// A table of named columns (/ensemble, /observations); empty when the file has none.
+NamedTable read_named_table(const std::filesystem::path& h5_path, const std::string& group);
 /// A NodeField of a snapshot (`name` as written), node-major; empty when the snapshot has none.
 std::vector<double> read_snapshot_field(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot, const std::string& name);

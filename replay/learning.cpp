@@ -138,7 +138,7 @@ LearningResult run_learning_in_process(
     const config::DetailConfig& detail, const std::vector<messages::Batch>& batches,
     const std::vector<messages::Observation>& observations, bool json,
     const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
-    const std::function<void(const std::string&)>& on_line) {
+    const std::function<void(const std::string&)>& on_line, const twin::TwinObserver& on_twin) {
   LearningResult result;
   auto created = twin::InProcessTwin::create(detail);
   if (!created) {
@@ -157,7 +157,14 @@ LearningResult run_learning_in_process(
     if (on_line) on_line(json ? ensemble_json(what, est, o, u) : describe_ensemble(what, est));
   };
   if (on_state) on_state(t.state());
+  if (on_twin) on_twin(t.twin(), false);
   line("prior", nullptr, nullptr);
+  // The results (on_twin) closed on every way out.
+  auto fail = [&](std::string error) {
+    result.error = std::move(error);
+    if (on_twin) on_twin(t.twin(), true);
+    return result;
+  };
   std::size_t next = 0;
   auto take_observations = [&]() -> bool {
     while (next < observations.size() && observations[next].cycle <= e.total_cycles()) {
@@ -167,27 +174,31 @@ LearningResult run_learning_in_process(
         return false;
       }
       if (on_state) on_state(t.state());
+      if (on_twin) on_twin(t.twin(), false);
       line("observation", &o, &e.observations().back().update);
     }
     return true;
   };
   for (const messages::Batch& b : batches) {
-    if (!take_observations()) return result;
+    if (!take_observations()) return fail(result.error);
     if (const core::Status applied = t.apply(b); !applied) {
-      result.error = applied.error().message();
-      return result;
+      return fail(applied.error().message());
     }
     if (t.ended()) break;
     if (on_state) on_state(t.state());
+    if (on_twin) on_twin(t.twin(), false);
   }
-  if (!take_observations()) return result;
+  if (!take_observations()) return fail(result.error);
   if (next < observations.size()) {
-    result.error = "observation at cycle " + std::to_string(observations[next].cycle) +
-                   " is beyond the history (" + std::to_string(e.total_cycles()) +
-                   " cycles applied" + (t.ended() ? ", the end of life reached" : "") + ")";
-    return result;
+    return fail("observation at cycle " + std::to_string(observations[next].cycle) +
+                " is beyond the history (" + std::to_string(e.total_cycles()) + " cycles applied" +
+                (t.ended() ? ", the end of life reached" : "") + ")");
   }
-  if (e.estimate_cycle() < e.total_cycles()) t.estimate_ensemble_now();
+  if (e.estimate_cycle() < e.total_cycles()) {
+    t.estimate_ensemble_now();
+    if (on_twin) on_twin(t.twin(), false);
+  }
+  if (on_twin) on_twin(t.twin(), true);
   line("final", nullptr, nullptr);
   result.final_state = t.state();
   result.final_estimate = e.summary();

@@ -47,11 +47,13 @@ struct LearningResult {
 };
 
 /// Runs the batches (already split at the observations' cycles) through an InProcessTwin and the
-/// ensemble. on_state as run_in_process; on_line gets each ensemble line (JSON when `json`).
+/// ensemble. on_state as run_in_process; on_line gets each ensemble line (JSON when `json`);
+/// on_twin (e.g. the results, outputs::DetailOutputs) as run_in_process's, also after each
+/// observation taken in and after the final estimate (both at the state before them).
 LearningResult run_learning_in_process(
     const config::DetailConfig& detail, const std::vector<messages::Batch>& batches,
     const std::vector<messages::Observation>& observations, bool json,
     const std::function<void(const peritwin_msgs::damage_state_t&)>& on_state,
-    const std::function<void(const std::string&)>& on_line);
+    const std::function<void(const std::string&)>& on_line, const twin::TwinObserver& on_twin = {});
 
 }  // namespace peritwin::replay

@@ -391,14 +391,24 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
                  const std::vector<messages::Batch>& split,
                  const std::vector<messages::Observation>& observations,
                  replay::StatePrinter& printer) {
+  // --results: the daemon's results files, with the ensemble's rows and the observations.
+  config::DetailConfig run_detail = detail;
+  std::unique_ptr<outputs::DetailOutputs> outputs;
+  twin::TwinObserver on_twin;
   if (!o.results_dir.empty()) {
-    std::cerr << "peritwin-replay: --observations does not write --results yet (the ensemble's "
-                 "percentiles have no place in the results file so far): run them apart\n";
-    return core::kExitUsage;
+    run_detail.output.directory = o.results_dir;
+    on_twin = [&outputs](const twin::Twin& t, bool last) {
+      if (!outputs) {
+        outputs = std::make_unique<outputs::DetailOutputs>(t);
+      } else if (!last) {
+        outputs->record(t);
+      }
+      if (last) outputs->finish(t);
+    };
   }
   const auto r = replay::run_learning_in_process(
-      detail, split, observations, o.json, printer.callback(),
-      [](const std::string& line) { std::cout << line << std::endl; });
+      run_detail, split, observations, o.json, printer.callback(),
+      [](const std::string& line) { std::cout << line << std::endl; }, on_twin);
   if (!r.error.empty()) {
     std::cerr << "peritwin-replay: " << r.error << "\n";
     return core::kExitUsage;

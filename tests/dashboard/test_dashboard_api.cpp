@@ -45,6 +45,7 @@
 #include "tests/dashboard/cdp_pipe.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
+#include "tests/support/state_messages.h"
 
 namespace peritwin::dashboard {
 namespace {
@@ -575,24 +576,10 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   ASSERT_TRUE(bus.good());
   const std::string demo = "life-demo";
   const auto demo_state = [&](std::int64_t seq, std::int64_t cycles) {
-    peritwin_msgs::damage_state_t m{};
-    m.utime = 1'000'000 * (seq + 1);
-    m.detail_id = demo;
-    m.state_seq = seq;
-    m.num_sources = 1;
-    m.source_ids = {"gauge"};
-    m.applied_seq = {seq};
-    m.checkpointed_seq = {0};
-    m.history = {0};
-    m.history_start = {0};
-    m.total_cycles = cycles;
-    m.k_i = m.k_ii = std::nan("");
+    auto m = testing::minimal_state(demo, seq, cycles);
     m.remaining_cycles = 38373.0;
     m.remaining_cycles_low = 30000.0;
     m.remaining_cycles_high = 50000.0;
-    m.remaining_life_seq = -1;
-    m.end_of_life_cycle = -1;
-    m.state_hash = m.engine_hash = "0";
     return m;
   };
   const std::vector<std::int64_t> demo_cycles{0, 3000, 9000};
@@ -668,6 +655,123 @@ TEST_F(DashboardApi, ThePageOpenedFirstUpdatesLiveAsTheDaemonAppliesTheHistory) 
   EXPECT_NE((*eol)["health"], "failed");
   EXPECT_EQ((*eol)["remaining"], "0");
   EXPECT_EQ((*eol)["end"], "9400");
+
+  // Issue 32 item 6, in the page: a learning detail (STATEs with its ensemble, published here)
+  // at 0, 20,000 and 40,000 cycles; the end of life predicted at the 5/50/95th percentiles moves
+  // and narrows; two observations (a crack of 2.1 ± 0.3 mm at 35,000 cycles, no crack found at
+  // 15,000 with a50 0.8 mm). The fan chart holds one point per state at the history's numbers, the
+  // crack-length chart the two markers with their bars, the card the posterior and P(horizon).
+  const std::string learn = "learn-demo";
+  const std::vector<std::int64_t> learn_cycles{0, 20000, 40000};
+  const std::vector<std::vector<double>> learn_eol{
+      {60000.0, 90000.0, 150000.0}, {65000.0, 85000.0, 120000.0}, {70000.0, 82000.0, 95000.0}};
+  const std::vector<testing::StateObservation> observed{
+      {.cycle = 15000, .no_crack = true, .pod_a50_m = 0.8e-3, .predicted_m = 0.0},
+      {.cycle = 35000, .length_m = 2.1e-3, .sigma_m = 0.3e-3, .predicted_m = 1.7e-3}};
+  for (std::size_t k = 0; k < learn_cycles.size(); ++k) {
+    auto m = testing::minimal_state(learn, static_cast<std::int64_t>(k), learn_cycles[k]);
+    // The observations as taken in by the ensemble: none, the first, both.
+    const double kd = static_cast<double>(k);
+    testing::set_ensemble(m, 64, learn_cycles[k], learn_eol[k], 50000.0, 0.05 * (kd + 1),
+                          60.0 - 10.0 * kd,
+                          {{1.2e-9 * (1 + 0.1 * kd), 0.3 / (kd + 1)}, {1.0, 0.05}},
+                          std::vector<testing::StateObservation>(
+                              observed.begin(), observed.begin() + static_cast<std::ptrdiff_t>(k)));
+    bus.publish(messages::channel(learn, messages::Kind::kState), &m);
+  }
+  const std::string learn_card = "document.querySelector('.card[data-detail=\"learn-demo\"]')";
+  ASSERT_TRUE(wait_until("(() => { const c = " + learn_card +
+                         "; return c !== null && c.querySelector('.state-seq').dataset.value === "
+                         "'2' && c.querySelector('.chart-crack').dataset.observations === '2' && "
+                         "c.querySelector('.chart-eol').dataset.points === '3'; })()"))
+      << browser.evaluate(page, "document.body.outerHTML", 60).value_or(json()).dump();
+  const auto [ls, lbody] = get("/api/details/learn-demo/history");
+  ASSERT_EQ(ls, 200);
+  const auto learn_history = json::parse(lbody);
+  EXPECT_EQ(learn_history["eol_median"], json({90000, 85000, 82000})) << lbody;
+  EXPECT_EQ(learn_history["eol_percentiles"], json({5.0, 50.0, 95.0})) << lbody;
+  ASSERT_EQ(learn_history["observations"].size(), 2u) << lbody;
+  const auto fan = browser.evaluate(page,
+                                    "(() => { const c = " + learn_card + R"(;
+      const eol = Chart.getChart(c.querySelector('.chart-eol'));
+      const crack = Chart.getChart(c.querySelector('.chart-crack'));
+      const xy = d => d.data.map(p => [p.x, p.y]);
+      const bar = d => d.data.map(p => [p.x, p.y, p.lo, p.hi]);
+      return {fanHidden: c.querySelector('.fan').hidden,
+              low: xy(eol.data.datasets[0]), high: xy(eol.data.datasets[1]),
+              median: xy(eol.data.datasets[2]),
+              bandFill: eol.data.datasets[1].fill,
+              observed: bar(crack.data.datasets[1]), noCrack: bar(crack.data.datasets[2]),
+              predicted: xy(crack.data.datasets[3]),
+              observedStyle: crack.data.datasets[1].pointStyle,
+              noCrackStyle: crack.data.datasets[2].pointStyle,
+              markers: crack.getDatasetMeta(1).data.length + crack.getDatasetMeta(2).data.length,
+              ensembleHidden: c.querySelector('.ensemble').hidden,
+              eolMedian: c.querySelector('.eol-median').dataset.value,
+              eolLow: c.querySelector('.eol-band').dataset.low,
+              eolHigh: c.querySelector('.eol-band').dataset.high,
+              pHorizon: c.querySelector('.p-horizon').dataset.value,
+              pHorizonTitle: c.querySelector('.p-horizon-title').textContent,
+              ess: c.querySelector('.ess').dataset.value,
+              parameters: [...c.querySelectorAll('.posterior .parameter')].map(
+                  p => [p.dataset.name, Number(p.dataset.median), Number(p.dataset.cov)]),
+              // The life-demo detail has no ensemble: no fan chart, no posterior.
+              otherFanHidden: )" + demo_card +
+                                        R"(.querySelector('.fan').hidden,
+              otherEnsembleHidden: )" + demo_card +
+                                        R"(.querySelector('.ensemble').hidden}; })())",
+                                    60);
+  ASSERT_TRUE(fan && fan->is_object()) << read_file(dir_ / "chromium.log");
+  const json& f = *fan;
+  EXPECT_EQ(f["fanHidden"], false);
+  EXPECT_EQ(f["bandFill"], "-1");  // the 5–95 % band shaded down to the 5 % line
+  for (std::size_t k = 0; k < learn_cycles.size(); ++k) {
+    const double x = static_cast<double>(learn_cycles[k]);
+    EXPECT_EQ(f["low"][k], json({x, learn_eol[k][0]})) << f.dump();
+    EXPECT_EQ(f["median"][k], json({x, learn_eol[k][1]})) << f.dump();
+    EXPECT_EQ(f["high"][k], json({x, learn_eol[k][2]})) << f.dump();
+  }
+  // Observations in mm: 2.1 ± 0.3 at 35,000; no crack at 15,000 (a bar to a50 = 0.8).
+  ASSERT_EQ(f["observed"].size(), 1u) << f.dump();
+  EXPECT_EQ(f["observed"][0][0], 35000);
+  EXPECT_NEAR(f["observed"][0][1].get<double>(), 2.1, 1e-12);
+  EXPECT_NEAR(f["observed"][0][2].get<double>(), 1.8, 1e-12);
+  EXPECT_NEAR(f["observed"][0][3].get<double>(), 2.4, 1e-12);
+  ASSERT_EQ(f["noCrack"].size(), 1u) << f.dump();
+  EXPECT_EQ(f["noCrack"][0][0], 15000);
+  EXPECT_EQ(f["noCrack"][0][1], 0);
+  EXPECT_NEAR(f["noCrack"][0][3].get<double>(), 0.8, 1e-12);
+  EXPECT_NE(f["observedStyle"], f["noCrackStyle"]);
+  EXPECT_EQ(f["markers"], 2);
+  ASSERT_EQ(f["predicted"].size(), 2u) << f.dump();
+  EXPECT_NEAR(f["predicted"][1][1].get<double>(), 1.7, 1e-12);
+  // The card: the last STATE's percentiles, P(end within 50,000 cycles), ESS, the posterior.
+  EXPECT_EQ(f["ensembleHidden"], false);
+  EXPECT_EQ(f["eolMedian"], "82000");
+  EXPECT_EQ(f["eolLow"], "70000");
+  EXPECT_EQ(f["eolHigh"], "95000");
+  EXPECT_EQ(std::stod(f["pHorizon"].get<std::string>()), 0.05 * 3);
+  EXPECT_NE(f["pHorizonTitle"].get<std::string>().find("50,000"), std::string::npos);
+  EXPECT_EQ(std::stod(f["ess"].get<std::string>()), 40.0);
+  ASSERT_EQ(f["parameters"].size(), 2u) << f.dump();
+  EXPECT_EQ(f["parameters"][0][0], "a2");
+  EXPECT_DOUBLE_EQ(f["parameters"][0][1].get<double>(), 1.2e-9 * 1.2);
+  EXPECT_DOUBLE_EQ(f["parameters"][0][2].get<double>(), 0.1);
+  EXPECT_EQ(f["parameters"][1][0], "load_scale");
+  EXPECT_EQ(f["otherFanHidden"], true);
+  EXPECT_EQ(f["otherEnsembleHidden"], true);
+  // The learning card, for a person to look at.
+  ASSERT_TRUE(browser.evaluate(page, learn_card + ".scrollIntoView(); true", 60).value_or(json()) ==
+              true);
+  const auto learn_captured =
+      browser.call("Page.captureScreenshot", {{"format", "png"}}, page, kWaitS);
+  ASSERT_TRUE(learn_captured && (*learn_captured)["result"].contains("data"));
+  const auto learn_png =
+      testing::base64_decode((*learn_captured)["result"]["data"].get<std::string>());
+  ASSERT_TRUE(learn_png && learn_png->size() > 8);
+  std::ofstream(fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-learn-test.png", std::ios::binary)
+      << *learn_png;
+  ASSERT_TRUE(browser.evaluate(page, "window.scrollTo(0, 0); true", 60).value_or(json()) == true);
 
   const fs::path shot = fs::path(PERITWIN_TEST_OUT_DIR) / "dashboard-live-test.png";
   fs::remove(shot);
@@ -929,22 +1033,7 @@ TEST_F(DashboardApi, ManyEventStreamsShareOneThreadAndEachGetsEveryEvent) {
   const std::string detail = "fanout-demo";
   constexpr int kStates = 3;
   for (int seq = 0; seq < kStates; ++seq) {
-    peritwin_msgs::damage_state_t m{};
-    m.utime = 1'000'000 * (seq + 1);
-    m.detail_id = detail;
-    m.state_seq = seq;
-    m.num_sources = 1;
-    m.source_ids = {"gauge"};
-    m.applied_seq = {seq};
-    m.checkpointed_seq = {0};
-    m.history = {0};  // message set version 8: one per source
-    m.history_start = {0};
-    m.total_cycles = 1000 * seq;
-    m.k_i = m.k_ii = std::nan("");
-    m.remaining_cycles = m.remaining_cycles_low = m.remaining_cycles_high = std::nan("");
-    m.remaining_life_seq = -1;
-    m.end_of_life_cycle = -1;
-    m.state_hash = m.engine_hash = "0";
+    const auto m = testing::minimal_state(detail, seq, 1000 * seq);
     bus.publish(messages::channel(detail, messages::Kind::kState), &m);
   }
   const std::vector<std::int64_t> expected{0, 1, 2};

@@ -19,6 +19,7 @@
 #include "dashboard/event_fanout.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
+#include "tests/support/state_messages.h"
 
 namespace peritwin::dashboard {
 namespace {
@@ -27,21 +28,7 @@ constexpr auto kDeadline = std::chrono::seconds(60);
 
 /// Publishes STATE `seq` of detail "fan" into `store` (one event).
 void push_state(Store& store, std::int64_t seq) {
-  peritwin_msgs::damage_state_t s{};
-  s.utime = 1;
-  s.detail_id = "fan";
-  s.state_seq = seq;
-  s.num_sources = 1;
-  s.source_ids = {"gauge"};
-  s.applied_seq = {seq};
-  s.checkpointed_seq = {0};
-  s.history = {0};  // message set version 8: one per source
-  s.history_start = {0};
-  s.total_cycles = 1000 * seq;
-  s.remaining_life_seq = -1;
-  s.end_of_life_cycle = -1;
-  s.state_hash = "00112233aabbccdd";
-  s.engine_hash = "ffeeddccbbaa0099";
+  const auto s = testing::minimal_state("fan", seq, 1000 * seq);
   std::vector<unsigned char> bytes(static_cast<std::size_t>(s.getEncodedSize()));
   s.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   store.on_message(messages::channel("fan", messages::Kind::kState), bytes.data(), bytes.size(),

@@ -16,6 +16,7 @@
 #include "messages/codec.h"
 #include "messages/mesh.h"
 #include "outputs/results_writer.h"
+#include "tests/support/state_messages.h"
 
 namespace peritwin::dashboard {
 namespace {
@@ -30,17 +31,8 @@ std::vector<unsigned char> encode(const Message& m) {
 }
 
 peritwin_msgs::damage_state_t state(std::int64_t seq, std::int64_t cycles, double crack) {
-  peritwin_msgs::damage_state_t s{};
+  auto s = testing::minimal_state("b1-ct", seq, cycles, "replay");
   s.utime = 1;
-  s.detail_id = "b1-ct";
-  s.state_seq = seq;
-  s.num_sources = 1;
-  s.source_ids = {"replay"};
-  s.applied_seq = {seq};
-  s.checkpointed_seq = {0};
-  s.history = {0};
-  s.history_start = {0};
-  s.total_cycles = cycles;
   s.broken_bonds = 7 * seq;
   s.max_damage = 0.25;
   s.crack_count = 1;

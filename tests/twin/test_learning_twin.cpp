@@ -3,13 +3,17 @@
 // the checkpoint (restore and go on: the bits of never stopping), the percentiles and the
 // observations in STATE and through its checked decoder. B1 at Δx = 2 mm with 6 particles.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "messages/codec.h"
+#include "outputs/detail_outputs.h"
+#include "outputs/results_writer.h"
 #include "tests/support/twin_fixtures.h"
 #include "twin/messages_io.h"
 #include "twin/twin.h"
@@ -17,7 +21,8 @@
 namespace peritwin::twin {
 namespace {
 
-std::shared_ptr<const DetailModel> learning_b1(const std::string& extra = "") {
+std::shared_ptr<const DetailModel> learning_b1(const std::string& extra = "",
+                                               const std::string& results_dir = "") {
   std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
   text +=
       "\n[detail.uncertainty]\nparticles = 6\nseed = 11\na2 = { median = 1301.0, cov = 0.3 }\n"
@@ -25,7 +30,12 @@ std::shared_ptr<const DetailModel> learning_b1(const std::string& extra = "") {
       extra;
   auto parsed = config::parse_config(text, "b1-learning.toml");
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
-  return testing::b1_model(parsed.config->details.at(0));
+  auto detail = parsed.config->details.at(0);
+  if (!results_dir.empty()) {
+    detail.output.directory = results_dir;
+    detail.output.png = false;
+  }
+  return testing::b1_model(detail);
 }
 
 messages::Observation observation(std::int64_t seq, std::int64_t cycle, double length,
@@ -188,6 +198,106 @@ TEST(LearningTwin, TheSameLoadsAndObservationsInOtherBatchesGiveTheSameEnsemble)
   apply(*b, 3, 8000);
   EXPECT_EQ(a->engine_hash(), b->engine_hash());
   EXPECT_EQ(a->ensemble()->state_hash(), b->ensemble()->state_hash());
+}
+
+// Issue 32 item 6: the results file (outputs::DetailOutputs, as the daemon and peritwin-replay
+// --results write it) has, per recorded state, the ensemble's percentiles, P(horizon), ESS and
+// posterior, and every observation taken in; an observation adds no time-series row; rewind_to
+// drops both tables' rows after the state like the time series'.
+TEST(LearningTwin, TheResultsFileHasTheEnsembleAndTheObservations) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("peritwin-learning-results-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const auto model = learning_b1("", dir.string());
+  auto t = testing::make_twin(model);
+  ASSERT_TRUE(t && t->ensemble());
+  const auto h5 = dir / "b1-ct.h5";
+  {
+    outputs::DetailOutputs out(*t);
+    for (int k = 1; k <= 8; ++k) {
+      apply(*t, k, 1000);
+      out.record(*t);
+    }
+    auto none = observation(1, 3000, std::nan(""));
+    none.kind = messages::ObservationKind::no_crack;
+    none.sigma_m = std::nan("");
+    none.pod_a50_m = 0.005;
+    none.pod_slope = 3.0;
+    ASSERT_TRUE(t->observe(none).applied());
+    out.record(*t);
+    for (int k = 9; k <= 12; ++k) {
+      apply(*t, k, 1000);
+      out.record(*t);
+    }
+    ASSERT_TRUE(t->observe(observation(2, 12000, 0.002)).applied());
+    out.record(*t);
+    out.finish(*t);
+  }
+  // One time-series row per state (0 to 12), none more for the observations.
+  const auto rows = outputs::read_time_series(h5);
+  ASSERT_EQ(rows.size(), 13u);
+  const auto ens = outputs::read_named_table(h5, "ensemble");
+  ASSERT_EQ(ens.rows(), 15u);  // 13 states and 2 observations
+  EXPECT_EQ(ens.attributes.at("percentiles"), "5,50,95");
+  const auto estimate = t->ensemble_estimate();
+  ASSERT_TRUE(estimate);
+  const std::size_t last = ens.rows() - 1;
+  EXPECT_EQ(ens.ints.at("state_seq")[last], 12);
+  EXPECT_EQ(ens.ints.at("total_cycles")[last], 12000);
+  EXPECT_EQ(ens.ints.at("estimate_cycle")[last], t->ensemble()->estimate_cycle());
+  EXPECT_EQ(ens.ints.at("observation_count")[last], 2);
+  EXPECT_EQ(ens.ints.at("particles")[last], 6);
+  EXPECT_EQ(ens.ints.at("observation_count")[0], 0);
+  const char* keys[] = {"p05", "p50", "p95"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(ens.doubles.at(std::string("end_of_life_") + keys[k])[last], estimate->end_of_life[k])
+        << keys[k];
+    EXPECT_EQ(ens.doubles.at(std::string("remaining_") + keys[k])[last], estimate->remaining[k])
+        << keys[k];
+  }
+  EXPECT_EQ(ens.doubles.at("probability_within_horizon")[last],
+            estimate->probability_within_horizon);
+  EXPECT_EQ(ens.doubles.at("horizon_cycles")[last], 5000.0);
+  EXPECT_EQ(ens.doubles.at("effective_sample_size")[last], estimate->effective_sample_size);
+  ASSERT_FALSE(estimate->posterior.empty());
+  for (const auto& p : estimate->posterior) {
+    EXPECT_EQ(ens.doubles.at(p.name + "_median")[last], p.median) << p.name;
+    EXPECT_EQ(ens.doubles.at(p.name + "_cov")[last], p.coefficient_of_variation) << p.name;
+  }
+  // The observations, in the order taken in, with what each did.
+  const auto obs = outputs::read_named_table(h5, "observations");
+  ASSERT_EQ(obs.rows(), 2u);
+  const auto& records = t->ensemble()->observations();
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_EQ(obs.ints.at("index"), (std::vector<std::int64_t>{0, 1}));
+  EXPECT_EQ(obs.ints.at("state_seq"), (std::vector<std::int64_t>{8, 12}));
+  EXPECT_EQ(obs.ints.at("cycle"), (std::vector<std::int64_t>{3000, 12000}));
+  EXPECT_EQ(obs.ints.at("taken_at"), (std::vector<std::int64_t>{8000, 12000}));
+  EXPECT_EQ(obs.ints.at("kind"), (std::vector<std::int64_t>{2, 1}));
+  EXPECT_EQ(obs.ints.at("seq"), (std::vector<std::int64_t>{1, 2}));
+  EXPECT_EQ(obs.strings.at("origins"), (std::vector<std::string>{"longest"}));
+  EXPECT_EQ(obs.ints.at("origin_index"), (std::vector<std::int64_t>{0, 0}));
+  EXPECT_EQ(obs.strings.at("sources"), (std::vector<std::string>{"ndt"}));
+  EXPECT_TRUE(std::isnan(obs.doubles.at("length_m")[0]));
+  EXPECT_EQ(obs.doubles.at("length_m")[1], 0.002);
+  EXPECT_EQ(obs.doubles.at("sigma_m")[1], 0.0005);
+  EXPECT_EQ(obs.doubles.at("pod_a50_m")[0], 0.005);
+  EXPECT_EQ(obs.doubles.at("pod_slope")[0], 3.0);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(obs.doubles.at("predicted_median_m")[i], records[i].update.predicted_median_m);
+    EXPECT_EQ(obs.doubles.at("log_evidence")[i], records[i].update.log_evidence);
+    EXPECT_EQ(obs.doubles.at("ess_before_resampling")[i], records[i].update.ess_before_resampling);
+    EXPECT_EQ(obs.ints.at("resampled")[i], records[i].update.resampled ? 1 : 0);
+  }
+  // A resume from the checkpoint of state 10: the rows after it go, both tables' too.
+  {
+    outputs::ResultsWriter writer(h5);
+    writer.rewind_to(10);
+  }
+  EXPECT_EQ(outputs::read_time_series(h5).size(), 11u);
+  EXPECT_EQ(outputs::read_named_table(h5, "ensemble").rows(), 12u);  // states 0-10, 1 observation
+  EXPECT_EQ(outputs::read_named_table(h5, "observations").rows(), 1u);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
