@@ -6,7 +6,8 @@
 #
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET [TARGET...]]    default: 60 s, every target
 #
-# Targets: batch state reject mesh key_file config series cycles spectrum lcm_log checkpoint (docs/testing.md). What libFuzzer
+# Targets: batch state reject mesh key_file config series cycles spectrum observations
+# observation_msg lcm_log checkpoint (docs/testing.md). What libFuzzer
 # finds beyond the committed corpus stays in build-fuzz/fuzz/<target>/corpus/ and seeds the next
 # run. PERITWIN_FUZZ_BUILD_DIR overrides build-fuzz; PERITWIN_FUZZ_JOBS the build's -j.
 set -euo pipefail
@@ -14,7 +15,8 @@ cd "$(dirname "$0")/.."
 
 seconds=${1:-60}
 shift || true
-all=(batch state reject mesh key_file config series cycles spectrum observations lcm_log checkpoint)
+all=(batch state reject mesh key_file config series cycles spectrum observations observation_msg lcm_log
+  checkpoint)
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=("${all[@]}")
 if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [ "$seconds" -lt 1 ]; then

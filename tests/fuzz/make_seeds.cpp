@@ -145,8 +145,63 @@ void state_seeds(const fs::path& dir) {
   s.echo_source = "replay";
   s.echo_nonce = 0x1d5c9e0b7a3f4260;
   write(dir / "two-sources.bin", encode_message(s));
+  // A learning twin's state (message set version 9): percentiles, posterior, observations.
+  peritwin_msgs::damage_state_t learning = s;
+  learning.num_particles = 64;
+  learning.ensemble_estimate_cycle = 12000;
+  learning.effective_sample_size = 40.5;
+  learning.percentiles = {5, 50, 95};
+  learning.end_of_life_percentiles = {30000, 39000, 47000};
+  learning.remaining_percentiles = {18000, 27000, 35000};
+  learning.num_percentiles = 3;
+  learning.horizon_cycles = 10000;
+  learning.probability_within_horizon = 0.02;
+  learning.parameter_names = {"a2", "load_scale"};
+  learning.parameter_medians = {1301.0, 1.0};
+  learning.parameter_covs = {0.2, 0.05};
+  learning.num_parameters = 2;
+  learning.observation_count = 1;
+  learning.observation_cycles = {8000};
+  learning.observation_kinds = {2};
+  learning.observation_lengths_m = {std::numeric_limits<double>::quiet_NaN()};
+  learning.observation_sigmas_m = {std::numeric_limits<double>::quiet_NaN()};
+  learning.observation_pod_a50s_m = {0.001};
+  learning.observation_predicted_m = {0.0};
+  learning.num_observations = 1;
+  learning.observation_source_ids = {"ndt"};
+  learning.observation_applied_seq = {1};
+  learning.num_observation_sources = 1;
+  write(dir / "learning.bin", encode_message(learning));
   peritwin::messages::sign(s, fuzz_key());
   write(dir / "signed.bin", encode_message(s));
+}
+
+// Observations (issue 32): a crack measured, none found (signed), one of another detail.
+void observation_seeds(const fs::path& dir) {
+  fs::create_directories(dir);
+  peritwin::messages::Observation o;
+  o.detail_id = "b1-ct";
+  o.source_id = "ndt";
+  o.seq = 1;
+  o.nonce = 0x1d5c9e0b7a3f4260;
+  o.cycle = 20000;
+  o.length_m = 0.0018;
+  o.sigma_m = 0.0003;
+  write(dir / "crack.bin", encode_message(peritwin::messages::observation_message(o, 1)));
+  peritwin::messages::Observation none = o;
+  none.seq = 2;
+  none.kind = peritwin::messages::ObservationKind::no_crack;
+  none.length_m = none.sigma_m = std::numeric_limits<double>::quiet_NaN();
+  none.pod_a50_m = 0.001;
+  none.pod_slope = 3;
+  auto signed_none = peritwin::messages::observation_message(none, 1);
+  peritwin::messages::sign(signed_none, fuzz_key());
+  write(dir / "no-crack-signed.bin", encode_message(signed_none));
+  peritwin::messages::Observation other = o;
+  other.detail_id = "b2-cts";
+  other.origin = "hole 0";
+  write(dir / "other-detail.bin",
+        encode_message(peritwin::messages::observation_message(other, 1)));
 }
 
 void reject_seeds(const fs::path& dir) {
@@ -264,6 +319,7 @@ int main(int argc, char** argv) {
     batch_seeds(dir / "batch");
     state_seeds(dir / "state");
     reject_seeds(dir / "reject");
+    observation_seeds(dir / "observation_msg");
     samples_seeds(dir / "samples");
     mesh_seeds(dir / "mesh");
     key_file_seed(dir / "key_file");
