@@ -7,6 +7,7 @@
 
 #include "core/fnv1a.h"
 #include "prognostics/observation_likelihood.h"
+#include "prognostics/random.h"
 #include "prognostics/weighted_statistics.h"
 #include "solver/model/pd_model.h"
 #include "twin/coarse_life.h"
@@ -285,6 +286,8 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
 
 EnsembleEstimate Ensemble::estimate(const std::vector<core::LoadBlock>& spectrum) {
   const DetailModel& pm = *particle_model_;
+  const config::UncertaintyConfig& u = model_->config().uncertainty;
+  const bool shuffle = model_->config().life.empirical_spectrum() && spectrum.size() > 1;
   std::vector<double> end(particles_.size(), kInf);
   for_each_particle([&](std::size_t i) {
     const Particle& p = particles_[i];
@@ -293,6 +296,17 @@ EnsembleEstimate Ensemble::estimate(const std::vector<core::LoadBlock>& spectrum
       return;
     }
     std::vector<core::LoadBlock> scaled = spectrum;
+    if (shuffle) {
+      // The empirical spectrum's blocks in an order of the particle's own (Fisher-Yates), drawn
+      // from a stream of the config's seed, the cycle count and the particle: the future's block
+      // order is as uncertain as its parameters, and the same on any thread.
+      prognostics::Random order(
+          u.seed ^ (0x9e3779b97f4a7c15ULL * (static_cast<std::uint64_t>(total_cycles_) + 1)) ^
+          (0xbf58476d1ce4e5b9ULL * (i + 1)));
+      for (std::size_t k = scaled.size() - 1; k > 0; --k) {
+        std::swap(scaled[k], scaled[static_cast<std::size_t>(order.uniform_below(k + 1))]);
+      }
+    }
     for (auto& b : scaled) b.p_max *= p.load_scale;
     const double life =
         simulate_life(pm, p.engine->export_state(), scaled, p.a2_factor, nullptr, p.engine.get());

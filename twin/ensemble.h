@@ -119,7 +119,9 @@ class Ensemble {
   /// compared with each particle's crack at its cycle; the resampling happens now.
   core::Expected<ObservationUpdate> observe(const messages::Observation& observation);
   /// Simulates each particle's end of life under `spectrum` (the reference spectrum: each
-  /// particle applies it with its own P_max scale) from a fork of its engine, keeps them, and
+  /// particle applies it with its own P_max scale; the empirical one, [detail.life] without a
+  /// reference_spectrum, in a block order of the particle's own, drawn from the config's seed,
+  /// the cycle count and the particle's index) from a fork of its engine, keeps them, and
   /// returns summary().
   EnsembleEstimate estimate(const std::vector<core::LoadBlock>& spectrum);
   /// Remaining life at the current cycle count from the ends of life simulated last (the

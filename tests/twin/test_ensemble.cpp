@@ -17,8 +17,10 @@ namespace {
 
 /// B1 at Δx = 2 mm with `uncertainty` as its [detail.uncertainty] (the example's own prior, 64
 /// particles, replaced).
-std::shared_ptr<const DetailModel> coarse_b1(const std::string& uncertainty) {
-  std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
+std::shared_ptr<const DetailModel> coarse_b1(const std::string& uncertainty,
+                                             testing::Edits edits = {}) {
+  edits.insert(edits.begin(), {"dx = 0.001 ", "dx = 0.002 "});
+  std::string text = testing::b1_text("every_batches = 0", edits);
   text += "\n[detail.uncertainty]\n" + uncertainty + "\n";
   auto parsed = config::parse_config(text, "b1-uncertain.toml");
   EXPECT_TRUE(parsed.ok()) << parsed.error_text();
@@ -196,6 +198,36 @@ TEST(Ensemble, ALateObservationIsComparedWithTheCrackAtItsCycle) {
   const auto wa = on_time->weights().weights(), wb = late->weights().weights();
   ASSERT_EQ(wa.size(), wb.size());
   for (std::size_t i = 0; i < wa.size(); ++i) EXPECT_EQ(wa[i], wb[i]) << i;
+}
+
+// Future loads from the empirical spectrum: each particle simulates its blocks in an order of its
+// own (drawn from the seed, the cycle and the particle), the same on every call; from a reference
+// spectrum, in the given order. Same particles, same spectrum: the ends of life differ.
+TEST(Ensemble, TheEmpiricalSpectrumIsSimulatedInEachParticlesOwnBlockOrder) {
+  const char* prior = "particles = 6\nseed = 4\na2 = { median = 1301.0, cov = 0.3 }";
+  const std::string reference =
+      "reference_spectrum = [{ p_max = 4000.0, r = 0.1, alpha = 0.0, count = 1000 }]";
+  const auto empirical = coarse_b1(prior, {{reference, "# empirical"}});
+  const auto fixed = coarse_b1(
+      prior, {{reference,
+               "reference_spectrum = [{ p_max = 6000.0, r = 0.1, alpha = 0.0, count = 3000 }, "
+               "{ p_max = 3000.0, r = 0.1, alpha = 0.0, count = 3000 }, { p_max = 4500.0, r = "
+               "0.5, alpha = 0.0, count = 3000 }]"}});
+  ASSERT_TRUE(empirical->config().life.empirical_spectrum());
+  const std::vector<core::LoadBlock> spectrum = fixed->config().life.reference_spectrum;
+  auto a = make(empirical), b = make(fixed), c = make(empirical);
+  ASSERT_TRUE(a && b && c);
+  for (auto* e : {a.get(), b.get(), c.get()}) {
+    ASSERT_TRUE(e->apply(std::vector<core::LoadBlock>{{4000, 0.1, 0, 12000}}).ok());
+  }
+  const auto ea = a->estimate(spectrum), eb = b->estimate(spectrum), ec = c->estimate(spectrum);
+  EXPECT_EQ(ea.end_of_life, ec.end_of_life);  // deterministic
+  int differ = 0;
+  for (std::size_t k = 0; k < ea.end_of_life.size(); ++k) {
+    EXPECT_TRUE(std::isfinite(ea.end_of_life[k]));
+    differ += ea.end_of_life[k] != eb.end_of_life[k] ? 1 : 0;
+  }
+  EXPECT_GT(differ, 0) << "the block order changed no end of life";
 }
 
 }  // namespace
