@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -646,6 +647,54 @@ bool answers(const peritwin_msgs::damage_state_t& state, const std::string& sour
          static_cast<std::uint64_t>(state.echo_nonce) == nonce;
 }
 
+namespace {
+
+/// "p05", "p50", "p95", "p97.5".
+std::string percentile_key(double q) {
+  char buf[32];
+  if (q == std::floor(q)) {
+    std::snprintf(buf, sizeof buf, "p%02d", static_cast<int>(q));
+  } else {
+    std::snprintf(buf, sizeof buf, "p%g", q);
+  }
+  return buf;
+}
+
+/// A learning twin's keys (message set version 9), as peritwin-replay --observations prints them:
+/// end_of_life_percentiles and remaining_percentiles (whole cycles, null beyond the horizon or
+/// before an estimate), probability_within_horizon, horizon_cycles, posterior, and the count of
+/// observations taken in. Nothing without an ensemble.
+void add_ensemble(nlohmann::ordered_json& j, const peritwin_msgs::damage_state_t& s) {
+  if (s.num_particles <= 0) return;
+  const auto cycles = [](double v) -> nlohmann::ordered_json {
+    if (!std::isfinite(v) || std::abs(v) >= 0x1p53) return nullptr;
+    return static_cast<std::int64_t>(std::llround(v));
+  };
+  nlohmann::ordered_json eol = nlohmann::ordered_json::object();
+  nlohmann::ordered_json rem = nlohmann::ordered_json::object();
+  const std::size_t n = std::min(
+      {s.percentiles.size(), s.end_of_life_percentiles.size(), s.remaining_percentiles.size()});
+  for (std::size_t k = 0; k < n; ++k) {
+    eol[percentile_key(s.percentiles[k])] = cycles(s.end_of_life_percentiles[k]);
+    rem[percentile_key(s.percentiles[k])] = cycles(s.remaining_percentiles[k]);
+  }
+  j["end_of_life_percentiles"] = eol;
+  j["remaining_percentiles"] = rem;
+  j["probability_within_horizon"] = s.probability_within_horizon;
+  j["horizon_cycles"] = s.horizon_cycles;
+  nlohmann::ordered_json posterior = nlohmann::ordered_json::object();
+  const std::size_t m =
+      std::min({s.parameter_names.size(), s.parameter_medians.size(), s.parameter_covs.size()});
+  for (std::size_t k = 0; k < m; ++k) {
+    posterior[s.parameter_names[k]] = {{"median", s.parameter_medians[k]},
+                                       {"cov", s.parameter_covs[k]}};
+  }
+  j["posterior"] = posterior;
+  j["observations"] = s.observation_count;
+}
+
+}  // namespace
+
 std::string state_json(const peritwin_msgs::damage_state_t& s) {
   nlohmann::ordered_json j;
   j["detail"] = s.detail_id;
@@ -664,6 +713,7 @@ std::string state_json(const peritwin_msgs::damage_state_t& s) {
   j["end_of_life_cycle"] = s.end_of_life_cycle;
   j["state_hash"] = s.state_hash;
   j["engine_hash"] = s.engine_hash;
+  add_ensemble(j, s);
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -678,6 +728,7 @@ std::string summary_json(const peritwin_msgs::damage_state_t& s,
   j["end_of_life_cycle"] = s.end_of_life_cycle;
   j["state_hash"] = s.state_hash;
   j["engine_hash"] = s.engine_hash;
+  add_ensemble(j, s);
   for (const SummaryObject& object : extra) {
     nlohmann::ordered_json o = nlohmann::ordered_json::object();
     for (const auto& [key, value] : object.numbers) {

@@ -182,6 +182,19 @@ std::string describe(const peritwin_msgs::damage_state_t& s,
   } else if (std::isinf(s.remaining_cycles)) {
     life = "remaining life unbounded under the reference spectrum";
   }
+  // A learning twin's end of life as a probability: its first, middle and last percentile.
+  const std::size_t n = std::min(s.percentiles.size(), s.end_of_life_percentiles.size());
+  if (s.num_particles > 0 && n > 0 && s.failure == 0) {
+    const double lo = s.end_of_life_percentiles.front(), mid = s.end_of_life_percentiles[n / 2],
+                 hi = s.end_of_life_percentiles[n - 1];
+    if (std::isfinite(lo) && std::isfinite(mid)) {
+      std::snprintf(buf, sizeof buf, "; end of life p%g %.0f, p%g %.0f, p%g %s (%d observations)",
+                    s.percentiles.front(), lo, s.percentiles[n / 2], mid, s.percentiles[n - 1],
+                    std::isfinite(hi) ? std::to_string(std::llround(hi)).c_str() : "beyond",
+                    s.observation_count);
+      life += buf;
+    }
+  }
   std::snprintf(buf, sizeof buf, "state %lld: %lld cycles, %lld broken bonds, crack %.2f mm, ",
                 static_cast<long long>(s.state_seq), static_cast<long long>(s.total_cycles),
                 static_cast<long long>(s.broken_bonds), 1e3 * messages::crack_length(s));

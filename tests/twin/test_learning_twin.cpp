@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -137,6 +138,14 @@ TEST(LearningTwin, ObservationsAreTakenInOncePerSourceAndSeqAndRefusalsChangeNot
   ASSERT_EQ(m.num_observation_sources, 2);
   EXPECT_EQ(m.observation_source_ids, (std::vector<std::string>{"gauge-team", "ndt"}));
   EXPECT_EQ(m.observation_applied_seq, (std::vector<std::int64_t>{1, 1}));
+  // The JSON lines of the tools (state_json, summary_json) carry the same.
+  for (const std::string& line : {messages::state_json(m), messages::summary_json(m)}) {
+    const auto j = nlohmann::json::parse(line);
+    EXPECT_EQ(j["observations"], 2) << line;
+    EXPECT_EQ(j["end_of_life_percentiles"]["p50"], std::llround(m.end_of_life_percentiles[1]));
+    EXPECT_EQ(j["remaining_percentiles"]["p95"], std::llround(m.remaining_percentiles[2]));
+    EXPECT_EQ(j["posterior"]["a2"]["median"], m.parameter_medians[0]);
+  }
   // Through the wire and the checked decoder.
   std::vector<std::uint8_t> bytes(static_cast<std::size_t>(m.getEncodedSize()));
   ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
