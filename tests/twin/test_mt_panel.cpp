@@ -54,7 +54,14 @@ TEST(MiddleCrackTensionPanel, NoFalseFinalFailureWhereTwoNodesHangOnTheCrackLine
   std::cout << "mt panel: " << broken << " bonds broken, growth " << cracks.main_length() * 1e3
             << " mm per tip, max damage " << cracks.max_damage << "\n";
   EXPECT_EQ(broken, 762);
-  EXPECT_NEAR(cracks.main_length(), 0.0115495, 1e-6);  // 10.55 mm at 38 699 cycles
+  // The node-based length of the main crack as before the sub-grid length (10.55 mm at 38 699
+  // cycles); the published one lies within Δx/2 of it (docs/design.md, "Sub-grid crack length";
+  // two tips: the cut beyond both, the lag taken off twice).
+  ASSERT_FALSE(cracks.cracks.empty());
+  EXPECT_NEAR(cracks.cracks[0].crack.node_length, 0.0115495, 1e-6);
+  EXPECT_NEAR(cracks.main_length(), 0.0110940, 1e-6);
+  EXPECT_LE(std::abs(cracks.main_length() - cracks.cracks[0].crack.node_length),
+            0.5 * model->disc().dx + 1e-12);
   EXPECT_NEAR(cracks.max_damage, 0.797, 0.001);        // as at 38 699: nothing came loose
   // A resumed engine replays the re-solves, the failed update and its pin with them: the same
   // state bit for bit, the same pin.
