@@ -225,9 +225,13 @@ std::optional<std::int64_t> LifeCountdown::observe(const peritwin_msgs::damage_s
 
 void StatePrinter::print(const peritwin_msgs::damage_state_t& s) {
   const std::optional<std::int64_t> estimate_cycles = countdown_.observe(s);
-  if (s.state_seq == last_seq_ && s.remaining_life_seq == last_life_) return;
+  if (s.state_seq == last_seq_ && s.remaining_life_seq == last_life_ &&
+      s.observation_count == last_observations_) {
+    return;
+  }
   last_seq_ = s.state_seq;
   last_life_ = s.remaining_life_seq;
+  last_observations_ = s.observation_count;
   std::cout << (json_ ? messages::state_json(s) : describe(s, estimate_cycles)) << std::endl;
 }
 

@@ -135,7 +135,8 @@ class LifeCountdown {
 };
 
 /// The state lines of peritwin-replay and peritwin-stream on stdout: each state once (a new
-/// state_seq or remaining_life_seq), as twin::state_json with `json`, else describe(); flushed.
+/// state_seq, remaining_life_seq or observation taken in), as twin::state_json with `json`, else
+/// describe(); flushed.
 class StatePrinter {
  public:
   explicit StatePrinter(bool json) : json_(json) {}
@@ -147,7 +148,7 @@ class StatePrinter {
 
  private:
   bool json_;
-  std::int64_t last_seq_ = -2, last_life_ = -2;
+  std::int64_t last_seq_ = -2, last_life_ = -2, last_observations_ = -1;
   LifeCountdown countdown_;  ///< the text lines count the remaining life down (JSON: as published)
 };
 

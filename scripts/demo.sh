@@ -3,7 +3,9 @@
 # B1 compact-tension example (examples/b1-ct-al6061.toml, the 1 mm demo grid):
 #   an LCM TCP hub on 127.0.0.1 (lcm.jar's TCPService; nothing leaves the machine),
 #   the daemon (build/bin/peritwin --deterministic),
-#   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1),
+#   the replay tool in lockstep feeding examples/b1-cycles.csv (64 x 1000 cycles at 4 kN, R 0.1)
+#   and, at their cycles, the inspections of examples/b1-inspections.csv (the twin's ensemble
+#   learns from them: the end of life's percentiles narrow; docs/prognostics.md),
 # and prints every state (the web dashboard peritwin-dashboard shows them too, its URL printed): cycles, broken bonds, crack length and the remaining life with its band
 # (re-estimated every 10 batches). Authenticated: the script generates a key file
 # (out/demo/keys.toml, mode 0600, keys "replay", "stream" and "peritwin"), the daemon's config is the example
@@ -69,11 +71,12 @@ echo "demo: dashboard on $dashboard_url (log: out/demo/dashboard.log)"
    --lcm-url "$url" --state-dir state --deterministic) >"$demo/daemon.log" 2>&1 &
 daemon_pid=$!
 echo "demo: daemon started (log: out/demo/daemon.log); replaying examples/b1-cycles.csv in lockstep"
+echo "      with the inspections of examples/b1-inspections.csv at 8 000, 20 000 and 28 000 cycles"
 echo
 
 "$bin/peritwin-replay" --config examples/b1-ct-al6061.toml --key-file "$demo/keys.toml" \
   --history examples/b1-cycles.csv --format cycles --lcm-url "$url" --lockstep \
-  2> >(grep -v '^LCM tcpq' >&2)
+  --observations examples/b1-inspections.csv 2> >(grep -v '^LCM tcpq' >&2)
 
 echo
 # DASHBOARD_SCREENSHOT=file.png: headless chromium's picture of the dashboard at the end.
