@@ -207,6 +207,22 @@ bool reject_layout(const unsigned char* p, std::size_t size) {
          w.skip(static_cast<std::size_t>(tag)) && w.at_end();
 }
 
+/// The end of a signed message from where the walker stands: tag_length (0 or kAuthTagBytes), the
+/// tag, nothing after; `signed_size` = the bytes before tag_length. Empty when so, else why not.
+std::string signed_tail(LayoutWalker& w, std::size_t& signed_size) {
+  signed_size = w.pos();
+  std::int32_t tag = 0;
+  if (!w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
+    return "malformed or truncated tag_length / auth_tag";
+  }
+  if (tag != 0 && tag != static_cast<std::int32_t>(kAuthTagBytes)) {
+    return "malformed tag_length " + std::to_string(tag) + " (0 or " +
+           std::to_string(kAuthTagBytes) + ")";
+  }
+  if (!w.at_end()) return "oversized payload: bytes after the message's end";
+  return {};
+}
+
 /// load_samples_t: the layout (every count against the bytes left), and the size the tag covers.
 std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t& signed_size) {
   LayoutWalker w(p, size);
@@ -224,17 +240,7 @@ std::string samples_layout(const unsigned char* p, std::size_t size, std::size_t
       return std::string("malformed or truncated ") + array + " (its count exceeds the payload)";
     }
   }
-  signed_size = w.pos();
-  std::int32_t tag = 0;
-  if (!w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
-    return "malformed or truncated tag_length / auth_tag";
-  }
-  if (tag != 0 && tag != static_cast<std::int32_t>(kAuthTagBytes)) {
-    return "malformed tag_length " + std::to_string(tag) + " (0 or " +
-           std::to_string(kAuthTagBytes) + ")";
-  }
-  if (!w.at_end()) return "oversized payload: bytes after the message's end";
-  return {};
+  return signed_tail(w, signed_size);
 }
 
 /// observation_t: the layout, and the size the tag covers; empty when it decodes safely.
@@ -249,17 +255,7 @@ std::string observation_layout(const unsigned char* p, std::size_t size, std::si
       !w.skip(4 * 8)) {
     return "malformed or truncated: a string length or the payload's end";
   }
-  signed_size = w.pos();
-  std::int32_t tag = 0;
-  if (!w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
-    return "malformed or truncated tag_length / auth_tag";
-  }
-  if (tag != 0 && tag != static_cast<std::int32_t>(kAuthTagBytes)) {
-    return "malformed tag_length " + std::to_string(tag) + " (0 or " +
-           std::to_string(kAuthTagBytes) + ")";
-  }
-  if (!w.at_end()) return "oversized payload: bytes after the message's end";
-  return {};
+  return signed_tail(w, signed_size);
 }
 
 bool status_layout(const unsigned char* p, std::size_t size) {
@@ -647,8 +643,6 @@ bool answers(const peritwin_msgs::damage_state_t& state, const std::string& sour
          static_cast<std::uint64_t>(state.echo_nonce) == nonce;
 }
 
-namespace {
-
 /// "p05", "p50", "p95", "p97.5".
 std::string percentile_key(double q) {
   char buf[32];
@@ -659,6 +653,8 @@ std::string percentile_key(double q) {
   }
   return buf;
 }
+
+namespace {
 
 /// A learning twin's keys (message set version 9), as peritwin-replay --observations prints them:
 /// end_of_life_percentiles and remaining_percentiles (whole cycles, null beyond the horizon or

@@ -156,6 +156,9 @@ SourceHistory source_history(const peritwin_msgs::damage_state_t& state, const s
 bool answers(const peritwin_msgs::damage_state_t& state, const std::string& source,
              std::uint64_t nonce);
 
+/// The JSON key of a percentile: "p05", "p50", "p95", "p97.5".
+std::string percentile_key(double percentile);
+
 /// One JSON object per state: detail, state_seq, cycles, broken_bonds, crack_length_m,
 /// crack_count, max_damage, k_i, remaining_cycles, remaining_low, remaining_high,
 /// remaining_life_seq, failure, end_of_life_cycle, state_hash, engine_hash. Non-finite numbers are

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "messages/codec.h"
 #include "twin/life.h"
 
 namespace peritwin::replay {
@@ -12,17 +13,6 @@ namespace peritwin::replay {
 namespace {
 
 using Json = nlohmann::ordered_json;
-
-/// "p05", "p50", "p95", "p97.5".
-std::string percentile_key(double q) {
-  char buf[32];
-  if (q == std::floor(q)) {
-    std::snprintf(buf, sizeof buf, "p%02d", static_cast<int>(q));
-  } else {
-    std::snprintf(buf, sizeof buf, "p%g", q);
-  }
-  return buf;
-}
 
 /// A cycle count as JSON: rounded to a whole cycle (a weighted percentile interpolates between
 /// particles), null for +Inf (beyond the simulated horizon) or NaN.
@@ -35,8 +25,8 @@ Json estimate_fields(const twin::EnsembleEstimate& e) {
   Json j;
   Json eol = Json::object(), rem = Json::object();
   for (std::size_t k = 0; k < e.percentiles.size() && k < e.end_of_life.size(); ++k) {
-    eol[percentile_key(e.percentiles[k])] = cycles_json(e.end_of_life[k]);
-    rem[percentile_key(e.percentiles[k])] = cycles_json(e.remaining[k]);
+    eol[messages::percentile_key(e.percentiles[k])] = cycles_json(e.end_of_life[k]);
+    rem[messages::percentile_key(e.percentiles[k])] = cycles_json(e.remaining[k]);
   }
   j["end_of_life_percentiles"] = eol;
   j["remaining_percentiles"] = rem;
@@ -114,7 +104,7 @@ std::string describe_ensemble(const std::string& what, const twin::EnsembleEstim
   std::ostringstream s;
   s << "ensemble " << what << " at " << e.cycle << " cycles: end of life";
   for (std::size_t k = 0; k < e.percentiles.size() && k < e.end_of_life.size(); ++k) {
-    s << " " << percentile_key(e.percentiles[k]) << " ";
+    s << " " << messages::percentile_key(e.percentiles[k]) << " ";
     if (std::isfinite(e.end_of_life[k])) {
       s << static_cast<std::int64_t>(e.end_of_life[k]);
     } else {

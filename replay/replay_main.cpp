@@ -231,24 +231,30 @@ void report_history(const Options& o, const config::DetailConfig& detail,
   }
 }
 
+/// --results: the results files written as the in-process twin goes (DetailOutputs created at
+/// the first state, a row per state, finished at the last), `detail`'s output directory set to
+/// --results; no observer without --results.
+twin::TwinObserver results_observer(const Options& o, config::DetailConfig& detail,
+                                    std::unique_ptr<outputs::DetailOutputs>& outputs) {
+  if (o.results_dir.empty()) return {};
+  detail.output.directory = o.results_dir;
+  return [&outputs](const twin::Twin& t, bool last) {
+    if (!outputs) {
+      outputs = std::make_unique<outputs::DetailOutputs>(t);
+    } else if (!last) {
+      outputs->record(t);
+    }
+    if (last) outputs->finish(t);
+  };
+}
+
 /// --in-process: the batches applied here, with --results the daemon's results files written.
 int replay_in_process(const Options& o, const config::DetailConfig& detail,
                       const std::vector<messages::Batch>& batches, replay::StatePrinter& printer,
                       std::optional<peritwin_msgs::damage_state_t>& final_state) {
   config::DetailConfig run_detail = detail;
   std::unique_ptr<outputs::DetailOutputs> outputs;
-  twin::TwinObserver on_twin;
-  if (!o.results_dir.empty()) {
-    run_detail.output.directory = o.results_dir;
-    on_twin = [&outputs](const twin::Twin& t, bool last) {
-      if (!outputs) {
-        outputs = std::make_unique<outputs::DetailOutputs>(t);
-      } else if (!last) {
-        outputs->record(t);
-      }
-      if (last) outputs->finish(t);
-    };
-  }
+  const twin::TwinObserver on_twin = results_observer(o, run_detail, outputs);
   const auto r = twin::run_in_process(run_detail, batches, printer.callback(), on_twin);
   if (!r.error.empty()) {
     std::cerr << "peritwin-replay: " << r.error << "\n";
@@ -394,18 +400,7 @@ int run_learning(const Options& o, const config::DetailConfig& detail,
   // --results: the daemon's results files, with the ensemble's rows and the observations.
   config::DetailConfig run_detail = detail;
   std::unique_ptr<outputs::DetailOutputs> outputs;
-  twin::TwinObserver on_twin;
-  if (!o.results_dir.empty()) {
-    run_detail.output.directory = o.results_dir;
-    on_twin = [&outputs](const twin::Twin& t, bool last) {
-      if (!outputs) {
-        outputs = std::make_unique<outputs::DetailOutputs>(t);
-      } else if (!last) {
-        outputs->record(t);
-      }
-      if (last) outputs->finish(t);
-    };
-  }
+  const twin::TwinObserver on_twin = results_observer(o, run_detail, outputs);
   const auto r = replay::run_learning_in_process(
       run_detail, split, observations, o.json, printer.callback(),
       [](const std::string& line) { std::cout << line << std::endl; }, on_twin);
