@@ -559,15 +559,17 @@ void Daemon::taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_uti
   const auto& records = twin.ensemble()->observations();
   const twin::ObservationRecord& rec = records.back();
   const auto estimate = twin.ensemble_estimate();
+  const std::size_t mid = estimate ? estimate->end_of_life.size() / 2 : 0;
   spdlog::info(
       "[{}] observation {}#{} at cycle {} taken in ({}): predicted median {:.3g} mm, "
-      "log evidence {:.3g}{}; end of life p50 {:.0f} cycles",
+      "log evidence {:.3g}{}; end of life p{:g} {:.0f} cycles",
       d.id, ingested.source, ingested.seq, rec.observation.cycle,
       rec.observation.kind == messages::ObservationKind::crack_length ? "crack length"
                                                                       : "no crack found",
       rec.update.predicted_median_m * 1e3, rec.update.log_evidence,
       rec.update.resampled ? ", resampled" : "",
-      estimate && estimate->end_of_life.size() > 1 ? estimate->end_of_life[1] : 0.0);
+      estimate && mid < estimate->percentiles.size() ? estimate->percentiles[mid] : 50.0,
+      estimate && mid < estimate->end_of_life.size() ? estimate->end_of_life[mid] : 0.0);
   // Observations are few and cannot be recomputed from the loads: durable before the STATE says
   // they were taken in.
   checkpoint(d, "observation");
