@@ -213,8 +213,15 @@ core::Status Ensemble::apply(std::span<const core::LoadBlock> blocks) {
       if (p.ended_at >= 0) break;
       core::LoadBlock scaled = block;
       scaled.p_max *= p.load_scale;
-      p.engine->apply(scaled, stop);
-      if (end_of_life(pm, *p.engine) != Failure::none) p.ended_at = p.engine->total_cycles();
+      // The engine checks the end criterion after every group of breaks and stops there (stopped,
+      // or final_failure); the criterion is looked at again only after a block that broke bonds:
+      // quiet blocks need no crack search (as the twin's own quiet batches, Twin::ReportKey).
+      const std::size_t events = p.engine->break_events().size();
+      if (p.engine->apply(scaled, stop) != fatigue::EngineStatus::ok ||
+          (p.engine->break_events().size() != events &&
+           end_of_life(pm, *p.engine) != Failure::none)) {
+        p.ended_at = p.engine->total_cycles();
+      }
     }
   });
   for (const core::LoadBlock& block : blocks) total_cycles_ += block.count;
