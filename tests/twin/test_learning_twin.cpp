@@ -192,6 +192,27 @@ TEST(LearningTwin, ACheckpointedEnsembleGoesOnBitForBit) {
   EXPECT_NE(refused.error().message().find("ensemble_filter"), std::string::npos);
 }
 
+// An observation the physics contradicts — a crack shorter than one measured before — is taken in
+// as measured (docs/prognostics.md: the engines never un-break a bond; it favours the particles
+// that grew least): applied and recorded with the ensemble's prediction, longer than what was
+// measured; the state moves, the engine does not.
+TEST(LearningTwin, AShorterCrackThanOneMeasuredBeforeIsTakenInAsMeasured) {
+  const auto model = learning_b1();
+  auto a = testing::make_twin(model), b = testing::make_twin(model);
+  ASSERT_TRUE(a && b);
+  for (auto* t : {a.get(), b.get()}) {
+    for (int k = 1; k <= 26; ++k) apply(*t, k, 1000);
+    ASSERT_TRUE(t->observe(observation(1, 24000, 0.003)).applied());
+  }
+  const auto shorter = a->observe(observation(2, 26000, 0.0005));
+  ASSERT_TRUE(shorter.applied()) << shorter.what << ": " << shorter.why;
+  const auto& records = a->ensemble()->observations();
+  ASSERT_EQ(records.size(), 2u);
+  EXPECT_GT(records[1].update.predicted_median_m, 0.0005);
+  EXPECT_NE(a->state_hash_hex(), b->state_hash_hex());
+  EXPECT_EQ(a->engine_hash(), b->engine_hash());
+}
+
 // Batches cut otherwise give the same learning twin's engine and ensemble; the observations are
 // taken in between the same cycles.
 TEST(LearningTwin, TheSameLoadsAndObservationsInOtherBatchesGiveTheSameEnsemble) {
