@@ -646,7 +646,9 @@ bool answers(const peritwin_msgs::damage_state_t& state, const std::string& sour
 /// "p05", "p50", "p95", "p97.5".
 std::string percentile_key(double q) {
   char buf[32];
-  if (q == std::floor(q)) {
+  // Whole percentiles of [0, 100] as two digits at least; anything else (a forged STATE's too) as
+  // %g, never cast.
+  if (q >= 0.0 && q <= 100.0 && q == std::floor(q)) {
     std::snprintf(buf, sizeof buf, "p%02d", static_cast<int>(q));
   } else {
     std::snprintf(buf, sizeof buf, "p%g", q);
