@@ -93,7 +93,7 @@ core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx)
     if (!map.coarse.empty()) {
       c = std::max(c, map.coarse.back());
       f = std::max(f, map.fine.back());
-      if (c == map.coarse.back()) {  // a plateau of the coarse length: keep its middle's fine one
+      if (c == map.coarse.back()) {  // a plateau of the coarse length: its first sample stands
         continue;
       }
     }
