@@ -43,12 +43,15 @@
 #include "messages/mesh.h"
 #include "outputs/results_writer.h"
 #include "tests/dashboard/cdp_pipe.h"
+#include "tests/support/http_chunks.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
 #include "tests/support/state_messages.h"
 
 namespace peritwin::dashboard {
 namespace {
+
+using testing::dechunk;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -960,22 +963,6 @@ TEST_F(DashboardApi, IdleAndHalfRequestConnectionsDoNotLockThePageOut) {
     EXPECT_EQ(status, 200) << "run " << run;
     std::printf("GET / after they closed: %.1f ms\n", took * 1e3);
   }
-}
-
-/// The body of a chunked HTTP response from `raw` (what came after its headers): the chunks
-/// complete so far, de-framed.
-std::string dechunk(const std::string& raw) {
-  std::string body;
-  std::size_t at = 0;
-  for (;;) {
-    const auto eol = raw.find("\r\n", at);
-    if (eol == std::string::npos) break;
-    const auto size = std::strtoull(raw.substr(at, eol - at).c_str(), nullptr, 16);
-    if (size == 0 || raw.size() < eol + 2 + size + 2) break;
-    body.append(raw, eol + 2, size);
-    at = eol + 2 + size + 2;
-  }
-  return body;
 }
 
 /// The state_seqs of the "state" events of `detail` in an event stream's body, in order.

@@ -19,10 +19,13 @@
 #include "dashboard/event_fanout.h"
 #include "dashboard/store.h"
 #include "messages/channels.h"
+#include "tests/support/http_chunks.h"
 #include "tests/support/state_messages.h"
 
 namespace peritwin::dashboard {
 namespace {
+
+using testing::dechunk;
 
 constexpr auto kDeadline = std::chrono::seconds(60);
 
@@ -52,21 +55,6 @@ struct Pair {
   int server = -1, client = -1;
   std::string raw;  // what the client received
 };
-
-/// The body from chunked `raw`: the complete chunks, de-framed.
-std::string dechunk(const std::string& raw) {
-  std::string body;
-  std::size_t at = 0;
-  for (;;) {
-    const auto eol = raw.find("\r\n", at);
-    if (eol == std::string::npos) break;
-    const auto size = std::strtoull(raw.substr(at, eol - at).c_str(), nullptr, 16);
-    if (raw.size() < eol + 2 + size + 2) break;
-    body.append(raw, eol + 2, size);
-    at = eol + 2 + size + 2;
-  }
-  return body;
-}
 
 /// The "id:" of each event in an SSE body, in order.
 std::vector<std::uint64_t> event_ids(const std::string& body) {
