@@ -111,6 +111,15 @@
 //                        factorizes again first, bit-identically: about a third of the memory of
 //                        a detail that idles, for one factorization at its first break; for
 //                        fleets, docs/benchmarks.md "Fleet")
+//   [[detail.gauge]]     (optional, issue 33, docs/gauges.md) strain gauges on the detail: id R (1
+//   to
+//                        32 characters from [A-Za-z0-9_-], unique in the detail), at R ([x, y] in
+//                        m, in the material: not in a hole or notch), angle 0 (rad, finite: the
+//                        measuring direction from +x), length 0 (m, >= 0: the strain is averaged
+//                        over the nodes within dx/2 of the segment of this length centred at `at`;
+//                        0 = the node nearest `at`), noise 0 (strain, >= 0: the gauge's standard
+//                        deviation; weights of the load identification, the compliance residual's
+//                        alarm and the likelihood of gauge observations)
 //   [detail.sensor]      for peritwin-stream (raw samples -> cycles; the daemon ignores it):
 //                        scale 1 (finite, != 0) and offset 0 (N, finite): the load is
 //                        P = scale * measured + offset (strain or volts to newtons), gate 0 (N,
@@ -301,6 +310,16 @@ struct LimitsConfig {
   bool release_idle_factor = false;
 };
 
+/// [[detail.gauge]]: a strain gauge on the detail (issue 33, docs/gauges.md).
+struct GaugeConfig {
+  std::string id;
+  mesh::Point at;       ///< centre of the measuring grid (m)
+  double angle = 0.0;   ///< measuring direction from +x (rad)
+  double length = 0.0;  ///< gauge length (m); 0 = the node nearest `at`
+  double noise = 0.0;   ///< standard deviation of a reading (strain)
+  SourceRef where;
+};
+
 /// [detail.sensor]: how peritwin-stream turns a sensor's samples into loads and cycles.
 struct SensorConfig {
   double scale = 1.0;      ///< N per unit measured; finite, != 0
@@ -330,7 +349,8 @@ struct DetailConfig {
   CheckpointConfig checkpoint;
   LimitsConfig limits;
   SensorConfig sensor;
-  SourceRef where;  ///< the [[detail]] table
+  std::vector<GaugeConfig> gauges;  ///< [[detail.gauge]], in the config's order
+  SourceRef where;                  ///< the [[detail]] table
 
   [[nodiscard]] double horizon() const { return horizon_ratio * dx; }
 };

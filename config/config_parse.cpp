@@ -587,6 +587,33 @@ void read_sensor(Context& ctx, const toml::table& t, const std::string& path, Se
   r.finish();
 }
 
+void read_gauge(Context& ctx, const toml::table& t, const std::string& path,
+                const mesh::DetailGeometry& g, bool outline_ok, std::vector<GaugeConfig>& gauges) {
+  TableReader r(ctx, t, path);
+  GaugeConfig c;
+  if (const auto id = r.string("id")) {
+    c.id = *id;
+    // The rule of a detail id (messages/channels.h): a gauge id is a CSV column header and a
+    // JSON key, so the same short, unambiguous alphabet.
+    if (r.check("id", messages::is_valid_detail_id(*id),
+                "\"" + *id + "\" is not 1 to 32 characters from [A-Za-z0-9_-]")) {
+      const bool repeated = std::any_of(gauges.begin(), gauges.end(),
+                                        [&](const GaugeConfig& o) { return o.id == *id; });
+      r.check("id", !repeated, "gauge \"" + *id + "\" is defined twice in this detail");
+    }
+  }
+  if (const auto at = r.point("at")) {
+    c.at = *at;
+    if (outline_ok) r.check("at", g.is_material(*at), "lies outside the material");
+  }
+  c.angle = opt(r, "angle", c.angle, core::Bound::any);
+  c.length = opt(r, "length", c.length, core::Bound::non_negative);
+  c.noise = opt(r, "noise", c.noise, core::Bound::non_negative);
+  c.where = ctx.ref(t, path);
+  r.finish();
+  gauges.push_back(std::move(c));
+}
+
 /// `file` as written in the config, or joined to the config file's directory when relative; made
 /// absolute (against the working directory) so that it names the same file from anywhere.
 std::string resolve_path(const std::string& file, const std::string& config_file) {
@@ -779,6 +806,10 @@ DetailConfig read_detail(Context& ctx, const toml::table& t, const std::string& 
     read_uncertainty(ctx, *u, r.path_of("uncertainty"), d, d.uncertainty);
   }
   if (const auto* s = r.table("sensor", false)) read_sensor(ctx, *s, r.path_of("sensor"), d.sensor);
+  each_table(r, "gauge", false, "an array of tables ([[detail.gauge]])",
+             [&](const auto& e, const auto& p) {
+               read_gauge(ctx, e, p, d.geometry, outline_ok, d.gauges);
+             });
   r.finish();
   if (sized) *estimate = estimate_resources(d);
   return d;

@@ -190,9 +190,15 @@ bool state_layout(const unsigned char* p, std::size_t size) {
   for (std::int32_t i = 0; i < n; ++i) {
     if (!w.string()) return false;
   }
-  // observation_applied_seq, echo_source, echo_nonce, the tag.
-  if (!w.skip(8 * static_cast<std::size_t>(n)) || !w.string() || !w.skip(8) || !w.count(1, tag) ||
-      !w.skip(static_cast<std::size_t>(tag))) {
+  // observation_applied_seq; the gauges (version 10): ids, 4 doubles, residual, its sigma, the
+  // alarm count, then gauge_alarm_sigmas and gauge_alarm_after.
+  if (!w.skip(8 * static_cast<std::size_t>(n)) || !w.count(2 + 6 * 8 + 4, n)) return false;
+  for (std::int32_t i = 0; i < n; ++i) {
+    if (!w.string()) return false;
+  }
+  if (!w.skip((6 * 8 + 4) * static_cast<std::size_t>(n)) || !w.skip(8 + 4)) return false;
+  // echo_source, echo_nonce, the tag.
+  if (!w.string() || !w.skip(8) || !w.count(1, tag) || !w.skip(static_cast<std::size_t>(tag))) {
     return false;
   }
   return w.at_end();
@@ -254,6 +260,15 @@ std::string observation_layout(const unsigned char* p, std::size_t size, std::si
   if (!w.skip(8) || !w.string() || !w.string() || !w.skip(3 * 8 + 1) || !w.string() ||
       !w.skip(4 * 8)) {
     return "malformed or truncated: a string length or the payload's end";
+  }
+  // The gauges (version 10): ids, then compliance, sigma and model per gauge, then the angle.
+  std::int32_t gauges = 0;
+  if (!w.count(2 + 3 * 8, gauges)) return "malformed or truncated num_gauges";
+  for (std::int32_t i = 0; i < gauges; ++i) {
+    if (!w.string()) return "malformed or truncated gauge_ids";
+  }
+  if (!w.skip(3 * 8 * static_cast<std::size_t>(gauges)) || !w.skip(8)) {
+    return "truncated payload: ends inside the gauges' values";
   }
   return signed_tail(w, signed_size);
 }
@@ -409,10 +424,11 @@ DecodedObservation decode_observation(const void* data, std::size_t size) {
     return out;
   }
   if (m.kind != peritwin_msgs::observation_t::KIND_CRACK_LENGTH &&
-      m.kind != peritwin_msgs::observation_t::KIND_NO_CRACK) {
+      m.kind != peritwin_msgs::observation_t::KIND_NO_CRACK &&
+      m.kind != peritwin_msgs::observation_t::KIND_GAUGE_COMPLIANCE) {
     out.error = {Verdict::invalid, "observation.kind",
-                 "kind = " + std::to_string(m.kind) + " is neither KIND_CRACK_LENGTH (1) nor " +
-                     "KIND_NO_CRACK (2)"};
+                 "kind = " + std::to_string(m.kind) + " is none of KIND_CRACK_LENGTH (1), " +
+                     "KIND_NO_CRACK (2), KIND_GAUGE_COMPLIANCE (3)"};
     out.source_id = m.source_id;
     out.seq = m.seq;
     out.nonce = static_cast<std::uint64_t>(m.nonce);
@@ -425,12 +441,18 @@ DecodedObservation decode_observation(const void* data, std::size_t size) {
   o.nonce = static_cast<std::uint64_t>(m.nonce);
   o.cycle = m.cycle;
   o.kind = m.kind == peritwin_msgs::observation_t::KIND_NO_CRACK ? ObservationKind::no_crack
-                                                                 : ObservationKind::crack_length;
+           : m.kind == peritwin_msgs::observation_t::KIND_GAUGE_COMPLIANCE
+               ? ObservationKind::gauge_compliance
+               : ObservationKind::crack_length;
   o.origin = m.origin;
   o.length_m = m.length_m;
   o.sigma_m = m.sigma_m;
   o.pod_a50_m = m.pod_a50_m;
   o.pod_slope = m.pod_slope;
+  for (std::size_t g = 0; g < m.gauge_ids.size(); ++g) {
+    o.gauges.push_back({m.gauge_ids[g], m.gauge_compliance[g], m.gauge_sigma[g], m.gauge_model[g]});
+  }
+  o.gauge_angle_rad = m.gauge_angle_rad;
   out.source_id = o.source_id;
   out.seq = o.seq;
   out.nonce = o.nonce;
@@ -449,12 +471,22 @@ peritwin_msgs::observation_t observation_message(const Observation& o, std::int6
   m.nonce = static_cast<std::int64_t>(o.nonce);
   m.cycle = o.cycle;
   m.kind = o.kind == ObservationKind::no_crack ? peritwin_msgs::observation_t::KIND_NO_CRACK
-                                               : peritwin_msgs::observation_t::KIND_CRACK_LENGTH;
+           : o.kind == ObservationKind::gauge_compliance
+               ? peritwin_msgs::observation_t::KIND_GAUGE_COMPLIANCE
+               : peritwin_msgs::observation_t::KIND_CRACK_LENGTH;
   m.origin = o.origin;
   m.length_m = o.length_m;
   m.sigma_m = o.sigma_m;
   m.pod_a50_m = o.pod_a50_m;
   m.pod_slope = o.pod_slope;
+  for (const GaugeCompliance& g : o.gauges) {
+    m.gauge_ids.push_back(g.id);
+    m.gauge_compliance.push_back(g.compliance);
+    m.gauge_sigma.push_back(g.sigma);
+    m.gauge_model.push_back(g.model);
+  }
+  m.num_gauges = static_cast<std::int32_t>(m.gauge_ids.size());
+  m.gauge_angle_rad = o.gauge_angle_rad;
   m.tag_length = 0;
   return m;
 }
@@ -691,6 +723,31 @@ void add_ensemble(nlohmann::ordered_json& j, const peritwin_msgs::damage_state_t
   j["observations"] = s.observation_count;
 }
 
+/// The strain gauges (message set version 10): per gauge id its influence coefficients (strain
+/// per N: constant, cos α, sin α) and the last compliance residual with its sigma and the
+/// observations in a row beyond the alarm bound (null before one). Nothing without gauges.
+void add_gauges(nlohmann::ordered_json& j, const peritwin_msgs::damage_state_t& s) {
+  const std::size_t n =
+      std::min({s.gauge_ids.size(), s.gauge_per_constant.size(), s.gauge_per_cos.size(),
+                s.gauge_per_sin.size(), s.gauge_residuals.size(), s.gauge_residual_sigmas.size(),
+                s.gauge_alarm_counts.size()});
+  if (n == 0) return;
+  const auto number = [](double v) -> nlohmann::ordered_json {
+    if (!std::isfinite(v)) return nullptr;
+    return v;
+  };
+  nlohmann::ordered_json gauges = nlohmann::ordered_json::object();
+  for (std::size_t k = 0; k < n; ++k) {
+    gauges[s.gauge_ids[k]] = {
+        {"per_n",
+         {number(s.gauge_per_constant[k]), number(s.gauge_per_cos[k]), number(s.gauge_per_sin[k])}},
+        {"residual", number(s.gauge_residuals[k])},
+        {"residual_sigma", number(s.gauge_residual_sigmas[k])},
+        {"in_a_row", s.gauge_alarm_counts[k]}};
+  }
+  j["gauges"] = gauges;
+}
+
 }  // namespace
 
 std::string state_json(const peritwin_msgs::damage_state_t& s) {
@@ -712,6 +769,7 @@ std::string state_json(const peritwin_msgs::damage_state_t& s) {
   j["state_hash"] = s.state_hash;
   j["engine_hash"] = s.engine_hash;
   add_ensemble(j, s);
+  add_gauges(j, s);
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -727,6 +785,7 @@ std::string summary_json(const peritwin_msgs::damage_state_t& s,
   j["state_hash"] = s.state_hash;
   j["engine_hash"] = s.engine_hash;
   add_ensemble(j, s);
+  add_gauges(j, s);
   for (const SummaryObject& object : extra) {
     nlohmann::ordered_json o = nlohmann::ordered_json::object();
     for (const auto& [key, value] : object.numbers) {

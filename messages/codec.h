@@ -112,8 +112,9 @@ std::optional<peritwin_msgs::damage_field_t> decode_field(const void* data, std:
 
 peritwin_msgs::load_batch_t batch_message(const Batch& batch, std::int64_t utime);
 
-/// Largest observation_t payload accepted (two maximal ids, an origin of 64 characters, a tag).
-inline constexpr std::size_t kMaxObservationPayload = 1024;
+/// Largest observation_t payload accepted: two maximal ids, an origin of 64 characters, a tag,
+/// and up to kMaxObservedGauges gauges (an id of 32 characters and three doubles each).
+inline constexpr std::size_t kMaxObservationPayload = 1024 + kMaxObservedGauges * (4 + 33 + 3 * 8);
 
 /// A decoded observation message (layout checked first; not yet checked by
 /// check_observation_message), or why not: verdict decode, or invalid for a kind that is none of

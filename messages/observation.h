@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/expected.h"
 #include "messages/batch.h"
@@ -17,6 +18,21 @@ namespace peritwin::messages {
 enum class ObservationKind {
   crack_length,  ///< a crack of length_m ± sigma_m (one standard deviation) at `origin`
   no_crack,      ///< nothing found by a method whose probability of detection is POD(a)
+  /// strain gauges' compliance measured against the loads identified from them (issue 33)
+  gauge_compliance,
+};
+
+/// Most gauges one gauge observation holds.
+inline constexpr std::size_t kMaxObservedGauges = 64;
+
+/// One gauge of a gauge_compliance observation (observation_t's gauge_* fields): the compliance
+/// its readings showed (1/N: strain per N of P at the observation's angle), its standard
+/// deviation (1/N, > 0), and the model's at that angle the loads were identified with (1/N).
+struct GaugeCompliance {
+  std::string id;
+  double compliance = 0.0;
+  double sigma = 0.0;
+  double model = 0.0;
 };
 
 struct Observation {
@@ -35,6 +51,10 @@ struct Observation {
   std::string source_id;
   std::int64_t seq = 0;
   std::uint64_t nonce = 0;
+  /// gauge_compliance: the gauges (ids of the detail's [[detail.gauge]], each once) and the
+  /// load angle of the cycles they were measured over (rad).
+  std::vector<GaugeCompliance> gauges;
+  double gauge_angle_rad = 0.0;
 };
 
 /// Ok, or the field that is wrong and why (the same rules as the CSV reader and the ensemble).
@@ -44,6 +64,32 @@ inline core::Status check_observation(const Observation& o) {
       o.origin.find_first_of("\n\r\t") != std::string::npos) {
     return core::Error{"origin", "must be \"longest\" or a crack origin (1 to 64 characters)"};
   }
+  if (o.kind == ObservationKind::gauge_compliance) {
+    if (o.gauges.empty() || o.gauges.size() > kMaxObservedGauges) {
+      return core::Error{"gauges",
+                         "must hold 1 to " + std::to_string(kMaxObservedGauges) + " gauges"};
+    }
+    if (!std::isfinite(o.gauge_angle_rad)) {
+      return core::Error{"gauge_angle_rad", "must be a finite angle"};
+    }
+    for (std::size_t g = 0; g < o.gauges.size(); ++g) {
+      const GaugeCompliance& c = o.gauges[g];
+      const std::string at = "gauges[" + std::to_string(g) + "]";
+      if (c.id.empty() || c.id.size() > 32)
+        return core::Error{at + ".id", "must be 1 to 32 characters"};
+      for (std::size_t h = 0; h < g; ++h) {
+        if (o.gauges[h].id == c.id) return core::Error{at + ".id", "gauge \"" + c.id + "\" twice"};
+      }
+      if (!std::isfinite(c.compliance)) return core::Error{at + ".compliance", "must be finite"};
+      if (!(std::isfinite(c.sigma) && c.sigma > 0)) {
+        return core::Error{at + ".sigma", "must be a finite standard deviation > 0"};
+      }
+      if (!std::isfinite(c.model)) return core::Error{at + ".model", "must be finite"};
+    }
+    return {};
+  }
+  if (!o.gauges.empty())
+    return core::Error{"gauges", "only a gauge_compliance observation has gauges"};
   if (o.kind == ObservationKind::crack_length) {
     if (!(std::isfinite(o.length_m) && o.length_m >= 0)) {
       return core::Error{"length_m", "must be a finite length >= 0"};

@@ -19,10 +19,12 @@ constexpr std::size_t kCheckpointsKept = 3;
 
 double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
+/// Every observation taken in moves its source's seq by one (gauge observations of a detail that
+/// does not learn too).
 std::int64_t observations_taken_in(const twin::Twin& twin) {
-  return twin.ensemble() != nullptr
-             ? static_cast<std::int64_t>(twin.ensemble()->observations().size())
-             : 0;
+  std::int64_t n = 0;
+  for (const auto& [source, seq] : twin.observed()) n += seq;
+  return n;
 }
 
 }  // namespace

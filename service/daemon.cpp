@@ -154,6 +154,8 @@ struct Daemon::Detail : DetailQueue {
   std::atomic<std::int64_t> duplicates{0};
   std::atomic<std::int64_t> gaps{0};
   std::atomic<bool> failed{false};  ///< final failure reached
+  /// A gauge in alarm (twin::GaugeResiduals::alarm): health "degraded" while set.
+  std::atomic<bool> gauge_alarm{false};
 };
 
 Daemon::Daemon(lcm::LCM& lcm, config::TwinConfig config, DaemonOptions options)
@@ -556,6 +558,24 @@ void Daemon::taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_uti
     }
     return;
   }
+  // Gauges (issue 33): the residual's alarm raised or cleared, named in the log.
+  const std::string alarm = twin.gauge_residuals().alarm();
+  if (!alarm.empty() && !d.gauge_alarm) {
+    spdlog::warn(
+        "[{}] health degraded: {} (the structure's compliance is not the model's: a "
+        "crack the model does not have, or a gauge fault)",
+        d.id, alarm);
+  } else if (alarm.empty() && d.gauge_alarm) {
+    spdlog::info("[{}] gauge alarm cleared", d.id);
+  }
+  d.gauge_alarm = !alarm.empty();
+  if (twin.ensemble() == nullptr) {
+    spdlog::info("[{}] gauge observation {}#{} taken in", d.id, ingested.source, ingested.seq);
+    checkpoint(d, "observation");
+    publish_state(d, recv_utime);
+    if (d.outputs) d.outputs->record(twin);
+    return;
+  }
   const auto& records = twin.ensemble()->observations();
   const twin::ObservationRecord& rec = records.back();
   const auto estimate = twin.ensemble_estimate();
@@ -565,7 +585,8 @@ void Daemon::taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_uti
       "log evidence {:.3g}{}; end of life p{:g} {:.0f} cycles",
       d.id, ingested.source, ingested.seq, rec.observation.cycle,
       rec.observation.kind == messages::ObservationKind::crack_length ? "crack length"
-                                                                      : "no crack found",
+      : rec.observation.kind == messages::ObservationKind::no_crack   ? "no crack found"
+                                                                      : "gauge compliance",
       rec.update.predicted_median_m * 1e3, rec.update.log_evidence,
       rec.update.resampled ? ", resampled" : "",
       estimate && mid < estimate->percentiles.size() ? estimate->percentiles[mid] : 50.0,
@@ -627,7 +648,7 @@ bool Daemon::publish_status(Detail& d, const char* health) {
     if (d.failed) {
       m.health = "failed";
     } else if (m.busy_s > d.max_batch_seconds || m.reject_rate > d.max_rejects_per_second ||
-               m.lag_s > options_.degraded_lag_s || failed()) {
+               m.lag_s > options_.degraded_lag_s || failed() || d.gauge_alarm) {
       m.health = "degraded";
     }
   }

@@ -91,6 +91,9 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
   m->finder_ = std::make_unique<crack::CrackFinder>(sp.disc, *m->tracker_, std::move(notch_paths),
                                                     config.fatigue.phase_switch_damage);
   for (auto c : sp.disc.bond_precut) m->precut_bonds_ += c ? 1 : 0;
+  // Gauges read the model, they do not change it: not in the signature (a checkpoint resumes
+  // after a gauge is added or moved).
+  m->gauges_ = model_gauges(config.gauges, sp.disc);
 
   SignatureHash h;
   const auto& d = sp.disc;

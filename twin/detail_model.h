@@ -18,6 +18,7 @@
 #include "solver/crack/crack_tracker.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/statics/specimen.h"
+#include "twin/gauges.h"
 
 namespace peritwin::twin {
 
@@ -52,6 +53,8 @@ class DetailModel {
   /// Where a crack that starts at `p` (not at a notch) comes from, for people: "hole <index>"
   /// when a hole's rim is the nearest surface, else "outline".
   [[nodiscard]] std::string surface_name(mesh::Point p) const;
+  /// The [[detail.gauge]] on this model's grid (issue 33, twin/gauges.h).
+  [[nodiscard]] const std::vector<ModelGauge>& gauges() const { return gauges_; }
   /// Bonds cut by notches at construction (not counted as broken in the published state).
   [[nodiscard]] std::int64_t precut_bonds() const { return precut_bonds_; }
   /// Byte-wise FNV-1a 64 (core/fnv1a.h) over everything that defines the model's numbers
@@ -77,6 +80,7 @@ class DetailModel {
   std::unique_ptr<crack::CrackFinder> finder_;
   std::int64_t precut_bonds_ = 0;
   std::uint64_t signature_ = 0;
+  std::vector<ModelGauge> gauges_;
 };
 
 /// Why a tip's K is NaN (crack_tip_t.K_* codes).

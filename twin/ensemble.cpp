@@ -11,6 +11,7 @@
 #include "prognostics/weighted_statistics.h"
 #include "solver/model/pd_model.h"
 #include "twin/coarse_life.h"
+#include "twin/gauges.h"
 #include "twin/life.h"
 
 namespace peritwin::twin {
@@ -186,6 +187,25 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
     return core::failure("a particle's engine cannot solve the virgin detail");
   }
+  if (particle_model != model && !model->gauges().empty()) {
+    // The detail's virgin gauges over the particle grid's, component by component (1 where the
+    // particle grid's is negligible: that basis case does not load the gauge).
+    auto fine = model->make_engine();
+    if (!fine->initialize()) return core::failure("the virgin detail cannot be solved");
+    const auto fine_influences = gauge_influences(model->gauges(), fine->solver());
+    const auto coarse_influences =
+        gauge_influences(particle_model->gauges(), e->particles_[0].engine->solver());
+    for (std::size_t g = 0; g < fine_influences.size(); ++g) {
+      const auto& f = fine_influences[g];
+      const auto& c = coarse_influences[g];
+      const double largest = std::max({std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
+      std::array<double, 3> ratio{1.0, 1.0, 1.0};
+      for (std::size_t b = 0; b < 3; ++b) {
+        if (std::abs(c[b]) > 1e-9 * largest && std::isfinite(f[b])) ratio[b] = f[b] / c[b];
+      }
+      e->gauge_calibration_.push_back(ratio);
+    }
+  }
   return e;
 }
 
@@ -234,7 +254,8 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
     return core::Error{"cycle", "is in the future of the twin (" + std::to_string(o.cycle) + " > " +
                                     std::to_string(total_cycles_) + " cycles applied)"};
   }
-  if (!is_crack_origin(*model_, o.origin)) {
+  const bool gauges = o.kind == messages::ObservationKind::gauge_compliance;
+  if (!gauges && !is_crack_origin(*model_, o.origin)) {
     return core::Error{"origin", "\"" + o.origin +
                                      "\" is no crack origin of this detail (\"longest\", a notch's "
                                      "name, \"hole <index>\", \"outline\" or \"interior\")"};
@@ -245,7 +266,22 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
     predicted[i] = length_map_(crack_length_at(pm, *particles_[i].engine, o.cycle, o.origin));
   });
   std::vector<double> log_likelihood;
-  if (o.kind == messages::ObservationKind::crack_length) {
+  if (gauges) {
+    // Each particle's gauges read its current bond state (a gauge observation covers the last
+    // blocks applied); on a coarser grid they are scaled by the detail's virgin gauges over the
+    // particle grid's (gauge_calibration_): the coarse grid's smoothing at the gauge taken out.
+    const auto indices = observed_gauge_indices(o, pm.gauges());
+    if (!indices) return indices.error();
+    log_likelihood.resize(particles_.size());
+    for_each_particle([&](std::size_t i) {
+      auto influences = gauge_influences(pm.gauges(), particles_[i].engine->solver());
+      for (std::size_t g = 0; g < influences.size() && g < gauge_calibration_.size(); ++g) {
+        for (std::size_t b = 0; b < 3; ++b) influences[g][b] *= gauge_calibration_[g][b];
+      }
+      log_likelihood[i] =
+          gauge_log_likelihood(o, predicted_compliance(o, *indices, pm.gauges(), influences));
+    });
+  } else if (o.kind == messages::ObservationKind::crack_length) {
     // The particle's length moves in steps of about its grid spacing: a uniform rounding error of
     // variance Δx_p²/12 beside the measurement's (docs/prognostics.md, "The twin's ensemble").
     const double rounding = pm.disc().dx / std::sqrt(12.0);
@@ -438,6 +474,12 @@ std::uint64_t Ensemble::state_hash() const {
     h.bytes(o.origin.data(), o.origin.size());
     for (double v : {o.length_m, o.sigma_m, o.pod_a50_m, o.pod_slope}) h.bytes(&v, sizeof v);
     h.bytes(&r.taken_at, sizeof r.taken_at);
+    // Gauges (issue 33): nothing for the other kinds, whose bits stay as they were.
+    for (const messages::GaugeCompliance& g : o.gauges) {
+      h.bytes(g.id.data(), g.id.size());
+      for (double v : {g.compliance, g.sigma, g.model}) h.bytes(&v, sizeof v);
+    }
+    if (!o.gauges.empty()) h.bytes(&o.gauge_angle_rad, sizeof o.gauge_angle_rad);
   }
   return h.get();
 }

@@ -178,6 +178,9 @@ class Ensemble {
   std::int64_t estimate_cycle_ = -1;
   std::vector<ObservationRecord> observations_;
   LengthMap length_map_;  ///< the particles' crack lengths as the detail's (particle_surrogate)
+  /// On a coarser particle grid: per gauge and basis case, the detail's virgin influence
+  /// coefficient over the particle grid's (empty on the detail's own grid: no scaling).
+  std::vector<std::array<double, 3>> gauge_calibration_;
 };
 
 /// The particles' model on the coarser grid of spacing `dx`: coarse_model (A2 by 000 Eq. 29) with

@@ -217,11 +217,14 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
       const messages::Observation& o = records[k].observation;
       const bool crack = o.kind == messages::ObservationKind::crack_length;
       m.observation_cycles.push_back(o.cycle);
+      const bool no_crack = o.kind == messages::ObservationKind::no_crack;
       m.observation_kinds.push_back(crack ? peritwin_msgs::observation_t::KIND_CRACK_LENGTH
-                                          : peritwin_msgs::observation_t::KIND_NO_CRACK);
+                                    : no_crack
+                                        ? peritwin_msgs::observation_t::KIND_NO_CRACK
+                                        : peritwin_msgs::observation_t::KIND_GAUGE_COMPLIANCE);
       m.observation_lengths_m.push_back(crack ? o.length_m : nan);
       m.observation_sigmas_m.push_back(crack ? o.sigma_m : nan);
-      m.observation_pod_a50s_m.push_back(crack ? nan : o.pod_a50_m);
+      m.observation_pod_a50s_m.push_back(no_crack ? o.pod_a50_m : nan);
       m.observation_predicted_m.push_back(records[k].update.predicted_median_m);
     }
     m.num_observations = static_cast<std::int32_t>(m.observation_cycles.size());
@@ -231,6 +234,23 @@ peritwin_msgs::damage_state_t state_message(const Twin& twin, std::int64_t utime
     }
     m.num_observation_sources = static_cast<std::int32_t>(m.observation_source_ids.size());
   }
+  // The gauges (issue 33): influence coefficients of this bond state, the last residuals.
+  const auto& gauges = twin.model().gauges();
+  const auto influences = twin.gauge_influences();
+  const GaugeResiduals& residuals = twin.gauge_residuals();
+  for (std::size_t g = 0; g < gauges.size(); ++g) {
+    m.gauge_ids.push_back(gauges[g].config.id);
+    m.gauge_per_constant.push_back(influences[g][0]);
+    m.gauge_per_cos.push_back(influences[g][1]);
+    m.gauge_per_sin.push_back(influences[g][2]);
+    m.gauge_noise.push_back(gauges[g].config.noise);
+    m.gauge_residuals.push_back(residuals.residual[g]);
+    m.gauge_residual_sigmas.push_back(residuals.sigma[g]);
+    m.gauge_alarm_counts.push_back(static_cast<std::int32_t>(residuals.in_a_row[g]));
+  }
+  m.num_gauges = static_cast<std::int32_t>(m.gauge_ids.size());
+  m.gauge_alarm_sigmas = kGaugeAlarmSigmas;
+  m.gauge_alarm_after = static_cast<std::int32_t>(kGaugeAlarmAfter);
   const Twin::Hashes hashes = twin.hashes();
   m.state_hash = core::hex64(hashes.state);
   m.engine_hash = core::hex64(hashes.engine);

@@ -11,7 +11,9 @@
 namespace peritwin::twin {
 
 Twin::Twin(std::shared_ptr<const DetailModel> model, Options options)
-    : model_(std::move(model)), options_(options) {}
+    : model_(std::move(model)),
+      options_(options),
+      gauge_residuals_(GaugeResiduals::none(model_->gauges())) {}
 
 core::Expected<std::unique_ptr<Twin>> Twin::create(std::shared_ptr<const DetailModel> model,
                                                    Options options) {
@@ -227,6 +229,29 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
                   "observation seq " + std::to_string(o.seq) + " of source \"" + o.source_id +
                       "\" skips ahead: expected " + std::to_string(last + 1));
   }
+  if (o.kind == messages::ObservationKind::gauge_compliance) {
+    // Gauges are read with or without a learning ensemble: the residual and its alarm
+    // (twin/gauges.h) need none.
+    if (o.cycle > engine_->total_cycles()) {
+      return refuse(messages::Verdict::invalid, "cycle",
+                    "is in the future of the twin (" + std::to_string(o.cycle) + " > " +
+                        std::to_string(engine_->total_cycles()) + " cycles applied)");
+    }
+    const auto indices = observed_gauge_indices(o, model_->gauges());
+    if (!indices) {
+      return refuse(messages::Verdict::invalid, indices.error().field, indices.error().reason);
+    }
+    if (ensemble_) {
+      if (auto update = ensemble_->observe(o); !update) {
+        return refuse(messages::Verdict::invalid, update.error().field, update.error().reason);
+      }
+    }
+    take_in(gauge_residuals_, o, *indices,
+            predicted_compliance(o, *indices, model_->gauges(), gauge_influences()));
+    observed_[o.source_id] = o.seq;
+    if (ensemble_) catch_up_ensemble(true);
+    return {};
+  }
   if (!ensemble_) {
     return refuse(messages::Verdict::invalid, "",
                   "detail " + detail_id() +
@@ -240,6 +265,10 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
   observed_[o.source_id] = o.seq;
   catch_up_ensemble(true);
   return {};
+}
+
+std::vector<std::array<double, 3>> Twin::gauge_influences() const {
+  return twin::gauge_influences(model_->gauges(), engine_->solver());
 }
 
 std::optional<EnsembleEstimate> Twin::ensemble_estimate() const {
@@ -263,6 +292,22 @@ void hash_field(Hash& h, const std::map<std::string, std::int64_t>& applied) {
   for (const auto& [source, seq] : applied) {
     h.packed(source);
     h.integer(seq);
+  }
+}
+template <class Hash>
+void hash_field(Hash& h, const GaugeResiduals& r) {
+  // Nothing while no gauge observation has been taken in (no gauges, or none observed yet): the
+  // gauges' state is then the config's, and the state_hash what it was before gauges.
+  const bool observed =
+      std::any_of(r.residual.begin(), r.residual.end(), [](double v) { return !std::isnan(v); }) ||
+      std::any_of(r.in_a_row.begin(), r.in_a_row.end(), [](std::int64_t n) { return n != 0; });
+  if (!observed) return;
+  h.integer(static_cast<std::int64_t>(r.ids.size()));
+  for (std::size_t k = 0; k < r.ids.size(); ++k) {
+    h.packed(r.ids[k]);
+    h.real(r.residual[k]);
+    h.real(r.sigma[k]);
+    h.integer(r.in_a_row[k]);
   }
 }
 template <class Hash>

@@ -132,6 +132,10 @@ class Twin {
   [[nodiscard]] const Ensemble* ensemble() const { return ensemble_.get(); }
   /// The ensemble's remaining life at the current state (Ensemble::summary()); empty without one.
   [[nodiscard]] std::optional<EnsembleEstimate> ensemble_estimate() const;
+  /// Every gauge's influence coefficients for the current bond state (twin/gauges.h).
+  [[nodiscard]] std::vector<std::array<double, 3>> gauge_influences() const;
+  /// The compliance residuals of the last gauge observation, per configured gauge.
+  [[nodiscard]] const GaugeResiduals& gauge_residuals() const { return gauge_residuals_; }
   /// Last taken-in observation seq per source (sorted by source id).
   [[nodiscard]] const std::map<std::string, std::int64_t>& observed() const { return observed_; }
   /// The detail's bounds ([detail.limits]): every p_max <= max_p() (INVALID), at most
@@ -233,6 +237,7 @@ class Twin {
     visit("spectrum", self.spectrum_, Hashed::yes);
     visit("history", self.histories_, Hashed::no);
     visit("observed", self.observed_, Hashed::yes);
+    visit("gauge", self.gauge_residuals_, Hashed::yes);
     visit("life_central", self.life_.central, Hashed::no);
     visit("life_low", self.life_.low, Hashed::no);
     visit("life_high", self.life_.high, Hashed::no);
@@ -254,6 +259,7 @@ class Twin {
   std::int64_t state_seq_ = 0;
   std::map<std::string, std::int64_t> applied_;
   std::map<std::string, std::int64_t> observed_;  ///< observations: last seq per source
+  GaugeResiduals gauge_residuals_;                ///< of the last gauge observation (twin/gauges.h)
   std::unique_ptr<Ensemble> ensemble_;
   HistoryBySource histories_;
   std::string last_source_;

@@ -14,6 +14,9 @@
 //                                        a checkpoint written before them (message set version 7)
 //                                        restores with no histories (same format_version, whose
 //                                        other keys mean what they meant)
+//   GaugeResiduals                    -> string <key>_ids (as above), f64 arrays <key>_residual,
+//                                        <key>_sigma, i64 array <key>_in_a_row; optional: a
+//                                        checkpoint written before gauges (issue 33) has none
 //   RollingSpectrum                   -> f64 arrays <key>_p_max, <key>_r, <key>_alpha, i64
 //   <key>_count
 // With a learning ensemble (Twin::ensemble(), twin/ensemble.h), its EnsembleCheckpoint under
@@ -108,6 +111,14 @@ struct CheckpointWriter {
     put(key_of(key, "_ids"), ids);
     put(key_of(key, "_fingerprint"), fingerprints);
     put(key_of(key, "_start"), starts);
+  }
+  void put(std::string_view key, const GaugeResiduals& r) {
+    std::string ids;
+    for (const auto& id : r.ids) ids += (ids.empty() ? "" : "\n") + id;
+    put(key_of(key, "_ids"), ids);
+    put(key_of(key, "_residual"), r.residual);
+    put(key_of(key, "_sigma"), r.sigma);
+    put(key_of(key, "_in_a_row"), r.in_a_row);
   }
   void put(std::string_view key, const RollingSpectrum& spectrum) {
     std::vector<double> p, r, a;
@@ -222,6 +233,20 @@ struct CheckpointReader {
       histories[split[k]] = {std::bit_cast<std::uint64_t>(fingerprints[k]), starts[k]};
     }
   }
+  void get(std::string_view key, GaugeResiduals& r) {
+    r = GaugeResiduals{};
+    if (!d.strings.contains(key_of(key, "_ids"))) return;  // written before gauges (issue 33)
+    std::string ids;
+    get(key_of(key, "_ids"), ids);
+    get(key_of(key, "_residual"), r.residual);
+    get(key_of(key, "_sigma"), r.sigma);
+    get(key_of(key, "_in_a_row"), r.in_a_row);
+    r.ids = ids.empty() ? std::vector<std::string>{} : split_ids(ids);
+    if (r.ids.size() != r.residual.size() || r.ids.size() != r.sigma.size() ||
+        r.ids.size() != r.in_a_row.size()) {
+      bad = std::string(key) + "_ids, _residual, _sigma and _in_a_row disagree";
+    }
+  }
   void get(std::string_view key, RollingSpectrum& spectrum) {
     std::vector<double> p, r, a;
     std::vector<std::int64_t> n;
@@ -296,6 +321,27 @@ void write_ensemble(CheckpointWriter& w, const EnsembleCheckpoint& e) {
   w.put("observation_log_evidence", evidence);
   w.put("observation_ess", ess);
   w.put("observation_predicted_m", predicted);
+  // Gauge observations (issue 33): per observation its gauge count and angle, the gauges
+  // flattened in that order.
+  std::vector<std::int64_t> gauge_count;
+  std::vector<std::string> gauge_ids;
+  std::vector<double> gauge_angle, compliance, gauge_sigma, gauge_model;
+  for (const ObservationRecord& r : e.observations) {
+    gauge_count.push_back(static_cast<std::int64_t>(r.observation.gauges.size()));
+    gauge_angle.push_back(r.observation.gauge_angle_rad);
+    for (const auto& g : r.observation.gauges) {
+      gauge_ids.push_back(g.id);
+      compliance.push_back(g.compliance);
+      gauge_sigma.push_back(g.sigma);
+      gauge_model.push_back(g.model);
+    }
+  }
+  w.put("observation_gauge_count", gauge_count);
+  w.put("observation_gauge_angle", gauge_angle);
+  w.put("observation_gauge_ids", join_lines(gauge_ids));
+  w.put("observation_gauge_compliance", compliance);
+  w.put("observation_gauge_sigma", gauge_sigma);
+  w.put("observation_gauge_model", gauge_model);
   for (std::size_t i = 0; i < e.engines.size(); ++i) {
     fatigue::for_each_field(e.engines[i], [&](std::string_view key, const auto& field) {
       w.put(particle_key(i, key), field);
@@ -349,6 +395,8 @@ EnsembleCheckpoint read_ensemble(CheckpointReader& r, std::size_t particles) {
       o.cycle = cycle[k];
       o.kind = kind[k] == static_cast<std::uint8_t>(messages::ObservationKind::no_crack)
                    ? messages::ObservationKind::no_crack
+               : kind[k] == static_cast<std::uint8_t>(messages::ObservationKind::gauge_compliance)
+                   ? messages::ObservationKind::gauge_compliance
                    : messages::ObservationKind::crack_length;
       o.length_m = length[k];
       o.sigma_m = sigma[k];
@@ -358,6 +406,32 @@ EnsembleCheckpoint read_ensemble(CheckpointReader& r, std::size_t particles) {
       rec.update = {cycle[k], evidence[k], ess[k], resampled[k] != 0, predicted[k]};
       e.observations.push_back(std::move(rec));
     }
+  }
+  // Gauge observations: optional (a checkpoint written before gauges has none).
+  if (r.bad.empty() && r.d.strings.contains("observation_gauge_ids")) {
+    std::vector<std::int64_t> gauge_count;
+    std::string gauge_ids;
+    std::vector<double> gauge_angle, compliance, gauge_sigma, gauge_model;
+    r.get("observation_gauge_count", gauge_count);
+    r.get("observation_gauge_angle", gauge_angle);
+    r.get("observation_gauge_ids", gauge_ids);
+    r.get("observation_gauge_compliance", compliance);
+    r.get("observation_gauge_sigma", gauge_sigma);
+    r.get("observation_gauge_model", gauge_model);
+    const std::vector<std::string> ids =
+        gauge_ids.empty() ? std::vector<std::string>{} : split_ids(gauge_ids);
+    std::size_t next = 0;
+    const bool sized = gauge_count.size() == n && gauge_angle.size() == n &&
+                       compliance.size() == ids.size() && gauge_sigma.size() == ids.size() &&
+                       gauge_model.size() == ids.size();
+    for (std::size_t k = 0; sized && k < n; ++k) {
+      auto& o = e.observations[k].observation;
+      o.gauge_angle_rad = gauge_angle[k];
+      for (std::int64_t g = 0; g < gauge_count[k] && next < ids.size(); ++g, ++next) {
+        o.gauges.push_back({ids[next], compliance[next], gauge_sigma[next], gauge_model[next]});
+      }
+    }
+    if (!sized || next != ids.size()) r.bad = "observation_gauge arrays of different lengths";
   }
   e.engines.resize(particles);
   for (std::size_t i = 0; i < particles; ++i) {
@@ -454,6 +528,8 @@ core::Status Twin::restore(const CheckpointData& d) {
     }
     if (core::Status st = ensemble_->import_state(ensemble); !st) return fail(st.error().message());
   }
+  // The gauges as configured now (a gauge added or removed since the checkpoint: by id).
+  gauge_residuals_ = gauge_residuals_.for_gauges(model_->gauges());
   const Failure stored = failure_;
   report_key_.reset();  // a new engine state: measured afresh
   refresh();

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -23,6 +24,21 @@ struct PlaneStrain {
   /// The larger principal strain of the 2x2 tensor.
   [[nodiscard]] double max_principal() const;
 };
+
+/// The displacement gradient H = F − I at a node (H_ij = ∂u_i/∂x_j): xy = ∂u_x/∂y.
+struct DisplacementGradient {
+  double xx = 0.0;
+  double xy = 0.0;
+  double yx = 0.0;
+  double yy = 0.0;
+};
+
+/// H = F − I at node k with F of 004 Eq. (6) over the node's intact bonds (as below); nullopt
+/// when those bonds do not span the plane. u: the full DOF vector.
+std::optional<DisplacementGradient> pd_displacement_gradient(const mesh::Discretization& disc,
+                                                             std::span<const std::uint8_t> intact,
+                                                             std::span<const double> u,
+                                                             mesh::NodeIndex k);
 
 /// Per node: F = [Σ_j ω (ξ + η) ⊗ ξ V_j] · [Σ_j ω ξ ⊗ ξ V_j]⁻¹ over the intact bonds j of the
 /// node (004 Eq. 6, ξ = x_j − x_k, η = u_j − u_k, V_j the partial volume of 001 Eq. 36, ω = 1:
