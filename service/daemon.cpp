@@ -569,7 +569,10 @@ void Daemon::taken_in(Detail& d, const Ingested& ingested, std::int64_t recv_uti
     spdlog::info("[{}] gauge alarm cleared", d.id);
   }
   d.gauge_alarm = !alarm.empty();
-  if (twin.ensemble() == nullptr) {
+  const auto* learned = twin.ensemble();
+  if (learned == nullptr || learned->observations().empty() ||
+      learned->observations().back().observation.source_id != ingested.source ||
+      learned->observations().back().observation.seq != ingested.seq) {
     spdlog::info("[{}] gauge observation {}#{} taken in", d.id, ingested.source, ingested.seq);
     checkpoint(d, "observation");
     publish_state(d, recv_utime);

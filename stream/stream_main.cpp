@@ -6,6 +6,7 @@
 //                   [--batch-blocks N] [--batch-seconds T] [--lockstep|--window N]
 //                   [--residue half|whole|keep] [--in-process] [--give-up-after S]
 //                   [--key-file F [--daemon-key ID | --sign-only]]
+//                   [--format series|gauges [--identify-only] [--gauge-observe-cycles N]]
 //
 // Input: lines "t,P" or "t,P,alpha" (the series format's columns; its header line and '#'
 // comments accepted; t in s strictly increasing, P in the sensor's unit, alpha in rad), read as
@@ -18,6 +19,20 @@
 // previous one, or whose load is outside sample_load_bound(), is skipped and counted (bad_lines),
 // never taken, so it poisons neither later samples nor its batch (after kRebaseAfter samples in
 // a row behind an outlying time the stream goes on from them).
+// --format gauges (issue 33, docs/gauges.md): the input is a strain-gauge series, the header
+// "time_s,<gauge id>,..." (ids of the detail's [[detail.gauge]]) then lines "t,e1,...,en"
+// (strains, dimensionless); each sample's P and α are identified by least squares from the
+// model's influence coefficients (stream/gauge_identification.h): the daemon's newest (every
+// STATE carries them, recomputed after each re-solve) or the in-process twin's. [detail.sensor]
+// scale and offset do not apply (gate and alpha_bin do). A header whose gauges give fewer
+// independent equations than the load's unknowns is refused (exit 2, the reason). Every
+// --gauge-observe-cycles cycles (default 5000; 0 = never) the gauges' compliance over the samples
+// since the last one goes to the twin as an observation (stream/gauge_feed.h) once the batches
+// before it are applied: its residual per gauge is in the STATE, a persistent one turns the
+// daemon's health "degraded" naming the gauge, and a learning twin's ensemble takes it in.
+// --identify-only writes the identified series "time_s,load_N,angle_rad" to stdout and exits
+// (no batches; the coefficients of the daemon's current state, or with --in-process of the
+// virgin model). --input lcm carries loads, not strains: refused with --format gauges.
 // Each sample: P = scale * measured + offset, then RainflowCounter (gate) -> CycleBlocks
 // (alpha_bin, compressed_bonds_fatigue) -> batches closed at --batch-cycles (1000) cycles,
 // --batch-blocks (1024) blocks, or --batch-seconds of sample time (0: off).
@@ -76,7 +91,9 @@
 #include "messages/auth.h"
 #include "messages/channels.h"
 #include "messages/transport.h"
+#include "replay/observation_sender.h"
 #include "replay/replay_tool.h"
+#include "stream/gauge_feed.h"
 #include "stream/stream_tool.h"
 #include "twin/in_process_twin.h"
 
@@ -212,8 +229,9 @@ int listen_on(int port) {
 /// The command line.
 struct Options {
   std::string config_file, detail_id, input, lcm_url, source_id = "stream", state_file;
-  std::string residue = "half";
-  bool lockstep = false, in_process = false, json = false;
+  std::string residue = "half", format = "series";
+  bool lockstep = false, in_process = false, json = false, identify_only = false;
+  std::int64_t gauge_observe_cycles = 5000;
   loads::BatchingOptions batching;
   loads::ReplayOptions replay;
   loads::ProducerKeyOptions keys;
@@ -248,6 +266,16 @@ void add_options(CLI::App& app, Options& o) {
   auto* in_process_opt =
       app.add_flag("--in-process", o.in_process, "run the twin library here (no daemon)");
   loads::add_key_options(app, o.keys)->excludes(in_process_opt);
+  app.add_option("--format", o.format,
+                 "series: t,P[,alpha] lines (default); gauges: the header time_s,<gauge id>,... "
+                 "then t,<strains> lines, the loads identified from the model's gauges")
+      ->check(CLI::IsMember({"series", "gauges"}));
+  app.add_flag("--identify-only", o.identify_only,
+               "--format gauges: write the identified time_s,load_N,angle_rad to stdout and exit");
+  app.add_option("--gauge-observe-cycles", o.gauge_observe_cycles,
+                 "--format gauges: the gauges' compliance to the twin every this many cycles "
+                 "(default 5000; 0 = never)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--give-up-after", o.replay.give_up_after_s,
                  "seconds without progress from the daemon before failing (default 120)")
       ->check(peritwin::core::finite_positive());
@@ -298,6 +326,20 @@ std::optional<int> check_options(const Options& o, const config::DetailConfig* d
   }
   if (o.source_id.empty() || o.source_id.size() > messages::kMaxSourceIdLength) {
     std::cerr << "peritwin-stream: --source must have 1 to 64 characters\n";
+    return core::kExitUsage;
+  }
+  if (o.format == "gauges" && o.input == "lcm") {
+    std::cerr << "peritwin-stream: --format gauges reads strain lines (stdin, a FILE, a FIFO, "
+                 "tcp://); --input lcm carries loads (load_samples_t)\n";
+    return core::kExitUsage;
+  }
+  if (o.format == "gauges" && detail->gauges.empty()) {
+    std::cerr << "peritwin-stream: --format gauges: detail " << detail->id
+              << " has no [[detail.gauge]] in " << o.config_file << "\n";
+    return core::kExitUsage;
+  }
+  if (o.identify_only && (o.format != "gauges" || !o.state_file.empty())) {
+    std::cerr << "peritwin-stream: --identify-only needs --format gauges and no --state-file\n";
     return core::kExitUsage;
   }
   if (o.in_process && !o.state_file.empty()) {
@@ -396,8 +438,13 @@ class Stream {
  private:
   std::optional<int> set_up_sender(loads::ReplayAuth auth, std::vector<messages::Batch> resend);
   bool deliver();
+  /// --format gauges: the newest coefficients to the feed; the compliance observation when due.
+  void follow_gauges();
+  void observe_gauges();
   void take(double t, double p, double alpha);
   void take_line(const std::string& line);
+  void take_gauge_line(const std::string& line);
+  void report_bad_line(const std::string& line, const std::string& why);
   [[nodiscard]] std::string input_name() const {
     return in_.kind == Input::Kind::tcp ? o_.input : o_.input == "-" ? "stdin" : o_.input;
   }
@@ -425,15 +472,28 @@ class Stream {
   /// what was taken before is delivered.
   std::string input_error_;
   bool line_too_long_ = false;  ///< read_input() met a line beyond kMaxLineBytes
+  bool stop_input_ = false;     ///< the input cannot be read on (a gauge header refused)
   std::string first_bad_;       ///< the first line skipped, for the no-usable-line error
   double load_bound_ = 0.0;     ///< sample_load_bound(), or in-process the twin's max_p
   int behind_ = 0;              ///< samples in a row refused as not after last_time ...
   double behind_last_ = 0.0;    ///< ... the last of them
   LineInput lines_in_;
+  /// --format gauges: the feed, the state_seq its coefficients are from, the block cycles at
+  /// which the next compliance observation is due, the last observation seq of --source.
+  std::optional<stream::GaugeFeed> gauges_;
+  std::int64_t coefficients_seq_ = -1;
+  std::uint64_t next_observation_cycles_ = 0;
+  std::int64_t observation_seq_ = 0;
+  loads::ReplayAuth auth_;
 };
 
 std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
   load_bound_ = stream::sample_load_bound(detail_);
+  auth_ = auth;
+  if (o_.format == "gauges") {
+    gauges_.emplace();
+    next_observation_cycles_ = static_cast<std::uint64_t>(o_.gauge_observe_cycles);
+  }
   std::vector<messages::Batch> resend;
   if (!o_.state_file.empty() && std::filesystem::exists(o_.state_file)) {
     if (auto rc = restore_state(o_, detail_, in_.seekable, pipeline_, resend)) return rc;
@@ -602,21 +662,141 @@ void Stream::take(double t, double p, double alpha) {
 void Stream::take_line(const std::string& line) {
   stream::Pipeline& pipe = *pipeline_;
   ++pipe.counts.input_lines;
+  if (gauges_) {
+    take_gauge_line(line);
+    return;
+  }
   const auto parsed = stream::parse_line(line);
   if (parsed.kind == stream::ParsedLine::Kind::sample) {
     take(parsed.t, parsed.p, parsed.alpha);
   } else if (parsed.kind == stream::ParsedLine::Kind::bad) {
-    ++pipe.counts.bad_lines;
-    if (bad_reported_++ < 5) {
-      std::cerr << "peritwin-stream: " << input_name() << ": line " << pipe.counts.input_lines
-                << " skipped: " << parsed.why << "\n";
+    report_bad_line(line, parsed.why);
+  }
+}
+
+void Stream::report_bad_line(const std::string& line, const std::string& why) {
+  stream::Pipeline& pipe = *pipeline_;
+  ++pipe.counts.bad_lines;
+  if (bad_reported_++ < 5) {
+    std::cerr << "peritwin-stream: " << input_name() << ": line " << pipe.counts.input_lines
+              << " skipped: " << why << "\n";
+  }
+  if (first_bad_.empty()) {
+    std::string text;
+    for (const char c : line.substr(0, 60)) text += c >= 0x20 && c < 0x7f ? c : '?';
+    first_bad_ = "line " + std::to_string(pipe.counts.input_lines) + " \"" + text +
+                 (line.size() > 60 ? "...\"" : "\"") + ": " + why;
+  }
+}
+
+/// The model's gauges as the newest state says (the daemon's last STATE, or the in-process
+/// twin's); empty before one.
+std::optional<peritwin_msgs::damage_state_t> newest_state(const loads::BatchSender* sender,
+                                                          const twin::InProcessTwin* local) {
+  if (local != nullptr) return local->state();
+  if (sender != nullptr) return sender->last_state();
+  return std::nullopt;
+}
+
+void Stream::take_gauge_line(const std::string& line) {
+  if (!gauges_->has_header()) {
+    const std::string_view text = line;
+    if (text.find_first_not_of(" \t\r") == std::string_view::npos || text.starts_with('#')) return;
+    const auto state = newest_state(sender_.get(), local_.get());
+    const auto influences =
+        state ? stream::influences_of(*state) : std::vector<stream::GaugeInfluence>{};
+    if (influences.empty()) {
+      input_error_ = "the daemon's STATE lists no gauge of detail " + detail_.id +
+                     " (is its config the one with [[detail.gauge]]?)";
+      stop_input_ = true;
+      return;
     }
-    if (first_bad_.empty()) {
-      std::string text;
-      for (const char c : line.substr(0, 60)) text += c >= 0x20 && c < 0x7f ? c : '?';
-      first_bad_ = "line " + std::to_string(pipe.counts.input_lines) + " \"" + text +
-                   (line.size() > 60 ? "...\"" : "\"") + ": " + parsed.why;
+    if (const core::Status ok = gauges_->header(line, influences); !ok) {
+      input_error_ = input_name() + ": line " + std::to_string(pipeline_->counts.input_lines) +
+                     ": " + ok.error().message();
+      stop_input_ = true;
+      return;
     }
+    coefficients_seq_ = state->state_seq;
+    const auto& id = gauges_->identifier();
+    std::cerr << "peritwin-stream: " << id.columns().size() << " gauges, " << id.unknowns()
+              << (id.unknowns() == 1 ? " unknown (P)" : " unknowns (P, alpha)")
+              << ", coefficients of state " << coefficients_seq_ << "\n";
+    if (o_.identify_only) std::cout << "time_s,load_N,angle_rad\n";
+    return;
+  }
+  auto sample = gauges_->line(line);
+  if (!sample) {
+    report_bad_line(line, sample.error());
+    return;
+  }
+  if (!*sample) return;
+  const stream::IdentifiedSample& s = **sample;
+  if (o_.identify_only) {
+    ++pipeline_->counts.samples;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g\n", s.t, s.load.p, s.load.alpha);
+    std::cout << buf;
+    return;
+  }
+  take(s.t, s.load.p, s.load.alpha);
+}
+
+void Stream::follow_gauges() {
+  if (!gauges_ || !gauges_->has_header()) return;
+  const auto state = newest_state(sender_.get(), local_.get());
+  if (!state || state->state_seq == coefficients_seq_) return;
+  if (const core::Status ok = gauges_->update(stream::influences_of(*state)); !ok) {
+    std::cerr << "peritwin-stream: the coefficients of state " << state->state_seq
+              << " are kept out: " << ok.error().message() << "\n";
+  }
+  coefficients_seq_ = state->state_seq;
+}
+
+void Stream::observe_gauges() {
+  if (!gauges_ || o_.gauge_observe_cycles <= 0 || o_.identify_only) return;
+  if (pipeline_->counts.block_cycles < next_observation_cycles_) return;
+  while (next_observation_cycles_ <= pipeline_->counts.block_cycles) {
+    next_observation_cycles_ += static_cast<std::uint64_t>(o_.gauge_observe_cycles);
+  }
+  auto o = gauges_->take_observation();
+  if (!o) return;
+  o->detail_id = detail_.id;
+  o->source_id = o_.source_id;
+  if (local_) {
+    o->cycle = local_->twin().engine().total_cycles();
+    o->seq = ++observation_seq_;
+    if (const core::Status taken = local_->observe(*o); !taken) {
+      std::cerr << "peritwin-stream: " << taken.error().message() << "\n";
+    } else {
+      printer_.print(local_->state());
+    }
+    return;
+  }
+  // Over LCM: after every batch sent so far is applied, at the daemon's cycle count then.
+  while (sender_->acked_seq() < sender_->last_seq() && core::keep_running()) {
+    const auto p = sender_->pump(20);
+    if (p == loads::BatchSender::Progress::failed) {
+      error_ = sender_->error();
+      return;
+    }
+    if (p == loads::BatchSender::Progress::done) return;  // the end of life
+  }
+  const auto& state = sender_->last_state();
+  if (!state) return;
+  o->cycle = state->total_cycles;
+  // This source's observation seq as the daemon has it: a restarted stream follows on.
+  for (std::size_t k = 0; k < state->observation_source_ids.size(); ++k) {
+    if (state->observation_source_ids[k] == o_.source_id) {
+      observation_seq_ = std::max(observation_seq_, state->observation_applied_seq[k]);
+    }
+  }
+  o->seq = ++observation_seq_;
+  if (const core::Status sent = replay::send_observation(*lcm_, *o, o_.replay, auth_,
+                                                         printer_.callback(), core::keep_running);
+      !sent) {
+    std::cerr << "peritwin-stream: gauge observation " << o->seq << ": " << sent.error().message()
+              << "\n";
   }
 }
 
@@ -673,9 +853,13 @@ void Stream::loop() {
     for (const auto& line : lines) {
       if (skip_lines_ > 0) {
         --skip_lines_;
+        // A restart over a FILE skips the lines taken before, a gauge series' header included:
+        // its columns are read again.
+        if (gauges_ && !gauges_->has_header()) take_gauge_line(line);
         continue;
       }
       take_line(line);
+      if (stop_input_) break;
     }
     if (line_too_long_) {
       input_error_ = input_name() + ": line " + std::to_string(pipe.counts.input_lines + 1) +
@@ -697,6 +881,9 @@ void Stream::loop() {
       }
     }
     if (!deliver()) break;
+    follow_gauges();
+    observe_gauges();
+    if (!error_.empty() || stop_input_) break;
     if (!o_.state_file.empty()) stream::write_received(o_.state_file, pipe.counts.samples);
     lines_idle = lines.empty();
     const auto progress = sender_ ? sender_->pump(0) : loads::BatchSender::Progress::running;
@@ -807,7 +994,13 @@ int run(Options o) {
   }
   Input in;
   if (auto rc = open_input(o.input, in)) return *rc;
-  Stream stream(o, *detail, in);
+  // Gauges identify P in N: [detail.sensor] scale and offset (a load sensor's) do not apply.
+  config::DetailConfig gauge_detail = *detail;
+  if (o.format == "gauges") {
+    gauge_detail.sensor.scale = 1.0;
+    gauge_detail.sensor.offset = 0.0;
+  }
+  Stream stream(o, o.format == "gauges" ? gauge_detail : *detail, in);
   if (auto rc = stream.set_up(std::move(*auth))) return *rc;
   stream.loop();
   return stream.finish();

@@ -187,12 +187,15 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   if (std::find(ok.begin(), ok.end(), 0) != ok.end()) {
     return core::failure("a particle's engine cannot solve the virgin detail");
   }
-  if (particle_model != model && !model->gauges().empty()) {
+  if (particle_model == model) {
+    e->gauge_virgin_ = gauge_influences(model->gauges(), e->particles_[0].engine->solver());
+  } else if (!model->gauges().empty()) {
     // The detail's virgin gauges over the particle grid's, component by component (1 where the
     // particle grid's is negligible: that basis case does not load the gauge).
     auto fine = model->make_engine();
     if (!fine->initialize()) return core::failure("the virgin detail cannot be solved");
     const auto fine_influences = gauge_influences(model->gauges(), fine->solver());
+    e->gauge_virgin_ = fine_influences;
     const auto coarse_influences =
         gauge_influences(particle_model->gauges(), e->particles_[0].engine->solver());
     for (std::size_t g = 0; g < fine_influences.size(); ++g) {
@@ -270,16 +273,27 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
     // Each particle's gauges read its current bond state (a gauge observation covers the last
     // blocks applied); on a coarser grid they are scaled by the detail's virgin gauges over the
     // particle grid's (gauge_calibration_): the coarse grid's smoothing at the gauge taken out.
+    // A particle's crack moves in steps of its grid spacing, so does its compliance: beside the
+    // gauge's σ, the rounding of its crack length (Δx_p/√12, as for an inspection) times the
+    // compliance's change per length, taken as the particle's secant since the virgin state
+    // (|m^p − m^virgin| / a_p): without it a long record's tiny σ would make the grid's steps
+    // decide and the ensemble collapse onto one particle.
     const auto indices = observed_gauge_indices(o, pm.gauges());
     if (!indices) return indices.error();
+    const auto virgin = predicted_compliance(o, *indices, pm.gauges(), gauge_virgin_);
+    const double rounding = pm.disc().dx / std::sqrt(12.0);
     log_likelihood.resize(particles_.size());
     for_each_particle([&](std::size_t i) {
       auto influences = gauge_influences(pm.gauges(), particles_[i].engine->solver());
       for (std::size_t g = 0; g < influences.size() && g < gauge_calibration_.size(); ++g) {
         for (std::size_t b = 0; b < 3; ++b) influences[g][b] *= gauge_calibration_[g][b];
       }
-      log_likelihood[i] =
-          gauge_log_likelihood(o, predicted_compliance(o, *indices, pm.gauges(), influences));
+      const auto m = predicted_compliance(o, *indices, pm.gauges(), influences);
+      std::vector<double> model_sigma(m.size(), 0.0);
+      for (std::size_t g = 0; g < m.size() && predicted[i] > 0; ++g) {
+        model_sigma[g] = std::abs(m[g] - virgin[g]) / predicted[i] * rounding;
+      }
+      log_likelihood[i] = gauge_log_likelihood(o, m, model_sigma);
     });
   } else if (o.kind == messages::ObservationKind::crack_length) {
     // The particle's length moves in steps of about its grid spacing: a uniform rounding error of

@@ -181,6 +181,8 @@ class Ensemble {
   /// On a coarser particle grid: per gauge and basis case, the detail's virgin influence
   /// coefficient over the particle grid's (empty on the detail's own grid: no scaling).
   std::vector<std::array<double, 3>> gauge_calibration_;
+  /// The detail's virgin gauges (influence coefficients on its own grid).
+  std::vector<std::array<double, 3>> gauge_virgin_;
 };
 
 /// The particles' model on the coarser grid of spacing `dx`: coarse_model (A2 by 000 Eq. 29) with

@@ -1,5 +1,6 @@
 #include "twin/gauges.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -112,12 +113,16 @@ std::vector<double> predicted_compliance(const messages::Observation& o,
   return out;
 }
 
-double gauge_log_likelihood(const messages::Observation& o, const std::vector<double>& predicted) {
+double gauge_log_likelihood(const messages::Observation& o, const std::vector<double>& predicted,
+                            const std::vector<double>& model_sigma) {
   double sum = 0.0;
   for (std::size_t i = 0; i < o.gauges.size(); ++i) {
     if (!std::isfinite(predicted[i])) return -std::numeric_limits<double>::infinity();
-    const double z = (o.gauges[i].compliance - predicted[i]) / o.gauges[i].sigma;
-    sum += z * z;
+    const double extra =
+        i < model_sigma.size() && std::isfinite(model_sigma[i]) ? model_sigma[i] : 0;
+    const double variance = o.gauges[i].sigma * o.gauges[i].sigma + extra * extra;
+    const double d = o.gauges[i].compliance - predicted[i];
+    sum += d * d / variance + std::log(variance);
   }
   return -0.5 * sum;
 }
@@ -130,8 +135,9 @@ void take_in(GaugeResiduals& residuals, const messages::Observation& o,
     const bool readable = std::isfinite(predicted[i]) && scale > 0;
     residuals.residual[k] = readable ? (o.gauges[i].compliance - predicted[i]) / scale : kNaN;
     residuals.sigma[k] = readable ? o.gauges[i].sigma / scale : kNaN;
-    const bool beyond = !readable || std::abs(o.gauges[i].compliance - predicted[i]) >
-                                         kGaugeAlarmSigmas * o.gauges[i].sigma;
+    const bool beyond =
+        !readable || std::abs(o.gauges[i].compliance - predicted[i]) >
+                         std::max(kGaugeAlarmSigmas * o.gauges[i].sigma, kGaugeAlarmFloor * scale);
     residuals.in_a_row[k] = beyond ? residuals.in_a_row[k] + 1 : 0;
   }
 }

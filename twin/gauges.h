@@ -32,6 +32,12 @@ namespace peritwin::twin {
 /// unusual load mix, does not raise it; a crack the model does not have keeps it there).
 inline constexpr double kGaugeAlarmSigmas = 4.0;
 inline constexpr std::int64_t kGaugeAlarmAfter = 3;
+/// ... and beyond this fraction of the model's compliance: a twin that tracks the structure still
+/// leaves the crack's growth within a window and the coefficients' lag behind it (the stream
+/// identifies with the last STATE's) in the residual, which the reading noise's σ (10⁻⁴ of the
+/// compliance over a window of 10⁴ samples) does not cover: measured 0.5-1.6 % on the B1 record
+/// of its own model (docs/gauges.md).
+inline constexpr double kGaugeAlarmFloor = 0.03;
 
 /// A configured gauge on a model's grid.
 struct ModelGauge {
@@ -74,9 +80,11 @@ std::vector<double> predicted_compliance(const messages::Observation& o,
                                          const std::vector<ModelGauge>& gauges,
                                          const std::vector<std::array<double, 3>>& influences);
 
-/// log L of the observation given the prediction m^X: −½ Σ_g ((m_g − m^X_g)/σ_g)² (Gaussian
-/// reading errors; the constant left out). −∞ when a prediction is NaN.
-double gauge_log_likelihood(const messages::Observation& o, const std::vector<double>& predicted);
+/// log L of the observation given the prediction m^X: −½ Σ_g ((m_g − m^X_g)²/v_g + ln v_g) with
+/// v_g = σ_g² + model_sigma_g² (Gaussian reading errors and the prediction's own; the 2π constant
+/// left out; model_sigma may be empty). −∞ when a prediction is NaN.
+double gauge_log_likelihood(const messages::Observation& o, const std::vector<double>& predicted,
+                            const std::vector<double>& model_sigma = {});
 
 /// Updates `residuals` with the observation against the prediction (gauges not in it keep
 /// their residual and their count).

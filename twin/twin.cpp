@@ -241,7 +241,10 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
     if (!indices) {
       return refuse(messages::Verdict::invalid, indices.error().field, indices.error().reason);
     }
-    if (ensemble_) {
+    // The ensemble learns from gauges only when its particles run on the detail's own grid: on
+    // a coarser one their gauges' compliance was biased (docs/gauges.md, "The ensemble").
+    const bool learns = ensemble_ && &ensemble_->particle_model() == model_.get();
+    if (learns) {
       if (auto update = ensemble_->observe(o); !update) {
         return refuse(messages::Verdict::invalid, update.error().field, update.error().reason);
       }
@@ -249,7 +252,7 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
     take_in(gauge_residuals_, o, *indices,
             predicted_compliance(o, *indices, model_->gauges(), gauge_influences()));
     observed_[o.source_id] = o.seq;
-    if (ensemble_) catch_up_ensemble(true);
+    if (learns) catch_up_ensemble(true);
     return {};
   }
   if (!ensemble_) {

@@ -26,6 +26,8 @@
 #include "messages/codec.h"
 #include "tests/support/lcm_hub.h"
 #include "tests/support/process.h"
+#include "twin/detail_model.h"
+#include "twin/gauges.h"
 
 namespace peritwin::stream {
 namespace {
@@ -347,6 +349,67 @@ TEST_F(Stream, NoUsableLineExitsTwoNamingTheFirst) {
                      "line 1 \"time_s;load_N\": expected t,P or t,P,alpha (1 fields)"),
             std::string::npos)
       << log;
+}
+
+/// Issue 33: the B1 example's gauges read the loads of examples/b1-series.csv through the virgin
+/// model's coefficients (no noise): --identify-only gives the loads back, and the stream applies
+/// the same cycles as the series' replay; a header naming no gauge of the detail exits 2.
+TEST_F(Stream, GaugeStrainsIdentifyTheLoads) {
+  auto parsed = peritwin::config::load_config(kConfig);
+  ASSERT_TRUE(parsed.ok()) << parsed.error_text();
+  const auto model = peritwin::twin::DetailModel::build(parsed.config->details.at(0));
+  ASSERT_TRUE(model.ok());
+  auto engine = (*model)->make_engine();
+  ASSERT_TRUE(engine->initialize());
+  const auto c = peritwin::twin::gauge_influences((*model)->gauges(), engine->solver());
+  ASSERT_EQ(c.size(), 3u);
+  std::vector<std::pair<std::string, double>> truth;
+  {
+    std::ofstream out(dir_ / "strains.csv");
+    out << "# strains of examples/b1-series.csv\ntime_s,back,tip,arm\n";  // any column order
+    out.precision(17);
+    for (const auto& row : series_rows()) {
+      const auto comma = row.find(',');
+      const double p = std::stod(row.substr(comma + 1));
+      truth.emplace_back(row.substr(0, comma), p);
+      out << row.substr(0, comma) << "," << p * c[2][0] << "," << p * c[0][0] << "," << p * c[1][0]
+          << "\n";
+    }
+  }
+  auto id = stream({"--input", (dir_ / "strains.csv").string(), "--in-process", "--format",
+                    "gauges", "--identify-only"},
+                   "identify.log");
+  const auto lines = lines_to_end(*id);
+  ASSERT_EQ(exit_code(*id), 0) << read_file(dir_ / "identify.log");
+  std::vector<std::string> rows;
+  for (const auto& l : lines) {
+    if (!l.empty() && l[0] != '{' && l[0] != 't') rows.push_back(l);
+  }
+  ASSERT_EQ(rows.size(), truth.size());
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const auto first = rows[k].find(',');
+    const double p = std::stod(rows[k].substr(first + 1));
+    EXPECT_NEAR(p, truth[k].second, 1e-6 * std::abs(truth[k].second) + 1e-9) << rows[k];
+  }
+  // Streamed: the cycles of the series' replay.
+  auto s =
+      stream({"--input", (dir_ / "strains.csv").string(), "--in-process", "--format", "gauges"},
+             "stream.log");
+  const auto summary = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(summary.empty());
+  EXPECT_EQ(field(summary.back(), "cycles"), field(replay_summary(kSeries), "cycles"));
+  // A column that is no gauge of the detail: exit 2 with the reason.
+  {
+    std::ofstream out(dir_ / "wrong.csv");
+    out << "time_s,tip,elsewhere\n0,1e-4,2e-4\n";
+  }
+  auto w = stream({"--input", (dir_ / "wrong.csv").string(), "--in-process", "--format", "gauges"},
+                  "wrong.log");
+  lines_to_end(*w);
+  EXPECT_EQ(exit_code(*w), 2);
+  EXPECT_NE(read_file(dir_ / "wrong.log").find("elsewhere"), std::string::npos)
+      << read_file(dir_ / "wrong.log");
 }
 
 /// Over LCM's TCP hub (skipped without java / lcm.jar).
