@@ -236,16 +236,47 @@ core::Expected<LoadIdentifier, std::string> LoadIdentifier::create(
       }
     }
     // The scan's step: half the narrowest width a minimum of the misfit can have, √(Dmin/Dmax)
-    // rad (near an α where D = uᵀGu is smallest, N²/D is a peak of that width); D measured on a
-    // fine grid.
-    constexpr int kFine = 8192;
-    double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
-    for (int k = 0; k < kFine; ++k) {
-      const double alpha = -kPi + (k + 1) * (2.0 * kPi / kFine);
+    // rad (near an α where D = uᵀGu is smallest, N²/D is a peak of that width).
+    // D is a trigonometric polynomial of degree 2 (at most 2 local minima): a grid of 256,
+    // then golden section within a grid step around each grid minimum, to 1e-8 rad (the value
+    // is then exact to rounding: D is flat there).
+    const auto d_at = [&g](double alpha) {
       const Eigen::Vector3d u(1.0, std::cos(alpha), std::sin(alpha));
-      const double d = u.dot(g * u);
-      d_min = std::min(d_min, d);
-      d_max = std::max(d_max, d);
+      return u.dot(g * u);
+    };
+    constexpr int kGrid = 256;
+    constexpr double kGridStep = 2.0 * kPi / kGrid;
+    std::array<double, kGrid> grid{};
+    for (int k = 0; k < kGrid; ++k) grid[static_cast<std::size_t>(k)] = d_at(k * kGridStep);
+    double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
+    for (int k = 0; k < kGrid; ++k) {
+      const double here = grid[static_cast<std::size_t>(k)];
+      d_max = std::max(d_max, here);
+      d_min = std::min(d_min, here);
+      if (here > grid[static_cast<std::size_t>((k + kGrid - 1) % kGrid)] ||
+          here > grid[static_cast<std::size_t>((k + 1) % kGrid)]) {
+        continue;
+      }
+      double lo = (k - 1) * kGridStep, hi = (k + 1) * kGridStep;
+      constexpr double kGolden = 0.3819660112501051;  // (3 − √5)/2
+      double m1 = lo + kGolden * (hi - lo), m2 = hi - kGolden * (hi - lo);
+      double d1 = d_at(m1), d2 = d_at(m2);
+      while (hi - lo > 1e-8) {
+        if (d1 < d2) {
+          hi = m2;
+          m2 = m1;
+          d2 = d1;
+          m1 = lo + kGolden * (hi - lo);
+          d1 = d_at(m1);
+        } else {
+          lo = m1;
+          m1 = m2;
+          d1 = d2;
+          m2 = hi - kGolden * (hi - lo);
+          d2 = d_at(m2);
+        }
+      }
+      d_min = std::min({d_min, d1, d2});
     }
     if (!(d_min > 0.0)) return too_few(id.form_, 2, id.columns_);  // v(α) = 0: rank < 3
     const double wanted = std::ceil(4.0 * kPi / std::sqrt(d_min / d_max));

@@ -101,7 +101,8 @@ class LoadIdentifier {
       std::vector<std::string> columns, const std::vector<GaugeInfluence>& influence);
 
   /// New coefficients (the model re-solved after bonds broke) for the same columns; the same
-  /// refusal rules; on refusal the old ones stay. The form (and unknowns()) may change.
+  /// refusal rules; on refusal the old ones stay. The form (and unknowns()) may change. For 8
+  /// gauges about 2 µs (p_only, linear_pair) or 13 µs (constant_and_angle): fine per STATE.
   core::Status update(const std::vector<GaugeInfluence>& influence);
 
   /// P and α of one sample of strains (one per column, in columns() order, finite) and the
