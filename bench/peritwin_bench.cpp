@@ -8,6 +8,7 @@
 //   peritwin-bench ingest [...]                      peritwin-bench-ingest (LCM ingest rate)
 //   peritwin-bench soak --batches N [...]            peritwin-bench-soak (the daemon's RSS)
 //   peritwin-bench stream [--seconds S] [...]        peritwin-bench-stream (sensor -> STATE)
+//   peritwin-bench stream --gauges [--gauge-samples N]  ... instead gauge strains -> P, α rate
 //   peritwin-bench dashboard [...]                   peritwin-bench-dashboard (SSE latency)
 //   peritwin-bench fleet [--details N] [...]         peritwin-bench-fleet (one daemon, N details)
 //   peritwin-bench life --nodes N [...]              peritwin-bench-life (one life estimate)

@@ -21,6 +21,8 @@
 //    "transport":"tcpq"}
 // Exit 0 when every batch was applied and nothing broke, 1 when a bond broke (the measure is not
 // "while no bond breaks"), 3 on a runtime failure.
+// With --gauges [--gauge-samples N]: instead, in-process, the rate of strain gauges -> P, α
+// (bench/gauge_bench.h; one JSON line per form of the load, "bench":"gauge_identification").
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -32,6 +34,7 @@
 #include <thread>
 
 #include "bench/child_process.h"
+#include "bench/gauge_bench.h"
 #include "config/config.h"
 #include "core/json_line.h"
 #include "core/loopback_port.h"
@@ -318,6 +321,14 @@ int main(int argc, char** argv) {
   CLI::App app{"peritwin-bench-stream: sensor samples -> peritwin-stream -> daemon, latency"};
   Options o;
   add_options(app, o);
+  bool gauges = false;
+  std::int64_t gauge_samples = 1'000'000;
+  app.add_flag("--gauges", gauges,
+               "instead: the rate of strain gauges -> P, α (stream/gauge_identification.h) for 8 "
+               "gauges in each form of the load, in-process (bench/gauge_bench.h)");
+  app.add_option("--gauge-samples", gauge_samples, "--gauges: identify() calls per form (1e6)")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40));
   if (const auto rc = core::parse_options(app, argc, argv, core::ParseErrors::cli11)) return *rc;
+  if (gauges) return bench::run_gauge_identification(gauge_samples);
   return run(o);
 }

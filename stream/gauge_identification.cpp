@@ -50,7 +50,7 @@ std::string too_few(LoadForm form, int rank, const std::vector<std::string>& col
       break;
   }
   return "2 unknowns (P, α) of a load with a constant and an angle part need 3 independent "
-         "gauges (with fewer, two different (P, α) fit every sample exactly) but " +
+         "gauges (with fewer, two different (P, α) give the same strains) but " +
          gauges + equations(rank) +
          " (add a gauge whose constant, cos α and sin α coefficients are no combination of "
          "theirs)";
@@ -236,16 +236,47 @@ core::Expected<LoadIdentifier, std::string> LoadIdentifier::create(
       }
     }
     // The scan's step: half the narrowest width a minimum of the misfit can have, √(Dmin/Dmax)
-    // rad (near an α where D = uᵀGu is smallest, N²/D is a peak of that width); D measured on a
-    // fine grid.
-    constexpr int kFine = 8192;
-    double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
-    for (int k = 0; k < kFine; ++k) {
-      const double alpha = -kPi + (k + 1) * (2.0 * kPi / kFine);
+    // rad (near an α where D = uᵀGu is smallest, N²/D is a peak of that width).
+    // D is a trigonometric polynomial of degree 2 (at most 2 local minima): a grid of 256,
+    // then golden section within a grid step around each grid minimum, to 1e-8 rad (the value
+    // is then exact to rounding: D is flat there).
+    const auto d_at = [&g](double alpha) {
       const Eigen::Vector3d u(1.0, std::cos(alpha), std::sin(alpha));
-      const double d = u.dot(g * u);
-      d_min = std::min(d_min, d);
-      d_max = std::max(d_max, d);
+      return u.dot(g * u);
+    };
+    constexpr int kGrid = 256;
+    constexpr double kGridStep = 2.0 * kPi / kGrid;
+    std::array<double, kGrid> grid{};
+    for (int k = 0; k < kGrid; ++k) grid[static_cast<std::size_t>(k)] = d_at(k * kGridStep);
+    double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
+    for (int k = 0; k < kGrid; ++k) {
+      const double here = grid[static_cast<std::size_t>(k)];
+      d_max = std::max(d_max, here);
+      d_min = std::min(d_min, here);
+      if (here > grid[static_cast<std::size_t>((k + kGrid - 1) % kGrid)] ||
+          here > grid[static_cast<std::size_t>((k + 1) % kGrid)]) {
+        continue;
+      }
+      double lo = (k - 1) * kGridStep, hi = (k + 1) * kGridStep;
+      constexpr double kGolden = 0.3819660112501051;  // (3 − √5)/2
+      double m1 = lo + kGolden * (hi - lo), m2 = hi - kGolden * (hi - lo);
+      double d1 = d_at(m1), d2 = d_at(m2);
+      while (hi - lo > 1e-8) {
+        if (d1 < d2) {
+          hi = m2;
+          m2 = m1;
+          d2 = d1;
+          m1 = lo + kGolden * (hi - lo);
+          d1 = d_at(m1);
+        } else {
+          lo = m1;
+          m1 = m2;
+          d1 = d2;
+          m2 = hi - kGolden * (hi - lo);
+          d2 = d_at(m2);
+        }
+      }
+      d_min = std::min({d_min, d1, d2});
     }
     if (!(d_min > 0.0)) return too_few(id.form_, 2, id.columns_);  // v(α) = 0: rank < 3
     const double wanted = std::ceil(4.0 * kPi / std::sqrt(d_min / d_max));
@@ -388,17 +419,24 @@ struct AngleMisfit {
     return maximum(up, down);
   }
 
-  /// The local maximum of N²/D around `start`: in the smallest of [start ∓ h], h = 1e-6, 1e-4,
-  /// 1e-2 and `width` rad, where ψ falls from > 0 to < 0; `start` when none. For a start that
-  /// may be a stationary point already (the linear candidate), whose ψ's sign is then rounding:
-  /// a one-sided bracket could go to another stationary point (two local minima of the misfit
-  /// can lie close together when the coefficients nearly make v'(α) ∥ v(α)).
-  [[nodiscard]] double refine_around(double start, double width) const {
-    for (const double h : {1e-6, 1e-4, 1e-2, width}) {
-      if (h > width) break;
+  /// The local maximum of N²/D around `start`, or nullopt: in the smallest bracket
+  /// [start − h, start + h] where ψ falls from > 0 to < 0, h from 4 × the Newton step at `start`
+  /// (1e-6 when N²/D is not concave there; at least 1e-9) growing × 100 up to `width`. For a
+  /// start that may be a stationary point already (the linear candidate), whose ψ's sign is then
+  /// rounding: a one-sided bracket could go to another stationary point (two local minima of the
+  /// misfit can lie close together when the coefficients nearly make v'(α) ∥ v(α)).
+  [[nodiscard]] std::optional<double> refine_around(double start, double width) const {
+    const At s = at(start);
+    if (s.psi == 0.0 && s.dpsi < 0.0) return start;
+    double h = s.dpsi < 0.0 ? std::max(4.0 * std::abs(s.psi / s.dpsi), 1e-9) : 1e-6;
+    for (bool last = false; !last; h *= 100.0) {
+      if (h >= width) {
+        h = width;
+        last = true;
+      }
       if (at(start - h).psi > 0.0 && at(start + h).psi < 0.0) return maximum(start - h, start + h);
     }
-    return start;
+    return std::nullopt;
   }
 
   /// The root of ψ in the bracket ψ(up) > 0 > ψ(down): safeguarded Newton (Numerical Recipes'
@@ -482,12 +520,17 @@ IdentifiedLoad LoadIdentifier::identify_constant_and_angle(std::span<const doubl
     before = here;
     here = after;
   }
-  // Each refined; the largest N²/D (the smallest misfit) wins, the linear one on a tie.
-  double alpha = misfit.refine_around(linear, kPi / kMinScanAngles);
+  // Each refined; the largest N²/D (the smallest misfit) wins, the linear one on a tie. A scan
+  // maximum within a step of the refined linear candidate is the same maximum (the step is half
+  // the narrowest a peak can be): not refined again.
+  const std::optional<double> refined = misfit.refine_around(linear, kPi / kMinScanAngles);
+  double alpha = refined.value_or(linear);
   AngleMisfit::At best = misfit.at(alpha);
   double best_q = best.n * best.n / best.d;
   for (std::size_t i = 0; i < top.size() && top_q[i] >= 0.0; ++i) {
-    const double a = misfit.refine_towards(-kPi + (top[i] + 1) * step, step);
+    const double scanned = -kPi + (top[i] + 1) * step;
+    if (refined && std::abs(std::remainder(scanned - *refined, 2.0 * kPi)) < step) continue;
+    const double a = misfit.refine_towards(scanned, step);
     const AngleMisfit::At f = misfit.at(a);
     const double q = f.n * f.n / f.d;
     if (q > best_q * (1.0 + 1e-12)) {
