@@ -36,6 +36,8 @@ def main():
     ap.add_argument("--bin", default="build/bin", help="directory of peritwin-replay")
     ap.add_argument("--out", required=True, help="the strain record (CSV)")
     ap.add_argument("--truth", default="", help="also write the truth's loads here (CSV)")
+    ap.add_argument("--truth-states", default="",
+                    help="also write the truth's cycles,crack_length_m per state here (CSV)")
     ap.add_argument("--cycles", type=int, default=40000)
     ap.add_argument("--block", type=int, default=100, help="cycles per load level")
     ap.add_argument("--p-max", type=float, default=4000.0, help="mean P_max (N)")
@@ -92,10 +94,17 @@ def main():
         if run.returncode != 0:
             sys.exit("peritwin-replay failed:\n" + run.stderr)
     states = []  # (cycles, {id: (c0, c1, c2)})
+    cracks = []  # (cycles, crack length)
     for line in run.stdout.splitlines():
         s = json.loads(line)
         if "gauges" in s and "state_seq" in s:
             states.append((s["cycles"], {k: v["per_n"] for k, v in s["gauges"].items()}))
+            cracks.append((s["cycles"], s["crack_length_m"]))
+    if a.truth_states:
+        with open(a.truth_states, "w") as f:
+            f.write("cycles,crack_length_m\n")
+            for c, length in cracks:
+                f.write(f"{c},{length}\n")
     if not states:
         sys.exit("peritwin-replay printed no state with gauges")
     ended = states[-1][0]

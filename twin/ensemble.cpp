@@ -50,10 +50,63 @@ double LengthMap::operator()(double coarse_length) const {
   return fine[k - 1] + t * (fine[k] - fine[k - 1]);
 }
 
+std::vector<std::array<double, 3>> GaugeMap::operator()(double crack_length) const {
+  if (length.empty()) return {};
+  if (!(crack_length > length.front())) return influences.front();
+  if (crack_length >= length.back()) return influences.back();
+  const auto k = static_cast<std::size_t>(
+      std::lower_bound(length.begin(), length.end(), crack_length) - length.begin());
+  const double t = (crack_length - length[k - 1]) / (length[k] - length[k - 1]);
+  std::vector<std::array<double, 3>> out = influences[k - 1];
+  for (std::size_t g = 0; g < out.size(); ++g) {
+    for (std::size_t b = 0; b < 3; ++b) out[g][b] += t * (influences[k][g][b] - out[g][b]);
+  }
+  return out;
+}
+
+namespace {
+
+/// The fine run's gauges at the cycles of the LengthMap's samples: the virgin solver copied and
+/// the run's break events applied to it group by group (rank updates), the coefficients read
+/// after each (issue 33). Strictly increasing lengths (a later state of an equal length replaces
+/// the earlier). Stops at a break that leaves the stiffness singular.
+GaugeMap gauge_map_of_run(const DetailModel& fine, const fatigue::FatigueEngine& end,
+                          double life, int samples) {
+  GaugeMap map;
+  if (fine.gauges().empty()) return map;
+  auto virgin = fine.make_engine();
+  if (!virgin->initialize()) return map;
+  statics::StaticSolver solver = virgin->solver();
+  map.length.push_back(0.0);
+  map.influences.push_back(gauge_influences(fine.gauges(), solver));
+  const auto& events = end.break_events();
+  std::size_t next = 0;
+  for (int k = 1; k <= samples; ++k) {
+    const auto cycle = static_cast<std::int64_t>(life * k / samples);
+    std::vector<mesh::BondIndex> bonds;
+    for (; next < events.size() && events[next].cycle <= cycle; ++next) {
+      bonds.push_back(events[next].bond);
+    }
+    if (bonds.empty()) continue;
+    if (!solver.break_bonds(bonds)) break;
+    const double length = crack_length_at(fine, end, cycle, "longest");
+    auto influences = gauge_influences(fine.gauges(), solver);
+    if (length > map.length.back()) {
+      map.length.push_back(length);
+      map.influences.push_back(std::move(influences));
+    } else {
+      map.influences.back() = std::move(influences);
+    }
+  }
+  return map;
+}
+
+}  // namespace
+
 core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx) {
   auto coarse = coarse_model(fine, dx);
   if (!coarse) return coarse.error();
-  Surrogate out{*coarse, 1.0, {}};
+  Surrogate out{*coarse, 1.0, {}, {}};
   const std::vector<core::LoadBlock> spectrum = reference_spectrum(fine, RollingSpectrum{});
   if (spectrum.empty() || !can_fork(fine)) return out;
   // The virgin detail to its end of life under the reference spectrum on a grid, at an A2 factor:
@@ -105,7 +158,8 @@ core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx)
   config.fatigue.strain.A2 *= factor;
   auto calibrated = DetailModel::build(config);
   if (!calibrated) return calibrated.error();
-  return Surrogate{*calibrated, factor, std::move(map)};
+  return Surrogate{*calibrated, factor, std::move(map),
+                   gauge_map_of_run(fine, *fine_end, fine_life, kSamples)};
 }
 
 Ensemble::Ensemble(std::shared_ptr<const DetailModel> model,
@@ -165,14 +219,17 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   filter->initialize(u.seed);
   std::shared_ptr<const DetailModel> particle_model = model;
   LengthMap length_map;
+  GaugeMap gauge_map;
   if (const double dx = u.particle_dx(model->config().life.dx); dx > 0) {
     auto coarse = particle_surrogate(*model, dx);
     if (!coarse) return coarse.error().within("uncertainty.dx: ");
     particle_model = coarse->model;
     length_map = std::move(coarse->length_map);
+    gauge_map = std::move(coarse->gauge_map);
   }
   std::unique_ptr<Ensemble> e(new Ensemble(model, particle_model, std::move(*filter)));
   e->length_map_ = std::move(length_map);
+  e->gauge_map_ = std::move(gauge_map);
   e->predicted_end_.assign(settings.particles, kNaN);
   e->a2_column_ = a2_column;
   e->load_scale_column_ = load_column;
@@ -189,25 +246,6 @@ core::Expected<std::unique_ptr<Ensemble>> Ensemble::create(
   }
   if (particle_model == model) {
     e->gauge_virgin_ = gauge_influences(model->gauges(), e->particles_[0].engine->solver());
-  } else if (!model->gauges().empty()) {
-    // The detail's virgin gauges over the particle grid's, component by component (1 where the
-    // particle grid's is negligible: that basis case does not load the gauge).
-    auto fine = model->make_engine();
-    if (!fine->initialize()) return core::failure("the virgin detail cannot be solved");
-    const auto fine_influences = gauge_influences(model->gauges(), fine->solver());
-    e->gauge_virgin_ = fine_influences;
-    const auto coarse_influences =
-        gauge_influences(particle_model->gauges(), e->particles_[0].engine->solver());
-    for (std::size_t g = 0; g < fine_influences.size(); ++g) {
-      const auto& f = fine_influences[g];
-      const auto& c = coarse_influences[g];
-      const double largest = std::max({std::abs(c[0]), std::abs(c[1]), std::abs(c[2])});
-      std::array<double, 3> ratio{1.0, 1.0, 1.0};
-      for (std::size_t b = 0; b < 3; ++b) {
-        if (std::abs(c[b]) > 1e-9 * largest && std::isfinite(f[b])) ratio[b] = f[b] / c[b];
-      }
-      e->gauge_calibration_.push_back(ratio);
-    }
   }
   return e;
 }
@@ -275,23 +313,40 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
     // particle grid's (gauge_calibration_): the coarse grid's smoothing at the gauge taken out.
     // A particle's crack moves in steps of its grid spacing, so does its compliance: beside the
     // gauge's σ, the rounding of its crack length (Δx_p/√12, as for an inspection) times the
-    // compliance's change per length, taken as the particle's secant since the virgin state
-    // (|m^p − m^virgin| / a_p): without it a long record's tiny σ would make the grid's steps
-    // decide and the ensemble collapse onto one particle.
+    // compliance's change per length: without it a long record's tiny σ would let the grid's
+    // steps decide. On the detail's own grid a particle's gauges read its own bond state (the
+    // change per length: its secant since the virgin state); on a coarser grid they are the
+    // detail's GaugeMap at the fine length the particle's crack stands for (the change per
+    // length: the map's across ±Δx_p/2).
+    if (!reads_gauges()) {
+      return core::Error{"", "the particles' grid cannot read the gauges (no gauge map)"};
+    }
     const auto indices = observed_gauge_indices(o, pm.gauges());
     if (!indices) return indices.error();
-    const auto virgin = predicted_compliance(o, *indices, pm.gauges(), gauge_virgin_);
-    const double rounding = pm.disc().dx / std::sqrt(12.0);
+    const double step = pm.disc().dx;
+    const double rounding = step / std::sqrt(12.0);
+    const std::vector<double> virgin =
+        gauge_map_.empty() ? predicted_compliance(o, *indices, pm.gauges(), gauge_virgin_)
+                           : std::vector<double>{};
     log_likelihood.resize(particles_.size());
     for_each_particle([&](std::size_t i) {
-      auto influences = gauge_influences(pm.gauges(), particles_[i].engine->solver());
-      for (std::size_t g = 0; g < influences.size() && g < gauge_calibration_.size(); ++g) {
-        for (std::size_t b = 0; b < 3; ++b) influences[g][b] *= gauge_calibration_[g][b];
-      }
-      const auto m = predicted_compliance(o, *indices, pm.gauges(), influences);
-      std::vector<double> model_sigma(m.size(), 0.0);
-      for (std::size_t g = 0; g < m.size() && predicted[i] > 0; ++g) {
-        model_sigma[g] = std::abs(m[g] - virgin[g]) / predicted[i] * rounding;
+      const double a = predicted[i];
+      std::vector<double> model_sigma(o.gauges.size(), 0.0);
+      std::vector<double> m;
+      if (gauge_map_.empty()) {
+        m = predicted_compliance(o, *indices, pm.gauges(),
+                                 gauge_influences(pm.gauges(), particles_[i].engine->solver()));
+        for (std::size_t g = 0; g < m.size() && a > 0; ++g) {
+          model_sigma[g] = std::abs(m[g] - virgin[g]) / a * rounding;
+        }
+      } else {
+        m = predicted_compliance(o, *indices, model_->gauges(), gauge_map_(a));
+        const auto above = predicted_compliance(o, *indices, model_->gauges(), gauge_map_(a + step / 2));
+        const auto below =
+            predicted_compliance(o, *indices, model_->gauges(), gauge_map_(std::max(0.0, a - step / 2)));
+        for (std::size_t g = 0; g < m.size(); ++g) {
+          model_sigma[g] = std::abs(above[g] - below[g]) / step * rounding;
+        }
       }
       log_likelihood[i] = gauge_log_likelihood(o, m, model_sigma);
     });

@@ -104,6 +104,18 @@ struct LengthMap {
   [[nodiscard]] double operator()(double coarse_length) const;
 };
 
+/// The detail's gauges along its median run on its own grid (particle_surrogate, issue 33): at
+/// increasing crack lengths (m), every gauge's influence coefficients. A particle on a coarser
+/// grid reads its gauges through it at the fine crack length its own stands for (LengthMap): its
+/// coarse grid does not resolve a gauge a few mm from the crack path.
+struct GaugeMap {
+  std::vector<double> length;
+  std::vector<std::vector<std::array<double, 3>>> influences;  ///< per length, per gauge
+  [[nodiscard]] bool empty() const { return length.empty(); }
+  /// Linear between the lengths, the ends' values beyond them.
+  [[nodiscard]] std::vector<std::array<double, 3>> operator()(double crack_length) const;
+};
+
 class Ensemble {
  public:
   /// The particles of the detail's [detail.uncertainty], initialized (their first solve); an
@@ -133,6 +145,11 @@ class Ensemble {
   [[nodiscard]] const std::vector<ObservationRecord>& observations() const { return observations_; }
   /// The model the particles run on (the detail's, or its coarser grid).
   [[nodiscard]] const DetailModel& particle_model() const { return *particle_model_; }
+  /// Whether gauge observations are evidence for the particles: on the detail's own grid (each
+  /// particle's own gauges), or on a coarser one with the detail's GaugeMap.
+  [[nodiscard]] bool reads_gauges() const {
+    return particle_model_ == model_ || !gauge_map_.empty();
+  }
   /// Checkpoints: everything the ensemble's future depends on; import_state on an ensemble
   /// created from the same config (an error, the ensemble unusable, when it does not fit).
   [[nodiscard]] EnsembleCheckpoint export_state() const;
@@ -178,9 +195,8 @@ class Ensemble {
   std::int64_t estimate_cycle_ = -1;
   std::vector<ObservationRecord> observations_;
   LengthMap length_map_;  ///< the particles' crack lengths as the detail's (particle_surrogate)
-  /// On a coarser particle grid: per gauge and basis case, the detail's virgin influence
-  /// coefficient over the particle grid's (empty on the detail's own grid: no scaling).
-  std::vector<std::array<double, 3>> gauge_calibration_;
+  /// On a coarser particle grid: the detail's gauges by crack length (empty on its own grid).
+  GaugeMap gauge_map_;
   /// The detail's virgin gauges (influence coefficients on its own grid).
   std::vector<std::array<double, 3>> gauge_virgin_;
 };
@@ -194,6 +210,7 @@ struct Surrogate {
   std::shared_ptr<const DetailModel> model;
   double a2_calibration = 1.0;
   LengthMap length_map;
+  GaugeMap gauge_map;  ///< empty without gauges or without the fine run
 };
 core::Expected<Surrogate> particle_surrogate(const DetailModel& fine, double dx);
 

@@ -120,7 +120,8 @@ double gauge_log_likelihood(const messages::Observation& o, const std::vector<do
     if (!std::isfinite(predicted[i])) return -std::numeric_limits<double>::infinity();
     const double extra =
         i < model_sigma.size() && std::isfinite(model_sigma[i]) ? model_sigma[i] : 0;
-    const double variance = o.gauges[i].sigma * o.gauges[i].sigma + extra * extra;
+    const double window = kGaugeModelFraction * predicted[i];
+    const double variance = o.gauges[i].sigma * o.gauges[i].sigma + extra * extra + window * window;
     const double d = o.gauges[i].compliance - predicted[i];
     sum += d * d / variance + std::log(variance);
   }

@@ -38,6 +38,10 @@ inline constexpr std::int64_t kGaugeAlarmAfter = 3;
 /// compliance over a window of 10⁴ samples) does not cover: measured 0.5-1.6 % on the B1 record
 /// of its own model (docs/gauges.md).
 inline constexpr double kGaugeAlarmFloor = 0.03;
+/// The likelihood of a gauge observation for a model's prediction m^X adds this fraction of m^X
+/// to its standard deviation: the same window and lag effects, which a learning ensemble would
+/// otherwise read as evidence (1 %: the middle of the 0.5-1.6 % measured).
+inline constexpr double kGaugeModelFraction = 0.01;
 
 /// A configured gauge on a model's grid.
 struct ModelGauge {
@@ -81,8 +85,9 @@ std::vector<double> predicted_compliance(const messages::Observation& o,
                                          const std::vector<std::array<double, 3>>& influences);
 
 /// log L of the observation given the prediction m^X: −½ Σ_g ((m_g − m^X_g)²/v_g + ln v_g) with
-/// v_g = σ_g² + model_sigma_g² (Gaussian reading errors and the prediction's own; the 2π constant
-/// left out; model_sigma may be empty). −∞ when a prediction is NaN.
+/// v_g = σ_g² + model_sigma_g² + (kGaugeModelFraction·m^X_g)² (Gaussian reading errors, the
+/// prediction's own, the window's; the 2π constant left out; model_sigma may be empty). −∞ when a
+/// prediction is NaN.
 double gauge_log_likelihood(const messages::Observation& o, const std::vector<double>& predicted,
                             const std::vector<double>& model_sigma = {});
 

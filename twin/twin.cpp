@@ -241,9 +241,8 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
     if (!indices) {
       return refuse(messages::Verdict::invalid, indices.error().field, indices.error().reason);
     }
-    // The ensemble learns from gauges only when its particles run on the detail's own grid: on
-    // a coarser one their gauges' compliance was biased (docs/gauges.md, "The ensemble").
-    const bool learns = ensemble_ && &ensemble_->particle_model() == model_.get();
+    // The ensemble learns from gauges when its particles can read them (Ensemble::reads_gauges).
+    const bool learns = ensemble_ && ensemble_->reads_gauges();
     if (learns) {
       if (auto update = ensemble_->observe(o); !update) {
         return refuse(messages::Verdict::invalid, update.error().field, update.error().reason);
