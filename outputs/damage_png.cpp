@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -77,8 +78,8 @@ struct Surface {
 // --- text ------------------------------------------------------------------------------------
 
 /// The faces of the pictures' text: fontconfig's "Sans" (DejaVu Sans on Debian), sizes in pixels.
-enum class Face { text, title };
-constexpr int kTextPixels = 14, kTitlePixels = 17;
+enum class Face { text, title, small };
+constexpr int kTextPixels = 14, kTitlePixels = 17, kSmallPixels = 12;
 
 struct Size {
   int width = 0, height = 0;
@@ -103,6 +104,8 @@ class Typesetter {
     title_font_.reset(pango_font_description_copy(text_font_.get()));
     pango_font_description_set_absolute_size(title_font_.get(), kTitlePixels * PANGO_SCALE);
     pango_font_description_set_weight(title_font_.get(), PANGO_WEIGHT_BOLD);
+    small_font_.reset(pango_font_description_copy(text_font_.get()));
+    pango_font_description_set_absolute_size(small_font_.get(), kSmallPixels * PANGO_SCALE);
   }
 
   /// The width and height of `text` (its logical extents) in whole pixels; with `wrap` > 0 the
@@ -147,8 +150,9 @@ class Typesetter {
 
  private:
   void set(std::string_view text, Face face, int wrap = 0) {
-    pango_layout_set_font_description(layout_.get(),
-                                      face == Face::title ? title_font_.get() : text_font_.get());
+    pango_layout_set_font_description(layout_.get(), face == Face::title   ? title_font_.get()
+                                                     : face == Face::small ? small_font_.get()
+                                                                           : text_font_.get());
     pango_layout_set_wrap(layout_.get(), PANGO_WRAP_WORD_CHAR);
     pango_layout_set_width(layout_.get(), wrap > 0 ? wrap * PANGO_SCALE : -1);
     const auto n = static_cast<gssize>(text.size());
@@ -167,7 +171,7 @@ class Typesetter {
 
   Surface measure_;
   LayoutHandle layout_;
-  FontHandle text_font_, title_font_;
+  FontHandle text_font_, title_font_, small_font_;
 };
 
 // --- drawing ---------------------------------------------------------------------------------
@@ -649,6 +653,117 @@ void draw_nodes(cairo_t* cr, const DamageImageLayout& layout, int left, int top,
   }
 }
 
+// --- gauges on the map -------------------------------------------------------------------------
+
+constexpr double kGaugeCore = 5.0;  // the coloured bar's width (pixels)
+constexpr double kGaugeRim = 1.0;   // the black rim around it
+constexpr int kPlatePad = 2;        // label text to its plate's edge
+constexpr int kPlateGap = 3;        // the bar's box to the plate
+
+/// A gauge's bar in the picture's pixels (see GaugeMark), from the frame of the map.
+GaugeMark gauge_mark(const Frame& f, const MapGauge& g, double dx, int node_pixels) {
+  GaugeMark m;
+  m.id = g.id;
+  const double length = std::max(g.length, kGaugeMinLengthDx * dx) / dx * node_pixels;
+  const double cx = f.px(1e3 * g.at.x), cy = f.py(1e3 * g.at.y);
+  // Rows go down; a gauge along x or y (cos or sin ~ 1e-16) is drawn on whole pixels.
+  auto snap = [](double v) { return std::abs(v) < 1e-12 ? 0.0 : v; };
+  const double ux = snap(std::cos(g.angle)), uy = snap(-std::sin(g.angle));
+  const double h = 0.5 * length;
+  m.x0 = cx - h * ux;
+  m.y0 = cy - h * uy;
+  m.x1 = cx + h * ux;
+  m.y1 = cy + h * uy;
+  if (ux == 0.0 || uy == 0.0) {  // whole pixels: line() centres it on a pixel, crisp
+    for (double* v : {&m.x0, &m.y0, &m.x1, &m.y1}) *v = std::round(*v);
+  }
+  const double mx = 0.5 * (m.x0 + m.x1), my = 0.5 * (m.y0 + m.y1);
+  const double along = 0.5 * std::hypot(m.x1 - m.x0, m.y1 - m.y0) + kGaugeRim;
+  const double across = 0.5 * kGaugeCore + kGaugeRim + 0.5;
+  const double ex = along * std::abs(ux) + across * std::abs(uy);
+  const double ey = along * std::abs(uy) + across * std::abs(ux);
+  const auto left = static_cast<int>(std::floor(mx - ex));
+  const auto top = static_cast<int>(std::floor(my - ey));
+  m.bar = {left, top, static_cast<int>(std::ceil(mx + ex)) - left,
+           static_cast<int>(std::ceil(my + ey)) - top};
+  return m;
+}
+
+/// The bar: kGaugeColor with a black rim (butt ends, the rim past them too).
+void draw_gauge_bar(cairo_t* cr, const GaugeMark& m) {
+  const double len = std::hypot(m.x1 - m.x0, m.y1 - m.y0);
+  const double ux = (m.x1 - m.x0) / len, uy = (m.y1 - m.y0) / len;
+  line(cr, m.x0 - kGaugeRim * ux, m.y0 - kGaugeRim * uy, m.x1 + kGaugeRim * ux,
+       m.y1 + kGaugeRim * uy, kGaugeCore + 2.0 * kGaugeRim, kBlack);
+  line(cr, m.x0, m.y0, m.x1, m.y1, kGaugeCore, kGaugeColor);
+}
+
+/// Small boxes along the polylines (their lines are 3 pixels wide, a tip's dot 9), to keep the
+/// gauges' labels off the notches and the crack paths.
+std::vector<Box> line_boxes(const Frame& f, const std::vector<std::vector<MapPoint>>& lines) {
+  std::vector<Box> out;
+  auto around = [&](double x, double y, int r) {
+    out.push_back({static_cast<int>(std::floor(x)) - r, static_cast<int>(std::floor(y)) - r,
+                   2 * r + 1, 2 * r + 1});
+  };
+  for (const auto& l : lines) {
+    for (std::size_t i = 0; i < l.size(); ++i) {
+      const double x1 = f.px(1e3 * l[i].x), y1 = f.py(1e3 * l[i].y);
+      if (!std::isfinite(x1) || !std::isfinite(y1)) continue;
+      around(x1, y1, 5);
+      if (i == 0) continue;
+      const double x0 = f.px(1e3 * l[i - 1].x), y0 = f.py(1e3 * l[i - 1].y);
+      if (!std::isfinite(x0) || !std::isfinite(y0)) continue;
+      const int steps = static_cast<int>(std::ceil(std::hypot(x1 - x0, y1 - y0) / 4.0));
+      for (int k = 1; k < std::min(steps, 100000); ++k) {
+        const double t = static_cast<double>(k) / steps;
+        around(x0 + t * (x1 - x0), y0 + t * (y1 - y0), 3);
+      }
+    }
+  }
+  return out;
+}
+
+/// Places every gauge's label plate (see MapGauge): `marks` have their bars; sets their labels.
+void place_gauge_labels(Typesetter& ts, const Box& raster, const std::vector<Box>& lines,
+                        std::vector<GaugeMark>& marks) {
+  auto count = [](const Box& b, const std::vector<Box>& boxes) {
+    return static_cast<int>(
+        std::count_if(boxes.begin(), boxes.end(), [&](const Box& o) { return b.overlaps(o); }));
+  };
+  std::vector<Box> taken;  // every bar, and the plates placed so far
+  for (const auto& m : marks) taken.push_back(m.bar);
+  for (auto& m : marks) {
+    const Size text = ts.size(m.id, Face::small);
+    const int w = text.width + 2 * kPlatePad, h = text.height + 2 * kPlatePad;
+    const Box& b = m.bar;
+    const int cx = b.left + b.width / 2, cy = b.top + b.height / 2;
+    const std::array<Box, 4> sides{{{b.right() + kPlateGap, cy - h / 2, w, h},
+                                    {b.left - kPlateGap - w, cy - h / 2, w, h},
+                                    {cx - w / 2, b.top - kPlateGap - h, w, h},
+                                    {cx - w / 2, b.bottom() + kPlateGap, w, h}}};
+    auto into_raster = [&](Box p) {
+      p.left = std::max(raster.left, std::min(p.left, raster.right() - w));
+      p.top = std::max(raster.top, std::min(p.top, raster.bottom() - h));
+      return p;
+    };
+    // Cost: plates and bars covered weigh most, then notch or crack lines, then a moved plate.
+    int best_cost = std::numeric_limits<int>::max();
+    for (int moved = 0; moved < 2; ++moved) {
+      for (const Box& side : sides) {
+        if (moved == 0 && !raster.contains(side)) continue;
+        const Box p = moved ? into_raster(side) : side;
+        const int cost = 4 * count(p, taken) + 2 * (count(p, lines) > 0 ? 1 : 0) + moved;
+        if (cost < best_cost) {
+          best_cost = cost;
+          m.label = p;
+        }
+      }
+    }
+    taken.push_back(m.label);
+  }
+}
+
 }  // namespace
 
 DamageImageLayout write_damage_png(const std::filesystem::path& path, std::span<const double> x,
@@ -723,6 +838,15 @@ DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::spa
                       line(cr, b.left, yc, b.right() - 4, yc, 3, kCrackPath);
                       dot(cr, b.right() - 4.5, yc, 4.5, kCrackPath);
                     }});
+  if (!map.gauges.empty()) {
+    legend.push_back({"gauge", [](cairo_t* cr, const Box& b) {
+                        GaugeMark m;
+                        m.y0 = m.y1 = b.top + b.height / 2;
+                        m.x0 = b.left + 4;
+                        m.x1 = b.right() - 4;
+                        draw_gauge_bar(cr, m);
+                      }});
+  }
   int entries_width = 0;
   for (const auto& item : legend) {
     entries_width =
@@ -768,6 +892,24 @@ DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::spa
     if (!crack.empty())
       dot(cr, f.px(1e3 * crack.back().x), f.py(1e3 * crack.back().y), 4.5,
           kCrackPath);  // the tip now
+  }
+  // The gauges over the cracks: the bars, then their labels on white plates.
+  for (const auto& gauge : map.gauges)
+    out.gauges.push_back(gauge_mark(f, gauge, dx, g.node_pixels));
+  if (!out.gauges.empty()) {
+    std::vector<std::vector<MapPoint>> lines = map.notches;
+    lines.insert(lines.end(), map.crack_paths.begin(), map.crack_paths.end());
+    place_gauge_labels(ts, raster, line_boxes(f, lines), out.gauges);
+  }
+  for (const auto& m : out.gauges) draw_gauge_bar(cr, m);
+  for (const auto& m : out.gauges) {
+    fill_box(cr, m.label, {255, 255, 255});
+    cairo_rectangle(cr, m.label.left + 0.5, m.label.top + 0.5, m.label.width - 1,
+                    m.label.height - 1);
+    set_colour(cr, kGaugeColor);
+    cairo_set_line_width(cr, 1.0);
+    cairo_stroke(cr);
+    ts.draw(cr, m.label.left + kPlatePad, m.label.top + kPlatePad, m.id, Face::small, kBlack);
   }
   cairo_restore(cr);
   draw_axes(cr, ts, f, "x [mm]", "y [mm]", kMargin, false, out.text);

@@ -1,8 +1,8 @@
 // PNG pictures of a detail for people: the damage map (nodes rasterized on their grid, colormapped,
 // white where there is no material; the annotated one with a title, axes in mm, a colour bar, the
-// notches and the crack paths) and the a-N plot (crack length against cycles with the
-// remaining-life estimates), with axes, ticks, tick labels and legends. Drawn with cairo, the text
-// set by pango in fontconfig's "Sans" (DejaVu Sans on Debian), the picture laid out by the
+// notches, the crack paths and the strain gauges) and the a-N plot (crack length against cycles
+// with the remaining-life estimates), with axes, ticks, tick labels and legends. Drawn with cairo,
+// the text set by pango in fontconfig's "Sans" (DejaVu Sans on Debian), the picture laid out by the
 // measured size of its text; encoded by cairo's PNG writer and written atomically (temp file +
 // rename). Each writer returns where it put things (boxes in pixels) so that a test can check the
 // layout. Units: positions and dx in m, crack lengths in m (plotted in mm).
@@ -57,6 +57,19 @@ struct MapPoint {
   double x = 0.0, y = 0.0;
 };
 
+/// A strain gauge on the damage map (config::GaugeConfig): drawn as a bar along its direction,
+/// kGaugeColor with a black rim, at least kGaugeMinLengthDx·dx long (a point gauge shows), its id
+/// beside it on a white plate inside the map (first of right, left, above, below of the bar that
+/// covers no other gauge, label, notch or crack path; else the least covered, moved into the map).
+struct MapGauge {
+  std::string id;
+  MapPoint at;          ///< centre of its measuring grid (m)
+  double angle = 0.0;   ///< measuring direction from +x (rad)
+  double length = 0.0;  ///< m
+};
+inline constexpr Rgb kGaugeColor{0, 200, 0};  ///< not a colour of damage_color nor notch_color
+inline constexpr double kGaugeMinLengthDx = 3.0;
+
 /// What the annotated damage map shows besides the damage.
 struct DamageMap {
   std::string title;  ///< e.g. "b1-ct  N = 38373 cycles"
@@ -66,6 +79,7 @@ struct DamageMap {
   std::vector<double> notch_damage;
   std::vector<std::vector<MapPoint>> notches;      ///< notch polylines, drawn black
   std::vector<std::vector<MapPoint>> crack_paths;  ///< crack tip tracks, drawn magenta
+  std::vector<MapGauge> gauges;                    ///< strain gauges, drawn over the cracks
 };
 
 /// Grey of a notch-only node with damage φ: from light (φ = 0) to dark (φ = 1).
@@ -100,19 +114,29 @@ struct PictureText {
   std::vector<LegendEntry> legend;
 };
 
+/// Where a gauge went on the annotated map: its bar's end points (pixels of the picture, the
+/// coloured core without its rim), the box around the bar with its rim, and its label's plate.
+struct GaugeMark {
+  std::string id;
+  double x0 = 0.0, y0 = 0.0, x1 = 0.0, y1 = 0.0;
+  Box bar, label;
+};
+
 /// Where the annotated map put things: the node raster (as write_damage_png) at (left, top).
 struct DamageMapLayout {
   DamageImageLayout grid;  ///< its width and height are the raster's
   int left = 0, top = 0;   ///< the raster's top-left pixel in the picture
   int width = 0, height = 0;
-  PictureText text;  ///< legend: the notch swatch (with notch damage) and the crack path
-  Box colour_bar;    ///< φ = 1 on its top row, φ = 0 on its bottom row
+  /// legend: the notch swatch (with notch damage), the crack path, the gauge (with gauges)
+  PictureText text;
+  Box colour_bar;  ///< φ = 1 on its top row, φ = 0 on its bottom row
   Box colour_bar_title;
   std::vector<Box> colour_bar_labels;  ///< "0.00" at the bottom to "1.00" at the top
+  std::vector<GaugeMark> gauges;       ///< as DamageMap::gauges
 };
 
 /// The damage map with a title, axes in mm with ticks, a colour bar for φ (and a grey swatch for
-/// the notch) and the notches and crack paths drawn over it.
+/// the notch) and the notches, crack paths and gauges drawn over it.
 DamageMapLayout write_damage_map_png(const std::filesystem::path& path, std::span<const double> x,
                                      std::span<const double> y, std::span<const double> damage,
                                      double dx, const DamageMap& map,

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -127,6 +128,27 @@ SnapshotFields snapshot_fields(const twin::Twin& twin) {
   return out;
 }
 
+NamedRow gauge_row(const twin::Twin& twin) {
+  const auto& gauges = twin.model().gauges();
+  NamedRow row;
+  row.ints = {{"state_seq", twin.state_seq()}, {"total_cycles", twin.engine().total_cycles()}};
+  row.units = {{"total_cycles", "cycles"}};
+  const auto influences = twin.gauge_influences();
+  const twin::GaugeResiduals residuals = twin.gauge_residuals().for_gauges(gauges);
+  constexpr std::array<const char*, 3> kBases{"_per_constant", "_per_cos", "_per_sin"};
+  for (std::size_t k = 0; k < gauges.size(); ++k) {
+    const std::string& id = gauges[k].config.id;
+    for (std::size_t b = 0; b < kBases.size(); ++b) {
+      row.doubles.emplace_back(id + kBases[b], influences.at(k)[b]);
+      row.units.emplace_back(id + kBases[b], "1/N");
+    }
+    row.doubles.emplace_back(id + "_residual", residuals.residual[k]);
+    row.doubles.emplace_back(id + "_sigma", residuals.sigma[k]);
+    row.ints.emplace_back(id + "_in_a_row", residuals.in_a_row[k]);
+  }
+  return row;
+}
+
 namespace {
 std::unique_ptr<ResultsWriter> open_writer(const std::filesystem::path& h5,
                                            const twin::Twin& twin) {
@@ -162,12 +184,19 @@ DetailOutputs::DetailOutputs(const twin::Twin& twin) : id_(twin.detail_id()) {
     }
     keep_an_earlier_history(twin);
     writer_->rewind_to(twin.state_seq() - 1);
+    std::vector<GaugeInfo> gauges;
+    for (const auto& g : twin.model().gauges()) {
+      const config::GaugeConfig& c = g.config;
+      gauges.push_back({c.id, c.at.x, c.at.y, c.angle, c.length, c.noise});
+    }
+    writer_->describe_gauges(gauges);
     for (const auto& s : writer_->snapshots()) last_snapshot_seq_ = s.state_seq;
     for (const auto& row : writer_->read_rows()) history_.add(row);
     const TimeSeriesRow row = results_row(twin);
     writer_->append(row);
     history_.add(row);
     record_ensemble(twin);
+    record_gauges(twin, false);
     const auto every = config.output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
     spdlog::info("[{}] results: {} ({} rows)", id_, h5_path_.string(), writer_->rows());
@@ -274,7 +303,9 @@ void DetailOutputs::record_ensemble(const twin::Twin& twin) {
                 {"state_seq", twin.state_seq()},
                 {"cycle", o.cycle},
                 {"taken_at", r.taken_at},
-                {"kind", o.kind == messages::ObservationKind::no_crack ? 2 : 1},
+                {"kind", o.kind == messages::ObservationKind::no_crack           ? 2
+                         : o.kind == messages::ObservationKind::gauge_compliance ? 3
+                                                                                 : 1},
                 {"seq", o.seq},
                 {"resampled", r.update.resampled ? 1 : 0}};
     obs.doubles = {{"length_m", o.length_m},
@@ -293,6 +324,25 @@ void DetailOutputs::record_ensemble(const twin::Twin& twin) {
   }
 }
 
+void DetailOutputs::record_gauges(const twin::Twin& twin, bool same_state) {
+  const auto& gauges = twin.model().gauges();
+  if (gauges.empty()) return;
+  const twin::GaugeResiduals r = twin.gauge_residuals().for_gauges(gauges);
+  std::vector<double> residuals;
+  for (std::size_t k = 0; k < gauges.size(); ++k) {
+    residuals.push_back(r.residual[k]);
+    residuals.push_back(r.sigma[k]);
+    residuals.push_back(static_cast<double>(r.in_a_row[k]));
+  }
+  const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  if (same_state && std::equal(residuals.begin(), residuals.end(), last_gauge_residuals_.begin(),
+                               last_gauge_residuals_.end(), same)) {
+    return;
+  }
+  writer_->append_named("gauges", gauge_row(twin));
+  last_gauge_residuals_ = std::move(residuals);
+}
+
 void DetailOutputs::record(const twin::Twin& twin) {
   if (!writer_) return;
   try {
@@ -300,12 +350,14 @@ void DetailOutputs::record(const twin::Twin& twin) {
     // time series has it; the ensemble's row and the observations only.
     if (!history_.state_seq.empty() && history_.state_seq.back() == twin.state_seq()) {
       record_ensemble(twin);
+      record_gauges(twin, true);
       return;
     }
     const TimeSeriesRow row = results_row(twin);
     writer_->append(row);
     history_.add(row);
     record_ensemble(twin);
+    record_gauges(twin, false);
     const auto every = twin.model().config().output.field_every_batches;
     if (every > 0 && twin.state_seq() % every == 0) snapshot(twin);
   } catch (const std::exception& e) {
@@ -386,6 +438,10 @@ void DetailOutputs::pictures(const twin::Twin& twin) {
       map.notches.push_back(std::move(line));
     }
     for (const auto& [key, track] : history_.tip_tracks) map.crack_paths.push_back(track);
+    for (const auto& g : twin.model().gauges()) {
+      map.gauges.push_back(
+          {g.config.id, {g.config.at.x, g.config.at.y}, g.config.angle, g.config.length});
+    }
     write_damage_map_png(damage_png(), x, y, twin.engine().node_damage(), disc.dx, map);
 
     CrackGrowthPlot plot;

@@ -281,6 +281,50 @@ void Object::set_string_attribute(std::string_view name, std::string_view value)
   }
 }
 
+void Object::set_attribute_array(std::string_view name, std::span<const double> values) {
+  quiet();
+  const std::string n(name);
+  if (has_attribute(name) && H5Adelete(id(), n.c_str()) < 0) fail("replace attribute " + n + " of");
+  const hsize_t dims[1] = {static_cast<hsize_t>(values.size())};
+  Handle space(H5Screate_simple(1, dims, nullptr), Handle::Kind::dataspace);
+  Handle attr(H5Acreate2(id(), n.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+              Handle::Kind::attribute);
+  if (!attr.valid() ||
+      (!values.empty() && H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, values.data()) < 0)) {
+    fail("write attribute " + n + " of");
+  }
+}
+
+std::vector<double> Object::attribute_doubles(std::string_view name) const {
+  quiet();
+  const std::string n(name);
+  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
+  if (!attr.valid()) fail("open attribute " + n + " of");
+  Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
+  Handle space(H5Aget_space(attr.get()), Handle::Kind::dataspace);
+  const H5T_class_t cls = H5Tget_class(ftype.get());
+  const hssize_t count = H5Sget_simple_extent_npoints(space.get());
+  if ((cls != H5T_INTEGER && cls != H5T_FLOAT) || count < 0) {
+    throw Error(
+        "HDF5: attribute " + n + " of '" + path_ + "' in file '" + file_ + "' is not numeric",
+        file_, path_);
+  }
+  std::vector<double> out(static_cast<std::size_t>(count));
+  if (!out.empty() && H5Aread(attr.get(), H5T_NATIVE_DOUBLE, out.data()) < 0) {
+    fail("read attribute " + n + " of");
+  }
+  return out;
+}
+
+bool Object::attribute_is_string(std::string_view name) const {
+  quiet();
+  const std::string n(name);
+  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
+  if (!attr.valid()) fail("open attribute " + n + " of");
+  Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
+  return H5Tget_class(ftype.get()) == H5T_STRING;
+}
+
 void Object::read_attribute_raw(std::string_view name, ElementType type, void* out) const {
   quiet();
   const std::string n(name);

@@ -108,8 +108,14 @@ class Object {
       set_string_attribute(name, std::string_view(value));
     }
   }
+  /// A 1-D float64 attribute of values.size() elements (an empty span: a 1-D one of none).
+  void set_attribute_array(std::string_view name, std::span<const double> values);
   [[nodiscard]] std::int64_t attribute_int64(std::string_view name) const;
   [[nodiscard]] double attribute_double(std::string_view name) const;
+  /// Every element of a numeric attribute (scalar or array, integer or float) as double.
+  [[nodiscard]] std::vector<double> attribute_doubles(std::string_view name) const;
+  /// Whether the attribute is a string (else a number or an array of them).
+  [[nodiscard]] bool attribute_is_string(std::string_view name) const;
   /// A string attribute. With `max_bytes` a fixed-length string longer than that, and any
   /// variable-length one (HDF5 allocates it before we could look), is an Error, never allocated.
   [[nodiscard]] std::string attribute_string(std::string_view name,

@@ -248,8 +248,17 @@ std::string SnapshotInfo::group() const { return "/fields/" + step_name(index); 
 
 std::size_t NodeField::components() const { return components_of(kind); }
 
-/// The named-column tables (/ensemble, /observations).
-constexpr std::array<const char*, 2> kNamedTables{"ensemble", "observations"};
+/// The named-column tables (/ensemble, /observations, /gauges).
+constexpr std::array<const char*, 3> kNamedTables{"ensemble", "observations", "gauges"};
+
+/// The numeric attributes of /gauges, one element per id of its attribute "ids".
+constexpr std::array<std::pair<const char*, double GaugeInfo::*>, 5> kGaugeAttributes{{
+    {"x_m", &GaugeInfo::x_m},
+    {"y_m", &GaugeInfo::y_m},
+    {"angle_rad", &GaugeInfo::angle_rad},
+    {"length_m", &GaugeInfo::length_m},
+    {"noise", &GaugeInfo::noise},
+}};
 
 std::vector<std::string> split_lines(const std::string& text) {
   std::vector<std::string> out;
@@ -266,6 +275,24 @@ std::vector<std::string> split_lines(const std::string& text) {
 bool has_attribute(const h5::Object& o, const std::string& name) {
   const auto names = o.attribute_names();
   return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+/// The gauges a /gauges group describes (its attributes), in the order of "ids".
+std::vector<GaugeInfo> described_gauges(const h5::Group& g) {
+  std::vector<GaugeInfo> out;
+  if (!has_attribute(g, "ids")) return out;
+  for (auto& id : split_lines(g.attribute_string("ids"))) {
+    GaugeInfo info;
+    info.id = std::move(id);
+    out.push_back(std::move(info));
+  }
+  for (const auto& [name, member] : kGaugeAttributes) {
+    if (!has_attribute(g, name)) continue;
+    const auto values = g.attribute_doubles(name);
+    for (std::size_t k = 0; k < std::min(values.size(), out.size()); ++k)
+      out[k].*member = values[k];
+  }
+  return out;
 }
 
 /// Rows of a named-column table: its shortest column (a crash between the appends of one row
@@ -663,6 +690,37 @@ void ResultsWriter::append_named(
   impl_->file.flush();
 }
 
+void ResultsWriter::describe_gauges(const std::vector<GaugeInfo>& gauges) {
+  impl_->require_open("describe_gauges");
+  for (const auto& g : gauges) {
+    if (g.id.empty() || g.id.find('\n') != std::string::npos) {
+      throw ResultsError("describe_gauges: bad gauge id '" + g.id + "'");
+    }
+  }
+  h5::File& f = impl_->file;
+  if (gauges.empty()) return;  // nothing new to say (gauges described before stay)
+  h5::Group g = f.require_group("gauges");
+  std::vector<GaugeInfo> all = described_gauges(g);
+  for (const auto& gauge : gauges) {
+    const auto it =
+        std::find_if(all.begin(), all.end(), [&](const GaugeInfo& a) { return a.id == gauge.id; });
+    if (it == all.end()) {
+      all.push_back(gauge);
+    } else {
+      *it = gauge;
+    }
+  }
+  std::string ids;
+  for (std::size_t k = 0; k < all.size(); ++k) ids += (k ? "\n" : "") + all[k].id;
+  g.set_attribute("ids", ids);
+  for (const auto& [name, member] : kGaugeAttributes) {
+    std::vector<double> values;
+    for (const auto& a : all) values.push_back(a.*member);
+    g.set_attribute_array(name, values);
+  }
+  f.flush();
+}
+
 std::uint64_t ResultsWriter::named_rows(const std::string& group) const {
   impl_->require_open("named_rows");
   if (!impl_->file.exists(group)) return 0;
@@ -778,6 +836,10 @@ NamedTable read_named_table(const std::filesystem::path& h5_path, const std::str
     }
   }
   for (const auto& name : g.attribute_names()) {
+    if (!g.attribute_is_string(name)) {
+      t.numbers[name] = g.attribute_doubles(name);
+      continue;
+    }
     const std::string value = g.attribute_string(name);
     // "<x>s" listing the values of the index column "<x>_index".
     if (name.size() > 1 && name.back() == 's' &&
@@ -788,6 +850,13 @@ NamedTable read_named_table(const std::filesystem::path& h5_path, const std::str
     }
   }
   return t;
+}
+
+std::vector<GaugeInfo> read_gauges(const std::filesystem::path& h5_path) {
+  const h5::File file(h5_path, h5::File::Mode::read_only, {false});
+  check_format(file);
+  if (!file.exists("gauges")) return {};
+  return described_gauges(file.open_group("gauges"));
 }
 
 std::vector<SnapshotInfo> read_snapshot_list(const std::filesystem::path& h5_path) {

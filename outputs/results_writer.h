@@ -7,7 +7,7 @@
 // File layout (layout_version 3; a version-1 or -2 file is upgraded in place when opened for
 // writing: version-1 rows get crack_count = -1, unknown, and no crack rows; the mesh gets
 // /mesh/xyz and /mesh/vertices):
-//   /                     attributes: format = "peritwin-results", layout_version = 2, detail
+//   /                     attributes: format = "peritwin-results", layout_version = 3, detail
 //   /timeseries/<column>  extendible 1-D, one element per row; attribute "units". Columns:
 //                         state_seq, total_cycles, broken_bonds, crack_count,
 //                         remaining_state_seq (the state the remaining-life estimate was
@@ -47,7 +47,8 @@
 //   /observations/<column>  one element per observation the ensemble took in, in that order:
 //                         index (0, 1, ...), state_seq (the state recorded when it was taken in),
 //                         cycle (of the inspection), taken_at (the ensemble's cycle count then),
-//                         kind (observation_t.KIND_*: 1 crack length, 2 no crack found),
+//                         kind (observation_t.KIND_*: 1 crack length, 2 no crack found,
+//                         3 gauge compliance),
 //                         origin_index (into the group attribute "origins", the origin names
 //                         separated by newlines: "longest", a notch's name, ...), seq (the
 //                         observation's seq from its source), resampled (0/1) (int64); length_m,
@@ -56,9 +57,27 @@
 //                         before it took it in), log_evidence, ess_before_resampling (float64).
 //                         Group attribute "sources": the source ids, newline-separated, indexed
 //                         by the column source_index (int64).
-//                         Both tables: a column that appears later (another percentile) has NaN
-//                         (float64) or -1 (int64) in the rows before it; rewind_to drops their
-//                         rows after the state like the time series'.
+//   /gauges/<column>      (a detail with strain gauges, [[detail.gauge]]; issue 33,
+//                         docs/gauges.md) extendible 1-D, one element per recorded state, and one
+//                         more at the same state_seq after a gauge observation that changed a
+//                         residual; attribute "units". Columns: state_seq, total_cycles, and per
+//                         gauge <id>_in_a_row (gauge observations in a row beyond the alarm's
+//                         bound, twin/gauges.h) (int64); <id>_per_constant, <id>_per_cos,
+//                         <id>_per_sin (the influence coefficients of the state's bond state:
+//                         strain per N of P of the constant, cos α and sin α load cases, "1/N";
+//                         a gauge reads ε = P·(c0 + cos α·c1 + sin α·c2)), <id>_residual (the
+//                         compliance residual of the last gauge observation, (m − m^X)/|m^X|)
+//                         and <id>_sigma (its standard deviation) (NaN before an observation of
+//                         the gauge) (float64). Group attributes, one element per gauge in the
+//                         order of "ids" (the gauge ids, newline-separated): x_m, y_m (the
+//                         centre of its measuring grid), angle_rad (its direction from +x),
+//                         length_m (0: the nearest node), noise (one standard deviation of a
+//                         reading, strain) (float64[n]); written when the file is opened
+//                         (describe_gauges), a gauge of an earlier run kept with its columns.
+//                         No /gauges for a detail without gauges.
+//                         These three tables: a column that appears later (another percentile, a
+//                         gauge added) has NaN (float64) or -1 (int64) in the rows before it;
+//                         rewind_to drops their rows after the state like the time series'.
 //   <name>.xdmf           XDMF 3: a temporal collection (Time = total_cycles) of Polyvertex grids
 //                         (connectivity /mesh/vertices), Geometry XYZ from /mesh/xyz, node
 //                         attributes "damage" and every NodeField (Scalar, Vector, Tensor6)
@@ -133,7 +152,20 @@ struct NamedTable {
   std::map<std::string, std::vector<double>> doubles;
   std::map<std::string, std::vector<std::string>> strings;
   std::map<std::string, std::string> attributes;  ///< the group's other string attributes
+  /// The group's numeric attributes (e.g. /gauges' x_m), every element as double.
+  std::map<std::string, std::vector<double>> numbers;
   [[nodiscard]] std::size_t rows() const;
+};
+
+/// A strain gauge as the results file describes it (the attributes of /gauges;
+/// config::GaugeConfig).
+struct GaugeInfo {
+  std::string id;
+  double x_m = 0.0, y_m = 0.0;  ///< centre of its measuring grid
+  double angle_rad = 0.0;       ///< measuring direction from +x
+  double length_m = 0.0;        ///< 0: the node nearest (x, y)
+  double noise = 0.0;           ///< one standard deviation of a reading (strain)
+  bool operator==(const GaugeInfo&) const = default;
 };
 
 /// One more per-node array of a snapshot, beside the damage.
@@ -209,6 +241,11 @@ class ResultsWriter {
                     const std::vector<std::pair<std::string, std::string>>& attributes = {});
   /// Rows of /<group> (0 when it does not exist).
   [[nodiscard]] std::uint64_t named_rows(const std::string& group) const;
+  /// Describes the gauges in the attributes of /gauges (the table of named columns the gauges'
+  /// rows go to): a gauge already described keeps its place and takes the new values, a new one
+  /// is added after them, one described before and not in `gauges` stays (its columns hold the
+  /// rows of an earlier run). Does nothing for no gauges.
+  void describe_gauges(const std::vector<GaugeInfo>& gauges);
   /// Drops every row and snapshot with state_seq > `state_seq` (resume from a checkpoint).
   void rewind_to(std::int64_t state_seq);
 
@@ -243,6 +280,8 @@ std::vector<float> read_snapshot_damage(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot);
 /// A table of named columns (/ensemble, /observations); empty when the file has none.
 NamedTable read_named_table(const std::filesystem::path& h5_path, const std::string& group);
+/// The gauges /gauges describes (ResultsWriter::describe_gauges), in its order; empty without.
+std::vector<GaugeInfo> read_gauges(const std::filesystem::path& h5_path);
 /// A NodeField of a snapshot (`name` as written), node-major; empty when the snapshot has none.
 std::vector<double> read_snapshot_field(const std::filesystem::path& h5_path,
                                         const SnapshotInfo& snapshot, const std::string& name);

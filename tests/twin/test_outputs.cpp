@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 #include "outputs/checkpoint_io.h"
@@ -310,6 +311,91 @@ TEST_F(OutputsTest, ResultsFileContinuesDropsHalfRowsAndRewinds) {
   const std::string xdmf = slurp(dir_ / "d.xdmf");
   EXPECT_NE(xdmf.find("<Time Value=\"31\"/>"), std::string::npos);
   EXPECT_EQ(xdmf.find("<Time Value=\"30\"/>"), std::string::npos);
+}
+
+/// A float64 attribute of any shape, read with the C API.
+std::vector<double> raw_double_attribute(hid_t file, const char* object, const char* name) {
+  const hid_t a = H5Aopen_by_name(file, object, name, H5P_DEFAULT, H5P_DEFAULT);
+  EXPECT_GE(a, 0) << object << " @" << name;
+  const hid_t space = H5Aget_space(a);
+  std::vector<double> out(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+  EXPECT_GE(H5Aread(a, H5T_NATIVE_DOUBLE, out.data()), 0);
+  H5Sclose(space);
+  H5Aclose(a);
+  return out;
+}
+
+TEST_F(OutputsTest, GaugeTableIsDescribedOnceAndRewoundLikeTheTimeSeries) {
+  const fs::path h5 = dir_ / "g.h5";
+  const std::vector<outputs::GaugeInfo> first{
+      {"g1", 0.030, 0.0205, 0.0, 0.004, 2e-6},
+      {"tip-2", 0.035, 0.002, 1.5707963267948966, 0.0, 0.0}};
+  auto row = [](std::int64_t seq, const std::vector<std::string>& ids) {
+    outputs::NamedRow r;
+    r.ints = {{"state_seq", seq}, {"total_cycles", 1000 * seq}};
+    r.units = {{"total_cycles", "cycles"}};
+    for (std::size_t g = 0; g < ids.size(); ++g) {
+      const auto v = static_cast<double>(10 * seq) + static_cast<double>(g + 1);  // exact
+      r.doubles.emplace_back(ids[g] + "_per_constant", v);
+      r.doubles.emplace_back(ids[g] + "_residual", seq == 3 ? 0.01 : kNaN);
+      r.ints.emplace_back(ids[g] + "_in_a_row", seq == 3 ? 1 : 0);
+      r.units.emplace_back(ids[g] + "_per_constant", "1/N");
+    }
+    return r;
+  };
+  {
+    outputs::ResultsWriter w(h5, {.detail = "d"});
+    w.describe_gauges({});  // no gauges: no group
+    EXPECT_EQ(w.named_rows("gauges"), 0u);
+    w.describe_gauges(first);
+    EXPECT_EQ(w.named_rows("gauges"), 0u);  // described, no rows yet
+    for (std::int64_t seq = 0; seq <= 4; ++seq) w.append_named("gauges", row(seq, {"g1", "tip-2"}));
+    EXPECT_EQ(w.named_rows("gauges"), 5u);
+    w.rewind_to(2);  // a resume from the checkpoint of state 3: rows after state 2 go
+    EXPECT_EQ(w.named_rows("gauges"), 3u);
+    EXPECT_THROW(w.describe_gauges({{"a\nb", 0, 0, 0, 0, 0}}), outputs::ResultsError);
+  }
+  EXPECT_EQ(outputs::read_gauges(h5), first);
+  {
+    // The next run: tip-2 moved, g3 added, g1 gone from the config (its columns stay).
+    outputs::ResultsWriter w(h5, {.detail = "d"});
+    w.describe_gauges(
+        {{"tip-2", 0.036, 0.003, 1.0, 0.002, 1e-6}, {"g3", 0.01, 0.02, 0.5, 0.0, 0.0}});
+    w.append_named("gauges", row(3, {"tip-2", "g3"}));
+  }
+  const std::vector<outputs::GaugeInfo> all{
+      first[0], {"tip-2", 0.036, 0.003, 1.0, 0.002, 1e-6}, {"g3", 0.01, 0.02, 0.5, 0.0, 0.0}};
+  EXPECT_EQ(outputs::read_gauges(h5), all);
+  const auto t = outputs::read_named_table(h5, "gauges");
+  ASSERT_EQ(t.rows(), 4u);
+  EXPECT_EQ(t.ints.at("state_seq"), (std::vector<std::int64_t>{0, 1, 2, 3}));
+  EXPECT_EQ(t.ints.at("total_cycles"), (std::vector<std::int64_t>{0, 1000, 2000, 3000}));
+  EXPECT_EQ(t.doubles.at("g1_per_constant")[2], 21.0);
+  EXPECT_TRUE(std::isnan(t.doubles.at("g1_per_constant")[3]));  // not in the last run's row
+  EXPECT_EQ(t.doubles.at("tip-2_per_constant")[1], 12.0);
+  EXPECT_EQ(t.doubles.at("tip-2_per_constant")[3], 31.0);
+  EXPECT_EQ(t.doubles.at("g3_per_constant")[3], 32.0);
+  EXPECT_TRUE(std::isnan(t.doubles.at("g3_per_constant")[0]));  // before g3 existed
+  EXPECT_EQ(t.ints.at("g3_in_a_row"), (std::vector<std::int64_t>{-1, -1, -1, 1}));
+  EXPECT_EQ(t.doubles.at("tip-2_residual")[3], 0.01);
+  EXPECT_EQ(t.attributes.at("ids"), "g1\ntip-2\ng3");
+  EXPECT_EQ(t.numbers.at("x_m"), (std::vector<double>{0.030, 0.036, 0.01}));
+  EXPECT_EQ(t.numbers.at("noise"), (std::vector<double>{2e-6, 1e-6, 0.0}));
+  // The same with the plain C API: float64 array attributes, a string of ids, units per column.
+  const hid_t f = H5Fopen(h5.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  EXPECT_EQ(raw_double_attribute(f, "/gauges", "y_m"), (std::vector<double>{0.0205, 0.003, 0.02}));
+  EXPECT_EQ(raw_double_attribute(f, "/gauges", "angle_rad"), (std::vector<double>{0.0, 1.0, 0.5}));
+  EXPECT_EQ(raw_double_attribute(f, "/gauges", "length_m"),
+            (std::vector<double>{0.004, 0.002, 0.0}));
+  const auto ids = H5Aopen_by_name(f, "/gauges", "ids", H5P_DEFAULT, H5P_DEFAULT);
+  const hid_t ids_type = H5Aget_type(ids);
+  EXPECT_EQ(H5Tget_class(ids_type), H5T_STRING);
+  H5Tclose(ids_type);
+  H5Aclose(ids);
+  EXPECT_EQ(raw_type(f, "/gauges/g3_per_constant"), std::make_pair(H5T_FLOAT, std::size_t{8}));
+  EXPECT_EQ(raw_read<double>(f, "/gauges/g1_per_constant", H5T_NATIVE_DOUBLE).size(), 4u);
+  H5Fclose(f);
 }
 
 TEST_F(OutputsTest, LayoutVersionOneFileIsUpgradedInPlace) {
@@ -972,6 +1058,140 @@ TEST_F(OutputsTest, DamageMapTellsTheNotchFromTheCrack) {
   EXPECT_EQ(plain.text.legend[0].label, "crack");
   map.notch_damage = {0.1};  // not one per node
   EXPECT_THROW(outputs::write_damage_map_png(p, x, y, d, dx, map), outputs::PngError);
+}
+
+TEST_F(OutputsTest, DamageMapDrawsTheGaugesWithTheirIds) {
+  // 20 x 10 nodes (dx = 1 mm, 40 pixels a node), a red node under the horizontal gauge "h1", a
+  // crack path right of it (where its label would go first), a point gauge "v0" along y (drawn
+  // 3 dx long) and a gauge at 45 degrees.
+  const double dx = 1e-3;
+  std::vector<double> x, y, d;
+  for (int j = 0; j < 10; ++j) {
+    for (int i = 0; i < 20; ++i) {
+      x.push_back((i + 0.5) * dx);
+      y.push_back((j + 0.5) * dx);
+      d.push_back(i == 10 && j == 7 ? 1.0 : 0.1 * (i % 5));
+    }
+  }
+  outputs::DamageMap map;
+  map.title = "ct-1   N = 12000 cycles";
+  map.notch_damage.assign(d.size(), 0.0);
+  map.crack_paths = {{{13.0e-3, 7.5e-3}, {19.5e-3, 7.5e-3}}};
+  const fs::path plain_png = dir_ / "plain.png";
+  const auto plain = outputs::write_damage_map_png(plain_png, x, y, d, dx, map);
+  map.gauges = {{"h1", {10.5e-3, 7.5e-3}, 0.0, 4e-3},
+                {"v0", {3.5e-3, 2.5e-3}, 0.5 * std::numbers::pi, 0.0},
+                {"d45", {15.5e-3, 4.5e-3}, 0.25 * std::numbers::pi, 2e-3}};
+  const fs::path p = dir_ / "gauges.png";
+  const outputs::DamageMapLayout layout = outputs::write_damage_map_png(p, x, y, d, dx, map);
+  const Picture pic(p), before(plain_png);
+  ASSERT_EQ(layout.grid.node_pixels, 40);
+  const outputs::Box raster{layout.left, layout.top, layout.grid.width, layout.grid.height};
+  // The pixel of a model point (m): node (x, y)'s square starts at column (x - x_min)/dx·40, row
+  // (y_max - y)/dx·40 (DamageImageLayout), its centre 20 pixels further.
+  auto px = [&](double xm) { return layout.left + (xm - 0.5e-3) / dx * 40 + 20; };
+  auto py = [&](double ym) { return layout.top + (9.5e-3 - ym) / dx * 40 + 20; };
+  const outputs::Rgb green = outputs::kGaugeColor, black{0, 0, 0};
+
+  // Nothing else moved: the text, the raster and the colour bar where they were without gauges;
+  // the legend gains the gauge after the crack.
+  EXPECT_EQ(layout.left, plain.left);
+  EXPECT_EQ(layout.top, plain.top);
+  EXPECT_GE(layout.width, plain.width);  // the legend's column may widen for "gauge"
+  auto same_box = [](const outputs::Box& a, const outputs::Box& b) {
+    return a.left == b.left && a.top == b.top && a.width == b.width && a.height == b.height;
+  };
+  const auto now = text_boxes(layout.text), was = text_boxes(plain.text);
+  ASSERT_EQ(now.size(), was.size() + 1);
+  for (std::size_t i = 0; i < was.size(); ++i) {
+    EXPECT_EQ(now[i].first, was[i].first);
+    EXPECT_TRUE(same_box(now[i].second, was[i].second)) << was[i].first;
+  }
+  EXPECT_TRUE(same_box(layout.colour_bar, plain.colour_bar));
+  EXPECT_TRUE(same_box(layout.colour_bar_title, plain.colour_bar_title));
+  ASSERT_EQ(layout.text.legend.size(), 2u);
+  EXPECT_EQ(layout.text.legend[1].label, "gauge");
+  EXPECT_GT(pic.count(layout.text.legend[1].sample, green), 60u);
+  expect_text_drawn(pic, layout.text);
+
+  ASSERT_EQ(layout.gauges.size(), 3u);
+  // h1: 4 mm along x = 160 pixels, centred on its node; the core is 5 pixels across with a black
+  // rim: its middle three rows are wholly green from end to end (less a pixel at each end).
+  const double hx = px(10.5e-3), hy = py(7.5e-3);
+  EXPECT_EQ(layout.gauges[0].id, "h1");
+  EXPECT_NEAR(layout.gauges[0].x0, hx - 80, 1e-9);
+  EXPECT_NEAR(layout.gauges[0].x1, hx + 80, 1e-9);
+  EXPECT_NEAR(layout.gauges[0].y0, hy, 1e-9);
+  const outputs::Box core{static_cast<int>(hx) - 79, static_cast<int>(hy) - 1, 158, 3};
+  EXPECT_EQ(pic.count(core, green), 158u * 3u);
+  EXPECT_EQ(pic.at(static_cast<int>(hx), static_cast<int>(hy) - 3), black);  // the rim
+  EXPECT_EQ(pic.at(static_cast<int>(hx), static_cast<int>(hy) + 3), black);
+  EXPECT_EQ(pic.at(static_cast<int>(hx), static_cast<int>(hy) - 8),
+            before.at(static_cast<int>(hx), static_cast<int>(hy) - 8));       // the map beyond it
+  EXPECT_NE(pic.at(static_cast<int>(hx) + 85, static_cast<int>(hy)), green);  // its end
+  // v0: a point gauge drawn 3 dx = 120 pixels along y.
+  const double vx = px(3.5e-3), vy = py(2.5e-3);
+  EXPECT_EQ(pic.count({static_cast<int>(vx) - 1, static_cast<int>(vy) - 58, 3, 116}, green),
+            3u * 116u);
+  EXPECT_NE(pic.at(static_cast<int>(vx), static_cast<int>(vy) - 64), green);
+  EXPECT_NE(pic.at(static_cast<int>(vx), static_cast<int>(vy) + 64), green);
+  // d45: 3 dx at 45 degrees (up and right): green along the line through its centre.
+  const double cx = px(15.5e-3), cy = py(4.5e-3);
+  for (int t = -55; t <= 55; t += 5) {
+    const double u = t / std::numbers::sqrt2;
+    EXPECT_EQ(pic.at(static_cast<int>(std::floor(cx + u)), static_cast<int>(std::floor(cy - u))),
+              green)
+        << t;
+  }
+  // Green pixels only on the bars and the label plates' rims; elsewhere the raster is the map
+  // without gauges.
+  std::size_t changed_outside = 0, green_outside = 0;
+  for (int r = raster.top; r < raster.bottom(); ++r) {
+    for (int c = raster.left; c < raster.right(); ++c) {
+      bool marked = false;
+      for (const auto& m : layout.gauges) {
+        marked = marked || m.bar.overlaps({c, r, 1, 1}) || m.label.overlaps({c, r, 1, 1});
+      }
+      if (marked) continue;
+      changed_outside += !(pic.at(c, r) == before.at(c, r));
+      green_outside += pic.at(c, r) == green;
+    }
+  }
+  EXPECT_EQ(changed_outside, 0u);
+  EXPECT_EQ(green_outside, 0u);
+  // The labels: inside the map (so clear of the title, axes, colour bar and legend), on no bar
+  // and no other label, beside their own bar, the id drawn in dark pixels on white.
+  for (std::size_t i = 0; i < layout.gauges.size(); ++i) {
+    const auto& m = layout.gauges[i];
+    EXPECT_TRUE(raster.contains(m.label)) << m.id;
+    for (std::size_t j = 0; j < layout.gauges.size(); ++j) {
+      EXPECT_FALSE(m.label.overlaps(layout.gauges[j].bar)) << m.id << " on " << layout.gauges[j].id;
+      if (j != i) {
+        EXPECT_FALSE(m.label.overlaps(layout.gauges[j].label)) << m.id;
+      }
+    }
+    const outputs::Box near{m.bar.left - 4, m.bar.top - 4, m.bar.width + 8, m.bar.height + 8};
+    EXPECT_TRUE(near.overlaps(m.label)) << m.id << " is not beside its bar";
+    EXPECT_GT(pic.dark(m.label), 8u * m.id.size()) << m.id;
+    EXPECT_GT(pic.count(m.label, outputs::Rgb{255, 255, 255}), 40u) << m.id;
+    EXPECT_GE(m.label.height, 12) << m.id;
+    EXPECT_LT(m.label.height - 4, layout.text.x_tick_labels.at(0).height) << m.id << ": small";
+  }
+  // h1's label is not on the crack path right of it: it went left of the bar.
+  EXPECT_LE(layout.gauges[0].label.right(), layout.gauges[0].bar.left);
+  // The crack path is still drawn where no label covers it.
+  const outputs::Rgb magenta{200, 0, 200};
+  EXPECT_GT(pic.count(raster, magenta), 300u);
+
+  // The gauges' colour is none of the map's: at least 200 (sum of |ΔR|, |ΔG|, |ΔB|) from every
+  // damage colour and every notch grey.
+  auto distance = [](outputs::Rgb a, outputs::Rgb b) {
+    return std::abs(a.r - b.r) + std::abs(a.g - b.g) + std::abs(a.b - b.b);
+  };
+  for (int k = 0; k <= 1000; ++k) {
+    EXPECT_GE(distance(outputs::damage_color(k / 1000.0), green), 200) << k;
+    EXPECT_GE(distance(outputs::notch_color(k / 1000.0), green), 200) << k;
+  }
 }
 
 TEST_F(OutputsTest, CrackGrowthPlotShowsTheEstimates) {

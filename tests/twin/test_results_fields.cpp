@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -401,6 +402,283 @@ TEST_F(ResultsFieldsTest, ResultsDirectoryIsWhatParaViewAndPeopleRead) {
   EXPECT_EQ(rows[2].remaining_state_seq, 2);  // estimated at states 0 and 2 (every_batches = 2)
   EXPECT_EQ(rows[1].remaining_state_seq, 0);
   EXPECT_EQ(rows[0].remaining_state_seq, 0);
+}
+
+/// A gauge observation of B1's gauges: each gauge's compliance the model's at α = 0 times
+/// (1 + excess[g]), σ = 0.1 % of it (as tests/twin/test_gauges.cpp makes them).
+messages::Observation gauge_observation(const Twin& twin, std::int64_t seq,
+                                        const std::vector<double>& excess) {
+  messages::Observation o;
+  o.kind = messages::ObservationKind::gauge_compliance;
+  o.detail_id = "b1-ct";
+  o.source_id = "gauges";
+  o.seq = seq;
+  o.cycle = twin.engine().total_cycles();
+  const auto c = twin.gauge_influences();
+  for (std::size_t g = 0; g < c.size(); ++g) {
+    const double v = c[g][0];  // P = 1 N at α = 0
+    o.gauges.push_back(
+        {twin.model().gauges()[g].config.id, v * (1 + excess[g]), 1e-3 * std::abs(v), v});
+  }
+  return o;
+}
+
+/// RGB pixels of a PNG, read with libpng's simplified API.
+std::vector<std::uint8_t> png_rgb(const fs::path& p, int& width, int& height) {
+  png_image img{};
+  img.version = PNG_IMAGE_VERSION;
+  EXPECT_NE(png_image_begin_read_from_file(&img, p.c_str()), 0) << p;
+  img.format = PNG_FORMAT_RGB;
+  std::vector<std::uint8_t> px(PNG_IMAGE_SIZE(img));
+  EXPECT_NE(png_image_finish_read(&img, nullptr, px.data(), 0, nullptr), 0) << img.message;
+  width = static_cast<int>(img.width);
+  height = static_cast<int>(img.height);
+  return px;
+}
+
+/// A connected set of pixels: its extent and centroid.
+struct Cluster {
+  int left = 1 << 30, top = 1 << 30, right = -1, bottom = -1;  // inclusive
+  double cx = 0.0, cy = 0.0;
+  std::size_t n = 0;
+};
+
+/// The clusters (4-connected) of the pixels of the gauges' bars: the gauge colour with the gauge
+/// colour next to it on all four sides (inside a bar's 5-pixel core, not on the 1-pixel rims of
+/// the label plates).
+std::vector<Cluster> gauge_bar_clusters(const fs::path& png) {
+  int w = 0, h = 0;
+  const auto rgb = png_rgb(png, w, h);
+  auto green = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return false;
+    const std::size_t i = 3 * (static_cast<std::size_t>(y) * w + x);
+    return outputs::Rgb{rgb[i], rgb[i + 1], rgb[i + 2]} == outputs::kGaugeColor;
+  };
+  std::vector<std::uint8_t> core(static_cast<std::size_t>(w) * h, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      core[static_cast<std::size_t>(y) * w + x] =
+          green(x, y) && green(x - 1, y) && green(x + 1, y) && green(x, y - 1) && green(x, y + 1);
+    }
+  }
+  std::vector<Cluster> out;
+  std::vector<std::pair<int, int>> stack;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      if (!core[static_cast<std::size_t>(y) * w + x]) continue;
+      Cluster c;
+      stack.assign(1, {x, y});
+      core[static_cast<std::size_t>(y) * w + x] = 0;
+      while (!stack.empty()) {
+        const auto [px, py] = stack.back();
+        stack.pop_back();
+        c.left = std::min(c.left, px);
+        c.right = std::max(c.right, px);
+        c.top = std::min(c.top, py);
+        c.bottom = std::max(c.bottom, py);
+        c.cx += px;
+        c.cy += py;
+        ++c.n;
+        for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+          const int nx = px + dx, ny = py + dy;
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          auto& k = core[static_cast<std::size_t>(ny) * w + nx];
+          if (k) {
+            k = 0;
+            stack.emplace_back(nx, ny);
+          }
+        }
+      }
+      c.cx /= static_cast<double>(c.n);
+      c.cy /= static_cast<double>(c.n);
+      out.push_back(c);
+    }
+  }
+  return out;
+}
+
+// Issue 33 items 1-2: a short in-process run of the B1 example (three gauges: tip, arm, back)
+// writes /gauges with the coefficients Twin::gauge_influences() gives at each recorded state and
+// the residuals of a gauge observation; a resume from a checkpoint drops the rows after it; the
+// damage map draws each gauge at its place.
+TEST_F(ResultsFieldsTest, TheResultsFileHasEveryGaugesCoefficientsPerState) {
+  config::DetailConfig config = b1_config();
+  config.output.directory = dir_.string();
+  config.output.field_every_batches = 0;
+  config.output.png = true;
+  const auto model = b1_model(config);
+  ASSERT_EQ(model->gauges().size(), 3u);
+  auto twin = make_twin(model);
+  std::vector<std::vector<std::array<double, 3>>> influences{twin->gauge_influences()};
+  std::vector<std::int64_t> broken{twin->broken_bonds()};
+  std::optional<CheckpointData> at_2;
+  {
+    outputs::DetailOutputs out(*twin);
+    for (std::int64_t seq = 1; seq <= 3; ++seq) {
+      // 3 x 12 000 cycles at 4 kN: B1 (demo grid) ends its life at 38 873.
+      const auto outcome = twin->apply(batch(seq, {{4000.0, 0.1, 0.0, 12000}}));
+      ASSERT_TRUE(outcome.applied()) << outcome.what << ": " << outcome.why;
+      out.record(*twin);
+      influences.push_back(twin->gauge_influences());
+      broken.push_back(twin->broken_bonds());
+      if (seq == 2) at_2 = twin->to_checkpoint();
+    }
+    // A gauge observation at state 3 (the tip gauge 5 % more compliant than the model): one more
+    // row at state 3 with its residuals; recording again without a change adds none.
+    ASSERT_TRUE(twin->observe(gauge_observation(*twin, 1, {0.05, 0.0, 0.0})).applied());
+    out.record(*twin);
+    out.record(*twin);
+    out.finish(*twin);
+  }
+  // The run broke bonds: the coefficients of the last state are not those of the first.
+  ASSERT_GT(broken.back(), broken.front());
+  EXPECT_NE(influences.back()[0][0], influences.front()[0][0]);
+
+  const fs::path h5 = dir_ / "b1-ct.h5";
+  const auto& gauges = model->gauges();
+  std::vector<outputs::GaugeInfo> described;
+  for (const auto& g : gauges) {
+    described.push_back({g.config.id, g.config.at.x, g.config.at.y, g.config.angle, g.config.length,
+                         g.config.noise});
+  }
+  EXPECT_EQ(outputs::read_gauges(h5), described);
+  EXPECT_EQ(described[0].id, "tip");
+  EXPECT_EQ(described[1].id, "arm");
+  EXPECT_EQ(described[2].id, "back");
+  EXPECT_EQ(described[2].x_m, 0.0605);
+  EXPECT_EQ(described[0].noise, 2e-6);
+  const auto table = outputs::read_named_table(h5, "gauges");
+  ASSERT_EQ(table.rows(), 5u);  // states 0-3 and the observation at state 3
+  EXPECT_EQ(table.ints.at("state_seq"), (std::vector<std::int64_t>{0, 1, 2, 3, 3}));
+  EXPECT_EQ(table.ints.at("total_cycles"),
+            (std::vector<std::int64_t>{0, 12000, 24000, 36000, 36000}));
+  EXPECT_EQ(table.attributes.at("ids"), "tip\narm\nback");
+  const char* bases[] = {"_per_constant", "_per_cos", "_per_sin"};
+  const auto& residuals = twin->gauge_residuals();
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    const auto state = static_cast<std::size_t>(table.ints.at("state_seq")[r]);
+    for (std::size_t g = 0; g < gauges.size(); ++g) {
+      const std::string& id = gauges[g].config.id;
+      for (std::size_t b = 0; b < 3; ++b) {
+        EXPECT_EQ(table.doubles.at(id + bases[b])[r], influences[state][g][b])
+            << id << bases[b] << " row " << r;
+      }
+      if (r < 4) {  // before the observation
+        EXPECT_TRUE(std::isnan(table.doubles.at(id + "_residual")[r])) << id << " row " << r;
+        EXPECT_TRUE(std::isnan(table.doubles.at(id + "_sigma")[r])) << id << " row " << r;
+        EXPECT_EQ(table.ints.at(id + "_in_a_row")[r], 0);
+      } else {
+        EXPECT_EQ(table.doubles.at(id + "_residual")[r], residuals.residual[g]) << id;
+        EXPECT_EQ(table.doubles.at(id + "_sigma")[r], residuals.sigma[g]) << id;
+        EXPECT_EQ(table.ints.at(id + "_in_a_row")[r], residuals.in_a_row[g]) << id;
+      }
+    }
+  }
+  // The model's own coefficients in the stream: P̂ = P, so the residuals are the excess, σ 0.1 %.
+  EXPECT_NEAR(table.doubles.at("tip_residual")[4], 0.05, 1e-12);
+  EXPECT_NEAR(table.doubles.at("arm_residual")[4], 0.0, 1e-12);
+  EXPECT_NEAR(table.doubles.at("tip_sigma")[4], 1e-3, 1e-12);
+  EXPECT_EQ(table.ints.at("tip_in_a_row")[4], 1);  // 50 σ: beyond the alarm's bound
+  EXPECT_EQ(table.ints.at("arm_in_a_row")[4], 0);
+  // B1 has the constant load basis only: per N of P, the cos and sin parts are 0.
+  EXPECT_EQ(table.doubles.at("arm_per_cos")[2], 0.0);
+  EXPECT_NE(table.doubles.at("arm_per_constant")[2], 0.0);
+
+  // A resume from the checkpoint of state 2: the rows after state 1 go and state 2 is recorded
+  // again (with its coefficients, which the restored twin has).
+  {
+    auto resumed = make_twin(model);
+    ASSERT_TRUE(resumed->restore(*at_2).ok());
+    EXPECT_EQ(resumed->gauge_influences(), influences[2]);
+    outputs::DetailOutputs out(*resumed);
+    out.finish(*resumed);
+  }
+  const auto again = outputs::read_named_table(h5, "gauges");
+  ASSERT_EQ(again.rows(), 3u);
+  EXPECT_EQ(again.ints.at("state_seq"), (std::vector<std::int64_t>{0, 1, 2}));
+  for (std::size_t g = 0; g < gauges.size(); ++g) {
+    EXPECT_EQ(again.doubles.at(gauges[g].config.id + "_per_constant")[2], influences[2][g][0]);
+  }
+  EXPECT_EQ(outputs::read_time_series(h5).size(), 3u);
+
+  // The damage map: each gauge's bar where it is. The bars' cores found in the picture (the
+  // rightmost one is the legend's sample, right of the map) lie relative to each other as the
+  // gauges do in the model at the map's scale (node_pixels = 800 / the grid's longer side in
+  // nodes), each as long as its gauge (at least 3 dx).
+  const mesh::Discretization& disc = model->disc();
+  double x_min = 1e300, x_max = -1e300, y_min = 1e300, y_max = -1e300;
+  for (const auto& p : disc.position) {
+    x_min = std::min(x_min, p.x);
+    x_max = std::max(x_max, p.x);
+    y_min = std::min(y_min, p.y);
+    y_max = std::max(y_max, p.y);
+  }
+  const auto cols = static_cast<int>(std::lround((x_max - x_min) / disc.dx)) + 1;
+  const auto rows = static_cast<int>(std::lround((y_max - y_min) / disc.dx)) + 1;
+  const double scale = std::max(2, 800 / std::max(cols, rows)) / disc.dx;  // pixels per m
+  auto clusters = gauge_bar_clusters(dir_ / "b1-ct-damage.png");
+  ASSERT_EQ(clusters.size(), 4u);
+  std::sort(clusters.begin(), clusters.end(),
+            [](const Cluster& a, const Cluster& b) { return a.cx < b.cx; });
+  clusters.pop_back();  // the legend's sample
+  std::array<std::size_t, 3> order{0, 1, 2}, best{};
+  double best_error = 1e300;
+  do {  // which bar is which gauge: the assignment that fits the relative positions best
+    double error = 0.0;
+    for (std::size_t g = 1; g < 3; ++g) {
+      const double want_x = (gauges[g].config.at.x - gauges[0].config.at.x) * scale;
+      const double want_y = -(gauges[g].config.at.y - gauges[0].config.at.y) * scale;
+      const Cluster &a = clusters[order[g]], &o = clusters[order[0]];
+      error = std::max({error, std::abs(a.cx - o.cx - want_x), std::abs(a.cy - o.cy - want_y)});
+    }
+    if (error < best_error) {
+      best_error = error;
+      best = order;
+    }
+  } while (std::next_permutation(order.begin(), order.end()));
+  EXPECT_LE(best_error, 1.0) << "pixels off the gauges' relative positions";
+  for (std::size_t g = 0; g < 3; ++g) {
+    const Cluster& c = clusters[best[g]];
+    const double length = std::max(gauges[g].config.length, 3 * disc.dx) * scale;
+    const bool along_y = std::abs(std::sin(gauges[g].config.angle)) > 0.5;
+    const int extent = along_y ? c.bottom - c.top + 1 : c.right - c.left + 1;
+    const int across = along_y ? c.right - c.left + 1 : c.bottom - c.top + 1;
+    EXPECT_NEAR(extent, length - 2, 1.5) << gauges[g].config.id;  // the core less a pixel an end
+    EXPECT_EQ(across, 3) << gauges[g].config.id;                  // 5 pixels less one each side
+  }
+}
+
+// With the learning ensemble a gauge observation is also one of /observations: of kind 3
+// (observation_t.KIND_GAUGE_COMPLIANCE), not a crack length.
+TEST_F(ResultsFieldsTest, AGaugeObservationIsKindThreeInTheObservations) {
+  std::string text = testing::b1_text("every_batches = 0", {{"dx = 0.001 ", "dx = 0.002 "}});
+  text +=
+      "\n[detail.uncertainty]\nparticles = 4\nseed = 11\na2 = { median = 1301.0, cov = 0.3 }\n"
+      "horizon_cycles = 5000\n";
+  auto parsed = config::parse_config(text, "b1-learning.toml");
+  ASSERT_TRUE(parsed.ok()) << parsed.error_text();
+  config::DetailConfig config = parsed.config->details.at(0);
+  config.output.directory = dir_.string();
+  config.output.png = false;
+  const auto model = b1_model(config);
+  auto twin = make_twin(model);
+  ASSERT_TRUE(twin && twin->ensemble());
+  {
+    outputs::DetailOutputs out(*twin);
+    ASSERT_TRUE(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 1000}})).applied());
+    out.record(*twin);
+    ASSERT_TRUE(twin->observe(gauge_observation(*twin, 1, {0.0, 0.0, 0.0})).applied());
+    out.record(*twin);
+    out.finish(*twin);
+  }
+  const auto obs = outputs::read_named_table(dir_ / "b1-ct.h5", "observations");
+  ASSERT_EQ(obs.rows(), 1u);
+  EXPECT_EQ(obs.ints.at("kind")[0], 3);
+  EXPECT_EQ(obs.ints.at("state_seq")[0], 1);
+  EXPECT_TRUE(std::isnan(obs.doubles.at("length_m")[0]));
+  const auto gauges = outputs::read_named_table(dir_ / "b1-ct.h5", "gauges");
+  ASSERT_EQ(gauges.rows(), 3u);  // states 0 and 1, and the observation's residuals at state 1
+  EXPECT_NEAR(gauges.doubles.at("back_residual")[2], 0.0, 1e-12);
 }
 
 }  // namespace
