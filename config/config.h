@@ -119,7 +119,8 @@
 //                        over the nodes within dx/2 of the segment of this length centred at `at`;
 //                        0 = the node nearest `at`), noise 0 (strain, >= 0: the gauge's standard
 //                        deviation; weights of the load identification, the compliance residual's
-//                        alarm and the likelihood of gauge observations)
+//                        alarm and the likelihood of gauge observations), identify true (false:
+//                        peritwin-stream does not identify the loads from it, compares it only)
 //   [detail.sensor]      for peritwin-stream (raw samples -> cycles; the daemon ignores it):
 //                        scale 1 (finite, != 0) and offset 0 (N, finite): the load is
 //                        P = scale * measured + offset (strain or volts to newtons), gate 0 (N,
@@ -317,6 +318,9 @@ struct GaugeConfig {
   double angle = 0.0;   ///< measuring direction from +x (rad)
   double length = 0.0;  ///< gauge length (m); 0 = the node nearest `at`
   double noise = 0.0;   ///< standard deviation of a reading (strain)
+  /// peritwin-stream --format gauges identifies the loads from it (default); false: its
+  /// compliance is compared only (a gauge near the crack, docs/gauges.md).
+  bool identify = true;
   SourceRef where;
 };
 

@@ -609,6 +609,7 @@ void read_gauge(Context& ctx, const toml::table& t, const std::string& path,
   c.angle = opt(r, "angle", c.angle, core::Bound::any);
   c.length = opt(r, "length", c.length, core::Bound::non_negative);
   c.noise = opt(r, "noise", c.noise, core::Bound::non_negative);
+  c.identify = r.boolean("identify", c.identify);
   c.where = ctx.ref(t, path);
   r.finish();
   gauges.push_back(std::move(c));

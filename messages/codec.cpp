@@ -261,13 +261,14 @@ std::string observation_layout(const unsigned char* p, std::size_t size, std::si
       !w.skip(4 * 8)) {
     return "malformed or truncated: a string length or the payload's end";
   }
-  // The gauges (version 10): ids, then compliance, sigma and model per gauge, then the angle.
+  // The gauges (version 10): ids, then compliance, sigma and model per gauge, whether it
+  // identifies, then the angle.
   std::int32_t gauges = 0;
-  if (!w.count(2 + 3 * 8, gauges)) return "malformed or truncated num_gauges";
+  if (!w.count(2 + 3 * 8 + 1, gauges)) return "malformed or truncated num_gauges";
   for (std::int32_t i = 0; i < gauges; ++i) {
     if (!w.string()) return "malformed or truncated gauge_ids";
   }
-  if (!w.skip(3 * 8 * static_cast<std::size_t>(gauges)) || !w.skip(8)) {
+  if (!w.skip((3 * 8 + 1) * static_cast<std::size_t>(gauges)) || !w.skip(8)) {
     return "truncated payload: ends inside the gauges' values";
   }
   return signed_tail(w, signed_size);
@@ -450,7 +451,8 @@ DecodedObservation decode_observation(const void* data, std::size_t size) {
   o.pod_a50_m = m.pod_a50_m;
   o.pod_slope = m.pod_slope;
   for (std::size_t g = 0; g < m.gauge_ids.size(); ++g) {
-    o.gauges.push_back({m.gauge_ids[g], m.gauge_compliance[g], m.gauge_sigma[g], m.gauge_model[g]});
+    o.gauges.push_back({m.gauge_ids[g], m.gauge_compliance[g], m.gauge_sigma[g], m.gauge_model[g],
+                        m.gauge_identifies[g] != 0});
   }
   o.gauge_angle_rad = m.gauge_angle_rad;
   out.source_id = o.source_id;
@@ -484,6 +486,7 @@ peritwin_msgs::observation_t observation_message(const Observation& o, std::int6
     m.gauge_compliance.push_back(g.compliance);
     m.gauge_sigma.push_back(g.sigma);
     m.gauge_model.push_back(g.model);
+    m.gauge_identifies.push_back(g.identifies ? 1 : 0);
   }
   m.num_gauges = static_cast<std::int32_t>(m.gauge_ids.size());
   m.gauge_angle_rad = o.gauge_angle_rad;

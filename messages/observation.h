@@ -4,6 +4,7 @@
 // observation_t (signed like a batch; messages/codec.h decode_observation).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -33,6 +34,7 @@ struct GaugeCompliance {
   double compliance = 0.0;
   double sigma = 0.0;
   double model = 0.0;
+  bool identifies = true;  ///< one of the gauges the loads were identified from
 };
 
 struct Observation {
@@ -85,6 +87,10 @@ inline core::Status check_observation(const Observation& o) {
         return core::Error{at + ".sigma", "must be a finite standard deviation > 0"};
       }
       if (!std::isfinite(c.model)) return core::Error{at + ".model", "must be finite"};
+    }
+    if (std::none_of(o.gauges.begin(), o.gauges.end(),
+                     [](const GaugeCompliance& g) { return g.identifies; })) {
+      return core::Error{"gauges", "no gauge identified the loads (gauge_identifies all 0)"};
     }
     return {};
   }

@@ -18,30 +18,59 @@ std::vector<GaugeInfluence> influences_of(const peritwin_msgs::damage_state_t& s
   return out;
 }
 
-core::Status GaugeFeed::header(std::string_view line,
-                               const std::vector<GaugeInfluence>& influence) {
+core::Status GaugeFeed::header(std::string_view line, const std::vector<GaugeInfluence>& influence,
+                               const std::vector<std::string>& identify_with) {
   auto columns = parse_gauge_header(line);
   if (!columns) return core::failure(columns.error());
-  auto created = LoadIdentifier::create(*columns, influence);
+  columns_ = std::move(*columns);
+  const std::vector<std::string> identifying = identify_with.empty() ? columns_ : identify_with;
+  identifying_.clear();
+  for (const auto& id : identifying) {
+    const auto at = std::find(columns_.begin(), columns_.end(), id);
+    if (at == columns_.end()) {
+      return core::failure("--identify-with names gauge \"" + id +
+                           "\", which is no column of the header");
+    }
+    identifying_.push_back(static_cast<std::size_t>(at - columns_.begin()));
+  }
+  if (const core::Status taken = take_coefficients(influence); !taken) return taken;
+  auto created = LoadIdentifier::create(identifying, influence);
   if (!created) return core::failure(created.error());
   identifier_.emplace(std::move(*created));
-  noise_.clear();
-  for (const auto& id : identifier_->columns()) {
-    for (const auto& g : influence) {
-      if (g.id == id) noise_.push_back(g.noise);
-    }
-  }
   reset_window();
+  return {};
+}
+
+core::Status GaugeFeed::take_coefficients(const std::vector<GaugeInfluence>& influence) {
+  std::vector<std::array<double, 3>> per_basis;
+  std::vector<double> noise;
+  for (const auto& id : columns_) {
+    const auto it = std::find_if(influence.begin(), influence.end(),
+                                 [&](const GaugeInfluence& g) { return g.id == id; });
+    if (it == influence.end()) {
+      return core::failure("column \"" + id + "\" is no gauge of the detail");
+    }
+    per_basis.push_back(it->per_basis);
+    noise.push_back(it->noise);
+  }
+  per_basis_ = std::move(per_basis);
+  noise_ = std::move(noise);
   return {};
 }
 
 core::Status GaugeFeed::update(const std::vector<GaugeInfluence>& influence) {
   if (!identifier_) return {};
-  return identifier_->update(influence);
+  if (const core::Status ok = identifier_->update(influence); !ok) return ok;
+  return take_coefficients(influence);
+}
+
+double GaugeFeed::model_strain(std::size_t g, double p, double alpha) const {
+  const auto& c = per_basis_[g];
+  return p * (c[0] + std::cos(alpha) * c[1] + std::sin(alpha) * c[2]);
 }
 
 void GaugeFeed::reset_window() {
-  const std::size_t n = identifier_ ? identifier_->columns().size() : 0;
+  const std::size_t n = columns_.size();
   window_ = Window{};
   window_.strain_times_model.assign(n, 0.0);
   window_.model_squared.assign(n, 0.0);
@@ -50,15 +79,17 @@ void GaugeFeed::reset_window() {
 
 core::Expected<std::optional<IdentifiedSample>, std::string> GaugeFeed::line(
     std::string_view text) {
-  const std::size_t n = identifier_->columns().size();
+  const std::size_t n = columns_.size();
   auto parsed = parse_gauge_line(text, n);
   if (!parsed) return parsed.error();
   if (!*parsed) return std::optional<IdentifiedSample>{};
   const GaugeSample& s = **parsed;
-  IdentifiedSample out{s.t, identifier_->identify(s.strains)};
+  subset_.resize(identifying_.size());
+  for (std::size_t i = 0; i < identifying_.size(); ++i) subset_[i] = s.strains[identifying_[i]];
+  IdentifiedSample out{s.t, identifier_->identify(subset_)};
   if (!std::isfinite(out.load.p)) return std::string("the gauges' strains identify no load");
   for (std::size_t g = 0; g < n; ++g) {
-    const double model = identifier_->model_strain(g, out.load.p, out.load.alpha);
+    const double model = model_strain(g, out.load.p, out.load.alpha);
     window_.strain_times_model[g] += s.strains[g] * model;
     window_.model_squared[g] += model * model;
     const double r = s.strains[g] - model;
@@ -75,10 +106,9 @@ std::optional<messages::Observation> GaugeFeed::take_observation() {
   messages::Observation o;
   o.kind = messages::ObservationKind::gauge_compliance;
   o.gauge_angle_rad = window_.abs_p_alpha / window_.abs_p;
-  const auto& columns = identifier_->columns();
-  for (std::size_t g = 0; g < columns.size(); ++g) {
+  for (std::size_t g = 0; g < columns_.size(); ++g) {
     const double yy = window_.model_squared[g];
-    const double per_n = identifier_->model_strain(g, 1.0, o.gauge_angle_rad);
+    const double per_n = model_strain(g, 1.0, o.gauge_angle_rad);
     if (!(yy > 0) || per_n == 0.0) continue;  // the model's gauge reads nothing of this load
     const double slope = window_.strain_times_model[g] / yy;
     const double noise =
@@ -87,10 +117,15 @@ std::optional<messages::Observation> GaugeFeed::take_observation() {
             : std::sqrt(window_.residual_squared[g] / static_cast<double>(window_.samples));
     const double sigma = noise * std::abs(per_n) / std::sqrt(yy);
     if (!(sigma > 0) || !std::isfinite(sigma)) continue;  // a perfect fit without a noise figure
-    o.gauges.push_back({columns[g], slope * per_n, sigma, per_n});
+    const bool identifies =
+        std::find(identifying_.begin(), identifying_.end(), g) != identifying_.end();
+    o.gauges.push_back({columns_[g], slope * per_n, sigma, per_n, identifies});
   }
   reset_window();
-  if (o.gauges.empty()) return std::nullopt;
+  if (std::none_of(o.gauges.begin(), o.gauges.end(),
+                   [](const messages::GaugeCompliance& g) { return g.identifies; })) {
+    return std::nullopt;
+  }
   return o;
 }
 

@@ -37,8 +37,12 @@ struct IdentifiedSample {
 
 class GaugeFeed {
  public:
-  /// The header line: the columns, checked against the model's gauges (LoadIdentifier::create).
-  core::Status header(std::string_view line, const std::vector<GaugeInfluence>& influence);
+  /// The header line: the columns, checked against the model's gauges; the loads are identified
+  /// from the columns `identify_with` names (LoadIdentifier::create; empty: every column), the
+  /// others only compared (a gauge near the crack: its coefficients are the most sensitive to
+  /// the difference between the model's crack and the structure's, docs/gauges.md).
+  core::Status header(std::string_view line, const std::vector<GaugeInfluence>& influence,
+                      const std::vector<std::string>& identify_with = {});
   [[nodiscard]] bool has_header() const { return identifier_.has_value(); }
   /// Newer coefficients (a STATE after bonds broke); on refusal the old ones stay.
   core::Status update(const std::vector<GaugeInfluence>& influence);
@@ -49,6 +53,10 @@ class GaugeFeed {
   /// caller); nullopt when the window saw no load. The window starts afresh.
   std::optional<messages::Observation> take_observation();
   [[nodiscard]] const LoadIdentifier& identifier() const { return *identifier_; }
+  /// Every column of the header, in its order.
+  [[nodiscard]] const std::vector<std::string>& columns() const { return columns_; }
+  /// The model's strain of column g (any column) for the load (p, alpha).
+  [[nodiscard]] double model_strain(std::size_t g, double p, double alpha) const;
   [[nodiscard]] std::uint64_t window_samples() const { return window_.samples; }
 
  private:
@@ -58,8 +66,14 @@ class GaugeFeed {
     std::uint64_t samples = 0;
   };
   void reset_window();
+  /// Every column's coefficients from `influence`, or why not (a column the model lacks).
+  core::Status take_coefficients(const std::vector<GaugeInfluence>& influence);
   std::optional<LoadIdentifier> identifier_;
-  std::vector<double> noise_;  ///< per column
+  std::vector<std::string> columns_;
+  std::vector<std::size_t> identifying_;          ///< the identifier's columns' positions here
+  std::vector<std::array<double, 3>> per_basis_;  ///< per column
+  std::vector<double> noise_;                     ///< per column
+  std::vector<double> subset_;                    ///< scratch: the identifying strains
   Window window_;
   std::vector<double> residuals_;  ///< scratch
 };

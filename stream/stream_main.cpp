@@ -6,7 +6,8 @@
 //                   [--batch-blocks N] [--batch-seconds T] [--lockstep|--window N]
 //                   [--residue half|whole|keep] [--in-process] [--give-up-after S]
 //                   [--key-file F [--daemon-key ID | --sign-only]]
-//                   [--format series|gauges [--identify-only] [--gauge-observe-cycles N]]
+//                   [--format series|gauges [--identify-only] [--identify-with G,...]
+//                   [--gauge-observe-cycles N]]
 //
 // Input: lines "t,P" or "t,P,alpha" (the series format's columns; its header line and '#'
 // comments accepted; t in s strictly increasing, P in the sensor's unit, alpha in rad), read as
@@ -24,8 +25,9 @@
 // (strains, dimensionless); each sample's P and α are identified by least squares from the
 // model's influence coefficients (stream/gauge_identification.h): the daemon's newest (every
 // STATE carries them, recomputed after each re-solve) or the in-process twin's. [detail.sensor]
-// scale and offset do not apply (gate and alpha_bin do). A header whose gauges give fewer
-// independent equations than the load's unknowns is refused (exit 2, the reason). Every
+// scale and offset do not apply (gate and alpha_bin do). --identify-with G,...: the loads from
+// these columns only (gauges away from the crack), the others compared only. A header whose gauges
+// give fewer independent equations than the load's unknowns is refused (exit 2, the reason). Every
 // --gauge-observe-cycles cycles (default 5000; 0 = never) the gauges' compliance over the samples
 // since the last one goes to the twin as an observation (stream/gauge_feed.h) once the batches
 // before it are applied: its residual per gauge is in the STATE, a persistent one turns the
@@ -70,6 +72,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -232,6 +235,7 @@ struct Options {
   std::string residue = "half", format = "series";
   bool lockstep = false, in_process = false, json = false, identify_only = false;
   std::int64_t gauge_observe_cycles = 5000;
+  std::vector<std::string> identify_with;
   loads::BatchingOptions batching;
   loads::ReplayOptions replay;
   loads::ProducerKeyOptions keys;
@@ -272,6 +276,10 @@ void add_options(CLI::App& app, Options& o) {
       ->check(CLI::IsMember({"series", "gauges"}));
   app.add_flag("--identify-only", o.identify_only,
                "--format gauges: write the identified time_s,load_N,angle_rad to stdout and exit");
+  app.add_option("--identify-with", o.identify_with,
+                 "--format gauges: identify the loads from these gauges only (comma-separated; "
+                 "default all columns), the others only compared: gauges away from the crack")
+      ->delimiter(',');
   app.add_option("--gauge-observe-cycles", o.gauge_observe_cycles,
                  "--format gauges: the gauges' compliance to the twin every this many cycles "
                  "(default 5000; 0 = never)")
@@ -711,7 +719,19 @@ void Stream::take_gauge_line(const std::string& line) {
       stop_input_ = true;
       return;
     }
-    if (const core::Status ok = gauges_->header(line, influences); !ok) {
+    // The identifying gauges: --identify-with, else the config's (identify = true) among the
+    // columns, else every column.
+    std::vector<std::string> identify_with = o_.identify_with;
+    if (identify_with.empty()) {
+      const auto columns = stream::parse_gauge_header(line);
+      for (const auto& g : detail_.gauges) {
+        if (g.identify && columns &&
+            std::find(columns->begin(), columns->end(), g.id) != columns->end()) {
+          identify_with.push_back(g.id);
+        }
+      }
+    }
+    if (const core::Status ok = gauges_->header(line, influences, identify_with); !ok) {
       input_error_ = input_name() + ": line " + std::to_string(pipeline_->counts.input_lines) +
                      ": " + ok.error().message();
       stop_input_ = true;
@@ -719,7 +739,8 @@ void Stream::take_gauge_line(const std::string& line) {
     }
     coefficients_seq_ = state->state_seq;
     const auto& id = gauges_->identifier();
-    std::cerr << "peritwin-stream: " << id.columns().size() << " gauges, " << id.unknowns()
+    std::cerr << "peritwin-stream: " << gauges_->columns().size() << " gauges ("
+              << id.columns().size() << " identifying), " << id.unknowns()
               << (id.unknowns() == 1 ? " unknown (P)" : " unknowns (P, alpha)")
               << ", coefficients of state " << coefficients_seq_ << "\n";
     if (o_.identify_only) std::cout << "time_s,load_N,angle_rad\n";

@@ -70,8 +70,8 @@ namespace {
 /// the run's break events applied to it group by group (rank updates), the coefficients read
 /// after each (issue 33). Strictly increasing lengths (a later state of an equal length replaces
 /// the earlier). Stops at a break that leaves the stiffness singular.
-GaugeMap gauge_map_of_run(const DetailModel& fine, const fatigue::FatigueEngine& end,
-                          double life, int samples) {
+GaugeMap gauge_map_of_run(const DetailModel& fine, const fatigue::FatigueEngine& end, double life,
+                          int samples) {
   GaugeMap map;
   if (fine.gauges().empty()) return map;
   auto virgin = fine.make_engine();
@@ -341,9 +341,10 @@ core::Expected<ObservationUpdate> Ensemble::observe(const messages::Observation&
         }
       } else {
         m = predicted_compliance(o, *indices, model_->gauges(), gauge_map_(a));
-        const auto above = predicted_compliance(o, *indices, model_->gauges(), gauge_map_(a + step / 2));
-        const auto below =
-            predicted_compliance(o, *indices, model_->gauges(), gauge_map_(std::max(0.0, a - step / 2)));
+        const auto above =
+            predicted_compliance(o, *indices, model_->gauges(), gauge_map_(a + step / 2));
+        const auto below = predicted_compliance(o, *indices, model_->gauges(),
+                                                gauge_map_(std::max(0.0, a - step / 2)));
         for (std::size_t g = 0; g < m.size(); ++g) {
           model_sigma[g] = std::abs(above[g] - below[g]) / step * rounding;
         }
@@ -547,6 +548,8 @@ std::uint64_t Ensemble::state_hash() const {
     for (const messages::GaugeCompliance& g : o.gauges) {
       h.bytes(g.id.data(), g.id.size());
       for (double v : {g.compliance, g.sigma, g.model}) h.bytes(&v, sizeof v);
+      const std::uint8_t identifies = g.identifies ? 1 : 0;
+      h.bytes(&identifies, sizeof identifies);
     }
     if (!o.gauges.empty()) h.bytes(&o.gauge_angle_rad, sizeof o.gauge_angle_rad);
   }

@@ -94,7 +94,9 @@ std::vector<double> predicted_compliance(const messages::Observation& o,
                                          const std::vector<std::array<double, 3>>& influences) {
   const std::size_t n = o.gauges.size();
   bool weighted = true;
-  for (const std::size_t k : indices) weighted = weighted && gauges[k].config.noise > 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (o.gauges[i].identifies) weighted = weighted && gauges[indices[i]].config.noise > 0;
+  }
   std::vector<double> model(n);
   double tx = 0.0, tt = 0.0;  // Σ w v^t v^X, Σ w (v^t)²
   for (std::size_t i = 0; i < n; ++i) {
@@ -102,6 +104,7 @@ std::vector<double> predicted_compliance(const messages::Observation& o,
     model[i] = statics::gauge_strain(influences[k], 1.0, o.gauge_angle_rad);
     const double noise = gauges[k].config.noise;
     const double w = weighted ? 1.0 / (noise * noise) : 1.0;
+    if (!o.gauges[i].identifies) continue;  // compared only: not in the identification
     tx += w * o.gauges[i].model * model[i];
     tt += w * o.gauges[i].model * o.gauges[i].model;
   }

@@ -7,11 +7,12 @@
 // loads the stream identified from the gauges with the model's strain per N v^t_g (at the
 // observation's angle), i.e. m_g = v^t_g · (Σ ε_g ŷ_g / Σ ŷ_g²), ŷ_g = P̂·v^t_g. If the structure
 // behaves as a model X with strain per N v^X, the identification gives P̂ = k_X·P with
-// k_X = Σ_h w_h v^t_h v^X_h / Σ_h w_h (v^t_h)² (weighted least squares, w_h = 1/noise_h² when every
-// gauge has a noise, else 1), so the observation predicted by X is m^X_g = v^X_g / k_X: exact for
-// a load pattern without an angle dependence (one unknown P); for the two-unknown patterns (P, α)
-// the angle is taken as identified (the observation's), which is the same to first order.
-// The residual of gauge g is (m_g − m^X_g)/|m^X_g| with the standard deviation σ_g/|m^X_g|.
+// k_X = Σ_h w_h v^t_h v^X_h / Σ_h w_h (v^t_h)² over the gauges h the loads were identified from
+// (weighted least squares, w_h = 1/noise_h² when every one has a noise, else 1), so the observation
+// predicted by X is m^X_g = v^X_g / k_X: exact for a load pattern without an angle dependence (one
+// unknown P); for the two-unknown patterns (P, α) the angle is taken as identified (the
+// observation's), which is the same to first order. The residual of gauge g is (m_g −
+// m^X_g)/|m^X_g| with the standard deviation σ_g/|m^X_g|.
 #pragma once
 
 #include <array>
@@ -31,13 +32,14 @@ namespace peritwin::twin {
 /// in kGaugeAlarmAfter gauge observations in a row (a single outlier, e.g. a block with an
 /// unusual load mix, does not raise it; a crack the model does not have keeps it there).
 inline constexpr double kGaugeAlarmSigmas = 4.0;
-inline constexpr std::int64_t kGaugeAlarmAfter = 3;
+inline constexpr std::int64_t kGaugeAlarmAfter = 2;
 /// ... and beyond this fraction of the model's compliance: a twin that tracks the structure still
 /// leaves the crack's growth within a window and the coefficients' lag behind it (the stream
 /// identifies with the last STATE's) in the residual, which the reading noise's σ (10⁻⁴ of the
-/// compliance over a window of 10⁴ samples) does not cover: measured 0.5-1.6 % on the B1 record
-/// of its own model (docs/gauges.md).
-inline constexpr double kGaugeAlarmFloor = 0.03;
+/// compliance over a window of 10⁴ samples) does not cover: measured up to 1.6 % (loads from
+/// every gauge) and 3.4 % (the gauge near the crack only compared) on the B1 record of its own
+/// model, 12-60 % once a truth's crack leads by 0.7-1.5 mm (docs/gauges.md).
+inline constexpr double kGaugeAlarmFloor = 0.05;
 /// The likelihood of a gauge observation for a model's prediction m^X adds this fraction of m^X
 /// to its standard deviation: the same window and lag effects, which a learning ensemble would
 /// otherwise read as evidence (1 %: the middle of the 0.5-1.6 % measured).

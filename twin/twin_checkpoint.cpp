@@ -326,6 +326,7 @@ void write_ensemble(CheckpointWriter& w, const EnsembleCheckpoint& e) {
   std::vector<std::int64_t> gauge_count;
   std::vector<std::string> gauge_ids;
   std::vector<double> gauge_angle, compliance, gauge_sigma, gauge_model;
+  std::vector<std::uint8_t> identifies;
   for (const ObservationRecord& r : e.observations) {
     gauge_count.push_back(static_cast<std::int64_t>(r.observation.gauges.size()));
     gauge_angle.push_back(r.observation.gauge_angle_rad);
@@ -334,6 +335,7 @@ void write_ensemble(CheckpointWriter& w, const EnsembleCheckpoint& e) {
       compliance.push_back(g.compliance);
       gauge_sigma.push_back(g.sigma);
       gauge_model.push_back(g.model);
+      identifies.push_back(g.identifies ? 1 : 0);
     }
   }
   w.put("observation_gauge_count", gauge_count);
@@ -342,6 +344,7 @@ void write_ensemble(CheckpointWriter& w, const EnsembleCheckpoint& e) {
   w.put("observation_gauge_compliance", compliance);
   w.put("observation_gauge_sigma", gauge_sigma);
   w.put("observation_gauge_model", gauge_model);
+  w.put("observation_gauge_identifies", identifies);
   for (std::size_t i = 0; i < e.engines.size(); ++i) {
     fatigue::for_each_field(e.engines[i], [&](std::string_view key, const auto& field) {
       w.put(particle_key(i, key), field);
@@ -418,17 +421,20 @@ EnsembleCheckpoint read_ensemble(CheckpointReader& r, std::size_t particles) {
     r.get("observation_gauge_compliance", compliance);
     r.get("observation_gauge_sigma", gauge_sigma);
     r.get("observation_gauge_model", gauge_model);
+    std::vector<std::uint8_t> identifies;
+    r.get("observation_gauge_identifies", identifies);
     const std::vector<std::string> ids =
         gauge_ids.empty() ? std::vector<std::string>{} : split_ids(gauge_ids);
     std::size_t next = 0;
     const bool sized = gauge_count.size() == n && gauge_angle.size() == n &&
                        compliance.size() == ids.size() && gauge_sigma.size() == ids.size() &&
-                       gauge_model.size() == ids.size();
+                       gauge_model.size() == ids.size() && identifies.size() == ids.size();
     for (std::size_t k = 0; sized && k < n; ++k) {
       auto& o = e.observations[k].observation;
       o.gauge_angle_rad = gauge_angle[k];
       for (std::int64_t g = 0; g < gauge_count[k] && next < ids.size(); ++g, ++next) {
-        o.gauges.push_back({ids[next], compliance[next], gauge_sigma[next], gauge_model[next]});
+        o.gauges.push_back({ids[next], compliance[next], gauge_sigma[next], gauge_model[next],
+                            identifies[next] != 0});
       }
     }
     if (!sized || next != ids.size()) r.bad = "observation_gauge arrays of different lengths";
