@@ -8,6 +8,7 @@
 #include <string>
 
 #include "config/config.h"
+#include "solver/statics/gauges.h"
 #include "twin/detail_model.h"
 #include "twin/twin.h"
 
@@ -81,6 +82,27 @@ inline std::unique_ptr<twin::Twin> make_twin(const std::shared_ptr<const twin::D
 inline messages::Batch batch(std::int64_t seq, std::vector<core::LoadBlock> blocks,
                              const std::string& source = "test") {
   return {"b1-ct", source, seq, std::move(blocks)};
+}
+
+/// A gauge observation (issue 33) of the twin's gauges: each gauge's compliance the model's at
+/// α = 0 times (1 + excess[g]), measured against the model's coefficients times `used` (the
+/// stream's, maybe older), σ = 0.1 % of it; detail b1-ct, source "gauges", at the twin's cycle.
+inline messages::Observation gauge_observation(const twin::Twin& twin, std::int64_t seq,
+                                               const std::vector<double>& excess,
+                                               double used = 1.0) {
+  messages::Observation o;
+  o.kind = messages::ObservationKind::gauge_compliance;
+  o.detail_id = "b1-ct";
+  o.source_id = "gauges";
+  o.seq = seq;
+  o.cycle = twin.engine().total_cycles();
+  const auto c = twin.gauge_influences();
+  for (std::size_t g = 0; g < c.size(); ++g) {
+    const double v = statics::gauge_strain(c[g], 1.0, 0.0);
+    o.gauges.push_back({twin.model().gauges()[g].config.id, used * v * (1 + excess[g]),
+                        1e-3 * std::abs(used * v), used * v, true});
+  }
+  return o;
 }
 
 }  // namespace peritwin::twin::testing

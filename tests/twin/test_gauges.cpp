@@ -150,25 +150,6 @@ TEST(Gauges, BesideAHoleKirschWithinTheNonlocalSmoothing) {
   }
 }
 
-/// A gauge observation of the B1 example's gauges: compliance = model·(1 + excess[g]) at α = 0,
-/// measured against the model's coefficients times `used` (the stream's, maybe older), σ = 0.1 %.
-messages::Observation gauge_observation(const Twin& twin, std::int64_t seq,
-                                        const std::vector<double>& excess, double used = 1.0) {
-  messages::Observation o;
-  o.kind = messages::ObservationKind::gauge_compliance;
-  o.detail_id = "b1-ct";
-  o.source_id = "gauges";
-  o.seq = seq;
-  o.cycle = twin.engine().total_cycles();
-  const auto c = twin.gauge_influences();
-  for (std::size_t g = 0; g < c.size(); ++g) {
-    const double v = statics::gauge_strain(c[g], 1.0, 0.0);
-    o.gauges.push_back({twin.model().gauges()[g].config.id, used * v * (1 + excess[g]),
-                        1e-3 * std::abs(used * v), used * v});
-  }
-  return o;
-}
-
 TEST(GaugeObservations, ResidualsAlarmAndCheckpoint) {
   const auto model = testing::b1_model(testing::b1_config());
   ASSERT_TRUE(model);
@@ -181,7 +162,7 @@ TEST(GaugeObservations, ResidualsAlarmAndCheckpoint) {
   EXPECT_TRUE(std::isnan(twin->gauge_residuals().residual[0]));
 
   // What the model predicts: residual 0 (to round-off) for every gauge, no alarm.
-  ASSERT_TRUE(twin->observe(gauge_observation(*twin, 1, {0, 0, 0})).applied());
+  ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 1, {0, 0, 0})).applied());
   for (std::size_t g = 0; g < 3; ++g) {
     EXPECT_NEAR(twin->gauge_residuals().residual[g], 0.0, 1e-12);
     EXPECT_NEAR(twin->gauge_residuals().sigma[g], 1e-3, 1e-12);
@@ -189,13 +170,13 @@ TEST(GaugeObservations, ResidualsAlarmAndCheckpoint) {
   }
   EXPECT_NE(twin::state_message(*twin, 0, {}).state_hash, before);
   // Coefficients 10 % high in the stream (P̂ = P/1.1 then): k_X = 1/1.1, m^X = 1.1·v: residual 0.
-  ASSERT_TRUE(twin->observe(gauge_observation(*twin, 2, {0, 0, 0}, 1.1)).applied());
+  ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 2, {0, 0, 0}, 1.1)).applied());
   EXPECT_NEAR(twin->gauge_residuals().residual[1], 0.0, 1e-12);
 
   // The tip gauge 8 % more compliant than the model, 80 σ: in alarm after kGaugeAlarmAfter.
   for (std::int64_t k = 0; k < kGaugeAlarmAfter; ++k) {
     EXPECT_EQ(twin->gauge_residuals().alarm(), "");
-    ASSERT_TRUE(twin->observe(gauge_observation(*twin, 3 + k, {0.08, 0, 0})).applied());
+    ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 3 + k, {0.08, 0, 0})).applied());
     EXPECT_NEAR(twin->gauge_residuals().residual[0], 0.08, 1e-12);
     EXPECT_EQ(twin->gauge_residuals().in_a_row[0], k + 1);
     EXPECT_EQ(twin->gauge_residuals().in_a_row[1], 0);
@@ -209,21 +190,21 @@ TEST(GaugeObservations, ResidualsAlarmAndCheckpoint) {
   EXPECT_EQ(state.gauge_alarm_counts[0], kGaugeAlarmAfter);
   EXPECT_NEAR(state.gauge_residuals[0], 0.08, 1e-12);
   // Beyond 4 σ but within the 5 % floor: no count (a twin tracking the structure leaves that).
-  ASSERT_TRUE(
-      twin->observe(gauge_observation(*twin, 3 + kGaugeAlarmAfter, {0.04, 0, 0})).applied());
+  ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 3 + kGaugeAlarmAfter, {0.04, 0, 0}))
+                  .applied());
   EXPECT_EQ(twin->gauge_residuals().in_a_row[0], 0);
-  ASSERT_TRUE(
-      twin->observe(gauge_observation(*twin, 4 + kGaugeAlarmAfter, {0.08, 0, 0})).applied());
-  ASSERT_TRUE(
-      twin->observe(gauge_observation(*twin, 5 + kGaugeAlarmAfter, {0.08, 0, 0})).applied());
+  ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 4 + kGaugeAlarmAfter, {0.08, 0, 0}))
+                  .applied());
+  ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 5 + kGaugeAlarmAfter, {0.08, 0, 0}))
+                  .applied());
   const auto again = twin::state_message(*twin, 0, {});
 
   // Refused, the state unchanged: a gauge the detail does not have, a cycle in the future.
-  auto unknown = gauge_observation(*twin, 6 + kGaugeAlarmAfter, {0, 0, 0});
+  auto unknown = testing::gauge_observation(*twin, 6 + kGaugeAlarmAfter, {0, 0, 0});
   unknown.gauges[1].id = "nowhere";
   const auto refused = twin->observe(unknown);
   EXPECT_EQ(refused.what, "observation.gauges[1].id");
-  auto future = gauge_observation(*twin, 6 + kGaugeAlarmAfter, {0, 0, 0});
+  auto future = testing::gauge_observation(*twin, 6 + kGaugeAlarmAfter, {0, 0, 0});
   future.cycle += 1;
   EXPECT_EQ(twin->observe(future).what, "observation.cycle");
   EXPECT_EQ(twin::state_message(*twin, 0, {}).state_hash, again.state_hash);

@@ -404,25 +404,6 @@ TEST_F(ResultsFieldsTest, ResultsDirectoryIsWhatParaViewAndPeopleRead) {
   EXPECT_EQ(rows[0].remaining_state_seq, 0);
 }
 
-/// A gauge observation of B1's gauges: each gauge's compliance the model's at α = 0 times
-/// (1 + excess[g]), σ = 0.1 % of it (as tests/twin/test_gauges.cpp makes them).
-messages::Observation gauge_observation(const Twin& twin, std::int64_t seq,
-                                        const std::vector<double>& excess) {
-  messages::Observation o;
-  o.kind = messages::ObservationKind::gauge_compliance;
-  o.detail_id = "b1-ct";
-  o.source_id = "gauges";
-  o.seq = seq;
-  o.cycle = twin.engine().total_cycles();
-  const auto c = twin.gauge_influences();
-  for (std::size_t g = 0; g < c.size(); ++g) {
-    const double v = c[g][0];  // P = 1 N at α = 0
-    o.gauges.push_back(
-        {twin.model().gauges()[g].config.id, v * (1 + excess[g]), 1e-3 * std::abs(v), v});
-  }
-  return o;
-}
-
 /// RGB pixels of a PNG, read with libpng's simplified API.
 std::vector<std::uint8_t> png_rgb(const fs::path& p, int& width, int& height) {
   png_image img{};
@@ -525,7 +506,7 @@ TEST_F(ResultsFieldsTest, TheResultsFileHasEveryGaugesCoefficientsPerState) {
     }
     // A gauge observation at state 3 (the tip gauge 5 % more compliant than the model): one more
     // row at state 3 with its residuals; recording again without a change adds none.
-    ASSERT_TRUE(twin->observe(gauge_observation(*twin, 1, {0.05, 0.0, 0.0})).applied());
+    ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 1, {0.08, 0.0, 0.0})).applied());
     out.record(*twin);
     out.record(*twin);
     out.finish(*twin);
@@ -575,10 +556,10 @@ TEST_F(ResultsFieldsTest, TheResultsFileHasEveryGaugesCoefficientsPerState) {
     }
   }
   // The model's own coefficients in the stream: P̂ = P, so the residuals are the excess, σ 0.1 %.
-  EXPECT_NEAR(table.doubles.at("tip_residual")[4], 0.05, 1e-12);
+  EXPECT_NEAR(table.doubles.at("tip_residual")[4], 0.08, 1e-12);
   EXPECT_NEAR(table.doubles.at("arm_residual")[4], 0.0, 1e-12);
   EXPECT_NEAR(table.doubles.at("tip_sigma")[4], 1e-3, 1e-12);
-  EXPECT_EQ(table.ints.at("tip_in_a_row")[4], 1);  // 50 σ: beyond the alarm's bound
+  EXPECT_EQ(table.ints.at("tip_in_a_row")[4], 1);  // 80 σ and beyond the 5 % floor: counted
   EXPECT_EQ(table.ints.at("arm_in_a_row")[4], 0);
   // B1 has the constant load basis only: per N of P, the cos and sin parts are 0.
   EXPECT_EQ(table.doubles.at("arm_per_cos")[2], 0.0);
@@ -667,7 +648,7 @@ TEST_F(ResultsFieldsTest, AGaugeObservationIsKindThreeInTheObservations) {
     outputs::DetailOutputs out(*twin);
     ASSERT_TRUE(twin->apply(batch(1, {{4000.0, 0.1, 0.0, 1000}})).applied());
     out.record(*twin);
-    ASSERT_TRUE(twin->observe(gauge_observation(*twin, 1, {0.0, 0.0, 0.0})).applied());
+    ASSERT_TRUE(twin->observe(testing::gauge_observation(*twin, 1, {0.0, 0.0, 0.0})).applied());
     out.record(*twin);
     out.finish(*twin);
   }
