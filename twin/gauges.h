@@ -42,8 +42,9 @@ inline constexpr std::int64_t kGaugeAlarmAfter = 2;
 inline constexpr double kGaugeAlarmFloor = 0.05;
 /// The likelihood of a gauge observation for a model's prediction m^X adds this fraction of m^X
 /// to its standard deviation: the same window and lag effects, which a learning ensemble would
-/// otherwise read as evidence (1 %: the middle of the 0.5-1.6 % measured).
-inline constexpr double kGaugeModelFraction = 0.01;
+/// otherwise read as evidence (3 %: what a twin that tracks the structure leaves, up to 3.4 %
+/// measured; at 1 % the ensemble's band collapsed and missed the truth, docs/gauges.md).
+inline constexpr double kGaugeModelFraction = 0.03;
 
 /// A configured gauge on a model's grid.
 struct ModelGauge {
