@@ -28,10 +28,11 @@
 // scale and offset do not apply (gate and alpha_bin do). --identify-with G,...: the loads from
 // these columns only (gauges away from the crack), the others compared only. A header whose gauges
 // give fewer independent equations than the load's unknowns is refused (exit 2, the reason). Every
-// --gauge-observe-cycles cycles (default 5000; 0 = never) the gauges' compliance over the samples
-// since the last one goes to the twin as an observation (stream/gauge_feed.h) once the batches
-// before it are applied: its residual per gauge is in the STATE, a persistent one turns the
-// daemon's health "degraded" naming the gauge, and a learning twin's ensemble takes it in.
+// --gauge-observe-cycles cycles (default 5000; 0 = never), and at the end of input, the gauges'
+// compliance over the samples since the last one goes to the twin as an observation
+// (stream/gauge_feed.h) once the batches before it are applied: its residual per gauge is in the
+// STATE, a persistent one turns the daemon's health "degraded" naming the gauge, and a learning
+// twin's ensemble takes it in.
 // --identify-only writes the identified series "time_s,load_N,angle_rad" to stdout and exits
 // (no batches; the coefficients of the daemon's current state, or with --in-process of the
 // virgin model). --input lcm carries loads, not strains: refused with --format gauges.
@@ -447,8 +448,14 @@ class Stream {
   std::optional<int> set_up_sender(loads::ReplayAuth auth, std::vector<messages::Batch> resend);
   bool deliver();
   /// --format gauges: the newest coefficients to the feed; the compliance observation when due.
+  /// A STATE from the daemon (a batch's or an observation's): printed and kept as the last.
+  void seen(const peritwin_msgs::damage_state_t& s) {
+    printer_.print(s);
+    last_seen_ = s;
+  }
   void follow_gauges();
-  void observe_gauges();
+  /// `last`: the end of input: the window so far, due or not.
+  void observe_gauges(bool last = false);
   void take(double t, double p, double alpha);
   void take_line(const std::string& line);
   void take_gauge_line(const std::string& line);
@@ -493,6 +500,7 @@ class Stream {
   std::uint64_t next_observation_cycles_ = 0;
   std::int64_t observation_seq_ = 0;
   loads::ReplayAuth auth_;
+  std::optional<peritwin_msgs::damage_state_t> last_seen_;
 };
 
 std::optional<int> Stream::set_up(loads::ReplayAuth auth) {
@@ -559,7 +567,7 @@ std::optional<int> Stream::set_up_sender(loads::ReplayAuth auth,
                                          std::vector<messages::Batch> resend) {
   sender_ = std::make_unique<loads::BatchSender>(*lcm_, detail_.id, o_.source_id, o_.replay,
                                                  std::move(auth));
-  sender_->on_state(printer_.callback());
+  sender_->on_state([this](const peritwin_msgs::damage_state_t& s) { seen(s); });
   const auto learned = sender_->probe_applied(core::keep_running);
   if (!learned) {
     std::cerr << "peritwin-stream: " << learned.error().message() << "\n";
@@ -774,9 +782,9 @@ void Stream::follow_gauges() {
   coefficients_seq_ = state->state_seq;
 }
 
-void Stream::observe_gauges() {
+void Stream::observe_gauges(bool last) {
   if (!gauges_ || o_.gauge_observe_cycles <= 0 || o_.identify_only) return;
-  if (pipeline_->counts.block_cycles < next_observation_cycles_) return;
+  if (!last && pipeline_->counts.block_cycles < next_observation_cycles_) return;
   while (next_observation_cycles_ <= pipeline_->counts.block_cycles) {
     next_observation_cycles_ += static_cast<std::uint64_t>(o_.gauge_observe_cycles);
   }
@@ -814,7 +822,8 @@ void Stream::observe_gauges() {
   }
   o->seq = ++observation_seq_;
   if (const core::Status sent = replay::send_observation(*lcm_, *o, o_.replay, auth_,
-                                                         printer_.callback(), core::keep_running);
+                                                         [this](const auto& s) { seen(s); },
+                                                         core::keep_running);
       !sent) {
     std::cerr << "peritwin-stream: gauge observation " << o->seq << ": " << sent.error().message()
               << "\n";
@@ -942,7 +951,9 @@ int Stream::finish() {
   const bool ended = sender_ && !sender_->end_of_life().empty();
   if (error_.empty() && !ended) {
     pipe.finish(rule, closed_);
-    if (deliver() && sender_) {
+    // The gauges' window up to the end of input is observed too (after its batches are applied).
+    if (deliver()) observe_gauges(true);
+    if (error_.empty() && sender_) {
       if (!o_.state_file.empty()) save_state(sender_->unacknowledged());
       sender_->finish();
       while (error_.empty()) {
@@ -982,7 +993,9 @@ int Stream::finish() {
   // The summary also after an input error: what was taken before it was delivered.
   std::optional<peritwin_msgs::damage_state_t> final_state;
   if (local_) final_state = local_->state();
-  if (sender_) final_state = sender_->last_state();
+  // The daemon's last STATE, a gauge observation's answer included (the sender keeps only
+  // those of batches).
+  if (sender_) final_state = last_seen_ ? last_seen_ : sender_->last_state();
   if (o_.json && final_state) {
     std::cout << messages::summary_json(*final_state, summary_extra(pipe)) << std::endl;
   }

@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -354,28 +355,35 @@ TEST_F(Stream, NoUsableLineExitsTwoNamingTheFirst) {
 /// Issue 33: the B1 example's gauges read the loads of examples/b1-series.csv through the virgin
 /// model's coefficients (no noise): --identify-only gives the loads back, and the stream applies
 /// the same cycles as the series' replay; a header naming no gauge of the detail exits 2.
-TEST_F(Stream, GaugeStrainsIdentifyTheLoads) {
+/// The strains the B1 example's gauges read under examples/b1-series.csv through the virgin
+/// model's coefficients (no noise), written to `file` (columns in another order than the
+/// config's); the series' (time, load) rows.
+std::vector<std::pair<std::string, double>> write_gauge_strains(const fs::path& file) {
   auto parsed = peritwin::config::load_config(kConfig);
-  ASSERT_TRUE(parsed.ok()) << parsed.error_text();
+  EXPECT_TRUE(parsed.ok()) << parsed.error_text();
   const auto model = peritwin::twin::DetailModel::build(parsed.config->details.at(0));
-  ASSERT_TRUE(model.ok());
+  EXPECT_TRUE(model.ok());
   auto engine = (*model)->make_engine();
-  ASSERT_TRUE(engine->initialize());
+  EXPECT_TRUE(engine->initialize());
   const auto c = peritwin::twin::gauge_influences((*model)->gauges(), engine->solver());
-  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c.size(), 3u);
   std::vector<std::pair<std::string, double>> truth;
-  {
-    std::ofstream out(dir_ / "strains.csv");
-    out << "# strains of examples/b1-series.csv\ntime_s,back,tip,arm\n";  // any column order
-    out.precision(17);
-    for (const auto& row : series_rows()) {
-      const auto comma = row.find(',');
-      const double p = std::stod(row.substr(comma + 1));
-      truth.emplace_back(row.substr(0, comma), p);
-      out << row.substr(0, comma) << "," << p * c[2][0] << "," << p * c[0][0] << "," << p * c[1][0]
-          << "\n";
-    }
+  std::ofstream out(file);
+  out << "# strains of examples/b1-series.csv\ntime_s,back,tip,arm\n";  // any column order
+  out.precision(17);
+  for (const auto& row : series_rows()) {
+    const auto comma = row.find(',');
+    const double p = std::stod(row.substr(comma + 1));
+    truth.emplace_back(row.substr(0, comma), p);
+    out << row.substr(0, comma) << "," << p * c[2][0] << "," << p * c[0][0] << "," << p * c[1][0]
+        << "\n";
   }
+  return truth;
+}
+
+TEST_F(Stream, GaugeStrainsIdentifyTheLoads) {
+  const auto truth = write_gauge_strains(dir_ / "strains.csv");
+  ASSERT_EQ(truth.size(), series_rows().size());
   auto id = stream({"--input", (dir_ / "strains.csv").string(), "--in-process", "--format",
                     "gauges", "--identify-only"},
                    "identify.log");
@@ -701,6 +709,35 @@ TEST_F(StreamOverHub, TheEndOfLifeReachedByTheStreamExitsZeroWithTheReason) {
                 .find("(CODE_FAILED): message: the detail reached its end-of-life criterion"),
             std::string::npos)
       << read_file(dir_ / "stream.log");
+  d->signal(SIGTERM);
+  d->wait_for(kWaitS);
+}
+
+// Issue 33 over the bus: the daemon's STATE gives the coefficients, the stream identifies the
+// loads (the series' cycles applied) and sends the gauges' compliance every 50 cycles and at the
+// end, which the daemon takes in: residuals of 0 (to round-off: the record is the daemon's own
+// virgin model).
+TEST_F(StreamOverHub, GaugeStrainsOverTheBus) {
+  write_gauge_strains(dir_ / "strains.csv");
+  const std::string reference = replay_summary(kSeries);
+  auto d = daemon("daemon.log");
+  auto s = stream({"--input", (dir_ / "strains.csv").string(), "--lcm-url", hub_->url(), "--format",
+                   "gauges", "--gauge-observe-cycles", "200", "--give-up-after", "600"},
+                  "stream.log");
+  const auto lines = lines_to_end(*s);
+  ASSERT_EQ(exit_code(*s), 0) << read_file(dir_ / "stream.log");
+  ASSERT_FALSE(lines.empty());
+  const std::string& summary = lines.back();
+  EXPECT_EQ(field(summary, "cycles"), field(reference, "cycles")) << summary;
+  const auto json = nlohmann::json::parse(summary);
+  ASSERT_TRUE(json.contains("gauges")) << summary;
+  for (const char* id : {"tip", "arm", "back"}) {
+    ASSERT_TRUE(json["gauges"][id]["residual"].is_number()) << summary;
+    EXPECT_NEAR(json["gauges"][id]["residual"].get<double>(), 0.0, 1e-6) << id;
+    EXPECT_EQ(json["gauges"][id]["in_a_row"].get<int>(), 0) << id;
+  }
+  EXPECT_NE(read_file(dir_ / "daemon.log").find("observation stream#"), std::string::npos)
+      << read_file(dir_ / "daemon.log");
   d->signal(SIGTERM);
   d->wait_for(kWaitS);
 }
