@@ -796,6 +796,7 @@ void Stream::observe_gauges(bool last) {
     o->cycle = local_->twin().engine().total_cycles();
     o->seq = ++observation_seq_;
     if (const core::Status taken = local_->observe(*o); !taken) {
+      --observation_seq_;  // refused: the next one takes its seq
       std::cerr << "peritwin-stream: " << taken.error().message() << "\n";
     } else {
       printer_.print(local_->state());
@@ -811,19 +812,20 @@ void Stream::observe_gauges(bool last) {
     }
     if (p == loads::BatchSender::Progress::done) return;  // the end of life
   }
-  const auto& state = sender_->last_state();
+  const auto& state = last_seen_ ? last_seen_ : sender_->last_state();
   if (!state) return;
   o->cycle = state->total_cycles;
-  // This source's observation seq as the daemon has it: a restarted stream follows on.
+  // This source's observation seq as the daemon has it (all its batches applied, so this STATE
+  // is current): a restarted stream follows on, and a refused observation's seq is taken again.
+  observation_seq_ = 0;
   for (std::size_t k = 0; k < state->observation_source_ids.size(); ++k) {
     if (state->observation_source_ids[k] == o_.source_id) {
-      observation_seq_ = std::max(observation_seq_, state->observation_applied_seq[k]);
+      observation_seq_ = state->observation_applied_seq[k];
     }
   }
   o->seq = ++observation_seq_;
-  if (const core::Status sent = replay::send_observation(*lcm_, *o, o_.replay, auth_,
-                                                         [this](const auto& s) { seen(s); },
-                                                         core::keep_running);
+  if (const core::Status sent = replay::send_observation(
+          *lcm_, *o, o_.replay, auth_, [this](const auto& s) { seen(s); }, core::keep_running);
       !sent) {
     std::cerr << "peritwin-stream: gauge observation " << o->seq << ": " << sent.error().message()
               << "\n";

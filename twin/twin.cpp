@@ -242,12 +242,9 @@ messages::Outcome Twin::observe(const messages::Observation& o) {
       return refuse(messages::Verdict::invalid, indices.error().field, indices.error().reason);
     }
     // The ensemble learns from gauges when its particles can read them (Ensemble::reads_gauges).
-    const bool learns = ensemble_ && ensemble_->reads_gauges();
-    if (learns) {
-      if (auto update = ensemble_->observe(o); !update) {
-        return refuse(messages::Verdict::invalid, update.error().field, update.error().reason);
-      }
-    }
+    // One that cannot explain the observation (every particle's gauge reads nothing) stays as it
+    // was: the residual and its alarm, the safety side, are taken in all the same.
+    const bool learns = ensemble_ && ensemble_->reads_gauges() && ensemble_->observe(o).ok();
     take_in(gauge_residuals_, o, *indices,
             predicted_compliance(o, *indices, model_->gauges(), gauge_influences()));
     observed_[o.source_id] = o.seq;
