@@ -435,6 +435,13 @@ DecodedObservation decode_observation(const void* data, std::size_t size) {
     out.nonce = static_cast<std::uint64_t>(m.nonce);
     return out;
   }
+  // gauge_identifies is a flag: a byte other than 0 or 1 would not encode back to itself.
+  for (const std::int8_t flag : m.gauge_identifies) {
+    if (flag != 0 && flag != 1) {
+      out.error = decode_error("gauge_identifies holds " + std::to_string(flag) + " (0 or 1)");
+      return out;
+    }
+  }
   Observation o;
   o.detail_id = m.detail_id;
   o.source_id = m.source_id;
