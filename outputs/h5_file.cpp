@@ -295,11 +295,16 @@ void Object::set_attribute_array(std::string_view name, std::span<const double> 
   }
 }
 
-std::vector<double> Object::attribute_doubles(std::string_view name) const {
+Handle Object::open_attribute(const std::string& name) const {
   quiet();
+  Handle attr(H5Aopen(id(), name.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
+  if (!attr.valid()) fail("open attribute " + name + " of");
+  return attr;
+}
+
+std::vector<double> Object::attribute_doubles(std::string_view name) const {
   const std::string n(name);
-  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
-  if (!attr.valid()) fail("open attribute " + n + " of");
+  const Handle attr = open_attribute(n);
   Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
   Handle space(H5Aget_space(attr.get()), Handle::Kind::dataspace);
   const H5T_class_t cls = H5Tget_class(ftype.get());
@@ -317,19 +322,15 @@ std::vector<double> Object::attribute_doubles(std::string_view name) const {
 }
 
 bool Object::attribute_is_string(std::string_view name) const {
-  quiet();
   const std::string n(name);
-  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
-  if (!attr.valid()) fail("open attribute " + n + " of");
+  const Handle attr = open_attribute(n);
   Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
   return H5Tget_class(ftype.get()) == H5T_STRING;
 }
 
 void Object::read_attribute_raw(std::string_view name, ElementType type, void* out) const {
-  quiet();
   const std::string n(name);
-  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
-  if (!attr.valid()) fail("open attribute " + n + " of");
+  const Handle attr = open_attribute(n);
   Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
   Handle space(H5Aget_space(attr.get()), Handle::Kind::dataspace);
   const H5T_class_t want = type == ElementType::i64 ? H5T_INTEGER : H5T_FLOAT;
@@ -354,10 +355,8 @@ double Object::attribute_double(std::string_view name) const {
 }
 
 std::string Object::attribute_string(std::string_view name, std::size_t max_bytes) const {
-  quiet();
   const std::string n(name);
-  Handle attr(H5Aopen(id(), n.c_str(), H5P_DEFAULT), Handle::Kind::attribute);
-  if (!attr.valid()) fail("open attribute " + n + " of");
+  const Handle attr = open_attribute(n);
   Handle ftype(H5Aget_type(attr.get()), Handle::Kind::datatype);
   Handle space(H5Aget_space(attr.get()), Handle::Kind::dataspace);
   if (const std::string why = string_too_long(ftype.get(), max_bytes); !why.empty()) {

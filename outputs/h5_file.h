@@ -136,6 +136,8 @@ class Object {
   void set_attribute_raw(std::string_view name, ElementType type, const void* value);
   void set_string_attribute(std::string_view name, std::string_view value);
   void read_attribute_raw(std::string_view name, ElementType type, void* out) const;
+  /// The attribute `name` opened (errors quieted), or fail("open attribute <name> of").
+  [[nodiscard]] Handle open_attribute(const std::string& name) const;
 };
 
 /// A 1-D dataset, a 2-D one of rows of components (WriteOptions::columns), or a scalar string
