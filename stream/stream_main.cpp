@@ -707,11 +707,12 @@ void Stream::report_bad_line(const std::string& line, const std::string& why) {
 
 /// The model's gauges as the newest state says (the daemon's last STATE, or the in-process
 /// twin's); empty before one.
-std::optional<peritwin_msgs::damage_state_t> newest_state(const loads::BatchSender* sender,
-                                                          const twin::InProcessTwin* local) {
-  if (local != nullptr) return local->state();
-  if (sender != nullptr) return sender->last_state();
-  return std::nullopt;
+/// (Not a copy: follow_gauges asks at every turn of the input loop.)
+const peritwin_msgs::damage_state_t* newest_state(const loads::BatchSender* sender,
+                                                  const twin::InProcessTwin* local) {
+  if (local != nullptr) return &local->state();
+  if (sender != nullptr && sender->last_state()) return &*sender->last_state();
+  return nullptr;
 }
 
 void Stream::take_gauge_line(const std::string& line) {
