@@ -521,7 +521,7 @@ int run(const Options& o) {
     loads::SeriesRules rules;
     rules.gate = c.sensor.gate;
     rules.alpha_bin = c.sensor.alpha_bin;
-    rules.compressed_bonds_fatigue = c.fatigue.compressed_bonds_fatigue;
+    rules.compressed_bonds_fatigue = c.fatigue.mirrors_compressive_cycles();
     auto read = loads::read_blocks(o.history, format, rules);
     if (!read) {
       std::fprintf(stderr, "peritwin-bench prognostics: %s\n", read.error().message().c_str());

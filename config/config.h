@@ -42,6 +42,12 @@
 //                          eps_inf_prop 0 (>= 0)                 (fatigue::StrainLawParams),
 //                          compressed_bonds_fatigue true (false: only bonds in tension at P_max
 //                          lose life; FatigueSettings::compressed_bonds_fatigue)
+//                        strain_range, energy: compression "full_range" (000 Eq. 15 as written:
+//                          the papers' and welded details' rule) | "contact" (strain_range only:
+//                          crack faces touch at P_min < 0, statics::CrackFaceContact) |
+//                          "closure" (Newman's opening function, fatigue::NewmanClosure, with
+//                          closure_constraint 2 (α in [1, 3]) and closure_smax_over_flow_stress
+//                          0.3 (in (0, 1))); docs/compression.md
 //                        bilinear (model.kind = "bond_based" only): s0 R (> 0), sc R (> s0),
 //                          A R (> 0), m 4 (> 0) (fatigue::BilinearParams), cycle_increment 1000
 //                          (ΔN, >= 1), softening_tolerance 1e-6 (> 0),

@@ -341,6 +341,43 @@ void read_material(Context& ctx, const toml::table& t, const std::string& path,
   r.finish();
 }
 
+/// [detail.fatigue] compression (issue 34, FatigueSettings::compression) and the closure rule's
+/// closure_constraint, closure_smax_over_flow_stress (fatigue::NewmanClosure).
+void read_compression(TableReader& r, fatigue::FatigueSettings& f) {
+  const std::vector<std::pair<std::string_view, fatigue::CompressionRule>> rules = {
+      {"full_range", fatigue::CompressionRule::full_range},
+      {"contact", fatigue::CompressionRule::contact},
+      {"closure", fatigue::CompressionRule::closure}};
+  f.compression = r.choice<fatigue::CompressionRule>("compression", rules, f.compression)
+                      .value_or(f.compression);
+  const bool range_law =
+      f.law == fatigue::FatigueLaw::strain_range || f.law == fatigue::FatigueLaw::energy;
+  if (f.compression != fatigue::CompressionRule::full_range) {
+    r.check("compression", range_law,
+            "applies to the laws strain_range and energy (000 Eq. 15); the kinetic law takes R "
+            "in its own dose (004 Eq. 15) and the bilinear law holds the load at its peak (003 "
+            "Sec. 4)");
+  }
+  if (f.compression == fatigue::CompressionRule::contact) {
+    r.check("compression", f.law == fatigue::FatigueLaw::strain_range,
+            "\"contact\" needs law = \"strain_range\" (each bond's range from the contact "
+            "solution at P_min)");
+  }
+  const bool closure = f.compression == fatigue::CompressionRule::closure;
+  for (const auto* key : {"closure_constraint", "closure_smax_over_flow_stress"}) {
+    if (r.has(key)) r.check(key, closure, "only with compression = \"closure\"");
+  }
+  f.closure.constraint = r.number("closure_constraint", f.closure.constraint);
+  r.check("closure_constraint", f.closure.constraint >= 1.0 && f.closure.constraint <= 3.0,
+          "must lie in [1, 3] (1 plane stress, 3 plane strain; got " +
+              core::format_number(f.closure.constraint) + ")");
+  f.closure.smax_over_flow_stress =
+      r.number("closure_smax_over_flow_stress", f.closure.smax_over_flow_stress);
+  r.check("closure_smax_over_flow_stress",
+          f.closure.smax_over_flow_stress > 0.0 && f.closure.smax_over_flow_stress < 1.0,
+          "must lie in (0, 1) (got " + core::format_number(f.closure.smax_over_flow_stress) + ")");
+}
+
 void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, double horizon_ratio,
                   fatigue::FatigueSettings& f) {
   TableReader r(ctx, t, path);
@@ -371,6 +408,7 @@ void read_fatigue(Context& ctx, const toml::table& t, const std::string& path, d
   }
   TomlParamReader params(r);
   entry.read(params, f);
+  read_compression(r, f);
   r.finish();
 }
 

@@ -174,7 +174,7 @@ std::optional<int> read_history(Options& o, const config::DetailConfig& detail,
   o.series_rules.residue = o.residue == "whole"  ? loads::ResidueRule::whole
                            : o.residue == "keep" ? loads::ResidueRule::keep
                                                  : loads::ResidueRule::half;
-  o.series_rules.compressed_bonds_fatigue = detail.fatigue.compressed_bonds_fatigue;
+  o.series_rules.compressed_bonds_fatigue = detail.fatigue.mirrors_compressive_cycles();
   auto read = replay::read_history(o.history, fmt, detail.id, o.series_rules);
   if (!read) {
     std::cerr << "peritwin-replay: " << read.error().message() << "\n";

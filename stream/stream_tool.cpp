@@ -89,7 +89,7 @@ Pipeline::Pipeline(const config::DetailConfig& detail, const std::string& source
     : scale_(detail.sensor.scale),
       offset_(detail.sensor.offset),
       counter_(detail.sensor.gate),
-      blocks_(loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}),
+      blocks_(loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.mirrors_compressive_cycles()}),
       batcher_(detail.id, source_id, first_seq, batching) {}
 
 void Pipeline::emit(std::vector<messages::Batch>& out) {
@@ -268,7 +268,7 @@ core::Expected<Pipeline, std::string> Pipeline::restore(std::string_view text,
   if (!converter) return converter.error();
   if (counter->gate() != detail.sensor.gate ||
       converter->rules() !=
-          loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.compressed_bonds_fatigue}) {
+          loads::BlockRules{detail.sensor.alpha_bin, detail.fatigue.mirrors_compressive_cycles()}) {
     return std::string(
         "written with another [detail.sensor] gate / alpha_bin or compressed_bonds_fatigue");
   }

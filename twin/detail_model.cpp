@@ -144,6 +144,14 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
   h.value(m->settings_.refactor_every_resolves);
   h.value(config.material.fracture_toughness);
   h.value(m->settings_.compressed_bonds_fatigue);
+  // Issue 34: hashed only when not the default, so that existing details keep their signatures.
+  if (m->settings_.compression != fatigue::CompressionRule::full_range) {
+    h.value(m->settings_.compression);
+    if (m->settings_.compression == fatigue::CompressionRule::closure) {
+      h.value(m->settings_.closure.constraint);
+      h.value(m->settings_.closure.smax_over_flow_stress);
+    }
+  }
   m->signature_ = h.h.get();
   return std::shared_ptr<const DetailModel>(std::move(m));
 }

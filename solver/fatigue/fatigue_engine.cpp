@@ -18,6 +18,7 @@ double advance_sum(double sum, double increment, std::int64_t k) {
 }
 
 bool same_rate_key(const core::LoadBlock& a, const core::LoadBlock& b, bool dose_mode) {
+  // Dose mode: the rates are per unit load at α; the block's P_max and R are in the dose.
   if (dose_mode) return a.alpha == b.alpha;
   return a.p_max == b.p_max && a.r == b.r && a.alpha == b.alpha;
 }
@@ -97,6 +98,26 @@ FatigueEngine::FatigueEngine(const mesh::Discretization& disc, const model::PdMo
                                 settings_.bilinear_solve_tolerance,
                                 settings_.bilinear_reference_step);
   }
+  if (settings_.compression != CompressionRule::full_range &&
+      settings_.law != FatigueLaw::strain_range && settings_.law != FatigueLaw::energy) {
+    throw std::invalid_argument(
+        "FatigueEngine: compression \"contact\" or \"closure\" applies to the strain_range and "
+        "energy laws (000 Eq. 15); the kinetic law takes R in its own dose (004 Eq. 15), the "
+        "bilinear law holds the load at its peak (003 Sec. 4)");
+  }
+  if (settings_.compression == CompressionRule::contact) {
+    if (settings_.law != FatigueLaw::strain_range) {
+      throw std::invalid_argument(
+          "FatigueEngine: compression \"contact\" needs the strain_range law (each bond's range "
+          "from the contact solution at P_min; the energy law's ḡ range has no such form)");
+    }
+    contact_ = std::make_unique<statics::CrackFaceContact>(disc, model, supports_, loads_, ties_);
+  }
+  if (settings_.compression == CompressionRule::closure) {
+    if (const core::Status valid = fatigue::validate(settings_.closure); !valid) {
+      throw std::invalid_argument("FatigueEngine: closure: " + valid.error().reason);
+    }
+  }
   solver_->set_incremental(settings_.incremental);
   state_.anchor_life.assign(nb, 1.0);  // 000 Eq. (14): λ = 1 at N = 0
   rate_.assign(nb, 0.0);
@@ -118,8 +139,40 @@ FatigueEngine::FatigueEngine(const mesh::Discretization& disc, const model::PdMo
 }
 
 bool FatigueEngine::dose_mode() const {
+  // Contact: a bond's range at R < 0 is |s⁺ − |R|·P_max·c_b| with c_b its own contact stretch,
+  // not a bond factor times a load dose: the direct mode.
   return settings_.law == FatigueLaw::strain_range && settings_.strain.eps_inf == 0.0 &&
-         settings_.strain.eps_inf_prop == 0.0;
+         settings_.strain.eps_inf_prop == 0.0 &&
+         settings_.compression != CompressionRule::contact;
+}
+
+double FatigueEngine::range_ratio(double load_ratio) const {
+  if (settings_.compression == CompressionRule::closure) {
+    return fatigue::newman_opening_ratio(load_ratio, settings_.closure);  // ΔK_eff = (1 − f)K_max
+  }
+  return load_ratio;
+}
+
+double FatigueEngine::cycle_dose(const core::LoadBlock& block, double m) const {
+  return fatigue::load_dose(block.p_max, range_ratio(block.r), m);
+}
+
+bool FatigueEngine::prepare_contact(double alpha) {
+  if (contact_valid_ && contact_alpha_ == alpha && contact_events_ == state_.events.size()) {
+    return true;
+  }
+  if (const core::Status r = contact_->compressive_stretch(solver_->intact(), alpha,
+                                                           contact_stretch_);
+      !r.ok()) {
+    state_.failed = true;
+    state_.failure_reason = "crack-face contact at P_min < 0: " + core::message_of(r);
+    contact_valid_ = false;
+    return false;
+  }
+  contact_valid_ = true;
+  contact_alpha_ = alpha;
+  contact_events_ = state_.events.size();
+  return true;
 }
 
 bool FatigueEngine::initialize() {
@@ -166,14 +219,18 @@ void FatigueEngine::materialize() {
   state_.dose[0] = state_.dose[1] = 0.0;
 }
 
-void FatigueEngine::prepare_rates(const core::LoadBlock& block) {
-  if (state_.rates_valid && same_rate_key(state_.rate_key, block, dose_mode())) return;
+bool FatigueEngine::prepare_rates(const core::LoadBlock& block) {
+  if (state_.rates_valid && same_rate_key(state_.rate_key, block, dose_mode())) return true;
   materialize();
-  compute_rates(block);
+  return compute_rates(block);
 }
 
-void FatigueEngine::compute_rates(const core::LoadBlock& block) {
+bool FatigueEngine::compute_rates(const core::LoadBlock& block) {
   const bool dose = dose_mode();
+  // Contact at P_min < 0: the stretches at P = −1 with the faces touching (homogeneous in P).
+  const bool contact_range = contact_ && block.r < 0.0;
+  if (contact_range && !prepare_contact(block.alpha)) return false;
+  const double ratio = range_ratio(block.r);
   const auto& p = settings_.strain;
   const auto& intact = solver_->intact();
   if (dose) {
@@ -204,9 +261,12 @@ void FatigueEngine::compute_rates(const core::LoadBlock& block) {
         if (dose) {
           rate_[b] = phase_[b] == 1 ? fatigue::strain_bond_factor(p.A1, p.m1, s)
                                     : fatigue::strain_bond_factor(p.A2, p.m2, s);
+        } else if (contact_range) {  // 000 Eq. (15) with s⁻ = |P_min|·c_b, the contact solution
+          const double s_min = -block.r * block.p_max * contact_stretch_[b];
+          rate_[b] = fatigue::strain_decrement(fatigue::strain_range(s, s_min), phase, p);
         } else {  // 000 Eq. (15), (17)-(19)
           rate_[b] =
-              fatigue::strain_decrement(fatigue::strain_range_from_ratio(s, block.r), phase, p);
+              fatigue::strain_decrement(fatigue::strain_range_from_ratio(s, ratio), phase, p);
         }
         break;
       case FatigueLaw::energy: {  // 000 Eq. (30)-(39) with B_i, n_i from Eq. (44)-(46)
@@ -215,9 +275,9 @@ void FatigueEngine::compute_rates(const core::LoadBlock& block) {
         // positive". With B_i from the same C1 (Eq. 44b) the decrement is then A_i·ε^m_i for
         // every bond: the energy law equals the strain-range law up to rounding (tested).
         const double c0 = s != 0.0 ? g[b] / (s * s) : 0.0;
-        const double range = fatigue::energy_release_rate_range_from_ratio(c0, s, block.r);
+        const double range = fatigue::energy_release_rate_range_from_ratio(c0, s, ratio);
         rate_[b] = c0 != 0.0 ? fatigue::energy_decrement(range, phase,
-                                                         fatigue::c1_coefficient(c0, block.r), p)
+                                                         fatigue::c1_coefficient(c0, ratio), p)
                              : 0.0;
         break;
       }
@@ -249,6 +309,7 @@ void FatigueEngine::compute_rates(const core::LoadBlock& block) {
   // The rates do not depend on the count; kept out of the state so that it is the same however
   // the cycles were cut into blocks (FatigueEngine::StopCheck, Twin::engine_hash).
   state_.rate_key.count = 0;
+  return true;
 }
 
 std::int64_t FatigueEngine::cycles_to_next_break(const core::LoadBlock& block,
@@ -263,8 +324,7 @@ std::int64_t FatigueEngine::cycles_to_next_break(const core::LoadBlock& block,
     return best;
   }
   const auto& p = settings_.strain;
-  const double increment[2] = {fatigue::load_dose(block.p_max, block.r, p.m1),
-                               fatigue::load_dose(block.p_max, block.r, p.m2)};
+  const double increment[2] = {cycle_dose(block, p.m1), cycle_dose(block, p.m2)};
   // Exact predicate of the per-cycle path: bond b has failed after k cycles of this block.
   auto failed_after = [&](std::size_t b, std::int64_t k) {
     const int ph = phase_[b] - 1;
@@ -330,8 +390,8 @@ std::int64_t FatigueEngine::cycles_to_next_break(const core::LoadBlock& block,
 void FatigueEngine::advance(const core::LoadBlock& block, std::int64_t k) {
   if (dose_mode()) {
     const auto& p = settings_.strain;
-    state_.dose[0] = advance_sum(state_.dose[0], fatigue::load_dose(block.p_max, block.r, p.m1), k);
-    state_.dose[1] = advance_sum(state_.dose[1], fatigue::load_dose(block.p_max, block.r, p.m2), k);
+    state_.dose[0] = advance_sum(state_.dose[0], cycle_dose(block, p.m1), k);
+    state_.dose[1] = advance_sum(state_.dose[1], cycle_dose(block, p.m2), k);
     return;
   }
   for (std::size_t b = 0; b < rate_.size(); ++b) {
@@ -351,7 +411,7 @@ EngineStatus FatigueEngine::apply(const core::LoadBlock& block, const StopCheck&
   if (stop_after(e0)) return EngineStatus::stopped;
   std::int64_t remaining = block.count;
   while (remaining > 0) {
-    prepare_rates(block);
+    if (!prepare_rates(block)) return EngineStatus::final_failure;
     const std::int64_t k = cycles_to_next_break(block, remaining);
     if (k > remaining) {
       advance(block, remaining);
@@ -386,10 +446,10 @@ EngineStatus FatigueEngine::apply_per_cycle(const core::LoadBlock& block) {
   if (state_.failed || !static_cascade(block)) return EngineStatus::final_failure;
   const auto& p = settings_.strain;
   for (std::int64_t c = 0; c < block.count; ++c) {
-    prepare_rates(block);
+    if (!prepare_rates(block)) return EngineStatus::final_failure;
     if (dose_mode()) {
-      state_.dose[0] += fatigue::load_dose(block.p_max, block.r, p.m1);
-      state_.dose[1] += fatigue::load_dose(block.p_max, block.r, p.m2);
+      state_.dose[0] += cycle_dose(block, p.m1);
+      state_.dose[1] += cycle_dose(block, p.m2);
     } else {
       for (std::size_t b = 0; b < rate_.size(); ++b) {
         if (rate_[b] > 0.0)
@@ -729,6 +789,12 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       node_damage_(other.node_damage_),
       stretch_(other.stretch_),
       solves_(other.solves_),
+      // A fresh contact solver (its virgin factor again on first use): its answer is a function
+      // of the broken set and α alone (statics/crack_contact.h), so the copy continues alike.
+      contact_(other.contact_ ? std::make_unique<statics::CrackFaceContact>(
+                                    other.disc_, other.model_, other.supports_, other.loads_,
+                                    other.ties_)
+                              : nullptr),
       increments_(other.increments_),
       unconverged_increments_(other.unconverged_increments_) {
   dose_threshold_[0] = other.dose_threshold_[0];
@@ -745,7 +811,8 @@ std::unique_ptr<FatigueEngine> FatigueEngine::fork(const FatigueSettings& settin
       settings.critical_stretch != settings_.critical_stretch ||
       settings.critical_bond_energy != settings_.critical_bond_energy ||
       settings.static_failure != settings_.static_failure ||
-      settings.crack_interactions != settings_.crack_interactions) {
+      settings.crack_interactions != settings_.crack_interactions ||
+      settings.compression != settings_.compression) {
     throw std::invalid_argument(
         "FatigueEngine::fork: only the fatigue laws' coefficients may differ");
   }
@@ -788,6 +855,7 @@ bool FatigueEngine::import_state(const EngineState& s) {
   }
   if (bilinear()) return import_bilinear_state(s);
   cascade_checked_ = false;
+  contact_valid_ = false;
   // The re-solves to replay: on a fresh engine, the recorded groups of events when they account
   // for every event (same updates, same factor bit for bit), else one group of every bond broken
   // since now.

@@ -61,6 +61,7 @@
 #include "solver/fatigue/laws/energy.h"
 #include "solver/mesh/discretization.h"
 #include "solver/model/pd_model.h"
+#include "solver/statics/crack_contact.h"
 #include "solver/statics/static_solver.h"
 
 namespace peritwin::fatigue {
@@ -257,6 +258,8 @@ class FatigueEngine {
   /// Bilinear law: increments integrated, and those that hit softening_max_iterations.
   [[nodiscard]] std::int64_t increments() const { return increments_; }
   [[nodiscard]] std::int64_t unconverged_increments() const { return unconverged_increments_; }
+  /// CompressionRule::contact: the crack-face contact solver (nullptr otherwise).
+  [[nodiscard]] const statics::CrackFaceContact* contact() const { return contact_.get(); }
 
   /// A copy of this engine that continues with `settings` (which may differ from this engine's
   /// only in the fatigue laws' coefficients, e.g. A2 for a life band): the factor is copied, not
@@ -285,10 +288,20 @@ class FatigueEngine {
   bool bilinear_increment(const core::LoadBlock& key, std::int64_t dn);
   EngineStatus apply_bilinear(const core::LoadBlock& block, const StopCheck& stop);
   bool import_bilinear_state(const EngineState& state);
-  /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key).
-  void prepare_rates(const core::LoadBlock& block);
-  /// Recomputes rate_ (and the dose thresholds) for `block` without folding the dose.
-  void compute_rates(const core::LoadBlock& block);
+  /// Makes rate_ valid for the block (recomputing after a re-solve or a change of load key);
+  /// false on final failure (a crack-face contact solve that failed, with failure_reason()).
+  bool prepare_rates(const core::LoadBlock& block);
+  /// Recomputes rate_ (and the dose thresholds) for `block` without folding the dose; false when
+  /// the crack-face contact solve failed (its reason in state_.failure_reason).
+  bool compute_rates(const core::LoadBlock& block);
+  /// The R that the bond ranges take: R itself, or Newman's opening ratio f(R) under
+  /// CompressionRule::closure (the range |s⁺|(1 − f)).
+  [[nodiscard]] double range_ratio(double load_ratio) const;
+  /// The load dose of one cycle of `block` for exponent m (dose mode), with range_ratio.
+  [[nodiscard]] double cycle_dose(const core::LoadBlock& block, double m) const;
+  /// CompressionRule::contact: contact_stretch_ made the stretches at P = −1, α with the crack
+  /// faces in contact for the current broken set (cached per α and re-solve); false on failure.
+  bool prepare_contact(double alpha);
   /// Folds the accumulated dose into the anchors (λ0 ← λ, D ← 0).
   void materialize();
   /// Smallest k in [1, limit] at which some breakable bond reaches λ ≤ 0, or limit + 1.
@@ -347,6 +360,14 @@ class FatigueEngine {
   double cascade_alpha_ = 0.0;
 
   int solves_ = 0;
+
+  // CompressionRule::contact (issue 34): the contact solver, and its stretches at P = −1 for the
+  // angle and the number of break events they were computed at (not state: recomputed alike).
+  std::unique_ptr<statics::CrackFaceContact> contact_;
+  std::vector<double> contact_stretch_;
+  bool contact_valid_ = false;
+  double contact_alpha_ = 0.0;
+  std::size_t contact_events_ = 0;
 
   // Bilinear law (003): see the file comment.
   std::int64_t increments_ = 0;

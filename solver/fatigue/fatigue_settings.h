@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "solver/fatigue/laws/bilinear.h"
+#include "solver/fatigue/laws/crack_closure.h"
 #include "solver/fatigue/laws/kinetic.h"
 #include "solver/fatigue/laws/remaining_life.h"
 #include "solver/fatigue/laws/strain_range.h"
@@ -23,6 +24,22 @@ enum class FatigueLaw {
 enum class StaticFailure {
   critical_stretch,      ///< 000 Eq. (7)-(8): a bond breaks when s ≥ s_c
   critical_bond_energy,  ///< 000 Eq. (9)-(12): a bond breaks when ḡ (Eq. 10-11, 31) ≥ g_c
+};
+
+/// How the compressive part of a reversed cycle (R < 0) counts (issue 34, docs/compression.md);
+/// laws strain_range and energy (contact: strain_range only).
+enum class CompressionRule {
+  /// 000 Eq. (15)-(16) as the papers write it: the bond range is |s⁺(1 − R)| whatever the sign of
+  /// P_min; the crack faces pass through each other. What the design codes count for welded
+  /// details (tensile residual stress keeps the crack open), and the papers' B1-B3.
+  full_range,
+  /// The crack faces touch: at P_min < 0 the broken bonds that close carry compression
+  /// (statics::CrackFaceContact), and each bond's range is |s⁺ − s(P_min)| with s(P_min) the
+  /// contact solution. R >= 0 is unchanged. Exact stepping in the engine's direct mode.
+  contact,
+  /// Newman's crack-opening function (fatigue::NewmanClosure): the range |s⁺|(1 − f(R)), for
+  /// every R (also R >= 0: A2 is then calibrated to ΔK_eff data, as NASGRO's C is).
+  closure,
 };
 
 struct FatigueSettings {
@@ -55,6 +72,17 @@ struct FatigueSettings {
   /// carries the compression). Under near-pure mode II the default grows a second branch on the
   /// compressed side of the tip, the mirror of the tensile one (docs/validation.md, B2).
   bool compressed_bonds_fatigue = true;
+  /// Laws strain_range and energy: the rule for the compressive part of a cycle (see there).
+  CompressionRule compression = CompressionRule::full_range;
+  /// CompressionRule::closure: the opening function's parameters.
+  NewmanClosure closure;
+  /// Whether a fully compressive cycle (P_max <= 0) is applied as its tensile mirror
+  /// (loads/cycle_blocks.h): only when compressed bonds fatigue over the full range. Under contact
+  /// or closure the crack is shut through such a cycle (K_max <= 0: no growth, ASTM E647), so it
+  /// is skipped and counted.
+  [[nodiscard]] bool mirrors_compressive_cycles() const {
+    return compressed_bonds_fatigue && compression == CompressionRule::full_range;
+  }
   /// 000 Sec. 4.4: a node's bonds follow phase II once it or a family member has φ ≥ φ0. The
   /// default suits δ = 3.015Δx; other horizons: phase_switch_damage_for_horizon.
   double phase_switch_damage = fatigue::kPhaseSwitchDamage2D;
