@@ -14,6 +14,7 @@
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
+#include "validation/c1_compression.h"
 #include "validation/ct_calibration.h"
 #include "validation/d_dynamics.h"
 
@@ -233,8 +234,13 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B2 | B3 | B4 | D1 | D2 | D3 | D4")
-      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "D1", "D2", "D3", "D4"}));
+  app.add_option("--case", which, "B1 | B2 | B3 | B4 | C1 | D1 | D2 | D3 | D4")
+      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "C1", "D1", "D2", "D3", "D4"}));
+  std::string c1_ct = PERITWIN_EXAMPLES_DIR "/b1-ct-al6061.toml";
+  std::string c1_panel = PERITWIN_EXAMPLES_DIR "/mt-panel-al6061.toml";
+  app.add_option("--ct-config", c1_ct, "C1: the CT detail (default the demo's B1)");
+  app.add_option("--panel-config", c1_panel,
+                 "C1: the middle-crack panel (default examples/mt-panel-al6061.toml; \"\" = none)");
   int threads = 2;
   app.add_option("--threads", threads, "D1, D3, D4: bond-force threads")->check(CLI::Range(1, 64));
   bool no_limit = false;
@@ -331,6 +337,7 @@ int main(int argc, char** argv) {
   if (which == "B3")
     return run_b3(dx_option->count() > 0 ? dx : 0.00025, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
+  if (which == "C1") return validation::run_c1_compression(c1_ct, c1_panel, out);
   if (which == "D1") return validation::run_d1(out, threads);
   if (which == "D2") return validation::run_d2(out);
   if (which == "D3") return validation::run_d3(out, threads);

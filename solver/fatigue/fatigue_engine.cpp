@@ -316,9 +316,23 @@ std::int64_t FatigueEngine::cycles_to_next_break(const core::LoadBlock& block,
                                                  std::int64_t limit) const {
   const std::int64_t none = limit + 1;
   if (!dose_mode()) {
-    std::int64_t best = none;
+    // Every bond's cycle to failure lies within cycles_to_failure_bounds; only the bonds whose
+    // lower bound is at most the smallest upper bound (and within the block) can fail first, and
+    // only those take the exact count (cycles_to_failure, bulk subtraction per binade: the cost
+    // that made a contact run 4x slower than the dose mode when it ran for every bond).
+    std::int64_t smallest_hi = none;
+    candidates_.clear();
     for (std::size_t b = 0; b < rate_.size(); ++b) {
       if (!breakable_[b] || !(rate_[b] > 0.0)) continue;
+      const fatigue::CycleBounds bounds =
+          fatigue::cycles_to_failure_bounds(state_.anchor_life[b], rate_[b]);
+      if (bounds.lo > smallest_hi) continue;
+      smallest_hi = std::min(smallest_hi, bounds.hi);
+      candidates_.emplace_back(bounds.lo, b);
+    }
+    std::int64_t best = none;
+    for (const auto& [lo, b] : candidates_) {
+      if (lo > smallest_hi || lo > best) continue;
       best = std::min(best, fatigue::cycles_to_failure(state_.anchor_life[b], rate_[b]));
     }
     return best;

@@ -353,6 +353,8 @@ class FatigueEngine {
   /// min over breakable bonds of λ0/F per phase (dose mode): no bond can fail before D reaches it.
   double dose_threshold_[2] = {0.0, 0.0};
   std::vector<double> stretch_;  ///< stretch at the rate key's (P_max, α)
+  /// Direct mode, cycles_to_next_break: (lower bound, bond) of the bonds that may fail first.
+  mutable std::vector<std::pair<std::int64_t, std::size_t>> candidates_;
 
   /// The phase III scan found nothing at (cascade_p_max_, cascade_alpha_) since the last re-solve.
   bool cascade_checked_ = false;

@@ -61,7 +61,8 @@ class CrackFaceContact {
   [[nodiscard]] int last_iterations() const { return last_iterations_; }
   /// Calls that reached kMaxIterations without a repeated set (the last iterate was used).
   [[nodiscard]] std::int64_t unconverged() const { return unconverged_; }
-  /// Solves with a non-empty open set (each a factor copy and |O| rank updates).
+  /// Solves with a non-empty open set (each a factor copy and |O| rank updates); a set met again
+  /// at the same angle reuses the last one's stretches.
   [[nodiscard]] std::int64_t updated_solves() const { return updated_solves_; }
 
   static constexpr int kMaxIterations = 50;
@@ -78,6 +79,11 @@ class CrackFaceContact {
   std::vector<Tie> ties_;
   std::unique_ptr<StaticSolver> virgin_;  ///< every bond intact, factorized on first use
   std::vector<mesh::BondIndex> open_;     ///< the last converged open set (the warm start)
+  /// The last solve with a non-empty open set: its angle, set and stretches.
+  bool last_valid_ = false;
+  double last_alpha_ = 0.0;
+  std::vector<mesh::BondIndex> last_open_;
+  std::vector<double> last_stretch_;
   int last_iterations_ = 0;
   std::int64_t unconverged_ = 0;
   std::int64_t updated_solves_ = 0;
