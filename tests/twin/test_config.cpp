@@ -430,6 +430,22 @@ TEST(Config, FatigueLawsMapEveryField) {
   EXPECT_EQ(g.static_failure, fatigue::StaticFailure::critical_bond_energy);
   EXPECT_FALSE(g.compressed_bonds_fatigue);
 
+  // Issue 34: the compression rule, Newman's parameters with the closure rule.
+  EXPECT_EQ(e.compression, fatigue::CompressionRule::full_range);
+  EXPECT_TRUE(e.mirrors_compressive_cycles());
+  const fatigue::FatigueSettings c =
+      fatigue({R"(law = "strain_range")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
+               R"(compression = "contact")"});
+  EXPECT_EQ(c.compression, fatigue::CompressionRule::contact);
+  EXPECT_FALSE(c.mirrors_compressive_cycles());  // a fully compressive cycle shuts the crack
+  const fatigue::FatigueSettings n =
+      fatigue({R"(law = "energy")", "A1 = 1.5", "m1 = 2.5", "A2 = 3.5", "m2 = 4.5",
+               R"(compression = "closure")", "closure_constraint = 2.5",
+               "closure_smax_over_flow_stress = 0.4"});
+  EXPECT_EQ(n.compression, fatigue::CompressionRule::closure);
+  EXPECT_EQ(n.closure.constraint, 2.5);
+  EXPECT_EQ(n.closure.smax_over_flow_stress, 0.4);
+
   const fatigue::FatigueSettings b =
       fatigue({R"(law = "bilinear")", "s0 = 1e-3", "sc = 3e-3", "A = 2e8"}, true);
   EXPECT_EQ(b.law, fatigue::FatigueLaw::bilinear);
@@ -535,12 +551,37 @@ TEST(ConfigErrors, MissingField) {
   expect_one_error(r, 1, "detail[0].material", "missing required key \"material\"");
 }
 
+TEST(ConfigErrors, CompressionRuleWhereTheLawCannotTakeIt) {
+  // Issue 34: "contact" and "closure" are for the range laws; contact for strain_range only;
+  // Newman's parameters only with the closure rule, and within their ranges.
+  Doc doc = plate();
+  doc.insert_after("m2 = ", R"(compression = "touching")");
+  expect_one_error(parse(doc), 19, "detail[0].fatigue.compression",
+                   "\"touching\" is not one of \"full_range\", \"contact\", \"closure\"");
+  doc = plate();
+  doc.replace("law = ", R"(law = "energy")");
+  doc.insert_after("m2 = ", R"(compression = "contact")");
+  expect_one_error(parse(doc), 19, "detail[0].fatigue.compression",
+                   "\"contact\" needs law = \"strain_range\" (each bond's range from the contact "
+                   "solution at P_min)");
+  doc = plate();
+  doc.insert_after("m2 = ", "closure_constraint = 2.0");
+  expect_one_error(parse(doc), 19, "detail[0].fatigue.closure_constraint",
+                   "only with compression = \"closure\"");
+  doc = plate();
+  doc.insert_after("m2 = ", R"(compression = "closure")");
+  doc.insert_after("compression = ", "closure_smax_over_flow_stress = 1.2");
+  expect_one_error(parse(doc), 20, "detail[0].fatigue.closure_smax_over_flow_stress",
+                   "must lie in (0, 1) (got 1.2)");
+}
+
 TEST(ConfigErrors, ParameterOfAnotherLaw) {
   Doc doc = plate();
   doc.insert_after("m2 = ", "U = 2e-19");
   expect_one_error(parse(doc), 19, "detail[0].fatigue.U",
                    "unknown key \"U\" (known here: law, phi0, static_failure, A1, m1, A2, m2, "
-                   "eps_inf, eps_inf_prop, compressed_bonds_fatigue)");
+                   "eps_inf, eps_inf_prop, compressed_bonds_fatigue, compression, "
+                   "closure_constraint, closure_smax_over_flow_stress)");
   doc = plate();
   doc.replace("law = ", R"(law = "bilinear")");
   const config::ConfigResult r = parse(doc);
