@@ -71,8 +71,7 @@ Timed time_identify(const stream::LoadIdentifier& id, const std::vector<double>&
 /// observation taken every 5000 cycles' worth of samples as peritwin-stream does. Only the
 /// reading of the line from the file or pipe and the sending are left out.
 Timed time_stream(const std::vector<stream::GaugeInfluence>& gauges,
-                  const std::vector<double>& strains, std::int64_t samples,
-                  std::int64_t* batches) {
+                  const std::vector<double>& strains, std::int64_t samples, std::int64_t* batches) {
   std::string header = "time_s";
   for (const auto& g : gauges) header += "," + g.id;
   stream::GaugeFeed feed;

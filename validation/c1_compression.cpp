@@ -96,10 +96,10 @@ int run_c1_compression(const std::string& ct_config, const std::string& panel_co
       }
       const double anchor = by_r.at(0.1).cycles;
       const double r0 = by_r.count(0.0) ? by_r.at(0.0).cycles : NAN;
-      outputs::PlotSeries twin_series{std::string("twin, ") + rule.name, {}, {}, colors[color],
-                                      false};
-      outputs::PlotSeries paris{std::string("Paris K_max, ") + rule.name, {}, {}, colors[color],
-                                true};
+      outputs::PlotSeries twin_series{
+          std::string("twin, ") + rule.name, {}, {}, colors[color], false};
+      outputs::PlotSeries paris{
+          std::string("Paris K_max, ") + rule.name, {}, {}, colors[color], true};
       for (const double r : g.ratios) {
         const Life& l = by_r.at(r);
         const double paris_n = anchor * std::pow(0.9 / (1.0 - std::max(r, 0.0)), m);
@@ -161,10 +161,10 @@ int run_c1_compression(const std::string& ct_config, const std::string& panel_co
       line["full_range_r0.1_wall_s"] = core::fixed(base.wall_s, 2);
       line["full_range_r0.1_breaks"] = static_cast<long long>(base.breaks);
       line["wall_ratio"] = core::fixed(l.wall_s / base.wall_s, 3);
-      line["per_break_ratio"] =
-          core::fixed((l.wall_s / static_cast<double>(std::max<std::int64_t>(l.breaks, 1))) /
-                          (base.wall_s / static_cast<double>(std::max<std::int64_t>(base.breaks, 1))),
-                      3);
+      line["per_break_ratio"] = core::fixed(
+          (l.wall_s / static_cast<double>(std::max<std::int64_t>(l.breaks, 1))) /
+              (base.wall_s / static_cast<double>(std::max<std::int64_t>(base.breaks, 1))),
+          3);
       core::print_line(line);
     }
     outputs::write_line_plot_png(out_dir / (std::string("c1_") + g.name + "_lives.png"), plot);

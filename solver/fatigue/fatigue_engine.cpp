@@ -142,8 +142,7 @@ bool FatigueEngine::dose_mode() const {
   // Contact: a bond's range at R < 0 is |s⁺ − |R|·P_max·c_b| with c_b its own contact stretch,
   // not a bond factor times a load dose: the direct mode.
   return settings_.law == FatigueLaw::strain_range && settings_.strain.eps_inf == 0.0 &&
-         settings_.strain.eps_inf_prop == 0.0 &&
-         settings_.compression != CompressionRule::contact;
+         settings_.strain.eps_inf_prop == 0.0 && settings_.compression != CompressionRule::contact;
 }
 
 double FatigueEngine::range_ratio(double load_ratio) const {
@@ -161,8 +160,8 @@ bool FatigueEngine::prepare_contact(double alpha) {
   if (contact_valid_ && contact_alpha_ == alpha && contact_events_ == state_.events.size()) {
     return true;
   }
-  if (const core::Status r = contact_->compressive_stretch(solver_->intact(), alpha,
-                                                           contact_stretch_);
+  if (const core::Status r =
+          contact_->compressive_stretch(solver_->intact(), alpha, contact_stretch_);
       !r.ok()) {
     state_.failed = true;
     state_.failure_reason = "crack-face contact at P_min < 0: " + core::message_of(r);
@@ -805,10 +804,10 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       solves_(other.solves_),
       // A fresh contact solver (its virgin factor again on first use): its answer is a function
       // of the broken set and α alone (statics/crack_contact.h), so the copy continues alike.
-      contact_(other.contact_ ? std::make_unique<statics::CrackFaceContact>(
-                                    other.disc_, other.model_, other.supports_, other.loads_,
-                                    other.ties_)
-                              : nullptr),
+      contact_(other.contact_
+                   ? std::make_unique<statics::CrackFaceContact>(
+                         other.disc_, other.model_, other.supports_, other.loads_, other.ties_)
+                   : nullptr),
       increments_(other.increments_),
       unconverged_increments_(other.unconverged_increments_) {
   dose_threshold_[0] = other.dose_threshold_[0];

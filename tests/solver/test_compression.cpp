@@ -46,8 +46,8 @@ TEST(NewmanClosure, TheCubicMeetsROneWithSlopeOneAndNeverFallsBelowR) {
       const fatigue::NewmanClosure c{alpha, s};
       EXPECT_NEAR(fatigue::newman_opening_ratio(1.0, c), 1.0, 1e-14);
       const double h = 1e-6;
-      const double slope = (fatigue::newman_opening_ratio(1.0, c) -
-                            fatigue::newman_opening_ratio(1.0 - h, c)) / h;
+      const double slope =
+          (fatigue::newman_opening_ratio(1.0, c) - fatigue::newman_opening_ratio(1.0 - h, c)) / h;
       EXPECT_NEAR(slope, 1.0, 1e-5) << alpha << " " << s;
       // Continuous at R = 0 (both branches give A0).
       EXPECT_NEAR(fatigue::newman_opening_ratio(1e-12, c), fatigue::newman_opening_ratio(-1e-12, c),
@@ -87,9 +87,9 @@ statics::Specimen cut_plate(model::ModelKind kind, bool confined) {
   if (confined) {
     p.supports.push_back(
         {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{-1, -h, dx, h})), true, false});
-    p.supports.push_back({p.disc.nodes_in(mesh::Region::of(
-                              mesh::Rectangle{(columns - 1) * dx, -h, 1, h})),
-                          true, false});
+    p.supports.push_back(
+        {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{(columns - 1) * dx, -h, 1, h})), true,
+         false});
   }
   p.loads.push_back(
       {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {}});
@@ -193,14 +193,12 @@ TEST_P(CrackFaceContactTest, UnderBendingPartOfTheCutOpensAndTheSignoriniConditi
   EXPECT_EQ(contact.open_bonds(), open);
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, CrackFaceContactTest,
-                         ::testing::Values(model::ModelKind::bond_based,
-                                           model::ModelKind::state_based),
-                         [](const auto& i) {
-                           return std::string(i.param == model::ModelKind::bond_based
-                                                  ? "bond_based"
-                                                  : "state_based");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Models, CrackFaceContactTest,
+    ::testing::Values(model::ModelKind::bond_based, model::ModelKind::state_based),
+    [](const auto& i) {
+      return std::string(i.param == model::ModelKind::bond_based ? "bond_based" : "state_based");
+    });
 
 // ------------------------------------------------------------------ the engine's rules
 
@@ -323,14 +321,41 @@ TEST_P(ContactEngine, AReversedCycleCostsTheTipTheContactSolutionsRangeNotTheFul
   EXPECT_LT(decrement, 0.5 * full_range);
 }
 
-INSTANTIATE_TEST_SUITE_P(Models, ContactEngine,
-                         ::testing::Values(model::ModelKind::bond_based,
-                                           model::ModelKind::state_based),
-                         [](const auto& i) {
-                           return std::string(i.param == model::ModelKind::bond_based
-                                                  ? "bond_based"
-                                                  : "state_based");
-                         });
+TEST_P(ContactEngine, ACheckpointAndAForkContinueBitForBit) {
+  // The contact solution is a function of the broken set and α alone (statics/crack_contact.h):
+  // an engine resumed from an exported state, and a fork, whose contact solvers start afresh,
+  // continue as the uninterrupted one does, bit for bit, through reversed blocks with breaks.
+  const auto plate = make_notched_plate(GetParam());
+  auto settings = plate_settings(plate, 1000.0, 60.0);
+  settings.compression = fatigue::CompressionRule::contact;
+  const std::vector<core::LoadBlock> first_half = {{1000.0, -1.0, 0.0, 150},
+                                                   {900.0, -2.0, 0.3, 40}};
+  const std::vector<core::LoadBlock> second_half = {{1000.0, -1.0, 0.0, 120},
+                                                    {1000.0, -0.5, 0.3, 80}};
+  fatigue::FatigueEngine straight(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(straight.initialize());
+  for (const auto& b : first_half) straight.apply(b);
+  const fatigue::EngineState saved = straight.export_state();
+  const auto fork = straight.fork(settings);
+  for (const auto& b : second_half) straight.apply(b);
+  fatigue::FatigueEngine resumed(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(resumed.initialize());
+  ASSERT_TRUE(resumed.import_state(saved));
+  for (const auto& b : second_half) {
+    resumed.apply(b);
+    fork->apply(b);
+  }
+  EXPECT_GT(straight.break_events().size(), saved.events.size());  // breaks after the checkpoint
+  EXPECT_EQ(resumed.state_hash(), straight.state_hash());
+  EXPECT_EQ(fork->state_hash(), straight.state_hash());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Models, ContactEngine,
+    ::testing::Values(model::ModelKind::bond_based, model::ModelKind::state_based),
+    [](const auto& i) {
+      return std::string(i.param == model::ModelKind::bond_based ? "bond_based" : "state_based");
+    });
 
 TEST(ClosureEngine, AReversedCycleIsTheFullRangeCycleAtNewmansOpeningRatio) {
   // The closure rule puts f(R) where the full-range rule has R (ΔK_eff = (1 − f)K_max): the same

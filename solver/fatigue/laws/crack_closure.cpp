@@ -22,8 +22,8 @@ core::Status validate(const NewmanClosure& c) {
 double newman_opening_ratio(double load_ratio, const NewmanClosure& c) {
   const double a = c.constraint;
   const double s = c.smax_over_flow_stress;
-  const double a0 = (0.825 - 0.34 * a + 0.05 * a * a) *
-                    std::pow(std::cos(std::numbers::pi * s / 2.0), 1.0 / a);
+  const double a0 =
+      (0.825 - 0.34 * a + 0.05 * a * a) * std::pow(std::cos(std::numbers::pi * s / 2.0), 1.0 / a);
   const double a1 = (0.415 - 0.071 * a) * s;
   const double a3 = 2.0 * a0 + a1 - 1.0;
   const double a2 = 1.0 - a0 - a1 - a3;
