@@ -160,8 +160,28 @@ bool FatigueEngine::prepare_contact(double alpha) {
   if (contact_valid_ && contact_alpha_ == alpha && contact_events_ == state_.events.size()) {
     return true;
   }
+  // The canonical order of the breaks (statics/crack_contact.h): a notch cut first, then each
+  // fatigue or overload break by its re-solve group (by its event when the groups do not account
+  // for every event): the same numbers on an engine that resumed from this state.
+  contact_rank_.assign(state_.anchor_life.size(), -1);
+  std::int64_t grouped = 0;
+  for (auto g : state_.resolve_groups) grouped += g;
+  const bool by_group = grouped == static_cast<std::int64_t>(state_.events.size());
+  std::size_t e = 0;
+  if (by_group) {
+    for (std::size_t g = 0; g < state_.resolve_groups.size(); ++g) {
+      for (std::int64_t i = 0; i < state_.resolve_groups[g]; ++i, ++e) {
+        contact_rank_[static_cast<std::size_t>(state_.events[e].bond)] =
+            static_cast<std::int64_t>(g);
+      }
+    }
+  } else {
+    for (; e < state_.events.size(); ++e) {
+      contact_rank_[static_cast<std::size_t>(state_.events[e].bond)] = static_cast<std::int64_t>(e);
+    }
+  }
   if (const core::Status r =
-          contact_->compressive_stretch(solver_->intact(), alpha, contact_stretch_);
+          contact_->compressive_stretch(solver_->intact(), contact_rank_, alpha, contact_stretch_);
       !r.ok()) {
     state_.failed = true;
     state_.failure_reason = "crack-face contact at P_min < 0: " + core::message_of(r);

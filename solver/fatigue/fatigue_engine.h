@@ -367,6 +367,7 @@ class FatigueEngine {
   // angle and the number of break events they were computed at (not state: recomputed alike).
   std::unique_ptr<statics::CrackFaceContact> contact_;
   std::vector<double> contact_stretch_;
+  std::vector<std::int64_t> contact_rank_;  ///< per bond, the canonical order of its break
   bool contact_valid_ = false;
   double contact_alpha_ = 0.0;
   std::size_t contact_events_ = 0;

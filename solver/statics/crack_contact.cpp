@@ -1,6 +1,7 @@
 #include "solver/statics/crack_contact.h"
 
 #include <algorithm>
+#include <iterator>
 #include <utility>
 
 namespace peritwin::statics {
@@ -22,8 +23,27 @@ CrackFaceContact::CrackFaceContact(const mesh::Discretization& disc, const model
       loads_(std::move(loads)),
       ties_(std::move(ties)) {}
 
+core::Status CrackFaceContact::append_by_rank(std::vector<mesh::BondIndex> bonds,
+                                              const std::vector<std::int64_t>& rank) {
+  const auto rank_of = [&](mesh::BondIndex b) { return rank[static_cast<std::size_t>(b)]; };
+  std::stable_sort(bonds.begin(), bonds.end(), [&](mesh::BondIndex a, mesh::BondIndex b) {
+    return rank_of(a) < rank_of(b);  // ascending bond order within a rank (stable)
+  });
+  std::vector<mesh::BondIndex> group;
+  for (std::size_t i = 0; i < bonds.size();) {
+    const std::int64_t r = rank_of(bonds[i]);
+    group.clear();
+    for (; i < bonds.size() && rank_of(bonds[i]) == r; ++i) group.push_back(bonds[i]);
+    if (auto status = held_->break_bonds(group); !status.ok()) return status;
+    held_last_rank_ = r;
+    ++appended_updates_;
+  }
+  return {};
+}
+
 core::Status CrackFaceContact::solve_with_open(const std::vector<mesh::BondIndex>& open,
-                                               double alpha, std::vector<double>& stretch) {
+                                               const std::vector<std::int64_t>& rank, double alpha,
+                                               std::vector<double>& stretch) {
   if (!virgin_) {
     auto solver = std::make_unique<StaticSolver>(closed_disc_, model_, supports_, loads_, ties_);
     solver->set_incremental(true);
@@ -34,25 +54,37 @@ core::Status CrackFaceContact::solve_with_open(const std::vector<mesh::BondIndex
     virgin_->stretch(-1.0, alpha, stretch);
     return {};
   }
-  // The last solve with an open set, when it had this one at this angle: the same numbers (the
-  // result is a function of (open set, α) alone). After a break whose new faces close, the set
-  // does not change and no factor is copied.
-  if (last_valid_ && last_alpha_ == alpha && last_open_ == open) {
-    stretch = last_stretch_;
-    return {};
+  // Reuse the held solver when `open` only adds bonds ranked after its last update.
+  std::vector<mesh::BondIndex> added;
+  bool reuse = held_ != nullptr &&
+               std::includes(open.begin(), open.end(), held_open_.begin(), held_open_.end());
+  if (reuse) {
+    std::set_difference(open.begin(), open.end(), held_open_.begin(), held_open_.end(),
+                        std::back_inserter(added));
+    for (auto b : added) {
+      if (rank[static_cast<std::size_t>(b)] <= held_last_rank_) reuse = false;
+    }
   }
-  ++updated_solves_;
-  StaticSolver copy(*virgin_);  // the virgin factor, then the open set broken by rank updates
-  if (auto r = copy.break_bonds(open); !r.ok()) return r;
-  copy.stretch(-1.0, alpha, stretch);
-  last_valid_ = true;
-  last_alpha_ = alpha;
-  last_open_ = open;
-  last_stretch_ = stretch;
+  if (!reuse) {
+    ++rebuilds_;
+    held_ = std::make_unique<StaticSolver>(*virgin_);
+    held_open_.clear();
+    added = open;
+  }
+  if (!added.empty()) {
+    if (auto r = append_by_rank(added, rank); !r.ok()) {
+      held_.reset();  // an unknown state: the next call rebuilds
+      held_open_.clear();
+      return r;
+    }
+    held_open_ = open;
+  }
+  held_->stretch(-1.0, alpha, stretch);
   return {};
 }
 
 core::Status CrackFaceContact::compressive_stretch(const std::vector<std::uint8_t>& intact,
+                                                   const std::vector<std::int64_t>& rank,
                                                    double alpha, std::vector<double>& stretch) {
   // The warm start: the last open set, restricted to bonds still broken (all are: bonds never
   // heal), in ascending order.
@@ -63,7 +95,7 @@ core::Status CrackFaceContact::compressive_stretch(const std::vector<std::uint8_
   std::vector<mesh::BondIndex> next;
   last_iterations_ = 0;
   for (int it = 0;; ++it) {
-    if (auto r = solve_with_open(open, alpha, stretch); !r.ok()) return r;
+    if (auto r = solve_with_open(open, rank, alpha, stretch); !r.ok()) return r;
     ++last_iterations_;
     next.clear();
     for (std::size_t b = 0; b < intact.size(); ++b) {
