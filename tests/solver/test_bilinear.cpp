@@ -82,25 +82,11 @@ Plate make_plate(model::ModelKind kind = model::ModelKind::bond_based, bool notc
   return testing::make_notched_plate(kind, notched, 24, 16, 1.0 / 3.0);
 }
 
-/// Largest stretch of an intact bond at load P (α = 0) on the undamaged plate.
-double largest_stretch(const Plate& p, double load, std::vector<double>* all = nullptr) {
-  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
-  EXPECT_TRUE(probe.solve().ok());
-  std::vector<double> s;
-  probe.stretch(load, 0.0, s);
-  double smax = 0.0;
-  for (std::size_t b = 0; b < s.size(); ++b) {
-    if (probe.intact()[b]) smax = std::max(smax, s[b]);
-  }
-  if (all) *all = s;
-  return smax;
-}
-
 /// s0 = 1.3 × the tip stretch at `load`, sc = 3 s0, m = 4, A such that the tip bond would reach
 /// D = 1 at constant stretch in `life` cycles (003 Eq. 27).
 fatigue::FatigueSettings bilinear_settings(const Plate& p, double load, double life,
                                            std::int64_t dn) {
-  const double smax = largest_stretch(p, load);
+  const double smax = testing::largest_intact_stretch(p, load);
   fatigue::FatigueSettings f;
   f.law = fatigue::FatigueLaw::bilinear;
   f.bilinear.s0 = 1.3 * smax;
@@ -174,7 +160,7 @@ TEST(BilinearEngine, SmallDamageFollowsTheLawBondByBond) {
   const double load = 1000.0;
   auto f = bilinear_settings(plate, load, 5e10, 10000);
   std::vector<double> s;
-  largest_stretch(plate, load, &s);
+  testing::largest_intact_stretch(plate, load, &s);
   fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(engine.initialize());
   engine.apply({load, 0.1, 0.0, 50000});

@@ -208,14 +208,7 @@ INSTANTIATE_TEST_SUITE_P(
 /// about `first_failure` cycles of P_max = `load` at R = 0 (000 Eq. 21).
 fatigue::FatigueSettings plate_settings(const statics::Specimen& p, double load,
                                         double first_failure) {
-  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
-  EXPECT_TRUE(probe.solve().ok());
-  std::vector<double> s;
-  probe.stretch(load, 0.0, s);
-  double smax = 0.0;
-  for (std::size_t b = 0; b < s.size(); ++b) {
-    if (!p.disc.bond_precut[b]) smax = std::max(smax, s[b]);
-  }
+  const double smax = testing::largest_intact_stretch(p, load);
   fatigue::FatigueSettings f;
   f.law = fatigue::FatigueLaw::strain_range;
   f.critical_stretch = 4 * smax;

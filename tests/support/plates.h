@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <string>
@@ -60,6 +61,22 @@ inline statics::Specimen make_notched_plate(model::ModelKind kind, bool notched 
   p.loads.push_back(
       {p.disc.nodes_in(mesh::Region::of(mesh::Rectangle{-1, h - dx, 1, h})), {0, 1}, {}, {0.5, 0}});
   return p;
+}
+
+/// The largest stretch of an intact bond at load P (α = 0) on the undamaged specimen (a bond cut
+/// by a notch "stretches" by the opening: left out); every bond's stretch into `all` if given.
+inline double largest_intact_stretch(const statics::Specimen& p, double load,
+                                     std::vector<double>* all = nullptr) {
+  statics::StaticSolver probe(p.disc, p.model, p.supports, p.loads);
+  EXPECT_TRUE(probe.solve().ok());
+  std::vector<double> s;
+  probe.stretch(load, 0.0, s);
+  double smax = 0.0;
+  for (std::size_t b = 0; b < s.size(); ++b) {
+    if (probe.intact()[b]) smax = std::max(smax, s[b]);
+  }
+  if (all != nullptr) *all = s;
+  return smax;
 }
 
 /// The same total cycles and the same break events (bond, cycle, cause), in order.
