@@ -34,7 +34,11 @@
 //   [detail.model]       kind "state_based" | "bond_based", kernel "constant" | "conical" |
 //                        "gaussian" (state-based: constant only), plane "plane_stress" |
 //                        "plane_strain", surface_correction true
-//   [detail.material] R  E R (Pa, > 0), nu R (-1 < ν < 0.5), K_c 0 (Pa·√m, >= 0; 0 = not given)
+//   [detail.material] R  E R (Pa, > 0), nu R (-1 < ν < 0.5), K_c 0 (Pa·√m, >= 0; 0 = not given),
+//                        E_std 0 (Pa, 0 <= E_std < E/5; > 0: E drawn per node from N(E, E_std²),
+//                          clamped to E ± 4·E_std, where a crack starts in a uniform specimen is
+//                          decided by the scatter, 004; docs/solver.md "Material scatter (004)"),
+//                        E_seed 0 (integer >= 0: the draw's seed, same seed same moduli)
 //   [detail.fatigue] R   law R "strain_range" | "energy" | "bilinear" | "kinetic",
 //                        phi0 (phase-switch / crack damage index, 0 < φ0 < 1; default the
 //                          damage along a straight split at horizon_ratio, 0.398 at 3.015);

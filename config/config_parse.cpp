@@ -338,6 +338,17 @@ void read_material(Context& ctx, const toml::table& t, const std::string& path,
             "must lie in (-1, 0.5) (got " + core::format_number(*nu) + ")");
   }
   m.fracture_toughness = opt(r, "K_c", 0.0, core::Bound::non_negative);
+  // Material scatter (004, model::node_youngs_moduli): σ_E < E/5 keeps every clamped draw > 0.
+  m.youngs_modulus_std = opt(r, "E_std", 0.0, core::Bound::non_negative);
+  if (m.youngs_modulus > 0 && m.youngs_modulus_std > 0) {
+    r.check("E_std", m.youngs_modulus_std < m.youngs_modulus / 5.0,
+            "must be < E/5 = " + core::format_number(m.youngs_modulus / 5.0) +
+                " Pa (each node's E is clamped to E ± 4·E_std, which must stay > 0; got " +
+                core::format_number(m.youngs_modulus_std) + ")");
+  }
+  const std::int64_t seed = r.integer("E_seed", 0);
+  r.check("E_seed", seed >= 0, "must be >= 0");
+  m.youngs_modulus_seed = static_cast<std::uint64_t>(std::max<std::int64_t>(seed, 0));
   r.finish();
 }
 

@@ -24,10 +24,12 @@ constexpr double kDiscretizationNodeBytes = 30.0;
 constexpr double kDiscretizationBondBytes = 49.0;
 constexpr double kLatticeCellBytes = 4.0;
 // PdModel (solver/model/pd_model.h): bond_stiffness 8 per bond; state-based also
-// dilatation_weight 8 per bond and dilatation_stiffness 8 per node.
+// dilatation_weight 8 per bond and dilatation_stiffness 8 per node; with material scatter
+// (E_std > 0) node_youngs_modulus 8 per node.
 constexpr double kModelBondBytes = 8.0;
 constexpr double kStateBasedBondBytes = 8.0;
 constexpr double kStateBasedNodeBytes = 8.0;
+constexpr double kScatterNodeBytes = 8.0;
 // One FatigueEngine (solver/fatigue/fatigue_engine.h): EngineState anchor_life 8 and intact 1,
 // rate_ 8, phase_ 1, breakable_ 1, stretch_ 8 per bond, node_damage_ 8 per node; the exported
 // copy of anchor_life and intact the twin and the life jobs hold (9 per bond); the bilinear law's
@@ -363,7 +365,8 @@ ResourceEstimate estimate_resources(const DetailConfig& d) noexcept {
 
   const bool bilinear = fatigue::law_entry(d.fatigue.law).damage_based;
   e.model_bytes = finite_or_huge(
-      e.nodes * (kDiscretizationNodeBytes + (state_based ? kStateBasedNodeBytes : 0.0)) +
+      e.nodes * (kDiscretizationNodeBytes + (state_based ? kStateBasedNodeBytes : 0.0) +
+                 (d.material.youngs_modulus_std > 0.0 ? kScatterNodeBytes : 0.0)) +
       e.bonds * (kDiscretizationBondBytes + kModelBondBytes +
                  (state_based ? kStateBasedBondBytes : 0.0)) +
       body.cells * kLatticeCellBytes);

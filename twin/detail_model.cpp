@@ -152,6 +152,12 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
       h.value(m->settings_.closure.smax_over_flow_stress);
     }
   }
+  // Material scatter (004): hashed only when drawn, so that uniform details keep their
+  // signatures (the drawn moduli are in bond_stiffness already; these name the draw).
+  if (config.material.youngs_modulus_std > 0.0) {
+    h.value(config.material.youngs_modulus_std);
+    h.value(config.material.youngs_modulus_seed);
+  }
   m->signature_ = h.h.get();
   return std::shared_ptr<const DetailModel>(std::move(m));
 }

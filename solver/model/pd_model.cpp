@@ -1,10 +1,12 @@
 #include "solver/model/pd_model.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 
 namespace peritwin::model {
@@ -33,7 +35,42 @@ core::Status validate(const Material& material, const ModelOptions& options) {
   }
   if (material.fracture_toughness < 0)
     return core::failure("material.fracture_toughness must be >= 0");
+  // Material scatter: σ_E < E/5 so that the clamped draw E − 4σ_E stays above E/5 > 0 (a node
+  // with E_k <= 0 would make the stiffness indefinite).
+  const double sd = material.youngs_modulus_std;
+  if (!std::isfinite(sd) || sd < 0) {
+    return core::failure("material.youngs_modulus_std must be finite and >= 0");
+  }
+  if (sd >= material.youngs_modulus / 5.0) {
+    return core::failure(
+        "material.youngs_modulus_std must be < E/5 (a draw clamped at E − 4σ stays > 0)");
+  }
   return {};
+}
+
+std::vector<double> node_youngs_moduli(const Material& material, std::size_t num_nodes) {
+  const double e = material.youngs_modulus;
+  const double sd = material.youngs_modulus_std;
+  if (!(sd > 0.0)) return {};
+  // Decision: clamp (truncate) each draw to [E − 4σ, E + 4σ] rather than refuse it. validate()
+  // refuses σ >= E/5, so E − 4σ > E/5 > 0 and no node can make the stiffness indefinite. A draw
+  // below E − 5σ (the first non-positive E at σ = E/5) has probability 2.9e-7 per node, about once
+  // in three builds of a million-node model; refusing a random draw would make a valid config
+  // fail by chance. Beyond 4σ lie 6.3e-5 of the draws: the clamp leaves the mean (symmetric) and
+  // lowers the standard deviation by 6e-5 relative (2∫_4^∞ (z² − 16)φ dz = 1.2e-4 of the variance).
+  const double lo = e - 4.0 * sd;
+  const double hi = e + 4.0 * sd;
+  std::mt19937_64 gen(material.youngs_modulus_seed);
+  constexpr double two_to_minus_53 = 0x1.0p-53;
+  std::vector<double> moduli(num_nodes);
+  for (std::size_t k = 0; k < num_nodes; ++k) {
+    // Two uniforms from the top 53 bits: u1 in (0, 1] (log finite), u2 in [0, 1).
+    const double u1 = static_cast<double>((gen() >> 11) + 1) * two_to_minus_53;
+    const double u2 = static_cast<double>(gen() >> 11) * two_to_minus_53;
+    const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * pi * u2);  // Box-Muller
+    moduli[k] = std::clamp(e + sd * z, lo, hi);
+  }
+  return moduli;
 }
 
 double effective_poisson_ratio(const Material& material, const ModelOptions& options) {
@@ -232,6 +269,30 @@ PdModel build_model(const mesh::Discretization& disc, const Material& material,
       m.dilatation_stiffness[k] = rigid * 2.0 * m.constants.a * disc.volume[k] / h;
     }
   }
+  // Material scatter (004): every coefficient above is linear in E (c ∝ E; a, b ∝ E through κ
+  // and μ at fixed ν), so the local modulus enters as a factor on the uniform model, applied
+  // after the surface correction, which is geometric. Without scatter nothing is touched: the
+  // model is bit for bit the uniform one.
+  m.node_youngs_modulus = node_youngs_moduli(material, nn);
+  if (!m.node_youngs_modulus.empty()) {
+    const double e = material.youngs_modulus;
+    // Decision: a bond takes the arithmetic mean (E_i + E_j)/(2E). The strain energy is a sum
+    // of point energies, each with its own point's constants (004 Eq. 5: W = ¼∫c s² ξ dV at
+    // x), and a bond enters the energy of both its ends: the pair coefficient is then the mean
+    // of the two points' coefficients, as the surface correction also averages its two
+    // nodes' factors. The harmonic mean would treat the bond as two half-bars in series, which
+    // is not how the PD energy is written; 004 does not say. The two differ by
+    // (E_i − E_j)²/(2(E_i + E_j)), a relative 2.4e-4 on average at 193 ± 3 GPa.
+    for (std::size_t b = 0; b < nb; ++b) {
+      const auto i = static_cast<std::size_t>(disc.bond_i[b]);
+      const auto j = static_cast<std::size_t>(disc.bond_j[b]);
+      m.bond_stiffness[b] *= 0.5 * (m.node_youngs_modulus[i] + m.node_youngs_modulus[j]) / e;
+    }
+    // The dilatation term is a point's own energy a_k·θ_k²: E_k/E (000 Eq. 4a).
+    for (std::size_t k = 0; k < m.dilatation_stiffness.size(); ++k) {
+      m.dilatation_stiffness[k] *= m.node_youngs_modulus[k] / e;
+    }
+  }
   return m;
 }
 
@@ -267,6 +328,7 @@ void bond_energy_release_rates(const mesh::Discretization& disc, const PdModel& 
   g.resize(nb);
   const double h = disc.thickness;
   const bool osb = model.options.kind == ModelKind::state_based;
+  const bool scatter = !model.node_youngs_modulus.empty();
   for (std::size_t b = 0; b < nb; ++b) {
     const auto i = static_cast<std::size_t>(disc.bond_i[b]);
     const auto j = static_cast<std::size_t>(disc.bond_j[b]);
@@ -275,8 +337,13 @@ void bond_energy_release_rates(const mesh::Discretization& disc, const PdModel& 
     // Force density per unit area as in 000 Eq. (3a): the pair term k_b·ξ·s·h/(V_i·V_j) ...
     double force = model.bond_stiffness[b] * xi * h * stretch[b] / vv;
     if (osb) {  // ... plus the dilatation term 2ad/ξ·(θ_i + θ_j) with the bond's weights.
-      force += 2.0 * model.constants.a * model.dilatation_weight[b] / (disc.volume[j] * xi) *
-               (dilatation[i] + dilatation[j]);
+      const double theta_sum = scatter
+                                   ? (model.node_youngs_modulus[i] * dilatation[i] +
+                                      model.node_youngs_modulus[j] * dilatation[j]) /
+                                         model.material.youngs_modulus  // each node's a_k = a·E_k/E
+                                   : dilatation[i] + dilatation[j];
+      force +=
+          2.0 * model.constants.a * model.dilatation_weight[b] / (disc.volume[j] * xi) * theta_sum;
     }
     g[b] = 0.5 * force * xi * stretch[b] * vv / (2.0 * disc.dx * h * h);  // 000 Eq. (31)
   }

@@ -5,6 +5,7 @@
 // which are per unit area of the plate, times the node's area Δx² (= V/h).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,12 @@ struct Material {
   [[nodiscard]] double critical_energy_release_rate() const {
     return fracture_toughness * fracture_toughness / youngs_modulus;
   }
+  /// Material scatter (004, "KTF symmetric cyclic loading model": E = 193 ± 3 GPa): the standard
+  /// deviation σ_E (Pa) of a Young's modulus drawn per node from N(E, σ_E²), 0 = uniform E;
+  /// build_model draws it (node_youngs_moduli). 0 <= σ_E < E/5 (validate).
+  double youngs_modulus_std = 0.0;
+  /// Seed of that draw: the same seed gives the same moduli, bit for bit.
+  std::uint64_t youngs_modulus_seed = 0;
 };
 
 struct ModelOptions {
@@ -38,6 +45,14 @@ struct ModelOptions {
 
 /// OK, or a message naming the offending field.
 core::Status validate(const Material& material, const ModelOptions& options);
+
+/// The per-node Young's moduli E_k ~ N(E, σ_E²) of the material scatter (004), one per
+/// node in node order; empty when σ_E = 0. Portable and deterministic per seed: std::mt19937_64
+/// (fixed by the standard) seeded with youngs_modulus_seed, two uniforms per node from the 53-bit
+/// mantissa, Box-Muller written out (z = √(−2 ln u1)·cos(2π u2)), never std::normal_distribution
+/// (its algorithm differs between standard libraries). Each E_k is clamped to [E − 4σ_E,
+/// E + 4σ_E], which with σ_E < E/5 keeps it above E/5 > 0 (docs/solver.md "Material scatter").
+std::vector<double> node_youngs_moduli(const Material& material, std::size_t num_nodes);
 
 /// Rigid regions of stiff material (000 Sec. 6.1, E_rigid = rigid_factor·E) in the state-based
 /// model: the index rigid_factor·(κ − 2μ)/μ = rigid_factor·(3ν − 1)/(1 − ν) (2D κ = E/(2(1 − ν)),
@@ -87,6 +102,9 @@ StateBasedConstants state_based_constants(const Material& material, PlaneConditi
 /// and for every node k (OSB only): dilatation_stiffness[k] = 2a·V_k/h, the coefficient of θ_k² in
 /// the node's strain energy; the dilatation part of K is Bᵀ·diag(2a·V/h)·B with θ = B·u (000 App.
 /// B). Broken bonds keep their coefficients here; the bond state lives with the solver.
+/// With material scatter (Material::youngs_modulus_std > 0) every coefficient, being linear in E,
+/// follows the local modulus: k_b times (E_i + E_j)/(2E), dilatation_stiffness[k] times E_k/E;
+/// dilatation_weight is geometric and stays (docs/solver.md "Material scatter (004)").
 struct PdModel {
   Material material;
   ModelOptions options;
@@ -95,6 +113,8 @@ struct PdModel {
   std::vector<double> bond_stiffness;
   std::vector<double> dilatation_weight;
   std::vector<double> dilatation_stiffness;
+  /// E_k (Pa) per node with material scatter, empty without (node_youngs_moduli).
+  std::vector<double> node_youngs_modulus;
 };
 
 PdModel build_model(const mesh::Discretization& disc, const Material& material,

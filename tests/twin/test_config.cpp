@@ -396,6 +396,24 @@ TEST(Config, ModelOptionsAndSeveralDetails) {
   EXPECT_EQ(r.config->details[1].model.kind, model::ModelKind::state_based);
 }
 
+TEST(Config, MaterialScatterIsRead) {
+  // 004's 193 ± 3 GPa: E_std and E_seed reach model::Material; absent, there is no scatter.
+  const config::ConfigResult plain = parse(plate());
+  ASSERT_TRUE(plain.ok()) << plain.error_text();
+  EXPECT_EQ(plain.config->details[0].material.youngs_modulus_std, 0.0);
+  EXPECT_EQ(plain.config->details[0].material.youngs_modulus_seed, 0u);
+  Doc doc = plate();
+  doc.replace("E = ", "E = 193e9");
+  doc.insert_after("nu = ", "E_std = 3e9");
+  doc.insert_after("E_std = ", "E_seed = 9007199254740993");  // above 2^53: an integer, exactly
+  const config::ConfigResult r = parse(doc);
+  ASSERT_TRUE(r.ok()) << r.error_text();
+  const model::Material& m = r.config->details[0].material;
+  EXPECT_EQ(m.youngs_modulus, 193e9);
+  EXPECT_EQ(m.youngs_modulus_std, 3e9);
+  EXPECT_EQ(m.youngs_modulus_seed, 9007199254740993u);
+}
+
 TEST(Config, FatigueLawsMapEveryField) {
   const auto fatigue = [](std::vector<std::string> keys, bool bond_based = false) {
     Doc doc = plate();
@@ -488,7 +506,8 @@ TEST(ConfigErrors, UnknownKey) {
   expect_one_error(r, 13, "detail[0].material.Nu", "unknown key \"Nu\"");
   EXPECT_EQ(r.errors[0].column, 1u);
   EXPECT_EQ(r.errors[0].message(),
-            "plate.toml:13:1: detail[0].material.Nu: unknown key \"Nu\" (known here: E, nu, K_c)");
+            "plate.toml:13:1: detail[0].material.Nu: unknown key \"Nu\" (known here: E, nu, K_c, "
+            "E_std, E_seed)");
 }
 
 TEST(ConfigErrors, UnknownKeyInAnInlineTable) {
@@ -613,6 +632,34 @@ TEST(ConfigErrors, NonPositiveYoungsModulus) {
     doc.replace("E = ", line);
     expect_one_error(parse(doc), 11, "detail[0].material.E", "must be > 0");
   }
+}
+
+TEST(ConfigErrors, MaterialScatterOutOfBounds) {
+  // E = 70e9 in the plate: E_std must be >= 0 and < E/5 = 14e9 (each node's E is clamped to
+  // E ± 4·E_std, which must stay > 0); the seed is an integer >= 0.
+  struct Case {
+    const char* line;
+    const char* path;
+    const char* reason;
+  };
+  const Case cases[] = {
+      {"E_std = -1e9", "detail[0].material.E_std", "must be >= 0 (got -1e+09)"},
+      {"E_std = 14e9", "detail[0].material.E_std", "must be < E/5 = 1.4e+10 Pa"},
+      {"E_std = 70e9", "detail[0].material.E_std", "must be < E/5"},
+      {"E_std = nan", "detail[0].material.E_std", "must be a finite number"},
+      {"E_std = \"3e9\"", "detail[0].material.E_std", "expected a number"},
+      {"E_seed = -1", "detail[0].material.E_seed", "must be >= 0"},
+      {"E_seed = 1.5", "detail[0].material.E_seed", "expected an integer"},
+  };
+  for (const Case& c : cases) {
+    Doc doc = plate();
+    doc.insert_after("nu = ", c.line);
+    SCOPED_TRACE(c.line);
+    expect_one_error(parse(doc), doc.line_of(c.line), c.path, c.reason);
+  }
+  Doc ok = plate();
+  ok.insert_after("nu = ", "E_std = 13.9e9");
+  EXPECT_TRUE(parse(ok).ok()) << parse(ok).error_text();
 }
 
 TEST(ConfigErrors, OtherImpossibleValues) {

@@ -626,5 +626,26 @@ TEST(SolverSettings, TensionOnlyFatigueReachesTheEngineAndTheSignature) {
   EXPECT_NE(with_compressed->signature(), tension_only->signature());
 }
 
+TEST(SolverSettings, MaterialScatterEntersTheSignatureOnlyWhenDrawn) {
+  // E_std = 0 (any seed) keeps the uniform detail's signature, so its checkpoints still resume;
+  // a drawn scatter (004) changes it, and so does another seed.
+  config::DetailConfig config = b1_config("every_batches = 0");
+  const auto uniform = b1_model(config);
+  config.material.youngs_modulus_seed = 5;
+  const auto zero_std = b1_model(config);
+  config.material.youngs_modulus_std = 0.01 * config.material.youngs_modulus;
+  const auto scattered = b1_model(config);
+  config.material.youngs_modulus_seed = 6;
+  const auto other_seed = b1_model(config);
+  ASSERT_TRUE(uniform && zero_std && scattered && other_seed);
+  EXPECT_EQ(zero_std->signature(), uniform->signature());
+  EXPECT_TRUE(zero_std->specimen().model.node_youngs_modulus.empty());
+  EXPECT_EQ(zero_std->specimen().model.bond_stiffness, uniform->specimen().model.bond_stiffness);
+  EXPECT_NE(scattered->signature(), uniform->signature());
+  EXPECT_NE(other_seed->signature(), scattered->signature());
+  EXPECT_EQ(scattered->specimen().model.node_youngs_modulus.size(),
+            static_cast<std::size_t>(scattered->specimen().disc.num_nodes()));
+}
+
 }  // namespace
 }  // namespace peritwin::twin
