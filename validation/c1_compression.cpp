@@ -96,17 +96,19 @@ int run_c1_compression(const std::string& ct_config, const std::string& panel_co
       }
       const double anchor = by_r.at(0.1).cycles;
       const double r0 = by_r.count(0.0) ? by_r.at(0.0).cycles : NAN;
-      outputs::PlotSeries twin_series{
-          std::string("twin, ") + rule.name, {}, {}, colors[color], false};
-      outputs::PlotSeries paris{
-          std::string("Paris K_max, ") + rule.name, {}, {}, colors[color], true};
+      // The two references of the file comment, anchored at this rule's life at R = 0.1.
+      const auto paris_cycles = [&](double r) {
+        return anchor * std::pow(0.9 / (1.0 - std::max(r, 0.0)), m);
+      };
+      const auto newman_cycles = [&](double r) {
+        return anchor * std::pow((1.0 - fatigue::newman_opening_ratio(0.1, newman)) /
+                                     (1.0 - fatigue::newman_opening_ratio(r, newman)),
+                                 m);
+      };
       for (const double r : g.ratios) {
         const Life& l = by_r.at(r);
-        const double paris_n = anchor * std::pow(0.9 / (1.0 - std::max(r, 0.0)), m);
-        const double newman_n =
-            anchor * std::pow((1.0 - fatigue::newman_opening_ratio(0.1, newman)) /
-                                  (1.0 - fatigue::newman_opening_ratio(r, newman)),
-                              m);
+        const double paris_n = paris_cycles(r);
+        const double newman_n = newman_cycles(r);
         core::JsonLine line;
         line["case"] = "C1";
         line["geometry"] = g.name;
@@ -124,25 +126,22 @@ int run_c1_compression(const std::string& ct_config, const std::string& panel_co
         core::print_line(line);
         std::fflush(stdout);
       }
-      for (auto it = g.ratios.rbegin(); it != g.ratios.rend(); ++it) {
-        twin_series.x.push_back(*it);
-        twin_series.y.push_back(by_r.at(*it).cycles / 1000.0);
-        paris.x.push_back(*it);
-        paris.y.push_back(anchor * std::pow(0.9 / (1.0 - std::max(*it, 0.0)), m) / 1000.0);
-      }
-      plot.series.push_back(twin_series);
-      if (rule.rule == fatigue::CompressionRule::full_range) plot.series.push_back(paris);
-      if (rule.rule == fatigue::CompressionRule::closure) {
-        outputs::PlotSeries nm{"Newman f(R), closure's R = 0.1", {}, {}, colors[color], true};
+      // Each curve from R = max(ratios) down to min, as the plot's x axis runs.
+      const auto series = [&](std::string label, bool dashed, const auto& cycles_at) {
+        outputs::PlotSeries out{std::move(label), {}, {}, colors[color], dashed};
         for (auto it = g.ratios.rbegin(); it != g.ratios.rend(); ++it) {
-          nm.x.push_back(*it);
-          nm.y.push_back(anchor *
-                         std::pow((1.0 - fatigue::newman_opening_ratio(0.1, newman)) /
-                                      (1.0 - fatigue::newman_opening_ratio(*it, newman)),
-                                  m) /
-                         1000.0);
+          out.x.push_back(*it);
+          out.y.push_back(cycles_at(*it) / 1000.0);
         }
-        plot.series.push_back(nm);
+        return out;
+      };
+      plot.series.push_back(series(std::string("twin, ") + rule.name, false,
+                                   [&](double r) { return by_r.at(r).cycles; }));
+      if (rule.rule == fatigue::CompressionRule::full_range) {
+        plot.series.push_back(series(std::string("Paris K_max, ") + rule.name, true, paris_cycles));
+      }
+      if (rule.rule == fatigue::CompressionRule::closure) {
+        plot.series.push_back(series("Newman f(R), closure's R = 0.1", true, newman_cycles));
       }
       ++color;
     }
