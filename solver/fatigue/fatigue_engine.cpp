@@ -60,13 +60,16 @@ double crack_crossing_interactions(double horizon_over_dx) {
 FatigueEngine::FatigueEngine(const mesh::Discretization& disc, const model::PdModel& model,
                              std::vector<statics::Support> supports,
                              std::vector<statics::LoadTerm> loads, FatigueSettings settings,
-                             std::vector<statics::Tie> ties)
+                             std::vector<statics::Tie> ties,
+                             std::vector<statics::PrescribedDisplacement> prescribed)
     : disc_(disc),
       model_(model),
       supports_(std::move(supports)),
       loads_(std::move(loads)),
       ties_(std::move(ties)),
-      solver_(std::make_unique<statics::StaticSolver>(disc, model, supports_, loads_, ties_)),
+      prescribed_(std::move(prescribed)),
+      solver_(std::make_unique<statics::StaticSolver>(disc, model, supports_, loads_, ties_,
+                                                      prescribed_)),
       settings_(settings) {
   const auto nb = static_cast<std::size_t>(disc.num_bonds());
   if (settings_.law == FatigueLaw::bilinear) {
@@ -110,6 +113,11 @@ FatigueEngine::FatigueEngine(const mesh::Discretization& disc, const model::PdMo
       throw std::invalid_argument(
           "FatigueEngine: compression \"contact\" needs the strain_range law (each bond's range "
           "from the contact solution at P_min; the energy law's ḡ range has no such form)");
+    }
+    if (!prescribed_.empty()) {
+      throw std::invalid_argument(
+          "FatigueEngine: compression \"contact\" is for force-controlled details (its "
+          "active-set solve at P = -1 takes loads, not prescribed displacements)");
     }
     contact_ = std::make_unique<statics::CrackFaceContact>(disc, model, supports_, loads_, ties_);
   }
@@ -737,7 +745,8 @@ core::Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
   // The old solver (its updated simplicial factor, the largest block of memory) goes before the
   // new one factorizes: the two never coexist (the rebuild's memory peak, issue 18 item 5).
-  solver_ = std::make_unique<statics::StaticSolver>(disc_, model_, supports_, loads_, ties_);
+  solver_ =
+      std::make_unique<statics::StaticSolver>(disc_, model_, supports_, loads_, ties_, prescribed_);
   statics::StaticSolver& fresh = *solver_;
   core::Status r = fresh.solve();
   std::vector<mesh::BondIndex> broken;
@@ -806,6 +815,7 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       supports_(other.supports_),
       loads_(other.loads_),
       ties_(other.ties_),
+      prescribed_(other.prescribed_),
       solver_(std::make_unique<statics::StaticSolver>(*other.solver_)),
       retired_update_s_(other.retired_update_s_),
       retired_updates_(other.retired_updates_),

@@ -201,7 +201,8 @@ class FatigueEngine {
   /// stiffness in every solve, never broken.
   FatigueEngine(const mesh::Discretization& disc, const model::PdModel& model,
                 std::vector<statics::Support> supports, std::vector<statics::LoadTerm> loads,
-                FatigueSettings settings, std::vector<statics::Tie> ties = {});
+                FatigueSettings settings, std::vector<statics::Tie> ties = {},
+                std::vector<statics::PrescribedDisplacement> prescribed = {});
 
   /// First static solve. Returns false (with failure_reason()) if the model is singular.
   bool initialize();
@@ -332,6 +333,7 @@ class FatigueEngine {
       supports_;  ///< kept to rebuild the solver (refactor_every_resolves)
   std::vector<statics::LoadTerm> loads_;
   std::vector<statics::Tie> ties_;
+  std::vector<statics::PrescribedDisplacement> prescribed_;
   std::unique_ptr<statics::StaticSolver> solver_;
   double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
   int retired_updates_ = 0;

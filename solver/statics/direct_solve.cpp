@@ -3,6 +3,7 @@
 // factor, and releasing an idle factor's values.
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -122,9 +123,8 @@ void StaticSolver::solve_bases() {
   std::vector<int> loaded;
   std::array<std::vector<double>, 3> forces;
   for (int basis = 0; basis < 3; ++basis) {
-    forces[static_cast<std::size_t>(basis)] = basis_force(static_cast<Basis>(basis));
     bool any = false;
-    for (double v : forces[static_cast<std::size_t>(basis)]) any = any || v != 0.0;
+    forces[static_cast<std::size_t>(basis)] = basis_rhs(static_cast<Basis>(basis), any);
     if (any) loaded.push_back(basis);
   }
   Eigen::MatrixXd rhs =
@@ -145,12 +145,26 @@ void StaticSolver::solve_bases() {
       for (std::size_t dof = 0; dof < u.size(); ++dof) {
         if (free_index_[dof] >= 0) u[dof] = rhs(free_index_[dof], c);
       }
-      model::bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
+      finish_basis(static_cast<Basis>(basis), u);
     } else {
       s_[static_cast<std::size_t>(basis)].assign(static_cast<std::size_t>(disc_.num_bonds()), 0.0);
+      for (double& r : reaction_[static_cast<std::size_t>(basis)]) r = 0.0;
     }
   }
   basis_solve_s_ += seconds_since(t0);
+}
+
+void StaticSolver::solve_free(const std::vector<double>& rhs, std::vector<double>& x) const {
+  if (mixed_) throw std::logic_error("StaticSolver::solve_free: not in the mixed form");
+  Eigen::MatrixXd column = Eigen::MatrixXd::Zero(num_unknowns_, 1);
+  for (std::size_t dof = 0; dof < rhs.size(); ++dof) {
+    if (free_index_[dof] >= 0) column(free_index_[dof], 0) = rhs[dof];
+  }
+  cholesky_.solve(column);
+  x.assign(free_index_.size(), 0.0);
+  for (std::size_t dof = 0; dof < x.size(); ++dof) {
+    if (free_index_[dof] >= 0) x[dof] = column(free_index_[dof], 0);
+  }
 }
 
 core::Status StaticSolver::refactor_resolve() {

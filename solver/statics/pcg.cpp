@@ -92,14 +92,13 @@ bool StaticSolver::pcg_solve_bases() {
   std::vector<int> loaded;
   std::vector<std::vector<double>> x, r, z, p;
   for (int basis = 0; basis < 3; ++basis) {
-    const auto force = basis_force(static_cast<Basis>(basis));
-    std::vector<double> rhs(n, 0.0);
     bool any = false;
+    const auto force = basis_rhs(static_cast<Basis>(basis), any);
+    if (!any) continue;
+    std::vector<double> rhs(n, 0.0);
     for (std::size_t dof = 0; dof < force.size(); ++dof) {
       if (free_index_[dof] >= 0) rhs[static_cast<std::size_t>(free_index_[dof])] = force[dof];
-      any = any || force[dof] != 0.0;
     }
-    if (!any) continue;
     loaded.push_back(basis);
     x.emplace_back(n, 0.0);
     r.push_back(std::move(rhs));
@@ -173,10 +172,11 @@ bool StaticSolver::pcg_solve_bases() {
         for (std::size_t dof = 0; dof < u.size(); ++dof) {
           if (free_index_[dof] >= 0) u[dof] = sol[static_cast<std::size_t>(free_index_[dof])];
         }
-        model::bond_stretches(disc_, u, s_[static_cast<std::size_t>(basis)]);
+        finish_basis(static_cast<Basis>(basis), u);
       } else {
         s_[static_cast<std::size_t>(basis)].assign(static_cast<std::size_t>(disc_.num_bonds()),
                                                    0.0);
+        for (double& value : reaction_[static_cast<std::size_t>(basis)]) value = 0.0;
       }
     }
   }

@@ -23,6 +23,8 @@ struct Specimen {
   std::vector<Support> supports;
   std::vector<LoadTerm> loads;
   std::vector<Tie> ties;  ///< constraints outside the bond families (a loading fixture)
+  /// strain control: displacements imposed on grips (the load's P in the control unit)
+  std::vector<PrescribedDisplacement> prescribed;
   mesh::Point initial_crack_tip;
 };
 

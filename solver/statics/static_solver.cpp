@@ -23,12 +23,13 @@ double tie_violation(const Tie& tie, const std::vector<double>& u) {
 
 StaticSolver::StaticSolver(const mesh::Discretization& disc, const model::PdModel& model,
                            std::vector<Support> supports, std::vector<LoadTerm> loads,
-                           std::vector<Tie> ties)
+                           std::vector<Tie> ties, std::vector<PrescribedDisplacement> prescribed)
     : disc_(disc),
       model_(model),
       supports_(std::move(supports)),
       loads_(std::move(loads)),
-      ties_(std::move(ties)) {
+      ties_(std::move(ties)),
+      prescribed_(std::move(prescribed)) {
   for (const Tie& tie : ties_) {
     const bool nodes_ok = std::all_of(tie.terms.begin(), tie.terms.end(), [&](const TieTerm& term) {
       return term.node >= 0 && term.node < disc.num_nodes() &&
@@ -40,6 +41,18 @@ StaticSolver::StaticSolver(const mesh::Discretization& disc, const model::PdMode
           "coefficient) and a finite stiffness > 0");
     }
   }
+  for (const PrescribedDisplacement& p : prescribed_) {
+    const bool nodes_ok = std::all_of(p.nodes.begin(), p.nodes.end(), [&](mesh::NodeIndex k) {
+      return k >= 0 && k < disc.num_nodes();
+    });
+    if (p.nodes.empty() || !nodes_ok || (p.component != 0 && p.component != 1) ||
+        !std::isfinite(p.constant) || !std::isfinite(p.per_cos) || !std::isfinite(p.per_sin)) {
+      throw std::invalid_argument(
+          "StaticSolver: a prescribed displacement needs nodes of the model, component 0 or 1 "
+          "and finite coefficients");
+    }
+  }
+  for (auto& r : reaction_) r.assign(prescribed_.size(), 0.0);
   intact_.resize(static_cast<std::size_t>(disc.num_bonds()));
   factor_.resize(intact_.size());
   for (std::size_t b = 0; b < intact_.size(); ++b) {
@@ -52,6 +65,11 @@ StaticSolver::StaticSolver(const mesh::Discretization& disc, const model::PdMode
     for (mesh::NodeIndex k : s.nodes) {
       if (s.fix_x) free_index_[2 * static_cast<std::size_t>(k)] = -1;
       if (s.fix_y) free_index_[2 * static_cast<std::size_t>(k) + 1] = -1;
+    }
+  }
+  for (const auto& p : prescribed_) {
+    for (mesh::NodeIndex k : p.nodes) {
+      free_index_[2 * static_cast<std::size_t>(k) + static_cast<std::size_t>(p.component)] = -1;
     }
   }
   for (auto& f : free_index_) f = f < 0 ? -1 : num_free_++;
@@ -136,6 +154,60 @@ std::vector<double> StaticSolver::basis_force(Basis b) const {
     }
   }
   return f;
+}
+
+std::vector<double> StaticSolver::basis_prescribed(Basis b) const {
+  std::vector<double> u(2 * static_cast<std::size_t>(disc_.num_nodes()), 0.0);
+  for (const auto& p : prescribed_) {
+    const double value = b == basis_constant ? p.constant : b == basis_cos ? p.per_cos : p.per_sin;
+    for (mesh::NodeIndex k : p.nodes) {
+      u[2 * static_cast<std::size_t>(k) + static_cast<std::size_t>(p.component)] = value;
+    }
+  }
+  return u;
+}
+
+std::vector<double> StaticSolver::basis_rhs(Basis b, bool& loaded) const {
+  std::vector<double> rhs = basis_force(b);
+  loaded = std::any_of(rhs.begin(), rhs.end(), [](double v) { return v != 0.0; });
+  if (prescribed_.empty()) return rhs;
+  const std::vector<double> ubar = basis_prescribed(b);
+  if (std::none_of(ubar.begin(), ubar.end(), [](double v) { return v != 0.0; })) return rhs;
+  loaded = true;
+  // F_f − K_fp·ū: K·ū bond by bond with the current bond factors; on the free rows it is K_fp·ū
+  // (ū is zero there). In the mixed form the w rows get 0: the Schur complement of the mixed
+  // matrix on u is K, so u_f solves K_ff·u_f = F_f − K_fp·ū all the same.
+  const std::vector<double> k_ubar = internal_force(ubar);
+  for (std::size_t dof = 0; dof < rhs.size(); ++dof) rhs[dof] -= k_ubar[dof];
+  return rhs;
+}
+
+void StaticSolver::finish_basis(Basis b, std::vector<double>& u) {
+  const auto bi = static_cast<std::size_t>(b);
+  if (!prescribed_.empty()) {
+    const std::vector<double> ubar = basis_prescribed(b);
+    for (std::size_t dof = 0; dof < u.size(); ++dof) {
+      if (free_index_[dof] < 0) u[dof] = ubar[dof];  // supports: 0
+    }
+    // The grips' force: K·u − F on the prescribed DOFs (the body's resistance to being moved).
+    const std::vector<double> k_u = internal_force(u);
+    const std::vector<double> f = basis_force(b);
+    for (std::size_t t = 0; t < prescribed_.size(); ++t) {
+      double sum = 0.0;
+      for (mesh::NodeIndex k : prescribed_[t].nodes) {
+        const auto dof =
+            2 * static_cast<std::size_t>(k) + static_cast<std::size_t>(prescribed_[t].component);
+        sum += k_u[dof] - f[dof];
+      }
+      reaction_[bi][t] = sum;
+    }
+  }
+  model::bond_stretches(disc_, u, s_[bi]);
+}
+
+double StaticSolver::reaction(std::size_t term, double p, double alpha) const {
+  return p * (reaction_[0][term] + std::cos(alpha) * reaction_[1][term] +
+              std::sin(alpha) * reaction_[2][term]);
 }
 
 void StaticSolver::displacement(double p, double alpha, std::vector<double>& u) const {

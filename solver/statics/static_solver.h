@@ -35,6 +35,22 @@ struct LoadTerm {
   mesh::Point per_sin;
 };
 
+/// Strain (displacement) control: one displacement component imposed on a set of nodes (a
+/// specimen's grip layer, a bolted joint's imposed slip, a constrained thermal expansion), affine
+/// in the cycle's load like LoadTerm, with P in the detail's control unit:
+///   ū = P·(constant + cos α·per_cos + sin α·per_sin)   (m per unit of P)
+/// The DOFs leave the unknowns as supports do (a support is the case ū = 0): the factor is K_ff,
+/// and each basis is solved with the right-hand side F − K_fp·ū, K_fp·ū computed bond by bond
+/// (internal_force), so a break's rank update is unchanged. The reaction at the prescribed DOFs
+/// is the internal force there (reaction()).
+struct PrescribedDisplacement {
+  std::vector<mesh::NodeIndex> nodes;
+  int component = 1;  ///< 0: x, 1: y
+  double constant = 0.0;
+  double per_cos = 0.0;
+  double per_sin = 0.0;
+};
+
 /// One displacement component of a node, with its coefficient in a Tie.
 struct TieTerm {
   mesh::NodeIndex node = 0;
@@ -70,7 +86,7 @@ class StaticSolver {
  public:
   StaticSolver(const mesh::Discretization& disc, const model::PdModel& model,
                std::vector<Support> supports, std::vector<LoadTerm> loads,
-               std::vector<Tie> ties = {});
+               std::vector<Tie> ties = {}, std::vector<PrescribedDisplacement> prescribed = {});
   /// A deep copy (the factor too) that continues bit for bit as this solver would
   /// (FatigueEngine::fork); the copy refers to the same discretization and model.
   StaticSolver(const StaticSolver&) = default;
@@ -129,6 +145,10 @@ class StaticSolver {
   /// y = K(f)·x over the free DOFs with the given bond stiffness factors, bond by bond (plus the
   /// ground springs of isolated nodes): the matrix of the preconditioned path, never assembled.
   void multiply(const std::vector<double>& factors, const double* x, double* y) const;
+  /// x = K⁻¹·rhs over the free DOFs with the current factor (full DOF vectors: rhs is read on the
+  /// free DOFs only, x is 0 elsewhere). Not in the mixed form (std::logic_error). The Newton steps
+  /// of elastoplastic bonds (statics/elastoplastic.h) solve with it after set_bond_factors.
+  void solve_free(const std::vector<double>& rhs, std::vector<double>& x) const;
   /// Seconds spent in low-rank updates.
   [[nodiscard]] double update_seconds() const { return update_s_; }
   [[nodiscard]] int updates() const { return updates_; }
@@ -145,6 +165,18 @@ class StaticSolver {
   void stretch(double p, double alpha, std::vector<double>& s) const;
   /// External force vector of the basis case (full DOFs).
   [[nodiscard]] std::vector<double> basis_force(Basis b) const;
+  /// The prescribed displacements of the basis case (full DOFs, zero elsewhere).
+  [[nodiscard]] std::vector<double> basis_prescribed(Basis b) const;
+  [[nodiscard]] const std::vector<PrescribedDisplacement>& prescribed() const {
+    return prescribed_;
+  }
+  /// Reaction of prescribed term t (N): the sum over its nodes of the force the grips apply in
+  /// its component, K·u − F there (equal and opposite to the body's pull on the grips), at the
+  /// load (P, α): P·(R_const + cos α·R_cos + sin α·R_sin). Zero once the body is cut through.
+  [[nodiscard]] double reaction(std::size_t term, double p, double alpha) const;
+  [[nodiscard]] double basis_reaction(std::size_t term, Basis b) const {
+    return reaction_[static_cast<std::size_t>(b)][term];
+  }
   /// Internal force f = K·u over the intact bonds and the ties, computed bond by bond (not from
   /// the matrix): the independent check of equilibrium.
   [[nodiscard]] std::vector<double> internal_force(const std::vector<double>& u) const;
@@ -204,6 +236,11 @@ class StaticSolver {
   [[nodiscard]] std::vector<int> dof_ordering() const;
   /// Solves the basis cases with the current factor; bases without load are zero.
   void solve_bases();
+  /// Right-hand side of basis b over the full DOFs: F − K·ū (ū its prescribed displacements,
+  /// K·ū by internal_force with the current bond factors); `loaded` says whether any is nonzero.
+  [[nodiscard]] std::vector<double> basis_rhs(Basis b, bool& loaded) const;
+  /// Completes a solved basis: ū on its prescribed DOFs, the stretches and the reactions.
+  void finish_basis(Basis b, std::vector<double>& u);
   /// The bond's gradient scale·e·(u_j − u_i) as (free index, coefficient) pairs; supported DOFs
   /// have index −1.
   [[nodiscard]] std::array<std::pair<int, double>, 4> bond_gradient(std::size_t b,
@@ -247,6 +284,8 @@ class StaticSolver {
   std::vector<Support> supports_;
   std::vector<LoadTerm> loads_;
   std::vector<Tie> ties_;
+  std::vector<PrescribedDisplacement> prescribed_;
+  std::array<std::vector<double>, 3> reaction_;  ///< per basis, per prescribed term
   std::vector<std::uint8_t> intact_;
   std::vector<double> factor_;  ///< stiffness factor of each bond's pair term (0 when broken)
   std::vector<std::int32_t> free_index_;  ///< DOF -> free index, -1 when supported
