@@ -15,56 +15,17 @@ double join_gap(const PowerLawCurve& c, double strain) {
   return c.youngs_modulus * strain - (c.a * std::pow(strain, c.b) + c.sigma_inf);
 }
 
-/// The curve with its join solved once, for the many evaluations of one Masing path.
-class Skeleton {
- public:
-  explicit Skeleton(const PowerLawCurve& c)
-      : c_(c),
-        yield_strain_(c.yield_strain()),
-        yield_energy_(0.5 * c.youngs_modulus * yield_strain_ * yield_strain_),
-        yield_antiderivative_(antiderivative(yield_strain_)) {}
-
-  /// g(ε), odd.
-  [[nodiscard]] double stress(double strain) const {
-    const double x = std::fabs(strain);
-    const double g =
-        x <= yield_strain_ ? c_.youngs_modulus * x : c_.a * std::pow(x, c_.b) + c_.sigma_inf;
-    return strain < 0.0 ? -g : g;
-  }
-  /// g'(ε), even.
-  [[nodiscard]] double tangent(double strain) const {
-    const double x = std::fabs(strain);
-    return x <= yield_strain_ ? c_.youngs_modulus : c_.a * c_.b * std::pow(x, c_.b - 1.0);
-  }
-  /// G(ε) = ∫_0^|ε| g, even.
-  [[nodiscard]] double energy(double strain) const {
-    const double x = std::fabs(strain);
-    if (x <= yield_strain_) return 0.5 * c_.youngs_modulus * x * x;
-    return yield_energy_ + (antiderivative(x) - yield_antiderivative_);
-  }
-
-  // ---- one Masing branch from the reversal (ε_r, σ_r) (bond_plasticity.h)
-  [[nodiscard]] double branch_stress(double er, double sr, double strain) const {
-    return sr + 2.0 * stress(0.5 * (strain - er));
-  }
-  [[nodiscard]] double branch_tangent(double er, double strain) const {
-    return tangent(0.5 * (strain - er));
-  }
-  /// ∫σ dε from `from` to `to` along the branch, both on the same side of ε_r.
-  [[nodiscard]] double branch_work(double er, double sr, double from, double to) const {
-    return sr * (to - from) + 4.0 * (energy(0.5 * (to - er)) - energy(0.5 * (from - er)));
-  }
-
- private:
-  /// a/(b+1)·x^(b+1) + σ∞·x, the power law's antiderivative.
-  [[nodiscard]] double antiderivative(double x) const {
-    return c_.a / (c_.b + 1.0) * std::pow(x, c_.b + 1.0) + c_.sigma_inf * x;
-  }
-  const PowerLawCurve& c_;
-  double yield_strain_;
-  double yield_energy_;
-  double yield_antiderivative_;
-};
+// ---- one Masing branch from the reversal (ε_r, σ_r) (bond_plasticity.h)
+double branch_stress(const MasingSkeleton& sk, double er, double sr, double strain) {
+  return sr + 2.0 * sk.stress(0.5 * (strain - er));
+}
+double branch_tangent(const MasingSkeleton& sk, double er, double strain) {
+  return sk.tangent(0.5 * (strain - er));
+}
+/// ∫σ dε from `from` to `to` along the branch, both on the same side of ε_r.
+double branch_work(const MasingSkeleton& sk, double er, double sr, double from, double to) {
+  return sr * (to - from) + 4.0 * (sk.energy(0.5 * (to - er)) - sk.energy(0.5 * (from - er)));
+}
 
 /// Removes entry i of the stack (shifting the newer ones down) and zeroes the freed slot.
 void erase_reversal(MasingState& s, int i) {
@@ -103,9 +64,9 @@ int branch_direction(const MasingState& s) {
 }
 
 /// The tangent of the state's own branch at its strain.
-double current_tangent(const Skeleton& sk, const MasingState& s) {
+double current_tangent(const MasingSkeleton& sk, const MasingState& s) {
   if (s.depth == 0) return sk.tangent(s.strain);
-  return sk.branch_tangent(s.reversal_strain[s.depth - 1], s.strain);
+  return branch_tangent(sk, s.reversal_strain[s.depth - 1], s.strain);
 }
 
 struct Walk {
@@ -115,7 +76,7 @@ struct Walk {
 };
 
 /// Follows the monotone path from s.strain to `trial` through the Masing rules.
-Walk walk(const Skeleton& sk, MasingState s, double trial) {
+Walk walk(const MasingSkeleton& sk, MasingState s, double trial) {
   Walk w;
   if (trial == s.strain) {
     w.tangent = current_tangent(sk, s);
@@ -142,15 +103,15 @@ Walk walk(const Skeleton& sk, MasingState s, double trial) {
     const double tol = kMasingSnapTolerance * std::fmax(std::fabs(ec), std::fabs(ec - er));
     const double overshoot = d * (trial - ec);
     if (overshoot < -tol) {  // stays on the branch from R_k
-      w.work += sk.branch_work(er, sr, s.strain, trial);
+      w.work += branch_work(sk, er, sr, s.strain, trial);
       s.strain = trial;
-      s.stress = sk.branch_stress(er, sr, trial);
-      w.tangent = sk.branch_tangent(er, trial);
+      s.stress = branch_stress(sk, er, sr, trial);
+      w.tangent = branch_tangent(sk, er, trial);
       break;
     }
     // The loop closes: snap to the stored point, pop, continue on the older branch.
-    w.work += sk.branch_work(er, sr, s.strain, ec);
-    w.tangent = sk.branch_tangent(er, ec);
+    w.work += branch_work(sk, er, sr, s.strain, ec);
+    w.tangent = branch_tangent(sk, er, ec);
     s.strain = ec;
     s.stress = sc;
     erase_reversal(s, k);
@@ -163,20 +124,52 @@ Walk walk(const Skeleton& sk, MasingState s, double trial) {
 
 }  // namespace
 
-double PowerLawCurve::stress(double strain) const { return Skeleton(*this).stress(strain); }
+MasingSkeleton::MasingSkeleton(const PowerLawCurve& curve)
+    : curve_(curve),
+      yield_strain_(curve.yield_strain()),
+      yield_energy_(0.5 * curve.youngs_modulus * yield_strain_ * yield_strain_),
+      yield_antiderivative_(antiderivative(yield_strain_)) {}
 
-double PowerLawCurve::tangent(double strain) const { return Skeleton(*this).tangent(strain); }
+double MasingSkeleton::antiderivative(double x) const {
+  return curve_.a / (curve_.b + 1.0) * std::pow(x, curve_.b + 1.0) + curve_.sigma_inf * x;
+}
 
-double PowerLawCurve::energy(double strain) const { return Skeleton(*this).energy(strain); }
+double MasingSkeleton::stress(double strain) const {
+  const double x = std::fabs(strain);
+  const double g = x <= yield_strain_ ? curve_.youngs_modulus * x
+                                      : curve_.a * std::pow(x, curve_.b) + curve_.sigma_inf;
+  return strain < 0.0 ? -g : g;
+}
+
+double MasingSkeleton::tangent(double strain) const {
+  const double x = std::fabs(strain);
+  return x <= yield_strain_ ? curve_.youngs_modulus
+                            : curve_.a * curve_.b * std::pow(x, curve_.b - 1.0);
+}
+
+double MasingSkeleton::energy(double strain) const {
+  const double x = std::fabs(strain);
+  if (x <= yield_strain_) return 0.5 * curve_.youngs_modulus * x * x;
+  return yield_energy_ + (antiderivative(x) - yield_antiderivative_);
+}
+
+double PowerLawCurve::stress(double strain) const { return MasingSkeleton(*this).stress(strain); }
+
+double PowerLawCurve::tangent(double strain) const { return MasingSkeleton(*this).tangent(strain); }
+
+double PowerLawCurve::energy(double strain) const { return MasingSkeleton(*this).energy(strain); }
 
 double PowerLawCurve::yield_strain() const {
   // h(ε) = E·ε − a·ε^b − σ∞ is convex (a·b > 0, b − 1 < 0) and h(σ∞/E) = −a·(σ∞/E)^b > 0, and
   // σ∞/E lies right of h's minimum when the join exists (validate). Newton from there decreases
-  // monotonically to the larger root; stop when a step no longer decreases ε (round-off).
+  // monotonically to the larger root (8 steps for the defaults); stop when a step no longer
+  // decreases ε (round-off).
   double strain = sigma_inf / youngs_modulus;
   for (int i = 0; i < 200; ++i) {
-    const double slope = youngs_modulus - a * b * std::pow(strain, b - 1.0);
-    const double next = strain - join_gap(*this, strain) / slope;
+    const double power = a * std::pow(strain, b);  // a·ε^b
+    const double gap = youngs_modulus * strain - (power + sigma_inf);
+    const double slope = youngs_modulus - b * power / strain;
+    const double next = strain - gap / slope;
     if (!(next < strain)) break;
     strain = next;
   }
@@ -208,20 +201,29 @@ core::Status validate(const PowerLawCurve& c) {
   return {};
 }
 
+MasingResponse masing_evaluate(const MasingSkeleton& skeleton, const MasingState& committed,
+                               double trial_strain) {
+  const Walk w = walk(skeleton, committed, trial_strain);
+  return {w.state.stress, w.tangent, w.work};
+}
+
+MasingState masing_commit(const MasingSkeleton& skeleton, const MasingState& committed,
+                          double trial_strain) {
+  return walk(skeleton, committed, trial_strain).state;
+}
+
 MasingResponse masing_evaluate(const PowerLawCurve& curve, const MasingState& committed,
                                double trial_strain) {
-  const Skeleton sk(curve);
-  const Walk w = walk(sk, committed, trial_strain);
-  return {w.state.stress, w.tangent, w.work};
+  return masing_evaluate(MasingSkeleton(curve), committed, trial_strain);
 }
 
 MasingState masing_commit(const PowerLawCurve& curve, const MasingState& committed,
                           double trial_strain) {
-  return walk(Skeleton(curve), committed, trial_strain).state;
+  return masing_commit(MasingSkeleton(curve), committed, trial_strain);
 }
 
 double masing_symmetric_loop_area(const PowerLawCurve& curve, double strain_amplitude) {
-  const Skeleton sk(curve);
+  const MasingSkeleton sk(curve);
   const double a = std::fabs(strain_amplitude);
   return 8.0 * sk.energy(a) - 4.0 * a * sk.stress(a);
 }

@@ -310,6 +310,26 @@ TEST(MasingMemory, SmallLoopsRestoreTheirStartBitForBit) {
   }
 }
 
+TEST(MasingSkeleton, PrebuiltSkeletonGivesTheSameBits) {
+  // The MasingSkeleton overloads and the PowerLawCurve ones run the same arithmetic.
+  const model::MasingSkeleton sk(kCurve);
+  EXPECT_EQ(sk.yield_strain(), kCurve.yield_strain());
+  MasingState a;
+  MasingState b;
+  for (double e : {0.006, -0.006, 0.0024, 0.006, 0.001, 0.0037, -0.0071}) {
+    const model::MasingResponse ra = model::masing_evaluate(kCurve, a, e);
+    const model::MasingResponse rb = model::masing_evaluate(sk, b, e);
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(ra.stress), std::bit_cast<std::uint64_t>(rb.stress));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(ra.tangent), std::bit_cast<std::uint64_t>(rb.tangent));
+    EXPECT_EQ(std::bit_cast<std::uint64_t>(ra.work), std::bit_cast<std::uint64_t>(rb.work));
+    a = model::masing_commit(kCurve, a, e);
+    b = model::masing_commit(sk, b, e);
+    EXPECT_TRUE(SameBits(a, b));
+    EXPECT_EQ(sk.stress(e), kCurve.stress(e));
+    EXPECT_EQ(sk.energy(e), kCurve.energy(e));
+  }
+}
+
 // ------------------------------------------------------------------ 5. tangent
 
 TEST(MasingTangent, MatchesCentralDifferencesOfTheStress) {
@@ -319,10 +339,12 @@ TEST(MasingTangent, MatchesCentralDifferencesOfTheStress) {
     std::vector<double> trials;
   };
   const std::vector<Case> cases{
-      {{}, {3e-4, 0.001, 0.0018, 0.006, -0.002}},                        // skeleton
-      {{0.006}, {0.005, 0.003, -0.001, -0.0045}},                        // branch from R1
-      {{0.006, -0.006, 0.006, 0.002}, {0.0025, 0.0032, 0.0038, 0.005}},  // nested, and through R1
-      {{-0.006, 0.006, 0.0024}, {0.003, 0.0045, 0.0058}},                // 004 PUL small cycle
+      {{}, {3e-4, 0.001, 0.0018, 0.006, -0.002}},  // skeleton
+      {{0.006}, {0.005, 0.003, -0.001, -0.0045}},  // branch from R1
+      {{0.006, -0.006, 0.006, 0.002},
+       {0.0025, 0.0032, 0.0038, 0.005, 0.0065,
+        0.008}},  // nested, then through R1 onto the skeleton
+      {{-0.006, 0.006, 0.0024}, {0.003, 0.0045, 0.0058}},  // 004 PUL small cycle
   };
   for (const Case& c : cases) {
     MasingState s;
@@ -418,6 +440,15 @@ TEST(MasingMemory, ClosureSnapsWithinTheTolerance) {
   EXPECT_EQ(snapped.strain, 0.006);
   EXPECT_EQ(snapped.stress, kCurve.stress(0.006));
   EXPECT_EQ(model::masing_evaluate(kCurve, start, near_miss).stress, kCurve.stress(0.006));
+  // Ending exactly on an inner closure point: the stored stress, and the tangent of the branch the
+  // path arrived on (from R3 = 0.4 %), not of the older one it continues on.
+  MasingState nested;
+  run(nested, {0.006, 0.002, 0.004});
+  const double s2 = nested.reversal_stress[1];
+  const model::MasingResponse at_r2 = model::masing_evaluate(kCurve, nested, 0.002);
+  EXPECT_EQ(at_r2.stress, s2);
+  EXPECT_EQ(at_r2.tangent, kCurve.tangent(0.5 * (0.002 - 0.004)));
+  EXPECT_NE(at_r2.tangent, kCurve.tangent(0.5 * (0.002 - 0.006)));
   const MasingState open = model::masing_commit(kCurve, start, 0.006 * (1.0 - 1e-9));
   EXPECT_EQ(open.depth, 1);
   EXPECT_LT(open.stress, kCurve.stress(0.006));
