@@ -85,9 +85,9 @@ core::Status validate(const PowerLawCurve& curve);
 
 /// The curve with its join solved once (ε_y, G(ε_y)): the same arithmetic as PowerLawCurve's
 /// members, bit for bit, without the Newton solve for ε_y on every call (measured: 0.12 µs per
-/// masing_evaluate against 0.7 µs with the solve). Build one per
-/// material (or per bond when E scatters) and pass it to the overloads of masing_evaluate and
-/// masing_commit in hot loops; the PowerLawCurve overloads build one per call.
+/// masing_evaluate against 0.7 µs with the solve). Build one per material (or per bond when E
+/// scatters) and pass it to the overloads of masing_evaluate and masing_commit in hot loops; the
+/// PowerLawCurve overloads build one per call.
 class MasingSkeleton {
  public:
   /// Requires validate(curve).
