@@ -449,6 +449,8 @@ TEST(MasingMemory, ClosureSnapsWithinTheTolerance) {
   EXPECT_EQ(at_r2.stress, s2);
   EXPECT_EQ(at_r2.tangent, kCurve.tangent(0.5 * (0.002 - 0.004)));
   EXPECT_NE(at_r2.tangent, kCurve.tangent(0.5 * (0.002 - 0.006)));
+  // The branch from R1 meets the skeleton at the mirror point with the skeleton's own slope.
+  EXPECT_EQ(model::masing_evaluate(kCurve, start, 0.006).tangent, kCurve.tangent(0.006));
   const MasingState open = model::masing_commit(kCurve, start, 0.006 * (1.0 - 1e-9));
   EXPECT_EQ(open.depth, 1);
   EXPECT_LT(open.stress, kCurve.stress(0.006));
