@@ -237,15 +237,12 @@ TEST(KineticReader, ErrorsNameTheKey) {
 
 // ------------------------------------------------------------------------------- engine
 
-TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
-  // The engine's kinetic rate is kt_bond_dose: (a) three equal segments give bit for bit the
-  // lives of one U, γ; (b) with a loop energy ψA the hottest bond's remaining life after a block
-  // is 1 − count·Φ(E·s_max, R, θ = kT + ψA), Φ by 004 Eq. (15) outside the engine.
-  const auto plate = testing::make_notched_plate(model::ModelKind::bond_based);
-  const double load = 1000.0;
-  std::vector<double> s;
-  const double smax = testing::largest_intact_stretch(plate, load, &s);
-  const double sigma = plate.model.material.youngs_modulus * smax;
+/// The notched plate's kinetic settings: the hottest bond (σ = E·s_max at P = 1000 N) lives
+/// `life` cycles at R = 0.1 with γσ/θ = 10 (as the engine tests' settings_for).
+fatigue::FatigueSettings plate_kinetic(const statics::Specimen& plate, double life,
+                                       std::vector<double>& s, double& sigma) {
+  const double smax = testing::largest_intact_stretch(plate, 1000.0, &s);
+  sigma = plate.model.material.youngs_modulus * smax;
   fatigue::FatigueSettings f;
   f.law = fatigue::FatigueLaw::kinetic;
   f.critical_stretch = 4 * smax;
@@ -253,7 +250,21 @@ TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
   auto& k = f.kinetic;
   const double kt = fatigue::kt_thermal_energy(k.temperature);
   k.gamma = 10 * kt / sigma;
-  k.U = std::log(fatigue::kt_cycle_dose(sigma, 0.1, k.frequency, 0.0, k.gamma, kt) * 500.0) * kt;
+  k.U = std::log(fatigue::kt_cycle_dose(sigma, 0.1, k.frequency, 0.0, k.gamma, kt) * life) * kt;
+  return f;
+}
+
+TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
+  // The engine's kinetic rate is kt_bond_dose: (a) three equal segments give bit for bit the
+  // lives of one U, γ; (b) with a loop energy ψA the hottest bond's remaining life after a block
+  // is 1 − count·Φ(E·s_max, R, θ = kT + ψA), Φ by 004 Eq. (15) outside the engine.
+  const auto plate = testing::make_notched_plate(model::ModelKind::bond_based);
+  const double load = 1000.0;
+  std::vector<double> s;
+  double sigma = 0.0;
+  const fatigue::FatigueSettings f = plate_kinetic(plate, 500.0, s, sigma);
+  const auto& k = f.kinetic;
+  const double kt = fatigue::kt_thermal_energy(k.temperature);
   const core::LoadBlock block{load, 0.1, 0.0, 120};
 
   fatigue::FatigueSettings seg = f;
@@ -285,6 +296,80 @@ TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
       fatigue::kt_cycle_dose(sigma, 0.1, k.frequency, k.U, k.gamma, kt + 0.005 * kt);
   EXPECT_NEAR(warm.remaining_life()[h], 1.0 - 120.0 * dose, 1e-12);
   EXPECT_LT(warm.remaining_life()[h], one.remaining_life()[h]);  // hotter: shorter (Eq. 26)
+}
+
+TEST(KineticEngine, PhaseTwoBondsTakeKuAndKgamma) {
+  // The notch's pre-cut bonds put the nodes at its faces in phase II from the start (φ ≥ φ0 =
+  // 0.398, 000 Sec. 4.4). After one block without breaks, a phase I bond's life equals the
+  // k_U = 1 engine's bit for bit, and a phase II bond's is 1 − count·Φ(E·s, R, k_U·U, k_γ·γ),
+  // Φ by 004 Eq. (15) outside the engine (004 step 6).
+  const auto plate = testing::make_notched_plate(model::ModelKind::bond_based);
+  std::vector<double> s;
+  double sigma = 0.0;
+  const fatigue::FatigueSettings f = plate_kinetic(plate, 500.0, s, sigma);
+  fatigue::FatigueSettings g = f;
+  g.kinetic.kU = 1.05;
+  g.kinetic.kgamma = 1.1;
+  fatigue::FatigueEngine base(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine grow(plate.disc, plate.model, plate.supports, plate.loads, g);
+  ASSERT_TRUE(base.initialize());
+  ASSERT_TRUE(grow.initialize());
+  const core::LoadBlock block{1000.0, 0.1, 0.0, 120};
+  base.apply(block);
+  grow.apply(block);
+  ASSERT_EQ(grow.break_events().size(), 0u);
+  const auto& k = f.kinetic;
+  const double kt = fatigue::kt_thermal_energy(k.temperature);
+  const auto lb = base.remaining_life(), lg = grow.remaining_life();
+  std::size_t phase_two = 0, differ = 0;
+  for (std::size_t b = 0; b < s.size(); ++b) {
+    if (plate.disc.bond_precut[b]) continue;
+    if (grow.bond_phase()[b] == 1) {
+      ASSERT_EQ(lg[b], lb[b]) << "bond " << b;
+      continue;
+    }
+    ++phase_two;
+    const double sb = plate.model.material.youngs_modulus * std::max(s[b], 0.0);
+    const double dose =
+        sb > 0.0 ? fatigue::kt_cycle_dose(sb, 0.1, k.frequency, 1.05 * k.U, 1.1 * k.gamma, kt)
+                 : 0.0;
+    EXPECT_NEAR(lg[b], 1.0 - 120.0 * dose, 1e-12) << "bond " << b;
+    if (lg[b] != lb[b]) ++differ;
+  }
+  EXPECT_GT(phase_two, 50u);
+  EXPECT_GT(differ, 50u);  // the factors reached the lives
+}
+
+TEST(KineticEngine, BlocksEqualPerCycleWithEveryPartOn) {
+  // The exact-stepping contract (next-break jumps = cycle-by-cycle integration, bit for bit)
+  // with segments, k_U, k_γ and Eq. (26) all on, through breaks and phase changes.
+  const auto plate = testing::make_notched_plate(model::ModelKind::bond_based);
+  std::vector<double> s;
+  double sigma = 0.0;
+  fatigue::FatigueSettings f = plate_kinetic(plate, 150.0, s, sigma);
+  auto& k = f.kinetic;
+  k.segment_count = 2;
+  k.segments = {fatigue::KineticSegment{0.8 * sigma, 1.02 * k.U, 0.9 * k.gamma},
+                fatigue::KineticSegment{kInf, k.U, k.gamma}, fatigue::KineticSegment{}};
+  k.kU = 1.02;
+  k.kgamma = 1.05;
+  k.psi = 1e-28;
+  k.loop_area = 0.002 * fatigue::kt_thermal_energy(k.temperature) / k.psi;
+  ASSERT_EQ(core::message_of(validate(k)), "");
+  fatigue::FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
+  fatigue::FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, f);
+  ASSERT_TRUE(fast.initialize());
+  ASSERT_TRUE(slow.initialize());
+  for (const core::LoadBlock& block :
+       {core::LoadBlock{1000.0, 0.1, 0.0, 120}, core::LoadBlock{1100.0, -0.2, 0.2, 90},
+        core::LoadBlock{1000.0, 0.1, 0.0, 300}}) {
+    fast.apply(block);
+    slow.apply_per_cycle(block);
+    testing::expect_same_breaks(fast, slow);
+    EXPECT_EQ(fast.remaining_life(), slow.remaining_life());
+    EXPECT_EQ(fast.bond_phase(), slow.bond_phase());
+  }
+  EXPECT_GE(fast.break_events().size(), 5u);  // it must actually crack the plate
 }
 
 // ------------------------------------------------------------------------------- calibration
