@@ -566,7 +566,8 @@ struct KineticOptions {
   std::vector<double> bounds;
   double step = 2e6;
   double r = -1.0;
-  fatigue::KineticParams law;  // λ, n0, T, f (and ψ, A for θ of Eq. 26)
+  fatigue::KineticParams law;         // λ, n0, T, f
+  double psi = 0.0, loop_area = 0.0;  // θ of Eq. (26)
   double n0 = 0.0;
 };
 
@@ -594,9 +595,9 @@ void add_kinetic_options(CLI::App& app, KineticOptions& o) {
       ->check(core::finite_positive());
   app.add_option("--frequency", o.law.frequency, "f (Hz, default 0.56)")
       ->check(core::finite_positive());
-  app.add_option("--psi", o.law.psi, "ψ (m^3) of Eq. (26), with --loop-area (default 0)")
+  app.add_option("--psi", o.psi, "ψ (m^3) of Eq. (26), with --loop-area (default 0)")
       ->check(core::finite_in(0.0, 1e-20));
-  app.add_option("--loop-area", o.law.loop_area, "A (J/m^3) of Eq. (26) (default 0)")
+  app.add_option("--loop-area", o.loop_area, "A (J/m^3) of Eq. (26) (default 0)")
       ->check(core::finite_in(0.0, 1e12));
 }
 
@@ -666,7 +667,7 @@ int run_kinetic(int argc, char** argv) {
   }
   fatigue::KineticParams& law = o.law;
   law.n0 = o.n0 > 0 ? o.n0 : fatigue::kt_n0_for_unit_life(law.lambda);
-  const double theta = fatigue::kt_thermal_energy(law.temperature, law.psi, law.loop_area, 0.0);
+  const double theta = fatigue::kt_thermal_energy(law.temperature, o.psi, o.loop_area, 0.0);
   constexpr double kEv = 1.602176634e-19;
   std::string head, keys;
   for (std::size_t i = 0; i < segments; ++i) {
@@ -701,14 +702,14 @@ int run_kinetic(int argc, char** argv) {
   std::printf(
       "#   on %s at R = %g, theta = %.6g J (kT%s)\n",
       o.nureg ? "NUREG/CR-6909 Rev. 0 austenitic SS via 004's 316L curve" : "the given points", o.r,
-      theta, law.psi * law.loop_area > 0 ? " + psi*A, Eq. 26" : "");
+      theta, o.psi * o.loop_area > 0 ? " + psi*A, Eq. 26" : "");
   std::printf("%s[detail.fatigue]\nlaw = \"kinetic\"\n%s", head.c_str(), keys.c_str());
   std::printf("lambda = %s\nn0 = %s\ntemperature = %s\nfrequency = %s\n",
               toml_number(law.lambda).c_str(), toml_number(law.n0).c_str(),
               toml_number(law.temperature).c_str(), toml_number(law.frequency).c_str());
-  if (law.psi * law.loop_area > 0) {
-    std::printf("psi = %s\nloop_area = %s\n", toml_number(law.psi).c_str(),
-                toml_number(law.loop_area).c_str());
+  if (o.psi * o.loop_area > 0) {
+    std::printf("psi = %s\nloop_area = %s\n", toml_number(o.psi).c_str(),
+                toml_number(o.loop_area).c_str());
   }
   return core::kExitOk;
 }

@@ -310,7 +310,8 @@ bool FatigueEngine::compute_rates(const core::LoadBlock& block) {
         // 6), and θ is Eq. (26)'s with the configured loop area; all off by default, and then
         // this is kt_cycle_dose(σ, R, f, U, γ, kT) bit for bit.
         const double sigma = model_.material.youngs_modulus * std::max(s, 0.0);
-        rate_[b] = fatigue::kt_bond_dose(settings_.kinetic, sigma, block.r, phase_[b]);
+        rate_[b] = fatigue::kt_bond_dose(settings_.kinetic, settings_.kinetic_extension, sigma,
+                                         block.r, phase_[b]);
         break;
       }
     }

@@ -43,57 +43,64 @@ TEST(KineticEq26, EqualsEq15BitForBitWithoutLoopEnergy) {
   }
 }
 
-fatigue::KineticParams three_segments() {
-  // U, γ in the range of the 004 calibration below (1.5-1.8 eV, 3-6e-28 m³).
+/// 004's three segments, with U, γ in the range of the calibration below (1.5-1.8 eV, 3-6e-28 m³).
+struct Law {
   fatigue::KineticParams p;
-  p.U = 1.49 * kElectronVolt;
-  p.gamma = 3.67e-28;
-  p.segment_count = 3;
-  p.segments[0] = {250e6, 1.49 * kElectronVolt, 3.67e-28};
-  p.segments[1] = {290e6, 1.75 * kElectronVolt, 5.28e-28};
-  p.segments[2] = {kInf, 2.0 * kElectronVolt, 6.0e-28};
-  return p;
+  fatigue::KineticExtension e;
+};
+Law three_segments() {
+  Law l;
+  l.p.U = 1.49 * kElectronVolt;
+  l.p.gamma = 3.67e-28;
+  l.e.segment_count = 3;
+  l.e.segments[0] = {250e6, 1.49 * kElectronVolt, 3.67e-28};
+  l.e.segments[1] = {290e6, 1.75 * kElectronVolt, 5.28e-28};
+  l.e.segments[2] = {kInf, 2.0 * kElectronVolt, 6.0e-28};
+  return l;
 }
 
 TEST(KineticSegments, ChosenByTheBondsMaximumStress) {
   // 004: "σ ≤ 250 MPa, 250 MPa < σ ≤ 290 MPa, and σ > 290 MPa".
-  const fatigue::KineticParams p = three_segments();
-  EXPECT_EQ(core::message_of(validate(p)), "");
-  const auto at = [&](double s, int phase = 1) { return fatigue::kt_activation(p, s, phase); };
-  EXPECT_EQ(at(1e6).U, p.segments[0].U);
-  EXPECT_EQ(at(250e6).U, p.segments[0].U);
-  EXPECT_EQ(at(250e6).gamma, p.segments[0].gamma);
-  EXPECT_EQ(at(std::nextafter(250e6, kInf)).U, p.segments[1].U);
-  EXPECT_EQ(at(290e6).gamma, p.segments[1].gamma);
-  EXPECT_EQ(at(std::nextafter(290e6, kInf)).U, p.segments[2].U);
-  EXPECT_EQ(at(1e9).gamma, p.segments[2].gamma);
-  // No segments: the single U, γ at every stress.
-  fatigue::KineticParams one = p;
-  one.segment_count = 0;
-  EXPECT_EQ(fatigue::kt_activation(one, 1e9, 1).U, p.U);
-  EXPECT_EQ(fatigue::kt_activation(one, 1e9, 1).gamma, p.gamma);
+  const Law l = three_segments();
+  const auto& seg = l.e.segments;
+  EXPECT_EQ(core::message_of(validate(l.e)), "");
+  const auto at = [&](double s, int phase = 1) {
+    return fatigue::kt_activation(l.p, l.e, s, phase);
+  };
+  EXPECT_EQ(at(1e6).U, seg[0].U);
+  EXPECT_EQ(at(250e6).U, seg[0].U);
+  EXPECT_EQ(at(250e6).gamma, seg[0].gamma);
+  EXPECT_EQ(at(std::nextafter(250e6, kInf)).U, seg[1].U);
+  EXPECT_EQ(at(290e6).gamma, seg[1].gamma);
+  EXPECT_EQ(at(std::nextafter(290e6, kInf)).U, seg[2].U);
+  EXPECT_EQ(at(1e9).gamma, seg[2].gamma);
+  // No segments: KineticParams' single U, γ at every stress.
+  const fatigue::KineticExtension none;
+  EXPECT_EQ(fatigue::kt_activation(l.p, none, 1e9, 1).U, l.p.U);
+  EXPECT_EQ(fatigue::kt_activation(l.p, none, 1e9, 1).gamma, l.p.gamma);
 }
 
 TEST(KineticSegments, PhaseTwoScalesUAndGamma) {
   // 004 step 6: in the growth phase U = k_U·U, γ = k_γ·γ; 004's values k_U = 1.2, k_γ = 1.
-  fatigue::KineticParams p = three_segments();
-  p.kU = 1.2;
-  p.kgamma = 0.9;
-  const auto a = fatigue::kt_activation(p, 270e6, 2);
-  EXPECT_EQ(a.U, 1.2 * p.segments[1].U);
-  EXPECT_EQ(a.gamma, 0.9 * p.segments[1].gamma);
-  EXPECT_EQ(fatigue::kt_activation(p, 270e6, 1).U, p.segments[1].U);  // phase I untouched
+  Law l = three_segments();
+  const auto& seg = l.e.segments;
+  l.e.kU = 1.2;
+  l.e.kgamma = 0.9;
+  const auto a = fatigue::kt_activation(l.p, l.e, 270e6, 2);
+  EXPECT_EQ(a.U, 1.2 * seg[1].U);
+  EXPECT_EQ(a.gamma, 0.9 * seg[1].gamma);
+  EXPECT_EQ(fatigue::kt_activation(l.p, l.e, 270e6, 1).U, seg[1].U);  // phase I untouched
   // The bond dose is kt_cycle_dose with those values (004 Eq. 15), computed independently here.
-  const double theta = fatigue::kBoltzmann * p.temperature;
-  EXPECT_EQ(fatigue::kt_bond_dose(p, 270e6, -1.0, 2),
-            fatigue::kt_cycle_dose(270e6, -1.0, p.frequency, 1.2 * p.segments[1].U,
-                                   0.9 * p.segments[1].gamma, theta));
-  p.kgamma = 1.0;
+  const double theta = fatigue::kBoltzmann * l.p.temperature;
+  EXPECT_EQ(fatigue::kt_bond_dose(l.p, l.e, 270e6, -1.0, 2),
+            fatigue::kt_cycle_dose(270e6, -1.0, l.p.frequency, 1.2 * seg[1].U, 0.9 * seg[1].gamma,
+                                   theta));
+  l.e.kgamma = 1.0;
   // With k_U = 1.2 a phase II bond at 227.5 MPa lives e^(0.2 U/kT) longer (U ≈ 59 kT: ~1.3e5
   // times), as 004-design check 8 found: the factor slows growth.
-  const double slow =
-      fatigue::kt_bond_dose(p, 227.5e6, -1.0, 1) / fatigue::kt_bond_dose(p, 227.5e6, -1.0, 2);
-  EXPECT_NEAR(std::log(slow) / (0.2 * p.segments[0].U / theta), 1.0, 1e-12);
+  const double slow = fatigue::kt_bond_dose(l.p, l.e, 227.5e6, -1.0, 1) /
+                      fatigue::kt_bond_dose(l.p, l.e, 227.5e6, -1.0, 2);
+  EXPECT_NEAR(std::log(slow) / (0.2 * seg[0].U / theta), 1.0, 1e-12);
 }
 
 TEST(KineticSegments, DefaultsLeaveTheDoseBitIdentical) {
@@ -102,34 +109,39 @@ TEST(KineticSegments, DefaultsLeaveTheDoseBitIdentical) {
   fatigue::KineticParams p;
   p.U = 1.6e-19;
   p.gamma = 2.1e-28;
+  const fatigue::KineticExtension e;
   for (const double s : {50e6, 227.5e6, 400e6}) {
     for (const double r : {-1.0, 0.1, 0.9}) {
       const double old = fatigue::kt_cycle_dose(s, r, p.frequency, p.U, p.gamma,
                                                 fatigue::kt_thermal_energy(p.temperature));
-      EXPECT_EQ(fatigue::kt_bond_dose(p, s, r, 1), old);
-      EXPECT_EQ(fatigue::kt_bond_dose(p, s, r, 2), old);
+      EXPECT_EQ(fatigue::kt_bond_dose(p, e, s, r, 1), old);
+      EXPECT_EQ(fatigue::kt_bond_dose(p, e, s, r, 2), old);
     }
   }
-  EXPECT_EQ(fatigue::kt_bond_dose(p, 0.0, -1.0, 1), 0.0);
-  EXPECT_EQ(fatigue::kt_bond_dose(p, -5e6, -1.0, 1), 0.0);
+  EXPECT_EQ(fatigue::kt_bond_dose(p, e, 0.0, -1.0, 1), 0.0);
+  EXPECT_EQ(fatigue::kt_bond_dose(p, e, -5e6, -1.0, 1), 0.0);
 }
 
 TEST(KineticSegments, Validation) {
-  fatigue::KineticParams p = three_segments();
-  p.segments[1].sigma_upper = 240e6;  // not above the first
-  EXPECT_NE(core::message_of(validate(p)).find("ascend"), std::string::npos);
-  p = three_segments();
-  p.segments[2].sigma_upper = 400e6;  // the last must be +inf
-  EXPECT_NE(core::message_of(validate(p)).find("ascend"), std::string::npos);
-  p = three_segments();
-  p.segments[1].gamma = 0.0;
-  EXPECT_NE(core::message_of(validate(p)).find("segment's U and gamma"), std::string::npos);
-  p = three_segments();
-  p.kU = 0.0;
-  EXPECT_NE(core::message_of(validate(p)).find("kU"), std::string::npos);
-  p = three_segments();
-  p.psi = -1.0;
-  EXPECT_NE(core::message_of(validate(p)).find("psi"), std::string::npos);
+  EXPECT_EQ(core::message_of(validate(fatigue::KineticExtension{})), "");
+  fatigue::KineticExtension e = three_segments().e;
+  e.segments[1].sigma_upper = 240e6;  // not above the first
+  EXPECT_NE(core::message_of(validate(e)).find("ascend"), std::string::npos);
+  e = three_segments().e;
+  e.segments[2].sigma_upper = 400e6;  // the last must be +inf
+  EXPECT_NE(core::message_of(validate(e)).find("ascend"), std::string::npos);
+  e = three_segments().e;
+  e.segments[1].gamma = 0.0;
+  EXPECT_NE(core::message_of(validate(e)).find("segment's U and gamma"), std::string::npos);
+  e = three_segments().e;
+  e.segment_count = 1;
+  EXPECT_NE(core::message_of(validate(e)).find("segment_count"), std::string::npos);
+  e = three_segments().e;
+  e.kU = 0.0;
+  EXPECT_NE(core::message_of(validate(e)).find("kU"), std::string::npos);
+  e = three_segments().e;
+  e.psi = -1.0;
+  EXPECT_NE(core::message_of(validate(e)).find("psi"), std::string::npos);
 }
 
 // ------------------------------------------------------------------------------- reader
@@ -188,8 +200,9 @@ TEST(KineticReader, SegmentsPhaseFactorsAndLoopEnergy) {
                            {"loop_area_yield", 0.0}},
                           f)
                   .empty());
-  const auto& k = f.kinetic;
+  const auto& k = f.kinetic_extension;
   EXPECT_EQ(core::message_of(validate(k)), "");
+  EXPECT_EQ(f.kinetic.U, 2.4e-19);
   ASSERT_EQ(k.segment_count, 3);
   EXPECT_EQ(k.segments[0].U, 2.4e-19);
   EXPECT_EQ(k.segments[0].gamma, 3.7e-28);
@@ -204,11 +217,11 @@ TEST(KineticReader, SegmentsPhaseFactorsAndLoopEnergy) {
 
   fatigue::FatigueSettings d;  // the old keys alone: every new one off
   EXPECT_TRUE(read_errors({{"U", 2e-19}, {"gamma", 1e-28}}, d).empty());
-  EXPECT_EQ(d.kinetic.segment_count, 0);
-  EXPECT_EQ(d.kinetic.kU, 1.0);
-  EXPECT_EQ(d.kinetic.kgamma, 1.0);
-  EXPECT_EQ(d.kinetic.psi, 0.0);
-  EXPECT_EQ(d.kinetic.loop_area, 0.0);
+  EXPECT_EQ(d.kinetic_extension.segment_count, 0);
+  EXPECT_EQ(d.kinetic_extension.kU, 1.0);
+  EXPECT_EQ(d.kinetic_extension.kgamma, 1.0);
+  EXPECT_EQ(d.kinetic_extension.psi, 0.0);
+  EXPECT_EQ(d.kinetic_extension.loop_area, 0.0);
 }
 
 TEST(KineticReader, ErrorsNameTheKey) {
@@ -268,10 +281,10 @@ TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
   const core::LoadBlock block{load, 0.1, 0.0, 120};
 
   fatigue::FatigueSettings seg = f;
-  seg.kinetic.segment_count = 3;
-  seg.kinetic.segments = {fatigue::KineticSegment{0.3 * sigma, k.U, k.gamma},
-                          fatigue::KineticSegment{0.7 * sigma, k.U, k.gamma},
-                          fatigue::KineticSegment{kInf, k.U, k.gamma}};
+  seg.kinetic_extension.segment_count = 3;
+  seg.kinetic_extension.segments = {fatigue::KineticSegment{0.3 * sigma, k.U, k.gamma},
+                                    fatigue::KineticSegment{0.7 * sigma, k.U, k.gamma},
+                                    fatigue::KineticSegment{kInf, k.U, k.gamma}};
   fatigue::FatigueEngine one(plate.disc, plate.model, plate.supports, plate.loads, f);
   fatigue::FatigueEngine three(plate.disc, plate.model, plate.supports, plate.loads, seg);
   ASSERT_TRUE(one.initialize());
@@ -281,8 +294,8 @@ TEST(KineticEngine, SegmentsAndLoopEnergyReachTheBondLives) {
   EXPECT_EQ(one.remaining_life(), three.remaining_life());
 
   fatigue::FatigueSettings hot = f;
-  hot.kinetic.psi = 1e-28;
-  hot.kinetic.loop_area = 0.005 * kt / hot.kinetic.psi;  // ψA = 0.005 kT
+  hot.kinetic_extension.psi = 1e-28;
+  hot.kinetic_extension.loop_area = 0.005 * kt / hot.kinetic_extension.psi;  // ψA = 0.005 kT
   fatigue::FatigueEngine warm(plate.disc, plate.model, plate.supports, plate.loads, hot);
   ASSERT_TRUE(warm.initialize());
   warm.apply(block);
@@ -308,8 +321,8 @@ TEST(KineticEngine, PhaseTwoBondsTakeKuAndKgamma) {
   double sigma = 0.0;
   const fatigue::FatigueSettings f = plate_kinetic(plate, 500.0, s, sigma);
   fatigue::FatigueSettings g = f;
-  g.kinetic.kU = 1.05;
-  g.kinetic.kgamma = 1.1;
+  g.kinetic_extension.kU = 1.05;
+  g.kinetic_extension.kgamma = 1.1;
   fatigue::FatigueEngine base(plate.disc, plate.model, plate.supports, plate.loads, f);
   fatigue::FatigueEngine grow(plate.disc, plate.model, plate.supports, plate.loads, g);
   ASSERT_TRUE(base.initialize());
@@ -347,15 +360,16 @@ TEST(KineticEngine, BlocksEqualPerCycleWithEveryPartOn) {
   std::vector<double> s;
   double sigma = 0.0;
   fatigue::FatigueSettings f = plate_kinetic(plate, 150.0, s, sigma);
-  auto& k = f.kinetic;
-  k.segment_count = 2;
-  k.segments = {fatigue::KineticSegment{0.8 * sigma, 1.02 * k.U, 0.9 * k.gamma},
+  const auto& k = f.kinetic;
+  auto& e = f.kinetic_extension;
+  e.segment_count = 2;
+  e.segments = {fatigue::KineticSegment{0.8 * sigma, 1.02 * k.U, 0.9 * k.gamma},
                 fatigue::KineticSegment{kInf, k.U, k.gamma}, fatigue::KineticSegment{}};
-  k.kU = 1.02;
-  k.kgamma = 1.05;
-  k.psi = 1e-28;
-  k.loop_area = 0.002 * fatigue::kt_thermal_energy(k.temperature) / k.psi;
-  ASSERT_EQ(core::message_of(validate(k)), "");
+  e.kU = 1.02;
+  e.kgamma = 1.05;
+  e.psi = 1e-28;
+  e.loop_area = 0.002 * fatigue::kt_thermal_energy(k.temperature) / e.psi;
+  ASSERT_EQ(core::message_of(validate(e)), "");
   fatigue::FatigueEngine fast(plate.disc, plate.model, plate.supports, plate.loads, f);
   fatigue::FatigueEngine slow(plate.disc, plate.model, plate.supports, plate.loads, f);
   ASSERT_TRUE(fast.initialize());

@@ -29,6 +29,11 @@ core::Status validate(const KineticParams& p) {
   require(msg, std::isfinite(p.n0) && p.n0 > 1.0, "n0 must be finite and > 1 (004 Eq. 12)");
   require(msg, positive(p.temperature), "temperature must be finite and > 0 K (004 Eq. 14)");
   require(msg, positive(p.frequency), "frequency must be finite and > 0 Hz (004 Eq. 15)");
+  return msg.empty() ? core::Status{} : core::Status{core::failure(msg)};
+}
+
+core::Status validate(const KineticExtension& p) {
+  std::string msg;
   require(msg,
           p.segment_count == 0 || (p.segment_count >= 2 && p.segment_count <= kMaxKineticSegments),
           "segment_count must be 0 (one U, gamma) or 2 to 3 (004 Fig. 8b)");
@@ -60,26 +65,28 @@ double kt_thermal_energy(double temperature, double psi, double loop_area, doubl
   return loop_area >= loop_area_yield ? kt + psi * loop_area : kt;
 }
 
-KineticActivation kt_activation(const KineticParams& p, double sigma_max, int phase) {
+KineticActivation kt_activation(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                                int phase) {
   KineticActivation a{p.U, p.gamma};
-  for (int i = 0; i < p.segment_count; ++i) {  // 004: "σ ≤ 250, 250 < σ ≤ 290, σ > 290 MPa"
-    const KineticSegment& s = p.segments[static_cast<std::size_t>(i)];
-    if (sigma_max <= s.sigma_upper || i + 1 == p.segment_count) {
+  for (int i = 0; i < e.segment_count; ++i) {  // 004: "σ ≤ 250, 250 < σ ≤ 290, σ > 290 MPa"
+    const KineticSegment& s = e.segments[static_cast<std::size_t>(i)];
+    if (sigma_max <= s.sigma_upper || i + 1 == e.segment_count) {
       a = {s.U, s.gamma};
       break;
     }
   }
   if (phase == 2) {  // 004 step 6: U = k_U·U, γ = k_γ·γ in the crack growth phase
-    a.U *= p.kU;
-    a.gamma *= p.kgamma;
+    a.U *= e.kU;
+    a.gamma *= e.kgamma;
   }
   return a;
 }
 
-double kt_bond_dose(const KineticParams& p, double sigma_max, double load_ratio, int phase) {
+double kt_bond_dose(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                    double load_ratio, int phase) {
   if (!(sigma_max > 0.0)) return 0.0;
-  const KineticActivation a = kt_activation(p, sigma_max, phase);
-  const double theta = kt_thermal_energy(p.temperature, p.psi, p.loop_area, p.loop_area_yield);
+  const KineticActivation a = kt_activation(p, e, sigma_max, phase);
+  const double theta = kt_thermal_energy(p.temperature, e.psi, e.loop_area, e.loop_area_yield);
   return kt_cycle_dose(sigma_max, load_ratio, p.frequency, a.U, a.gamma, theta);
 }
 
@@ -153,7 +160,7 @@ namespace {
 
 /// 004's segments from the keys U2, gamma2, U3, gamma3, sigma_upper1, sigma_upper2 (Pa); every
 /// problem reported at its key.
-void read_segments(core::ParamReader& r, KineticParams& k) {
+void read_segments(core::ParamReader& r, const KineticParams& k, KineticExtension& e) {
   const bool second = r.has("U2") || r.has("gamma2");
   const bool third = r.has("U3") || r.has("gamma3");
   if (!second) {
@@ -163,18 +170,18 @@ void read_segments(core::ParamReader& r, KineticParams& k) {
     return;
   }
   r.check("sigma_upper2", third || !r.has("sigma_upper2"), "needs U3 and gamma3 (a third segment)");
-  k.segment_count = third ? 3 : 2;
-  k.segments[0] = {kInf, k.U, k.gamma};
-  for (int i = 1; i < k.segment_count; ++i) {
-    auto& s = k.segments[static_cast<std::size_t>(i)];
+  e.segment_count = third ? 3 : 2;
+  e.segments[0] = {kInf, k.U, k.gamma};
+  for (int i = 1; i < e.segment_count; ++i) {
+    auto& s = e.segments[static_cast<std::size_t>(i)];
     const std::string n = std::to_string(i + 1);
     if (const auto v = r.required("U" + n, core::Bound::positive)) s.U = *v;
     if (const auto v = r.required("gamma" + n, core::Bound::positive)) s.gamma = *v;
     const std::string upper = "sigma_upper" + std::to_string(i);
     if (const auto v = r.required(upper, core::Bound::positive)) {
-      k.segments[static_cast<std::size_t>(i - 1)].sigma_upper = *v;
+      e.segments[static_cast<std::size_t>(i - 1)].sigma_upper = *v;
       if (i > 1) {
-        const double below = k.segments[static_cast<std::size_t>(i - 2)].sigma_upper;
+        const double below = e.segments[static_cast<std::size_t>(i - 2)].sigma_upper;
         r.check(upper, *v > below,
                 "must be > sigma_upper" + std::to_string(i - 1) + " (got " +
                     core::format_number(*v) + " <= " + core::format_number(below) + ")");
@@ -198,13 +205,13 @@ void read_kinetic(core::ParamReader& r, FatigueSettings& f) {
   r.check("n0", f.kinetic.n0 > 1, "must be > 1 (got " + core::format_number(f.kinetic.n0) + ")");
   f.kinetic.temperature = r.optional("temperature", f.kinetic.temperature, core::Bound::positive);
   f.kinetic.frequency = r.optional("frequency", f.kinetic.frequency, core::Bound::positive);
-  read_segments(r, f.kinetic);
-  f.kinetic.kU = r.optional("kU", f.kinetic.kU, core::Bound::positive);
-  f.kinetic.kgamma = r.optional("kgamma", f.kinetic.kgamma, core::Bound::positive);
-  f.kinetic.psi = r.optional("psi", f.kinetic.psi, core::Bound::non_negative);
-  f.kinetic.loop_area = r.optional("loop_area", f.kinetic.loop_area, core::Bound::non_negative);
-  f.kinetic.loop_area_yield =
-      r.optional("loop_area_yield", f.kinetic.loop_area_yield, core::Bound::non_negative);
+  auto& e = f.kinetic_extension;
+  read_segments(r, f.kinetic, e);
+  e.kU = r.optional("kU", e.kU, core::Bound::positive);
+  e.kgamma = r.optional("kgamma", e.kgamma, core::Bound::positive);
+  e.psi = r.optional("psi", e.psi, core::Bound::non_negative);
+  e.loop_area = r.optional("loop_area", e.loop_area, core::Bound::non_negative);
+  e.loop_area_yield = r.optional("loop_area_yield", e.loop_area_yield, core::Bound::non_negative);
 }
 
 }  // namespace peritwin::fatigue

@@ -36,9 +36,19 @@ struct KineticParams {
   double n0 = 1.771;    ///< initial constant, 004 Eq. (12); 1.771 for λ = 9 (kt_n0_for_unit_life)
   double temperature = 293.0;  ///< T (K), 004 test temperature 20 °C
   double frequency = 0.56;     ///< f (Hz), 004 test frequency
-  /// 004's stress segments (Fig. 4a, 8b): 0 = the single U, gamma above for every σ; 2 or 3 =
-  /// segments[0..count), ascending sigma_upper, the last +inf; segments[0] is {sigma_upper1, U,
-  /// gamma} (the reader keeps U, gamma equal to it).
+};
+core::Status validate(const KineticParams& p);
+
+/// 004's parts beyond Eq. (15): the stress segments, the phase II factors and Eq. (26)'s loop
+/// energy. Kept out of KineticParams on purpose: twin/detail_model.cpp hashes KineticParams'
+/// bytes into every detail's signature (checkpoints resume only on an equal signature), so a
+/// larger KineticParams would change the signature of every existing detail. Default: all off,
+/// and the law is Eq. (15) bit for bit. (The signature should include this struct when it is not
+/// the default; that line belongs to twin/.)
+struct KineticExtension {
+  /// 004's stress segments (Fig. 4a, 8b): 0 = KineticParams' single U, gamma for every σ; 2 or 3
+  /// = segments[0..count), ascending sigma_upper, the last +inf; the reader sets segments[0] to
+  /// {sigma_upper1, U, gamma}.
   int segment_count = 0;
   std::array<KineticSegment, kMaxKineticSegments> segments{};
   /// Phase II (crack growth) factors of 004 step 6 and Fig. 4b: U ← k_U·U, γ ← k_γ·γ for the bonds
@@ -55,7 +65,7 @@ struct KineticParams {
   /// A_σy: the loop area at the yield limit (J/m^3), below which Eq. (26) falls back to kT.
   double loop_area_yield = 0.0;
 };
-core::Status validate(const KineticParams& p);
+core::Status validate(const KineticExtension& e);
 
 /// k T (J): the thermal energy of 004 Eq. (14)-(15).
 double kt_thermal_energy(double temperature);
@@ -65,7 +75,7 @@ double kt_thermal_energy(double temperature, double psi, double loop_area, doubl
 /// Not implemented: 004's self-heating, Eq. (17) (T = T* + ψσa²/Δt, Fertig's version for
 /// composites, which 004 does not use for steel), and a loop area computed per bond (the twin's
 /// bonds are linear elastic and have no loop: Eq. 26 takes the configured
-/// KineticParams::loop_area).
+/// KineticExtension::loop_area).
 
 /// U and γ (J, m^3) of a bond at σ_max in phase 1 or 2: its stress segment (the first with
 /// σ_max ≤ sigma_upper), then k_U, k_γ in phase 2 (004 step 6).
@@ -73,7 +83,8 @@ struct KineticActivation {
   double U = 0.0;
   double gamma = 0.0;
 };
-KineticActivation kt_activation(const KineticParams& p, double sigma_max, int phase);
+KineticActivation kt_activation(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                                int phase);
 /// 004 Eq. (14): K_b = (θ/h) exp(−(U − γσ)/θ), θ = kT (or the Eq. 26 thermal energy).
 double kt_breakage_rate(double sigma, double U, double gamma, double thermal_energy);
 /// Per-cycle dose Φ = ∫ K_b dt over one cycle in which σ ramps linearly between Rσ_max and σ_max in
@@ -99,9 +110,10 @@ double kt_remaining_life(double n, double lambda, double n0);
 /// Inverse of kt_remaining_life: damage n for a remaining life r (r <= 0 gives n >= 1).
 double kt_damage_from_remaining_life(double remaining, double lambda, double n0);
 
-/// Per-cycle dose of a bond of the law kinetic: kt_cycle_dose with kt_activation(p, σ_max, phase)
-/// and θ of Eq. (26) from p (004 Eq. 14, 15, 26). 0 for σ_max <= 0.
-double kt_bond_dose(const KineticParams& p, double sigma_max, double load_ratio, int phase);
+/// Per-cycle dose of a bond of the law kinetic: kt_cycle_dose with kt_activation(p, e, σ_max,
+/// phase) and θ of Eq. (26) from e (004 Eq. 14, 15, 26). 0 for σ_max <= 0.
+double kt_bond_dose(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                    double load_ratio, int phase);
 
 /// Config reader of the law kinetic: U, gamma > 0 required (004 Eq. 13-14), lambda > 0 and n0 > 1
 /// (004 Eq. 12), temperature, frequency > 0 (004 Eq. 14-15). Segments: U2, gamma2 (and U3,
