@@ -7,12 +7,15 @@
 //     W, with the user's material): PD runs at the calibration load, A2 rescaled until the PD life
 //     to K_max = K_c equals the Paris life in integral form (validation/ct_calibration.h).
 // Then the PD life against the Paris life at other loads (the prediction check of B1).
+// --kinetic: another mode, the kinetic law's U and γ per stress segment on an S-N curve (004
+// Fig. 4a, 8b; fatigue::kt_calibrate_segment), no PD run; docs/kinetic.md.
 // Exit codes: 0 calibrated, 2 bad usage or input, 3 the calibration failed (did not converge, or
-// the PD crack never reached K_max = K_c).
+// the PD crack never reached K_max = K_c; --kinetic: no fit in a segment).
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +26,7 @@
 #include "core/json_line.h"
 #include "core/program.h"
 #include "solver/fatigue/fatigue_engine.h"
+#include "solver/fatigue/laws/kinetic_calibration.h"
 #include "validation/ct_calibration.h"
 
 namespace {
@@ -539,9 +543,188 @@ int calibrate(Options& o, const Plan& plan) {
   return core::kExitOk;
 }
 
+// ---------------------------------------------------------------- --kinetic (004 Fig. 4a, 8b)
+
+/// NUREG/CR-6909 Rev. 0 (Chopra and Shack, 2007), mean air curve of austenitic stainless steel:
+/// ln N = 6.891 − 1.920 ln(ε_a − 0.112), ε_a in % († docs/kinetic.md: it gives 004's 171,517
+/// cycles at 0.18 %).
+double nureg_6909_ss_life(double strain_amplitude) {
+  return std::exp(6.891 - 1.920 * std::log(100.0 * strain_amplitude - 0.112));
+}
+
+/// The strain on 004 Fig. 7c's 316L curve σ(ε) = min(Eε, −0.242 MPa·ε^−0.891 + 295 MPa),
+/// E = 193 GPa, at 0 < σ < 295 MPa (min of increasing branches: max of their inverses). The lead
+/// is adding the same curve as model::PowerLawCurve in solver/model/bond_plasticity.h; the two
+/// will be unified at merge.
+double strain_316l(double stress) {
+  return std::max(stress / 193e9, std::pow((295e6 - stress) / 0.242e6, -1.0 / 0.891));
+}
+
+struct KineticOptions {
+  std::vector<std::string> sn_stress;
+  bool nureg = false;
+  std::vector<double> bounds;
+  double step = 2e6;
+  double r = -1.0;
+  fatigue::KineticParams law;         // λ, n0, T, f
+  double psi = 0.0, loop_area = 0.0;  // θ of Eq. (26)
+  double n0 = 0.0;
+};
+
+void add_kinetic_options(CLI::App& app, KineticOptions& o) {
+  app.add_flag("--kinetic")->description("this mode");
+  app.add_option("--sn-stress", o.sn_stress,
+                 "S-N point SA:N (stress amplitude in Pa, cycles), repeated or comma-separated")
+      ->delimiter(',');
+  app.add_flag("--nureg-6909-ss", o.nureg,
+               "004's curve instead: NUREG/CR-6909 Rev. 0 austenitic SS through 004's 316L "
+               "tensile curve, a point every --step within each segment");
+  app.add_option("--segment-bounds", o.bounds,
+                 "stress-amplitude bounds (Pa) of 1-3 segments, ascending; default: the points' "
+                 "range (one segment), with --nureg-6909-ss 210e6,250e6,290e6,294e6 (004)")
+      ->delimiter(',')
+      ->check(core::finite_positive());
+  app.add_option("--step", o.step, "--nureg-6909-ss spacing (Pa, default 2e6)")
+      ->check(core::finite_positive());
+  app.add_option("--r", o.r, "load ratio of the S-N data (default -1)")
+      ->check(core::finite_in(-10.0, 0.99));
+  app.add_option("--lambda", o.law.lambda, "λ (default 9, 004)")->check(core::finite_positive());
+  app.add_option("--n0", o.n0, "n0 (default: unit life for λ, 1.771 at 9)")
+      ->check(core::finite_in(1.0 + 1e-9, 1e6));
+  app.add_option("--temperature", o.law.temperature, "T (K, default 293)")
+      ->check(core::finite_positive());
+  app.add_option("--frequency", o.law.frequency, "f (Hz, default 0.56)")
+      ->check(core::finite_positive());
+  app.add_option("--psi", o.psi, "ψ (m^3) of Eq. (26), with --loop-area (default 0)")
+      ->check(core::finite_in(0.0, 1e-20));
+  app.add_option("--loop-area", o.loop_area, "A (J/m^3) of Eq. (26) (default 0)")
+      ->check(core::finite_in(0.0, 1e12));
+}
+
+/// The S-N points of the mode, or a usage message.
+std::optional<std::vector<fatigue::SnPoint>> kinetic_points(KineticOptions& o, std::string& error) {
+  std::vector<fatigue::SnPoint> pts;
+  if (o.nureg == !o.sn_stress.empty()) {
+    error = "--kinetic needs exactly one of --sn-stress and --nureg-6909-ss";
+    return std::nullopt;
+  }
+  if (o.nureg) {
+    if (o.bounds.empty()) o.bounds = {210e6, 250e6, 290e6, 294e6};
+    if (!(o.bounds.back() < 295e6)) {
+      error = "--nureg-6909-ss: the 316L curve saturates at 295 MPa: bounds must stay below";
+      return std::nullopt;
+    }
+    const auto n =
+        static_cast<int>(std::floor((o.bounds.back() - o.bounds.front()) / o.step + 1e-9));
+    for (int k = 0; k <= n; ++k) {
+      const double sa = o.bounds.front() + k * o.step;
+      pts.push_back({sa, nureg_6909_ss_life(strain_316l(sa))});
+    }
+    return pts;
+  }
+  for (const auto& item : o.sn_stress) {
+    const auto colon = item.find(':');
+    fatigue::SnPoint p;
+    if (colon == std::string::npos ||
+        !core::parse_double(item.substr(0, colon), p.stress_amplitude) ||
+        !core::parse_double(item.substr(colon + 1), p.cycles)) {
+      error = "--sn-stress " + item + ": expected SA:N (e.g. 230e6:1.39e5)";
+      return std::nullopt;
+    }
+    pts.push_back(p);
+  }
+  if (pts.size() < 2) {
+    error = "--sn-stress: give at least 2 points (U and gamma are two unknowns)";
+    return std::nullopt;
+  }
+  if (o.bounds.empty()) {
+    double lo = pts.front().stress_amplitude, hi = lo;
+    for (const auto& p : pts) {
+      lo = std::min(lo, p.stress_amplitude);
+      hi = std::max(hi, p.stress_amplitude);
+    }
+    o.bounds = {lo, hi};
+  }
+  return pts;
+}
+
+int run_kinetic(int argc, char** argv) {
+  CLI::App app{
+      "peritwin-calibrate --kinetic: U and gamma of the kinetic law (004 Eq. 15) per stress "
+      "segment from an S-N curve (004 Fig. 4a, 8b): least squares on ln N of the single-bond "
+      "life, printed as a [detail.fatigue] table. SI units. Exit codes: 0 fitted, 2 bad input, 3 "
+      "no fit."};
+  KineticOptions o;
+  add_kinetic_options(app, o);
+  if (const auto rc = core::parse_options(app, argc, argv)) return *rc;
+  std::string error;
+  const auto pts = kinetic_points(o, error);
+  if (!pts) return usage(error);
+  const std::size_t segments = o.bounds.size() - 1;
+  if (segments < 1 || segments > fatigue::kMaxKineticSegments ||
+      !std::is_sorted(o.bounds.begin(), o.bounds.end(), std::less_equal<>())) {
+    return usage("--segment-bounds: 2 to 4 ascending stresses (1 to 3 segments)");
+  }
+  fatigue::KineticParams& law = o.law;
+  law.n0 = o.n0 > 0 ? o.n0 : fatigue::kt_n0_for_unit_life(law.lambda);
+  const double theta = fatigue::kt_thermal_energy(law.temperature, o.psi, o.loop_area, 0.0);
+  constexpr double kEv = 1.602176634e-19;
+  std::string head, keys;
+  for (std::size_t i = 0; i < segments; ++i) {
+    const double lo = o.bounds[i], hi = o.bounds[i + 1];
+    std::vector<fatigue::SnPoint> seg;
+    for (const auto& p : *pts) {
+      if (p.stress_amplitude >= lo * (1 - 1e-12) && p.stress_amplitude <= hi * (1 + 1e-12)) {
+        seg.push_back(p);
+      }
+    }
+    const auto fit = fatigue::kt_calibrate_segment(seg, o.r, law, theta);
+    if (!fit) {
+      std::fprintf(stderr, "peritwin-calibrate: segment %zu (%g-%g Pa): %s\n", i + 1, lo, hi,
+                   fit.error().message().c_str());
+      return kExitFailed;
+    }
+    const std::string n = i == 0 ? "" : std::to_string(i + 1);
+    head += format(
+        "#   segment %zu: sigma_a %g-%g MPa, %zu points: U = %.4f eV (%.2f theta), gamma = %.4g "
+        "m^3, max |dlnN| = %.3f\n",
+        i + 1, lo / 1e6, hi / 1e6, seg.size(), fit->U / kEv, fit->U / theta, fit->gamma,
+        fit->max_abs_log_error);
+    keys += format("U%s = %s  # J\ngamma%s = %s  # m^3\n", n.c_str(), toml_number(fit->U).c_str(),
+                   n.c_str(), toml_number(fit->gamma).c_str());
+    if (i + 1 < segments) {  // the bond's σ_max at the upper amplitude: σ_max = 2σ_a/(1 − R)
+      keys += format("sigma_upper%zu = %s  # Pa, bond sigma_max\n", i + 1,
+                     toml_number(2 * hi / (1 - o.r)).c_str());
+    }
+  }
+  std::printf(
+      "# peritwin-calibrate --kinetic: U, gamma per segment, 004 Eq. (15) single-bond life\n");
+  std::printf(
+      "#   on %s at R = %g, theta = %.6g J (kT%s)\n",
+      o.nureg ? "NUREG/CR-6909 Rev. 0 austenitic SS via 004's 316L curve" : "the given points", o.r,
+      theta, o.psi * o.loop_area > 0 ? " + psi*A, Eq. 26" : "");
+  std::printf("%s[detail.fatigue]\nlaw = \"kinetic\"\n%s", head.c_str(), keys.c_str());
+  std::printf("lambda = %s\nn0 = %s\ntemperature = %s\nfrequency = %s\n",
+              toml_number(law.lambda).c_str(), toml_number(law.n0).c_str(),
+              toml_number(law.temperature).c_str(), toml_number(law.frequency).c_str());
+  if (o.psi * o.loop_area > 0) {
+    std::printf("psi = %s\nloop_area = %s\n", toml_number(o.psi).c_str(),
+                toml_number(o.loop_area).c_str());
+  }
+  return core::kExitOk;
+}
+
+bool kinetic_mode(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--kinetic") == 0) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (kinetic_mode(argc, argv)) return run_kinetic(argc, argv);
   CLI::App app{
       "peritwin-calibrate: the strain-range fatigue law's parameters (000 Eq. 14-20) for your "
       "material, grid and PD model, as a [detail.fatigue] table to paste into a detail config.\n"
@@ -552,7 +735,8 @@ int main(int argc, char** argv) {
       "come from strain-life data (000 Eq. 23) if you give any, else B1's Al 6061-T6 values (000 "
       "Eq. 48). Then the PD and Paris lives at other loads as a check.\n"
       "Units: SI (Pa, m, N) except the Paris constant C, whose units --paris-units states.\n"
-      "Exit codes: 0 calibrated, 2 bad input, 3 calibration failed."};
+      "Exit codes: 0 calibrated, 2 bad input, 3 calibration failed.\n"
+      "--kinetic: the kinetic law's U, gamma on an S-N curve instead (--kinetic --help)."};
   Options o;
   add_options(app, o);
   if (const auto rc = core::parse_options(app, argc, argv)) return *rc;

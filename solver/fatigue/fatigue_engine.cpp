@@ -314,11 +314,12 @@ bool FatigueEngine::compute_rates(const core::LoadBlock& block) {
       case FatigueLaw::kinetic: {  // 004 Eq. (12)-(15): remaining life falls by Φ per cycle
         // Decision: the bond stress is E·s⁺, the stress of a bar at the bond's stretch (004 uses
         // the bond's stress; a PD bond carries no other uniaxial stress measure).
-        const auto& k = settings_.kinetic;
+        // The bond's σ_max picks its stress segment (004 Fig. 8b), its phase k_U, k_γ (004 step
+        // 6), and θ is Eq. (26)'s with the configured loop area; all off by default, and then
+        // this is kt_cycle_dose(σ, R, f, U, γ, kT) bit for bit.
         const double sigma = model_.material.youngs_modulus * std::max(s, 0.0);
-        rate_[b] = sigma > 0.0 ? fatigue::kt_cycle_dose(sigma, block.r, k.frequency, k.U, k.gamma,
-                                                        fatigue::kt_thermal_energy(k.temperature))
-                               : 0.0;
+        rate_[b] = fatigue::kt_bond_dose(settings_.kinetic, settings_.kinetic_extension, sigma,
+                                         block.r, phase_[b]);
         break;
       }
     }

@@ -46,6 +46,8 @@ struct FatigueSettings {
   FatigueLaw law = FatigueLaw::strain_range;
   fatigue::StrainLawParams strain;  ///< laws strain_range and energy (000 Eq. 44-46 maps A, m)
   fatigue::KineticParams kinetic;   ///< law kinetic (004 Eq. 12-16)
+  /// law kinetic: segments, k_U, k_γ, Eq. (26) (004); apart from `kinetic`, see its comment.
+  fatigue::KineticExtension kinetic_extension;
   /// law bilinear: s0, sc (003 Eq. 43-44), A, m of the third law (003 Eq. 27). Bond-based only.
   fatigue::BilinearParams bilinear;
   /// law bilinear: ΔN, cycles per damage increment (003 Sec. 5.1, 6.5-6.7: 100 to 50000); >= 1.

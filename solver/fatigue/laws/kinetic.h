@@ -2,6 +2,9 @@
 // grows at the thermally activated breakage rate K_b (Eq. 14), integrated per cycle (Eq. 15).
 #pragma once
 
+#include <array>
+#include <limits>
+
 #include "core/expected.h"
 #include "core/param_reader.h"
 
@@ -16,6 +19,16 @@ inline constexpr double kPlanck = 6.62607015e-34;   ///< h (J·s), exact SI 2019
 
 // ============================ law 4: kinetic theory of fracture (004) ============================
 
+/// One stress segment of 004's S-N calibration ("σ ≤ 250, 250 < σ ≤ 290, σ > 290 MPa", Sec. KTF
+/// symmetric model, Fig. 4a, 8b): U and γ of the bonds whose σ_max lies in (previous upper, upper].
+struct KineticSegment {
+  double sigma_upper = std::numeric_limits<double>::infinity();  ///< Pa; +inf for the last one
+  double U = 0.0;                                                ///< J
+  double gamma = 0.0;                                            ///< m^3
+};
+
+inline constexpr int kMaxKineticSegments = 3;
+
 struct KineticParams {
   double U = 0.0;      ///< activation energy (J), 004 Eq. (13)-(14); from the S-N curve, no default
   double gamma = 0.0;  ///< activation volume (m^3), 004 Eq. (13)-(14); no default
@@ -26,12 +39,52 @@ struct KineticParams {
 };
 core::Status validate(const KineticParams& p);
 
+/// 004's parts beyond Eq. (15): the stress segments, the phase II factors and Eq. (26)'s loop
+/// energy. Kept out of KineticParams on purpose: twin/detail_model.cpp hashes KineticParams'
+/// bytes into every detail's signature (checkpoints resume only on an equal signature), so a
+/// larger KineticParams would change the signature of every existing detail. Default: all off,
+/// and the law is Eq. (15) bit for bit. (The signature should include this struct when it is not
+/// the default; that line belongs to twin/.)
+struct KineticExtension {
+  /// 004's stress segments (Fig. 4a, 8b): 0 = KineticParams' single U, gamma for every σ; 2 or 3
+  /// = segments[0..count), ascending sigma_upper, the last +inf; the reader sets segments[0] to
+  /// {sigma_upper1, U, gamma}.
+  int segment_count = 0;
+  std::array<KineticSegment, kMaxKineticSegments> segments{};
+  /// Phase II (crack growth) factors of 004 step 6 and Fig. 4b: U ← k_U·U, γ ← k_γ·γ for the bonds
+  /// in phase II (FatigueSettings::phase_switch_damage; 004 uses φx ≥ 0.5). 004: k_U = 1.2,
+  /// k_γ = 1. Default 1: off.
+  double kU = 1.0;
+  double kgamma = 1.0;
+  /// 004 Eq. (26): θ = kT + ψA when A ≥ A_σy, else kT. ψ in m^3 (θ in J, A in J/m^3; 004 prints
+  /// "ψ = 50" without a unit, which in SI makes θ ≈ 10^7 J: docs/kinetic.md). Default 0: off.
+  double psi = 0.0;
+  /// A: the hysteresis loop area per cycle (J/m^3) applied to every loaded bond, 004's "measured
+  /// areas" mode (e.g. 0.78·A230 for POL, Fig. 12b). Default 0.
+  double loop_area = 0.0;
+  /// A_σy: the loop area at the yield limit (J/m^3), below which Eq. (26) falls back to kT.
+  double loop_area_yield = 0.0;
+};
+core::Status validate(const KineticExtension& e);
+
 /// k T (J): the thermal energy of 004 Eq. (14)-(15).
 double kt_thermal_energy(double temperature);
-// Not implemented: 004's self-heating, Eq. (17) (T = T* + ψσa²/Δt), and its hysteresis energy,
-// Eq. (26) (θ = kT + ψA above the yield loop area A_σy). The twin's bonds are linear elastic: they
-// have no hysteresis loop A, and ψ is fitted in 004 to one steel's measured temperatures. The
-// law runs at the configured temperature (KineticParams::temperature) instead.
+/// 004 Eq. (26): θ = kT + ψ·A if A ≥ A_σy, else kT (J), with ψ in m^3 and A, A_σy in J/m^3. It
+/// returns kt_thermal_energy(temperature) bit for bit when ψ·A = 0 or A < A_σy.
+double kt_thermal_energy(double temperature, double psi, double loop_area, double loop_area_yield);
+/// Not implemented: 004's self-heating, Eq. (17) (T = T* + ψσa²/Δt, Fertig's version for
+/// composites, which 004 does not use for steel), and a loop area computed per bond (the twin's
+/// bonds are linear elastic and have no loop: Eq. 26 takes the configured
+/// KineticExtension::loop_area).
+
+/// U and γ (J, m^3) of a bond at σ_max in phase 1 or 2: its stress segment (the first with
+/// σ_max ≤ sigma_upper), then k_U, k_γ in phase 2 (004 step 6).
+struct KineticActivation {
+  double U = 0.0;
+  double gamma = 0.0;
+};
+KineticActivation kt_activation(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                                int phase);
 /// 004 Eq. (14): K_b = (θ/h) exp(−(U − γσ)/θ), θ = kT (or the Eq. 26 thermal energy).
 double kt_breakage_rate(double sigma, double U, double gamma, double thermal_energy);
 /// Per-cycle dose Φ = ∫ K_b dt over one cycle in which σ ramps linearly between Rσ_max and σ_max in
@@ -57,8 +110,15 @@ double kt_remaining_life(double n, double lambda, double n0);
 /// Inverse of kt_remaining_life: damage n for a remaining life r (r <= 0 gives n >= 1).
 double kt_damage_from_remaining_life(double remaining, double lambda, double n0);
 
+/// Per-cycle dose of a bond of the law kinetic: kt_cycle_dose with kt_activation(p, e, σ_max,
+/// phase) and θ of Eq. (26) from e (004 Eq. 14, 15, 26). 0 for σ_max <= 0.
+double kt_bond_dose(const KineticParams& p, const KineticExtension& e, double sigma_max,
+                    double load_ratio, int phase);
+
 /// Config reader of the law kinetic: U, gamma > 0 required (004 Eq. 13-14), lambda > 0 and n0 > 1
-/// (004 Eq. 12), temperature, frequency > 0 (004 Eq. 14-15).
+/// (004 Eq. 12), temperature, frequency > 0 (004 Eq. 14-15). Segments: U2, gamma2 (and U3,
+/// gamma3) > 0 with sigma_upper1 (and sigma_upper2) in Pa, ascending; kU, kgamma > 0; psi (m^3),
+/// loop_area, loop_area_yield (J/m^3) >= 0. docs/kinetic.md lists them.
 void read_kinetic(core::ParamReader& r, FatigueSettings& f);
 
 }  // namespace peritwin::fatigue
