@@ -158,6 +158,23 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
     h.value(config.material.youngs_modulus_std);
     h.value(config.material.youngs_modulus_seed);
   }
+  // Issue 35, the kinetic law's segments, k_U, k_γ and Eq. (26): hashed only when not the
+  // default (a single U, γ; 1, 1; ψ = 0), so that existing details keep their signatures. Field
+  // by field (the struct has padding).
+  if (const fatigue::KineticExtension& e = m->settings_.kinetic_extension;
+      e.segment_count != 0 || e.kU != 1.0 || e.kgamma != 1.0 || e.psi != 0.0) {
+    h.value(e.segment_count);
+    for (const auto& s : e.segments) {
+      h.value(s.sigma_upper);
+      h.value(s.U);
+      h.value(s.gamma);
+    }
+    h.value(e.kU);
+    h.value(e.kgamma);
+    h.value(e.psi);
+    h.value(e.loop_area);
+    h.value(e.loop_area_yield);
+  }
   m->signature_ = h.h.get();
   return std::shared_ptr<const DetailModel>(std::move(m));
 }

@@ -27,6 +27,7 @@
 #include "core/program.h"
 #include "solver/fatigue/fatigue_engine.h"
 #include "solver/fatigue/laws/kinetic_calibration.h"
+#include "validation/b5_low_cycle.h"
 #include "validation/ct_calibration.h"
 
 namespace {
@@ -545,21 +546,6 @@ int calibrate(Options& o, const Plan& plan) {
 
 // ---------------------------------------------------------------- --kinetic (004 Fig. 4a, 8b)
 
-/// NUREG/CR-6909 Rev. 0 (Chopra and Shack, 2007), mean air curve of austenitic stainless steel:
-/// ln N = 6.891 − 1.920 ln(ε_a − 0.112), ε_a in % († docs/kinetic.md: it gives 004's 171,517
-/// cycles at 0.18 %).
-double nureg_6909_ss_life(double strain_amplitude) {
-  return std::exp(6.891 - 1.920 * std::log(100.0 * strain_amplitude - 0.112));
-}
-
-/// The strain on 004 Fig. 7c's 316L curve σ(ε) = min(Eε, −0.242 MPa·ε^−0.891 + 295 MPa),
-/// E = 193 GPa, at 0 < σ < 295 MPa (min of increasing branches: max of their inverses). The lead
-/// is adding the same curve as model::PowerLawCurve in solver/model/bond_plasticity.h; the two
-/// will be unified at merge.
-double strain_316l(double stress) {
-  return std::max(stress / 193e9, std::pow((295e6 - stress) / 0.242e6, -1.0 / 0.891));
-}
-
 struct KineticOptions {
   std::vector<std::string> sn_stress;
   bool nureg = false;
@@ -618,7 +604,8 @@ std::optional<std::vector<fatigue::SnPoint>> kinetic_points(KineticOptions& o, s
         static_cast<int>(std::floor((o.bounds.back() - o.bounds.front()) / o.step + 1e-9));
     for (int k = 0; k <= n; ++k) {
       const double sa = o.bounds.front() + k * o.step;
-      pts.push_back({sa, nureg_6909_ss_life(strain_316l(sa))});
+      pts.push_back({sa, validation::nureg_6909_ss_life(
+                             validation::curve_strain(model::PowerLawCurve{}, sa))});
     }
     return pts;
   }

@@ -14,6 +14,7 @@
 #include "validation/b2_compact_tension_shear.h"
 #include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
+#include "validation/b5_run.h"
 #include "validation/c1_compression.h"
 #include "validation/ct_calibration.h"
 #include "validation/d_dynamics.h"
@@ -234,8 +235,21 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B2 | B3 | B4 | C1 | D1 | D2 | D3 | D4")
-      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "C1", "D1", "D2", "D3", "D4"}));
+  app.add_option("--case", which, "B1 | B2 | B3 | B4 | B5 | C1 | D1 | D2 | D3 | D4")
+      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "B5", "C1", "D1", "D2", "D3", "D4"}));
+  validation::B5RunOptions b5;
+  app.add_option("--b5-loading", b5.loadings, "B5: all | symmetric | pol | pul")
+      ->check(CLI::IsMember({"all", "symmetric", "pol", "pul"}));
+  app.add_option("--b5-model", b5.models, "B5: all | conventional | modified")
+      ->check(CLI::IsMember({"all", "conventional", "modified"}));
+  app.add_option("--b5-points", b5.points_across, "B5: points across the 5 mm gauge (004: 17)")
+      ->check(CLI::Range(5, 65));
+  app.add_option("--psi", b5.psi, "B5: ψ of 004 Eq. (26) in m^3 (default 1.85e-28)")
+      ->check(peritwin::core::finite_in(0.0, 1e-20));
+  app.add_option("--k-u", b5.k_u, "B5: k_U of 004 step 6 (default 1.2)")
+      ->check(peritwin::core::finite_in(0.1, 10.0));
+  app.add_flag("--b5-own-loops", b5.own_loops,
+               "B5: the modified model with each bond's own loop area, not 004's measured ones");
   std::string c1_ct = PERITWIN_EXAMPLES_DIR "/b1-ct-al6061.toml";
   std::string c1_panel = PERITWIN_EXAMPLES_DIR "/mt-panel-al6061.toml";
   app.add_option("--ct-config", c1_ct, "C1: the CT detail (default the demo's B1)");
@@ -337,6 +351,7 @@ int main(int argc, char** argv) {
   if (which == "B3")
     return run_b3(dx_option->count() > 0 ? dx : 0.00025, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
+  if (which == "B5") return validation::run_b5(b5, out);
   if (which == "C1") return validation::run_c1_compression(c1_ct, c1_panel, out);
   if (which == "D1") return validation::run_d1(out, threads);
   if (which == "D2") return validation::run_d2(out);

@@ -100,7 +100,7 @@ Walk walk(const MasingSkeleton& sk, MasingState s, double trial) {
     // Closure point: R_{k−1}, or the mirror of R_1 on the skeleton.
     const double ec = k >= 1 ? s.reversal_strain[k - 1] : -er;
     const double sc = k >= 1 ? s.reversal_stress[k - 1] : -sr;
-    const double tol = kMasingSnapTolerance * std::fmax(std::fabs(ec), std::fabs(ec - er));
+    const double tol = sk.snap_tolerance() * std::fmax(std::fabs(ec), std::fabs(ec - er));
     const double overshoot = d * (trial - ec);
     if (overshoot < -tol) {  // stays on the branch from R_k
       w.work += branch_work(sk, er, sr, s.strain, trial);
@@ -124,11 +124,12 @@ Walk walk(const MasingSkeleton& sk, MasingState s, double trial) {
 
 }  // namespace
 
-MasingSkeleton::MasingSkeleton(const PowerLawCurve& curve)
+MasingSkeleton::MasingSkeleton(const PowerLawCurve& curve, double snap_tolerance)
     : curve_(curve),
       yield_strain_(curve.yield_strain()),
       yield_energy_(0.5 * curve.youngs_modulus * yield_strain_ * yield_strain_),
-      yield_antiderivative_(antiderivative(yield_strain_)) {}
+      yield_antiderivative_(antiderivative(yield_strain_)),
+      snap_tolerance_(snap_tolerance) {}
 
 double MasingSkeleton::antiderivative(double x) const {
   return curve_.a / (curve_.b + 1.0) * std::pow(x, curve_.b + 1.0) + curve_.sigma_inf * x;

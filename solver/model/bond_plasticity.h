@@ -83,6 +83,11 @@ struct PowerLawCurve {
 /// h(ε) = E·ε − a·ε^b − σ∞, at ε_m = (E/(a·b))^(1/(b−1)), is negative.
 core::Status validate(const PowerLawCurve& curve);
 
+/// Open reversals remembered per bond.
+inline constexpr int kMasingMemory = 32;
+/// Relative tolerance of "a branch reached a stored point" (see the top of this file).
+inline constexpr double kMasingSnapTolerance = 1e-12;
+
 /// The curve with its join solved once (ε_y, G(ε_y)): the same arithmetic as PowerLawCurve's
 /// members, bit for bit, without the Newton solve for ε_y on every call (measured: 0.12 µs per
 /// masing_evaluate against 0.7 µs with the solve). Build one per material (or per bond when E
@@ -91,7 +96,11 @@ core::Status validate(const PowerLawCurve& curve);
 class MasingSkeleton {
  public:
   /// Requires validate(curve).
-  explicit MasingSkeleton(const PowerLawCurve& curve);
+  /// `snap_tolerance`: the relative tolerance of "a branch reached a stored point" (see the top
+  /// of this file); a solver whose turning strains are converged to a tolerance τ needs one
+  /// above τ, or each repeated cycle leaves a loop of size τ open and the memory fills.
+  explicit MasingSkeleton(const PowerLawCurve& curve, double snap_tolerance = kMasingSnapTolerance);
+  [[nodiscard]] double snap_tolerance() const { return snap_tolerance_; }
   [[nodiscard]] const PowerLawCurve& curve() const { return curve_; }
   [[nodiscard]] double yield_strain() const { return yield_strain_; }
   [[nodiscard]] double stress(double strain) const;   ///< g(ε), odd
@@ -104,12 +113,8 @@ class MasingSkeleton {
   double yield_strain_;
   double yield_energy_;          ///< E·ε_y²/2
   double yield_antiderivative_;  ///< antiderivative(ε_y)
+  double snap_tolerance_;
 };
-
-/// Open reversals remembered per bond.
-inline constexpr int kMasingMemory = 8;
-/// Relative tolerance of "a branch reached a stored point" (see the top of this file).
-inline constexpr double kMasingSnapTolerance = 1e-12;
 
 /// One bond's (one material point's) Masing state: the committed strain and stress and the stack of
 /// open reversal points. Plain data; the default is the virgin state. Entries at and above `depth`

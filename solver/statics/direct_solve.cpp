@@ -167,6 +167,12 @@ void StaticSolver::solve_free(const std::vector<double>& rhs, std::vector<double
   }
 }
 
+void StaticSolver::solve_unknowns(std::vector<double>& x) const {
+  Eigen::MatrixXd column = Eigen::Map<const Eigen::VectorXd>(x.data(), num_unknowns_);
+  cholesky_.solve(column);
+  std::copy(column.data(), column.data() + num_unknowns_, x.begin());
+}
+
 core::Status StaticSolver::refactor_resolve() {
   for (mesh::NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
     if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;

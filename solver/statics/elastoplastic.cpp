@@ -32,7 +32,10 @@ const model::PowerLawCurve& checked(const model::PowerLawCurve& curve) {
 }  // namespace
 
 ElastoplasticSolver::ElastoplasticSolver(StaticSolver& solver, BondPlasticity law)
-    : solver_(solver), law_(std::move(law)), skeleton_(checked(law_.curve)) {
+    : solver_(solver),
+      law_(std::move(law)),
+      skeleton_(checked(law_.curve)),
+      commit_skeleton_(law_.curve, law_.snap_tolerance) {
   if (solver.model().options.kind != model::ModelKind::bond_based || solver.mixed_form()) {
     throw std::invalid_argument("ElastoplasticSolver: bond-based models only");
   }
@@ -44,12 +47,25 @@ ElastoplasticSolver::ElastoplasticSolver(StaticSolver& solver, BondPlasticity la
   work_.assign(nb, 0.0);
   u_.assign(2 * static_cast<std::size_t>(solver.discretization().num_nodes()), 0.0);
   reaction_.assign(solver.prescribed().size(), 0.0);
-  solver_.set_incremental(false);
 }
 
-void ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<double>& force,
-                                   std::vector<double>& tangent_factor,
-                                   std::vector<double>* work) const {
+ElastoplasticSolver::ElastoplasticSolver(const ElastoplasticSolver& other, StaticSolver& solver)
+    : solver_(solver),
+      law_(other.law_),
+      skeleton_(other.skeleton_),
+      commit_skeleton_(other.commit_skeleton_),
+      state_(other.state_),
+      work_(other.work_),
+      u_(other.u_),
+      reaction_(other.reaction_),
+      p_(other.p_),
+      iterations_(other.iterations_),
+      stalled_(other.stalled_),
+      substepped_(other.substepped_) {}
+
+double ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<double>& force,
+                                     std::vector<double>& tangent_factor,
+                                     std::vector<double>* work) const {
   const mesh::Discretization& disc = solver_.discretization();
   const model::PdModel& model = solver_.model();
   std::vector<double> stretch;
@@ -58,6 +74,7 @@ void ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<dou
   tangent_factor.assign(stretch.size(), 0.0);
   const double kappa = law_.stretch_per_strain;
   const double e = law_.curve.youngs_modulus;
+  double energy = 0.0;
   for (std::size_t b = 0; b < stretch.size(); ++b) {
     if (!solver_.intact()[b]) continue;
     const model::MasingResponse r =
@@ -66,6 +83,9 @@ void ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<dou
     const double magnitude = model.bond_stiffness[b] * disc.bond_length[b] * kappa * r.stress / e;
     tangent_factor[b] = std::clamp(r.tangent / e, 1e-9, 1.0);
     if (work != nullptr) (*work)[b] = r.work;
+    // The bond's work along the ramp (J): k_b·ξ²·κ²/E·∫σ dε, whose derivative is its force.
+    energy += model.bond_stiffness[b] * disc.bond_length[b] * disc.bond_length[b] * kappa * kappa /
+              e * r.work;
     const auto i = 2 * static_cast<std::size_t>(disc.bond_i[b]);
     const auto j = 2 * static_cast<std::size_t>(disc.bond_j[b]);
     force[i] -= magnitude * disc.bond_cos[b];
@@ -73,9 +93,46 @@ void ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<dou
     force[j] += magnitude * disc.bond_cos[b];
     force[j + 1] += magnitude * disc.bond_sin[b];
   }
+  return energy;
 }
 
 core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, double alpha) {
+  auto direct = ramp(p, alpha);
+  if (direct.ok()) return direct;
+  // Substeps: the same monotone ramp in 2, 4, … 64 parts, each committed (a bond whose strain
+  // turns within the ramp then keeps that reversal, which the single step could not see).
+  const std::vector<model::MasingState> state = state_;
+  const std::vector<double> u = u_, reaction = reaction_;
+  const double from = p_;
+  for (int parts = 2; parts <= 64; parts *= 2) {
+    std::vector<double> work(work_.size(), 0.0);
+    TurningPoint total;
+    bool ok = true;
+    for (int k = 1; k <= parts && ok; ++k) {
+      const double at = k == parts ? p : from + (p - from) * k / parts;
+      auto part = ramp(at, alpha);
+      ok = part.ok();
+      if (!ok) break;
+      total.iterations += part->iterations;
+      total.residual = part->residual;
+      for (std::size_t b = 0; b < work.size(); ++b) work[b] += work_[b];
+    }
+    if (ok) {
+      work_ = std::move(work);
+      total.control = p;
+      total.substeps = parts;
+      ++substepped_;
+      return total;
+    }
+    state_ = state;
+    u_ = u;
+    reaction_ = reaction;
+    p_ = from;
+  }
+  return direct;
+}
+
+core::Expected<TurningPoint> ElastoplasticSolver::ramp(double p, double alpha) {
   const std::vector<std::int32_t>& free_index = solver_.free_index();
   const double c = std::cos(alpha);
   const double s = std::sin(alpha);
@@ -99,14 +156,27 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
   for (std::size_t b = 0; b < solver_.intact().size(); ++b) {
     if (solver_.intact()[b]) bonds.push_back(static_cast<mesh::BondIndex>(b));
   }
-  std::vector<double> force, tangent, factors(bonds.size(), 1.0), residual(u_.size()), step;
+  std::vector<double> force, tangent, residual(u_.size()), step;
   TurningPoint out;
   out.control = p;
+  double energy = 0.0;  // Π(u) of the ramp at the last evaluation
+  const auto residual_at = [&](const std::vector<double>& at) {
+    energy = evaluate(at, force, tangent, nullptr);
+    for (std::size_t dof = 0; dof < at.size(); ++dof) {
+      residual[dof] = free_index[dof] >= 0 ? external[dof] - force[dof] : 0.0;
+      if (free_index[dof] >= 0) energy -= external[dof] * at[dof];
+    }
+    // The scale: the grips' force (or the applied load) now.
+    double scale = 0.0;
+    for (std::size_t dof = 0; dof < at.size(); ++dof) {
+      const double v = free_index[dof] < 0 ? force[dof] : external[dof];
+      scale += v * v;
+    }
+    return free_norm(residual, free_index) / std::max(std::sqrt(scale), 1e-300);
+  };
   // The elastic predictor (every branch leaves a reversal with the slope E): from the committed
-  // state, the grips move by Δū and the free DOFs by K⁻¹·(r(u_c) − K_fp·Δū), K elastic.
-  if (auto f = solver_.set_bond_factors(bonds, factors); !f.ok()) {
-    return core::failure(core::message_of(f));
-  }
+  // state, the grips move by Δū and the free DOFs by K⁻¹·(r(u_c) − K_fp·Δū), K the elastic
+  // stiffness the solver holds (its factors are 1 for intact bonds, 0 for broken ones).
   std::vector<double> u = u_;
   {
     std::vector<double> moved(u_.size(), 0.0);
@@ -114,45 +184,84 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
       if (free_index[dof] < 0) moved[dof] = grips[dof] - u_[dof];
     }
     const std::vector<double> k_moved = solver_.internal_force(moved);
-    evaluate(u_, force, tangent, nullptr);
+    residual_at(u_);
     for (std::size_t dof = 0; dof < u_.size(); ++dof) {
-      residual[dof] = free_index[dof] >= 0 ? external[dof] - force[dof] - k_moved[dof] : 0.0;
+      if (free_index[dof] >= 0) residual[dof] -= k_moved[dof];
     }
     solver_.solve_free(residual, step);
     for (std::size_t dof = 0; dof < u.size(); ++dof) {
       u[dof] = free_index[dof] >= 0 ? u_[dof] + step[dof] : grips[dof];
     }
   }
-  for (int it = 0;; ++it) {
-    evaluate(u, force, tangent, nullptr);
-    for (std::size_t dof = 0; dof < u.size(); ++dof) {
-      residual[dof] = free_index[dof] >= 0 ? external[dof] - force[dof] : 0.0;
-    }
-    // The scale: the grips' force (or the applied load) now.
-    double scale = 0.0;
-    for (std::size_t dof = 0; dof < u.size(); ++dof) {
-      const double v = free_index[dof] < 0 ? force[dof] : external[dof];
-      scale += v * v;
-    }
-    out.residual = free_norm(residual, free_index) / std::max(std::sqrt(scale), 1e-300);
-    if (out.residual <= law_.tolerance) break;
+  std::vector<double> trial;
+  out.residual = residual_at(u);
+  int elastic_steps = 0;
+  bool elastic_tried = false;
+  for (int it = 0; out.residual > law_.tolerance; ++it) {
     if (it == law_.max_iterations) {
+      if (out.residual <= law_.stall_tolerance) {  // see BondPlasticity::stall_tolerance
+        ++stalled_;
+        break;
+      }
       return core::failure("elastoplastic turning point at P = " + core::format_number(p) +
                            ": Newton did not converge in " + std::to_string(law_.max_iterations) +
                            " iterations (residual " + core::format_number(out.residual) +
                            " of the grips' force)");
     }
-    // The tangent of each bond's branch at its current strain.
-    for (std::size_t n = 0; n < bonds.size(); ++n) {
-      factors[n] = tangent[static_cast<std::size_t>(bonds[n])];
+    // Newton: K_t·Δu = r by conjugate gradients preconditioned with the elastic factor (the
+    // spectrum of K_e⁻¹K_t lies in (min σ'/E, 1]: no refactorization per iteration).
+    // After a Newton step that could not decrease Π, a few steps with the elastic stiffness
+    // (the initial-stiffness method: K_e ≥ K_t, so it decreases Π whatever the kinks; linear
+    // convergence), then Newton again.
+    if (elastic_steps > 0) {
+      solver_.solve_free(residual, step);
+      --elastic_steps;
+    } else {
+      tangent_step(tangent, residual, step);
     }
-    if (auto f = solver_.set_bond_factors(bonds, factors); !f.ok()) {
-      return core::failure(core::message_of(f));
+    // Backtracking (Armijo) on the ramp's potential Π(u) = Σ_b W_b(ε_b) − F·u: each bond's
+    // stress along a monotone ramp from its committed state increases with its strain (tangent
+    // > 0), so Π is convex and its gradient is −r. Any SPD K_t makes Δu a descent direction of
+    // Π, even where the tangent is inconsistent: a bond whose strain barely moves switches
+    // between the slope E (reversing) and its branch's tangent, where ‖r‖ is not smooth.
+    double slope = 0.0;  // dΠ/dλ at λ = 0: −rᵀΔu
+    for (std::size_t dof = 0; dof < u.size(); ++dof) slope -= residual[dof] * step[dof];
+    const double energy0 = energy;
+    const double residual0 = out.residual;
+    double length = 1.0;
+    bool decreased = false;
+    for (int halving = 0; halving <= 40 && slope < 0.0; ++halving) {
+      trial = u;
+      for (std::size_t dof = 0; dof < u.size(); ++dof) trial[dof] += length * step[dof];
+      const double r = residual_at(trial);
+      // Near the solution Π's decrease (∝ ‖r‖²) drowns in its round-off: ‖r‖ decides there.
+      if (r < residual0 || energy <= energy0 + 1e-4 * length * slope) {
+        out.residual = r;
+        decreased = true;
+        u.swap(trial);
+        break;
+      }
+      length *= 0.5;
     }
-    solver_.solve_free(residual, step);
-    for (std::size_t dof = 0; dof < u.size(); ++dof) u[dof] += step[dof];
+    if (!decreased) out.residual = residual0;
     ++out.iterations;
     ++iterations_;
+    if (!decreased) {
+      residual_at(u);  // the state of u again (force, tangents, residual)
+      if (elastic_steps == 0 && !elastic_tried) {
+        elastic_steps = 10;
+        elastic_tried = true;
+        continue;
+      }
+      if (out.residual <= law_.stall_tolerance) {
+        ++stalled_;
+        break;
+      }
+      return core::failure("elastoplastic turning point at P = " + core::format_number(p) +
+                           ": no Newton step decreases the potential (residual " +
+                           core::format_number(out.residual) + " of the grips' force)");
+    }
+    if (elastic_steps == 0) elastic_tried = false;
   }
   evaluate(u, force, tangent, &work_);
   const double kappa = law_.stretch_per_strain;
@@ -160,7 +269,7 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
   model::bond_stretches(solver_.discretization(), u, stretch);
   for (mesh::BondIndex b : bonds) {
     const auto bi = static_cast<std::size_t>(b);
-    state_[bi] = model::masing_commit(skeleton_, state_[bi], stretch[bi] / kappa);
+    state_[bi] = model::masing_commit(commit_skeleton_, state_[bi], stretch[bi] / kappa);
   }
   for (std::size_t t = 0; t < solver_.prescribed().size(); ++t) {
     double sum = 0.0;
@@ -176,12 +285,78 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
   return out;
 }
 
+void ElastoplasticSolver::tangent_step(const std::vector<double>& tangent,
+                                       const std::vector<double>& residual,
+                                       std::vector<double>& step) const {
+  const std::vector<std::int32_t>& free_index = solver_.free_index();
+  const auto n = static_cast<std::size_t>(solver_.num_unknowns());
+  std::vector<double> r(n, 0.0), x(n, 0.0), z, q(n, 0.0), d;
+  for (std::size_t dof = 0; dof < residual.size(); ++dof) {
+    if (free_index[dof] >= 0) r[static_cast<std::size_t>(free_index[dof])] = residual[dof];
+  }
+  const auto dot = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double sum = 0.0;  // sequential: the same bits every run
+    for (std::size_t i = 0; i < a.size(); ++i) sum += a[i] * b[i];
+    return sum;
+  };
+  const double norm0 = std::sqrt(dot(r, r));
+  z = r;
+  solver_.solve_unknowns(z);
+  d = z;
+  double rz = dot(r, z);
+  for (int k = 0; k < law_.max_linear_iterations && norm0 > 0.0; ++k) {
+    solver_.multiply(tangent, d.data(), q.data());
+    const double alpha = rz / dot(d, q);
+    for (std::size_t i = 0; i < n; ++i) {
+      x[i] += alpha * d[i];
+      r[i] -= alpha * q[i];
+    }
+    if (std::sqrt(dot(r, r)) <= law_.linear_tolerance * norm0) break;
+    z = r;
+    solver_.solve_unknowns(z);
+    const double rz_next = dot(r, z);
+    const double beta = rz_next / rz;
+    rz = rz_next;
+    for (std::size_t i = 0; i < n; ++i) d[i] = z[i] + beta * d[i];
+  }
+  step.assign(residual.size(), 0.0);
+  for (std::size_t dof = 0; dof < step.size(); ++dof) {
+    if (free_index[dof] >= 0) step[dof] = x[static_cast<std::size_t>(free_index[dof])];
+  }
+}
+
 core::Status ElastoplasticSolver::break_bonds(std::span<const mesh::BondIndex> bonds) {
   for (mesh::BondIndex b : bonds) {
     state_[static_cast<std::size_t>(b)] = model::MasingState{};
     work_[static_cast<std::size_t>(b)] = 0.0;
   }
   return solver_.break_bonds(bonds);
+}
+
+std::vector<std::array<double, 3>> ElastoplasticSolver::node_stress() const {
+  const mesh::Discretization& disc = solver_.discretization();
+  const model::PdModel& model = solver_.model();
+  const double kappa = law_.stretch_per_strain;
+  std::vector<std::array<double, 3>> sigma(static_cast<std::size_t>(disc.num_nodes()),
+                                           std::array<double, 3>{0.0, 0.0, 0.0});
+  for (std::size_t b = 0; b < state_.size(); ++b) {
+    if (!solver_.intact()[b]) continue;
+    const double force = model.bond_stiffness[b] * disc.bond_length[b] * kappa * state_[b].stress /
+                         law_.curve.youngs_modulus;
+    const double c = disc.bond_cos[b];
+    const double s = disc.bond_sin[b];
+    const double half = 0.5 * force * disc.bond_length[b];
+    for (const auto k : {disc.bond_i[b], disc.bond_j[b]}) {
+      auto& t = sigma[static_cast<std::size_t>(k)];
+      t[0] += half * c * c;
+      t[1] += half * s * s;
+      t[2] += half * c * s;
+    }
+  }
+  for (std::size_t k = 0; k < sigma.size(); ++k) {
+    for (double& v : sigma[k]) v /= disc.volume[k];
+  }
+  return sigma;
 }
 
 std::vector<double> ElastoplasticSolver::node_loop_area(

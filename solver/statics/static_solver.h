@@ -149,6 +149,9 @@ class StaticSolver {
   /// free DOFs only, x is 0 elsewhere). Not in the mixed form (std::logic_error). The Newton steps
   /// of elastoplastic bonds (statics/elastoplastic.h) solve with it after set_bond_factors.
   void solve_free(const std::vector<double>& rhs, std::vector<double>& x) const;
+  /// x ← K⁻¹·x in place, x over the unknowns (free index order): the preconditioner of
+  /// iterations on another matrix of the same DOFs (multiply()).
+  void solve_unknowns(std::vector<double>& x) const;
   /// Seconds spent in low-rank updates.
   [[nodiscard]] double update_seconds() const { return update_s_; }
   [[nodiscard]] int updates() const { return updates_; }
