@@ -457,30 +457,33 @@ TEST(MasingMemory, ClosureSnapsWithinTheTolerance) {
 }
 
 TEST(MasingMemory, OverflowDropsTheOldestInnerPairAndCounts) {
-  // Ten reversals of decreasing amplitude: pushes 1–8 fill the stack, push 9 drops R2 and R3
-  // (counted 2) and keeps R1 = (0.6 %, g(0.6 %)); push 10 fills it again.
-  const std::vector<double> turns{0.006, -0.0055, 0.005, -0.0045, 0.004, -0.0035,
-                                  0.003, -0.0025, 0.002, -0.0015, 0.001};
+  // M + 2 reversals of decreasing amplitude (M = kMasingMemory): pushes 1–M fill the stack, push
+  // M + 1 drops R2 and R3 (counted 2) and keeps R1 = (0.6 %, g(0.6 %)); push M + 2 fills it again.
+  constexpr int m = model::kMasingMemory;
+  const double step = 0.005 / (m + 2);
+  std::vector<double> turns;
+  for (int k = 0; k < m + 3; ++k) turns.push_back((k % 2 == 0 ? 1.0 : -1.0) * (0.006 - step * k));
   MasingState s;
   run(s, turns);
   EXPECT_EQ(s.dropped_reversals, 2u);
-  EXPECT_EQ(s.depth, model::kMasingMemory);
+  EXPECT_EQ(s.depth, m);
   EXPECT_EQ(s.reversal_strain[0], 0.006);
   EXPECT_EQ(s.reversal_stress[0], kCurve.stress(0.006));
-  EXPECT_EQ(s.reversal_strain[1], -0.0045);  // R4 moved down to R2
-  EXPECT_EQ(s.reversal_strain[7], -0.0015);
-  // The remembered loops still close exactly: up to 0.21 % closes the loop R7 = 0.2 % → R8 =
-  // −0.15 % and continues on R6's branch (R6 = −0.25 %), by hand from the stored R6.
-  const MasingState inner = model::masing_commit(kCurve, s, 0.0021);
-  EXPECT_EQ(inner.depth, model::kMasingMemory - 2);
-  EXPECT_EQ(inner.stress, branch(s.reversal_strain[5], s.reversal_stress[5], 0.0021));
+  EXPECT_EQ(s.reversal_strain[1], turns[3]);  // R4 moved down to R2
+  EXPECT_EQ(s.reversal_strain[m - 1], turns[m + 1]);
+  // The remembered loops still close exactly: up to just past R_{M−1} = turns[M] closes the loop
+  // R_{M−1} → R_M and continues on R_{M−2}'s branch, by hand from the stored R_{M−2}.
+  const double beyond = turns[m] + 0.2 * step;
+  const MasingState inner = model::masing_commit(kCurve, s, beyond);
+  EXPECT_EQ(inner.depth, m - 2);
+  EXPECT_EQ(inner.stress, branch(s.reversal_strain[m - 3], s.reversal_stress[m - 3], beyond));
   EXPECT_EQ(inner.dropped_reversals, 2u);
   // Beyond the outer loop the path is back on the skeleton exactly (R1 was kept).
   const MasingState out = model::masing_commit(kCurve, s, 0.007);
   EXPECT_EQ(out.depth, 0);
   EXPECT_EQ(out.stress, kCurve.stress(0.007));
   EXPECT_EQ(out.dropped_reversals, 2u);
-  for (int i = 0; i < model::kMasingMemory; ++i) EXPECT_EQ(out.reversal_strain[i], 0.0);
+  for (int i = 0; i < m; ++i) EXPECT_EQ(out.reversal_strain[i], 0.0);
 }
 
 }  // namespace
