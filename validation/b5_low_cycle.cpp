@@ -237,6 +237,7 @@ bool LowCycleRun::cycle(const StrainCycle& c, std::vector<double>& dose,
     ++result_.turning_points;
     if (!tp.ok()) {
       result_.reason = tp.error().reason;
+      result_.lost_equilibrium = true;
       return false;
     }
     stress[k].resize(nb);
@@ -323,6 +324,7 @@ bool LowCycleRun::break_bonds(const std::vector<mesh::BondIndex>& bonds) {
     ++result_.turning_points;
     if (!balanced.ok()) {
       result_.reason = balanced.error().reason;
+      result_.lost_equilibrium = true;
       return false;
     }
     model::bond_stretches(strip_.disc, plastic_->displacement(), stretch);
@@ -467,7 +469,7 @@ B5Result LowCycleRun::run() {
                 1e-9 * std::max(std::abs(previous_block[b]), 1e-300);
     }
     previous_block = block_dose;
-    if (!repeats) continue;
+    if (!repeats || !opt_.jump) continue;
     double blocks = std::numeric_limits<double>::infinity();
     for (std::size_t b = 0; b < nb; ++b) {
       if (breakable_[b] && block_dose[b] > 0.0) {
@@ -492,6 +494,9 @@ B5Result LowCycleRun::run() {
   if (result_.reason.empty()) {
     result_.reason = result_.n25_cycles >= 0 ? "25 % stress drop" : "cycle limit";
   }
+  result_.life_cycles = result_.n25_cycles >= 0                                ? result_.n25_cycles
+                        : result_.lost_equilibrium && result_.broken_bonds > 0 ? cycles_ + 1
+                                                                               : -1;
   result_.cycles = cycles_;
   result_.peak_stress = peak_reaction_ / area_of(strip_);
   result_.newton_iterations = plastic_->newton_iterations();

@@ -112,6 +112,9 @@ struct B5Options {
   double stress_drop = 0.25;  ///< N25
   std::int64_t max_cycles = 20'000'000;
   double newton_tolerance = 1e-10;
+  /// Jump whole blocks once a block repeats the one before (004's next-break step); false: every
+  /// block solved (the oracle; runs of equal cycles inside a block are still taken at once).
+  bool jump = true;
   /// Called with (cycle, strains, stresses) of the specimen's loop (σ = reaction/area) whenever
   /// the count passes one of `loop_cycles` (the loop then in force, traced in 2×`loop_steps`).
   std::vector<std::int64_t> loop_cycles;
@@ -122,6 +125,12 @@ struct B5Options {
 struct B5Result {
   std::int64_t n25_cycles = -1;  ///< -1: not reached (see reason)
   std::int64_t cycles = 0;
+  /// The turning-point solve failed (Newton found no equilibrium; docs/solver.md): with a crack
+  /// running, the strip no longer carries the imposed strain in the model.
+  bool lost_equilibrium = false;
+  /// N25, else (lost equilibrium after bonds broke) the cycle it was lost in: a lower bound of N25
+  /// (the stress had not dropped by 25 % at the last solve); −1 otherwise.
+  std::int64_t life_cycles = -1;
   std::int64_t broken_bonds = 0;
   std::int64_t static_breaks = 0;  ///< by s ≥ s_c
   std::int64_t break_groups = 0;
@@ -130,10 +139,10 @@ struct B5Result {
   std::int64_t newton_iterations = 0;
   std::int64_t stalled_turning_points = 0;  ///< accepted at a residual <= 1e-4 (statics)
   std::int64_t substepped_turning_points = 0;
-  int deepest_memory = 0;                ///< the most open Masing reversals of a bond at the end
-  std::int64_t dropped_reversals = 0;    ///< Masing memory overflows (model/bond_plasticity.h)
-  double peak_stress = 0.0;   ///< Pa, the largest measured σ = R/A
-  double final_stress = 0.0;  ///< Pa, at the end
+  int deepest_memory = 0;              ///< the most open Masing reversals of a bond at the end
+  std::int64_t dropped_reversals = 0;  ///< Masing memory overflows (model/bond_plasticity.h)
+  double peak_stress = 0.0;            ///< Pa, the largest measured σ = R/A
+  double final_stress = 0.0;           ///< Pa, at the end
   double kappa = 0.0;
   double wall_s = 0.0;
   std::string reason;  ///< why it stopped

@@ -113,8 +113,12 @@ int run_b5(const B5RunOptions& options, const std::filesystem::path& out_dir) {
       line["model"] = model_name;
       line["n25_cycles"] = r.n25_cycles;
       line["paper_n25"] = core::whole(paper);
+      line["life_cycles"] = r.life_cycles;
+      line["life_by"] = r.n25_cycles >= 0    ? "n25"
+                        : r.life_cycles >= 0 ? "lost_equilibrium"
+                                             : "none";
       line["to_paper"] =
-          r.n25_cycles > 0 ? core::fixed(static_cast<double>(r.n25_cycles) / paper, 4) : -1.0;
+          r.life_cycles > 0 ? core::fixed(static_cast<double>(r.life_cycles) / paper, 4) : -1.0;
       line["loop_area_j_m3"] =
           is_modified && !options.own_loops ? core::significant(l.table_area, 6) : -1.0;
       line["broken_bonds"] = r.broken_bonds;
@@ -128,10 +132,12 @@ int run_b5(const B5RunOptions& options, const std::filesystem::path& out_dir) {
       line["newton_iterations"] = r.newton_iterations;
       line["stalled_turning_points"] = r.stalled_turning_points;
       line["substepped_turning_points"] = r.substepped_turning_points;
+      line["deepest_memory"] = r.deepest_memory;
+      line["dropped_reversals"] = r.dropped_reversals;
       line["stopped"] = r.reason;
       line["wall_s"] = core::fixed(r.wall_s, 1);
       core::print_line(line);
-      if (r.n25_cycles < 0) rc = 3;
+      if (r.life_cycles < 0) rc = 3;
       if (!plot.series.empty()) {
         outputs::write_line_plot_png(out_dir / ("b5_" + l.loading.name + "_" + model_name + ".png"),
                                      plot);
