@@ -65,10 +65,10 @@ struct DcbRun {
   double moment = 0.048;        ///< M_a (N·m)
   std::int64_t delta_n = 1000;  ///< ΔN
   double max_cycles = 1e8;
-  double stop_growth = 0.0015;  ///< stop when the crack has grown this much (m)
+  double stop_growth = 0.001;  ///< stop when the crack has grown this much (m)
   /// The slope is the least-squares fit of crack length against cycles over growth in
   /// [fit_from, fit_to] (m), past the start-up of the fatigue zone.
-  double fit_from = 0.0005, fit_to = 0.0015;
+  double fit_from = 0.0003, fit_to = 0.001;
   bool progress = false;  ///< a line on stderr every 20 increments
 };
 

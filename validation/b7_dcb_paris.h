@@ -25,6 +25,7 @@ DcbSpec b7_spec(double horizon_ratio, int rows_per_arm, double ligament = 0.040)
 fatigue::BilinearParams b7_law();
 
 /// peritwin-validate --case B7: JSON lines and a PNG of the Paris plot into out_dir.
-int run_b7(const std::string& out_dir, bool quick);
+/// `only_ratio` > 0: that G/G_c alone.
+int run_b7(const std::string& out_dir, bool quick, double only_ratio = 0.0);
 
 }  // namespace peritwin::validation

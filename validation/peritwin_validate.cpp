@@ -242,6 +242,9 @@ int main(int argc, char** argv) {
   double b6_m = 3.0, b6_horizon = 3.75e-4, b6_coefficient = 0.0;
   std::int64_t b6_dn = 1000;
   bool quick = false;
+  double b7_ratio = 0.0;
+  app.add_option("--g-over-gc", b7_ratio, "B7: run this G/Gc alone")
+      ->check(peritwin::core::finite_in(0.01, 1.0));
   app.add_option("--b6-law", b6_law, "B6: run one configuration with this law (1, 2, 3)")
       ->check(CLI::Range(1, 3));
   app.add_option("--b6-m", b6_m, "B6 single: horizon ratio m")->check(CLI::Range(1.5, 6.0));
@@ -356,7 +359,7 @@ int main(int argc, char** argv) {
     return validation::run_b6_single(b6_law, b6_m, b6_dn, b6_horizon, b6_coefficient, max_cycles);
   }
   if (which == "B6") return validation::run_b6(out, quick);
-  if (which == "B7") return validation::run_b7(out, quick);
+  if (which == "B7") return validation::run_b7(out, quick, b7_ratio);
   if (which == "C1") return validation::run_c1_compression(c1_ct, c1_panel, out);
   if (which == "D1") return validation::run_d1(out, threads);
   if (which == "D2") return validation::run_d2(out);

@@ -2,6 +2,7 @@
 // energy release rate from the model's compliance against 003 Eq. (56), and short versions of B6.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -37,6 +38,22 @@ TEST(DcbCompliance, EnergyReleaseRateMatchesEq56BeforeAnyBreak) {
   EXPECT_GT(b7_coarse / b7_fine, 1.6);
   EXPECT_LT(b7_coarse / b7_fine, 3.0);
   EXPECT_GT(b7_fine, 0.0);  // softer, never stiffer
+}
+
+TEST(B6Short, ThirdLawSlopeOnTheCoarseGridAsTheFullRunMeasured) {
+  // B6 at m = 2 (Δl = 0.18 mm, the coarsest grid of 003 Fig. 19), third law: the slope of crack
+  // length against cycles at ΔN = 10000 and 50000 as `peritwin-validate --case B6` measured them
+  // (docs/validation.md, B6), within 1 % (the runs are deterministic; the tolerance is for other
+  // BLAS builds). Issue 36's goal is ≤ 10 % over ΔN on the converged grids (m = 3, 4; the full
+  // run); on this coarse grid the two differ by 10.5 %, asserted below 12 %.
+  const DcbResult a = run_dcb(b6_run(3, 2.0, 10000));
+  const DcbResult b = run_dcb(b6_run(3, 2.0, 50000));
+  std::printf("[ measured ] slopes %.6g %.6g m/cycle (%.1f s, %.1f s)\n", a.slope, b.slope,
+              a.wall_s, b.wall_s);
+  EXPECT_NEAR(a.slope / 1.70416e-09, 1.0, 0.01);
+  EXPECT_NEAR(b.slope / 1.54188e-09, 1.0, 0.01);
+  EXPECT_LT(std::max(a.slope, b.slope) / std::min(a.slope, b.slope) - 1.0, 0.12);
+  EXPECT_FALSE(a.failed || b.failed);
 }
 
 }  // namespace
