@@ -97,6 +97,13 @@ int run_b7(const std::string& out_dir, bool quick, double only_ratio) {
   line["case"] = "B7";
   line["paris_exponent"] = core::significant(n, 5);
   line["paris_exponent_predicted"] = core::significant(b7_law().m / 2.0, 5);
+  // The local exponents between neighbouring moments: → m/2 at low G, above it where the static
+  // part of Eq. (50) joins the fatigue zone (G > G_0 = G_c/k_r near the tip).
+  std::vector<double> local;
+  for (std::size_t i = 1; i < lx.size(); ++i) {
+    local.push_back(core::significant((ly[i] - ly[i - 1]) / (lx[i] - lx[i - 1]), 4));
+  }
+  line["local_exponents"] = local;
   line["paris_coefficient_m_per_cycle"] = core::significant(std::pow(10.0, mean_y - n * mean_x), 5);
   core::print_line(line);
   if (!quick && lx.size() >= 2) {
@@ -108,9 +115,12 @@ int run_b7(const std::string& out_dir, bool quick, double only_ratio) {
     std::vector<double> fx{lx.front(), lx.back()}, fy;
     for (double x : fx) fy.push_back(mean_y + n * (x - mean_x));
     plot.series.push_back({"least-squares line", fx, fy, {200, 40, 40}, true});
+    // The prediction holds where the fatigue zone carries no static damage (low G): the line of
+    // slope m/2 through the lowest-G point.
     std::vector<double> py;
-    for (double x : fx) py.push_back(mean_y + b7_law().m / 2.0 * (x - mean_x));
-    plot.series.push_back({"slope m/2 = 2 (predicted)", fx, py, {30, 150, 60}, true});
+    for (double x : fx) py.push_back(ly.front() + b7_law().m / 2.0 * (x - lx.front()));
+    plot.series.push_back(
+        {"slope m/2 = 2 through the lowest G (predicted)", fx, py, {30, 150, 60}, true});
     outputs::write_line_plot_png(std::filesystem::path(out_dir) / "b7_paris.png", plot);
   }
   return 0;

@@ -243,6 +243,9 @@ int main(int argc, char** argv) {
   std::int64_t b6_dn = 1000;
   bool quick = false;
   double b7_ratio = 0.0;
+  int b6_only_law = 0;
+  app.add_option("--only-law", b6_only_law, "B6: the study of this law alone (1, 2, 3)")
+      ->check(CLI::Range(1, 3));
   app.add_option("--g-over-gc", b7_ratio, "B7: run this G/Gc alone")
       ->check(peritwin::core::finite_in(0.01, 1.0));
   app.add_option("--b6-law", b6_law, "B6: run one configuration with this law (1, 2, 3)")
@@ -358,7 +361,7 @@ int main(int argc, char** argv) {
   if (which == "B6" && b6_law > 0) {
     return validation::run_b6_single(b6_law, b6_m, b6_dn, b6_horizon, b6_coefficient, max_cycles);
   }
-  if (which == "B6") return validation::run_b6(out, quick);
+  if (which == "B6") return validation::run_b6(out, quick, b6_only_law);
   if (which == "B7") return validation::run_b7(out, quick, b7_ratio);
   if (which == "C1") return validation::run_c1_compression(c1_ct, c1_panel, out);
   if (which == "D1") return validation::run_d1(out, threads);
