@@ -6,7 +6,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
 
@@ -357,6 +360,60 @@ int run_b6(const std::string& out_dir, bool quick, int only_law) {
       print_b6(names[law], run, run_dcb(run), "horizon");
     }
   }
+  return 0;
+}
+
+}  // namespace peritwin::validation
+
+namespace peritwin::validation {
+
+int plot_b6_slopes(const std::string& jsonl, const std::string& png) {
+  std::ifstream in(jsonl);
+  if (!in) return 1;
+  // (law, m) -> (log10 ΔN, slope) in file order
+  std::map<std::pair<std::string, double>, outputs::PlotSeries> by;
+  std::string text;
+  while (std::getline(in, text)) {
+    const auto j = nlohmann::json::parse(text, nullptr, false);
+    if (j.is_discarded() || j.value("case", "") != "B6" || !j.contains("law")) continue;
+    if (!j["slope_m_per_cycle"].is_number()) continue;
+    if (j.value("study", "") == "horizon") continue;
+    const std::string law = j["law"];
+    const double m = j["m"];
+    auto& series = by[{law, m}];
+    series.x.push_back(std::log10(j["delta_n"].get<double>()));
+    series.y.push_back(1e9 * j["slope_m_per_cycle"].get<double>());
+  }
+  outputs::LinePlot plot;
+  plot.title = "B6: slope of crack length against cycles, the three laws of 003";
+  plot.x_title = "log10(dN)";
+  plot.y_title = "dX/dN (nm/cycle)";
+  const std::map<std::string, outputs::Rgb> colors{
+      {"first", {140, 60, 170}}, {"second", {200, 40, 40}}, {"third", {30, 150, 60}}};
+  for (auto& [key, series] : by) {
+    // sorted by ΔN
+    std::vector<std::size_t> order(series.x.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return series.x[a] < series.x[b]; });
+    outputs::PlotSeries out;
+    out.label = key.first + " law, m = " + std::to_string(static_cast<int>(key.second));
+    for (auto i : order) {
+      out.x.push_back(series.x[i]);
+      out.y.push_back(series.y[i]);
+    }
+    out.color = colors.at(key.first);
+    if (key.second != 3.0) {  // m = 2 dashed, m = 4 lighter
+      out.dashed = key.second == 2.0;
+      if (key.second == 4.0) {
+        out.color = {static_cast<std::uint8_t>(out.color.r / 2),
+                     static_cast<std::uint8_t>(out.color.g / 2),
+                     static_cast<std::uint8_t>(out.color.b / 2)};
+      }
+    }
+    plot.series.push_back(std::move(out));
+  }
+  outputs::write_line_plot_png(png, plot);
   return 0;
 }
 

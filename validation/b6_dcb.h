@@ -108,6 +108,10 @@ int run_b6_single(int law, double horizon_ratio, std::int64_t delta_n, double ho
                   double coefficient, double max_cycles);
 
 /// B6 as peritwin-validate --case B6: JSON lines and docs/figures-style PNGs into out_dir.
+/// The three laws side by side: slope against ΔN per (law, m) from B6 JSON lines (any mix of
+/// study and single lines; horizon-study lines left out) into a PNG.
+int plot_b6_slopes(const std::string& jsonl, const std::string& png);
+
 /// `only_law` > 0: that law alone (its slopes and crack PNGs, its δ-convergence).
 int run_b6(const std::string& out_dir, bool quick, int only_law = 0);
 

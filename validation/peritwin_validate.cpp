@@ -244,6 +244,9 @@ int main(int argc, char** argv) {
   bool quick = false;
   double b7_ratio = 0.0;
   int b6_only_law = 0;
+  std::string b6_plot_from;
+  app.add_option("--plot-from", b6_plot_from,
+                 "B6: draw OUT/b6_slopes.png from these JSON lines instead of running");
   app.add_option("--only-law", b6_only_law, "B6: the study of this law alone (1, 2, 3)")
       ->check(CLI::Range(1, 3));
   app.add_option("--g-over-gc", b7_ratio, "B7: run this G/Gc alone")
@@ -360,6 +363,9 @@ int main(int argc, char** argv) {
   if (which == "B4") return validation::run_b4();
   if (which == "B6" && b6_law > 0) {
     return validation::run_b6_single(b6_law, b6_m, b6_dn, b6_horizon, b6_coefficient, max_cycles);
+  }
+  if (which == "B6" && !b6_plot_from.empty()) {
+    return validation::plot_b6_slopes(b6_plot_from, out + "/b6_slopes.png");
   }
   if (which == "B6") return validation::run_b6(out, quick, b6_only_law);
   if (which == "B7") return validation::run_b7(out, quick, b7_ratio);
