@@ -19,7 +19,7 @@ namespace peritwin::validation {
 /// pre-crack along y = 0 from x = 0 to x = a. The arms' free ends (the first column of nodes)
 /// carry opposing moments ±M as a linear distribution of x-forces over the end nodes (per unit P
 /// = 1 N·m: F_i = ±(y_i − y_c)/Σ(y_j − y_c)², which opens the crack); the last column x = L is
-/// clamped. Only bonds with both ends in the band |y| < δ + Δl/2 (the bonds that can cross the
+/// clamped. Only bonds with both ends in the band |y| < δ (the bonds that can cross the
 /// crack plane) and beyond x = a − δ may soften and break: the arms are no-fail zones. 003's DCB
 /// is a homogeneous PD body, but its figures are lost; with pure-moment loading the arms carry
 /// the bending strain 6M/(B h² E) over their whole length, which would fatigue the arms' fibres
