@@ -134,7 +134,14 @@ core::Expected<std::shared_ptr<const DetailModel>> DetailModel::build(
   h.value(m->settings_.kinetic);
   h.value(m->settings_.phase_switch_damage);
   h.value(m->settings_.critical_stretch);
-  h.value(m->settings_.bilinear);
+  // The bilinear bond's four original fields as before (the same bytes: existing signatures and
+  // checkpoints are unchanged); 003's first and second laws (issue 36) add their own.
+  const fatigue::BilinearParams& bl = m->settings_.bilinear;
+  for (const double v : {bl.s0, bl.sc, bl.A, bl.m}) h.value(v);
+  if (bl.law != 3) {
+    h.value(bl.law);
+    for (const double v : {bl.C, bl.beta, bl.lambda, bl.mu, bl.B, bl.n}) h.value(v);
+  }
   h.value(m->settings_.cycle_increment);
   h.value(m->settings_.softening_tolerance);
   h.value(m->settings_.softening_max_iterations);

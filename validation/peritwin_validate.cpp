@@ -15,6 +15,8 @@
 #include "validation/b3_ct_with_hole.h"
 #include "validation/b4_analytical.h"
 #include "validation/b5_run.h"
+#include "validation/b6_dcb.h"
+#include "validation/b7_dcb_paris.h"
 #include "validation/c1_compression.h"
 #include "validation/ct_calibration.h"
 #include "validation/d_dynamics.h"
@@ -235,8 +237,9 @@ int main(int argc, char** argv) {
   double a2_trial = 1055;
   int iterations = 2;
   std::string out = "results/validation";
-  app.add_option("--case", which, "B1 | B2 | B3 | B4 | B5 | C1 | D1 | D2 | D3 | D4")
-      ->check(CLI::IsMember({"B1", "B2", "B3", "B4", "B5", "C1", "D1", "D2", "D3", "D4"}));
+  app.add_option("--case", which, "B1 | B2 | B3 | B4 | B5 | B6 | B7 | C1 | D1 | D2 | D3 | D4")
+      ->check(
+          CLI::IsMember({"B1", "B2", "B3", "B4", "B5", "B6", "B7", "C1", "D1", "D2", "D3", "D4"}));
   validation::B5RunOptions b5;
   app.add_option("--b5-loading", b5.loadings, "B5: all | symmetric | pol | pul")
       ->check(CLI::IsMember({"all", "symmetric", "pol", "pul"}));
@@ -250,6 +253,28 @@ int main(int argc, char** argv) {
       ->check(peritwin::core::finite_in(0.1, 10.0));
   app.add_flag("--b5-own-loops", b5.own_loops,
                "B5: the modified model with each bond's own loop area, not 004's measured ones");
+  int b6_law = 0;
+  double b6_m = 3.0, b6_horizon = 3.75e-4, b6_coefficient = 0.0;
+  std::int64_t b6_dn = 1000;
+  bool quick = false;
+  double b7_ratio = 0.0;
+  int b6_only_law = 0;
+  std::string b6_plot_from;
+  app.add_option("--plot-from", b6_plot_from,
+                 "B6: draw OUT/b6_slopes.png from these JSON lines instead of running");
+  app.add_option("--only-law", b6_only_law, "B6: the study of this law alone (1, 2, 3)")
+      ->check(CLI::Range(1, 3));
+  app.add_option("--g-over-gc", b7_ratio, "B7: run this G/Gc alone")
+      ->check(peritwin::core::finite_in(0.01, 1.0));
+  app.add_option("--b6-law", b6_law, "B6: run one configuration with this law (1, 2, 3)")
+      ->check(CLI::Range(1, 3));
+  app.add_option("--b6-m", b6_m, "B6 single: horizon ratio m")->check(CLI::Range(1.5, 6.0));
+  app.add_option("--b6-dn", b6_dn, "B6 single: cycle increment")->check(CLI::Range(1, 1000000));
+  app.add_option("--b6-horizon", b6_horizon, "B6 single: horizon (m)")
+      ->check(peritwin::core::finite_in(1e-5, 1e-2));
+  app.add_option("--b6-coefficient", b6_coefficient, "B6 single: the law's A, C or B")
+      ->check(peritwin::core::finite_positive());
+  app.add_flag("--quick", quick, "B6, B7: the short versions (coarse grid) the tests run");
   std::string c1_ct = PERITWIN_EXAMPLES_DIR "/b1-ct-al6061.toml";
   std::string c1_panel = PERITWIN_EXAMPLES_DIR "/mt-panel-al6061.toml";
   app.add_option("--ct-config", c1_ct, "C1: the CT detail (default the demo's B1)");
@@ -352,6 +377,14 @@ int main(int argc, char** argv) {
     return run_b3(dx_option->count() > 0 ? dx : 0.00025, !no_limit, out, max_cycles);
   if (which == "B4") return validation::run_b4();
   if (which == "B5") return validation::run_b5(b5, out);
+  if (which == "B6" && b6_law > 0) {
+    return validation::run_b6_single(b6_law, b6_m, b6_dn, b6_horizon, b6_coefficient, max_cycles);
+  }
+  if (which == "B6" && !b6_plot_from.empty()) {
+    return validation::plot_b6_slopes(b6_plot_from, out + "/b6_slopes.png");
+  }
+  if (which == "B6") return validation::run_b6(out, quick, b6_only_law);
+  if (which == "B7") return validation::run_b7(out, quick, b7_ratio);
   if (which == "C1") return validation::run_c1_compression(c1_ct, c1_panel, out);
   if (which == "D1") return validation::run_d1(out, threads);
   if (which == "D2") return validation::run_d2(out);

@@ -596,12 +596,10 @@ bool FatigueEngine::bilinear_increment(const core::LoadBlock& key, std::int64_t 
     double largest_change = 0.0;
     for (std::size_t b = 0; b < nb; ++b) {
       if (!breakable_[b]) continue;
-      // 003 Eq. (50): static increment along the envelope (Eq. 46) + fatigue (Eq. 29)
-      double d =
-          state_.damage[b] +
-          fatigue::bilinear_static_damage_increment(state_.max_stretch[b], s[b], p.s0, p.sc) +
-          fatigue::third_law_fatigue_damage_increment(s_start[b], s[b], delta_n, p);
-      d = std::clamp(d, state_.damage[b], 1.0);
+      // 003 Eq. (50) (third law: static increment along the envelope, Eq. 46, + fatigue, Eq. 29),
+      // or Eq. (47) / (49) for the first / second law (BilinearParams::law)
+      double d = fatigue::bilinear_update_damage(state_.damage[b], state_.max_stretch[b],
+                                                 s_start[b], s[b], delta_n, p);
       // 003 Eq. (45): f = 1 − D below sc, 0 at or beyond sc or at D = 1 (broken)
       const double f = fatigue::bilinear_force_factor(s[b], d, p.sc);
       if (f == 0.0) d = 1.0;

@@ -39,6 +39,114 @@ TEST(BilinearClosedForm, ConstantStretchLifeEq27) {
   EXPECT_EQ(cycles, static_cast<std::int64_t>(std::ceil(n_exact / dn)) * 1000);
 }
 
+// The first and second degradation laws of 003 (Sec. 4.2-4.3) at a bond held at a constant
+// stretch: 003's spring at a fixed opening, where both laws have closed forms.
+
+fatigue::BilinearParams first_law_params(double lambda) {
+  fatigue::BilinearParams p{2e-3, 8e-3, 0.0, 4.0};
+  p.law = 1;
+  p.C = 2e-5;
+  p.beta = 3.0;
+  p.lambda = lambda;
+  return p;
+}
+
+TEST(BilinearFirstLaw, ConstantStretchDamageIsTheIntegralOfEq19) {
+  // 003 Eq. (20) as written integrates dD/dN = C/(1+β) e^{λD} (s/sc)^{1+β} (see bilinear.h); at a
+  // constant stretch s < s0 (no static damage) e^{−λD0} − e^{−λD} = λ k N, k = C/(1+β)
+  // (s/sc)^{1+β}. The μ-rule of Eq. (21) with μ = 0.7 is first order in ΔN where D grows (the
+  // exponential is taken at D_μ): D at N = N_f/2 in increments of N_f/2000 must match the closed
+  // form within 0.1 %, and the error must fall about twofold when ΔN is halved. λ = 0 is exact per
+  // increment.
+  for (double lambda : {0.0, 3.0}) {
+    const fatigue::BilinearParams p = first_law_params(lambda);
+    ASSERT_TRUE(fatigue::validate(p).ok());
+    const double s = 1.5e-3;
+    const double nf = fatigue::first_law_cycles_constant_stretch(s, 0.0, p);
+    const double k = p.C / (1.0 + p.beta) * std::pow(s / p.sc, 1.0 + p.beta);
+    const double n_half = 0.5 * nf;
+    const double exact = lambda > 0 ? -std::log(1.0 - lambda * k * n_half) / lambda : k * n_half;
+    const auto damage_at_half = [&](int increments) {
+      double d = 0.0;
+      for (int i = 0; i < increments; ++i) {
+        d = fatigue::first_law_update_damage(d, s, s, s, n_half / increments, p);
+      }
+      return d;
+    };
+    const double e1 = std::abs(damage_at_half(1000) / exact - 1);
+    const double e2 = std::abs(damage_at_half(2000) / exact - 1);
+    if (lambda == 0.0) {
+      EXPECT_NEAR(nf, 1.0 / k, 1e-9 * nf);
+      EXPECT_LT(e1, 1e-12);
+    } else {
+      EXPECT_NEAR(nf, (1.0 - std::exp(-lambda)) / (lambda * k), 1e-9 * nf);
+      EXPECT_LT(e1, 1e-3);
+      EXPECT_GT(e1 / e2, 1.8) << e1 << " " << e2;
+      EXPECT_LT(e1 / e2, 2.2) << e1 << " " << e2;
+    }
+  }
+}
+
+TEST(BilinearFirstLaw, ImplicitIncrementSolvesEq22) {
+  // 003 Eq. (22): D' = D + static + ΔN C/(1+β) e^{λ((1−μ)D + μD')} (s_μ/sc)^{1+β}; the returned D'
+  // must satisfy it to 1e-13, with static damage (s crossing s0) included; and an increment
+  // too large for a root below D = 1 must break the bond (D' = 1).
+  const fatigue::BilinearParams p = first_law_params(3.0);
+  const double d = 0.05, s_env = 2.5e-3, s_start = 2.4e-3, s_new = 3.0e-3, dn = 2000.0;
+  const double got = fatigue::first_law_update_damage(d, s_env, s_start, s_new, dn, p);
+  const double s_mu = 0.3 * s_start + 0.7 * s_new;
+  const double rhs = d + p.s0 * p.sc / (p.sc - p.s0) * (1 / s_env - 1 / s_new) +
+                     dn * p.C / (1 + p.beta) * std::exp(p.lambda * (0.3 * d + 0.7 * got)) *
+                         std::pow(s_mu / p.sc, 1 + p.beta);
+  EXPECT_NEAR(got, rhs, 1e-13);
+  EXPECT_GT(got, d);
+  EXPECT_EQ(fatigue::first_law_update_damage(d, s_env, s_start, s_new, 1e8, p), 1.0);
+}
+
+TEST(BilinearSecondLaw, ConstantStretchFollowsEq23And24) {
+  // 003 Eq. (23) at a constant stretch s0 < s < sc: sc(N) = sc − B (s − s0)^n N exactly for any
+  // ΔN, and D(N) is Eq. (24) with that sc(N); the bond fails when sc(N) reaches s, at
+  // N_f = (sc − s)/(B (s − s0)^n). The engine's update (the failure stretch recovered from D and
+  // the envelope, no extra state) must follow it to 1e-9 over increments of ΔN = 500 and fail in
+  // the increment that contains N_f. Below s0 the law does nothing (D stays 0).
+  fatigue::BilinearParams p{2e-3, 8e-3, 0.0, 4.0};
+  p.law = 2;
+  p.B = 1e-5;
+  p.n = 1.5;
+  ASSERT_TRUE(fatigue::validate(p).ok());
+  const double s = 3e-3;
+  const double nf = fatigue::second_law_cycles_constant_stretch(s, p);
+  EXPECT_NEAR(nf, (p.sc - s) / (p.B * std::pow(s - p.s0, p.n)), 1e-12 * nf);
+  double d = fatigue::bilinear_static_damage(s, p.s0, p.sc);  // the static ramp to s
+  const double dn = 500.0;
+  double n = 0.0;
+  while (true) {
+    const double next = fatigue::bilinear_update_damage(d, s, s, s, dn, p);
+    if (next >= 1.0) break;
+    n += dn;
+    EXPECT_NEAR(next, fatigue::second_law_damage_constant_stretch(s, n, p), 1e-9) << n;
+    d = next;
+  }
+  EXPECT_LE(n, nf);
+  EXPECT_GT(n + dn, nf);
+  EXPECT_EQ(fatigue::bilinear_update_damage(0.0, 1.5e-3, 1.5e-3, 1.5e-3, 1e6, p), 0.0);
+}
+
+TEST(BilinearLaws, ValidateChecksTheChosenLawsParameters) {
+  fatigue::BilinearParams p{2e-3, 8e-3, 0.0, 4.0};  // A = 0: law 3 invalid
+  EXPECT_FALSE(fatigue::validate(p).ok());
+  p.law = 1;
+  EXPECT_FALSE(fatigue::validate(p).ok());  // C = 0
+  p.C = 1e-5;
+  EXPECT_TRUE(fatigue::validate(p).ok());
+  p.law = 2;
+  EXPECT_FALSE(fatigue::validate(p).ok());  // B = 0
+  p.B = 1e-6;
+  EXPECT_TRUE(fatigue::validate(p).ok());
+  p.law = 4;
+  EXPECT_FALSE(fatigue::validate(p).ok());
+}
+
 TEST(BilinearClosedForm, LoadControlledBondLifeConvergesAtSecondOrder) {
   // A bond under constant force (003's single spring): N_f = (1 − (s_e/s0)^(m+1)) /
   // ((m+1) A (s_e/sc)^m) (see third_law_bar_cycles_to_failure). The increment integration with
