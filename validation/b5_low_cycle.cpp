@@ -109,7 +109,8 @@ double area_of(const statics::Specimen& strip) {
   return w * strip.geometry.thickness;
 }
 
-/// The specimen's stress σ = R/A at the virgin strip's first loading to `strain`.
+}  // namespace
+
 double virgin_stress(const statics::Specimen& strip, const model::PowerLawCurve& curve,
                      double kappa, double strain) {
   statics::StaticSolver solver(strip.disc, strip.model, strip.supports, strip.loads, strip.ties,
@@ -123,8 +124,6 @@ double virgin_stress(const statics::Specimen& strip, const model::PowerLawCurve&
     return std::numeric_limits<double>::quiet_NaN();
   return plastic.reaction(0) / area_of(strip);
 }
-
-}  // namespace
 
 double calibrate_b5_kappa(const statics::Specimen& strip, const model::PowerLawCurve& curve,
                           double strain) {
@@ -346,6 +345,8 @@ void LowCycleRun::trace_loop(std::int64_t at) {
   const StrainCycle& c = loading_.block[loading_.measured];
   std::vector<double> strain, stress;
   double from = trace.control();
+  strain.push_back(from);
+  stress.push_back(trace.reaction(0) / area_of(strip_));
   for (const double to : {c.first, c.second}) {
     for (int k = 1; k <= opt_.loop_steps; ++k) {
       const double p = from + (to - from) * k / opt_.loop_steps;

@@ -148,6 +148,9 @@ struct B5Result {
   std::string reason;  ///< why it stopped
 };
 
+/// The specimen's stress σ = R/A (Pa) at the virgin strip's first loading to `strain`.
+double virgin_stress(const statics::Specimen& strip, const model::PowerLawCurve& curve,
+                     double kappa, double strain);
 /// κ that makes the virgin strip's σ = R/A at `strain` equal to the curve's (bisection).
 double calibrate_b5_kappa(const statics::Specimen& strip, const model::PowerLawCurve& curve,
                           double strain);
