@@ -18,6 +18,7 @@
 #include "solver/fatigue/law_registry.h"
 #include "solver/fatigue/laws/kinetic.h"
 #include "solver/fatigue/laws/kinetic_calibration.h"
+#include "tests/support/map_reader.h"
 #include "tests/support/plates.h"
 
 namespace peritwin {
@@ -146,33 +147,7 @@ TEST(KineticSegments, Validation) {
 
 // ------------------------------------------------------------------------------- reader
 
-/// A ParamReader over a map of numbers that collects its errors (as the config's, without toml++).
-class MapReader final : public core::ParamReader {
- public:
-  explicit MapReader(std::map<std::string, double> values) : values_(std::move(values)) {}
-  [[nodiscard]] bool has(std::string_view key) const override {
-    return values_.contains(std::string(key));
-  }
-  std::optional<double> number(std::string_view key) override {
-    if (has(key)) return values_.at(std::string(key));
-    errors.push_back({std::string(key), "missing"});
-    return std::nullopt;
-  }
-  double number(std::string_view key, double fallback) override {
-    return has(key) ? values_.at(std::string(key)) : fallback;
-  }
-  std::int64_t integer(std::string_view key, std::int64_t fallback) override {
-    return has(key) ? static_cast<std::int64_t>(values_.at(std::string(key))) : fallback;
-  }
-  bool boolean(std::string_view key, bool fallback) override {
-    return has(key) ? values_.at(std::string(key)) != 0.0 : fallback;
-  }
-  void report(core::Error error) override { errors.push_back(std::move(error)); }
-  std::vector<core::Error> errors;
-
- private:
-  std::map<std::string, double> values_;
-};
+using testing::MapReader;
 
 std::vector<std::string> read_errors(std::map<std::string, double> values,
                                      fatigue::FatigueSettings& f) {
