@@ -45,7 +45,7 @@ std::uint64_t bits(double x) { return std::bit_cast<std::uint64_t>(x); }
 
 // Checks cycles_to_failure and advance_life (at several k, also past failure) against the loop.
 void check_against_loop(double lambda, double d) {
-  SCOPED_TRACE(testing::Message() << std::hexfloat << "lambda=" << lambda << " d=" << d);
+  SCOPED_TRACE(::testing::Message() << std::hexfloat << "lambda=" << lambda << " d=" << d);
   const std::int64_t n_loop = loop_cycles(lambda, d, 3'000'000);
   ASSERT_GT(n_loop, 0) << "test case too long for the loop";
   EXPECT_EQ(fatigue::cycles_to_failure(lambda, d), n_loop);
