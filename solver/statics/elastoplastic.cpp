@@ -102,7 +102,7 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
   // Substeps: the same monotone ramp in 2, 4, … 64 parts, each committed (a bond whose strain
   // turns within the ramp then keeps that reversal, which the single step could not see).
   const std::vector<model::MasingState> state = state_;
-  const std::vector<double> u = u_, reaction = reaction_;
+  const std::vector<double> u = u_, reaction = reaction_, work0 = work_;
   const double from = p_;
   for (int parts = 2; parts <= 64; parts *= 2) {
     std::vector<double> work(work_.size(), 0.0);
@@ -127,6 +127,7 @@ core::Expected<TurningPoint> ElastoplasticSolver::solve_turning_point(double p, 
     state_ = state;
     u_ = u;
     reaction_ = reaction;
+    work_ = work0;
     p_ = from;
   }
   return direct;
