@@ -57,8 +57,7 @@ core::Expected<B5Kinetics> calibrate_b5_kinetics(const model::PowerLawCurve& cur
       return core::failure("B5: segment " + std::to_string(s + 1) + ": " + fit.error().reason);
     }
     f.fit = *fit;
-    const double upper = s == 2 ? std::numeric_limits<double>::infinity() : r.upper;
-    k.extension.segments[s] = {upper, fit->U, fit->gamma};
+    k.extension.segments[s] = {r.upper, fit->U, fit->gamma};
     if (fits != nullptr) fits->push_back(f);
   }
   k.base.U = k.extension.segments[0].U;
@@ -192,6 +191,9 @@ class LowCycleRun {
     return phi(i) >= kin_.phase_switch || phi(j) >= kin_.phase_switch;
   }
   bool break_bonds(const std::vector<mesh::BondIndex>& bonds);
+  /// Adds the breakable intact bonds whose stretch at the committed state reaches s_c (phase
+  /// III) and are not listed yet.
+  void add_critical(std::vector<mesh::BondIndex>& list) const;
   void trace_loop(std::int64_t at);
   void measure(double upper);
 
@@ -226,7 +228,7 @@ double LowCycleRun::bond_dose(std::size_t b, double s1, double s2, double area) 
 bool LowCycleRun::cycle(const StrainCycle& c, std::vector<double>& dose,
                         std::vector<mesh::BondIndex>& over, double& upper) {
   const auto nb = life_.size();
-  std::vector<double> stress[2], work(nb, 0.0), stretch;
+  std::vector<double> stress[2], work(nb, 0.0);
   std::vector<std::array<double, 3>> point[2];
   over.clear();
   const double points[2] = {c.first, c.second};
@@ -249,13 +251,7 @@ bool LowCycleRun::cycle(const StrainCycle& c, std::vector<double>& dose,
       upper = plastic_->reaction(0);
       up = k;
     }
-    model::bond_stretches(strip_.disc, plastic_->displacement(), stretch);
-    for (std::size_t b = 0; b < nb; ++b) {
-      if (breakable_[b] && solver_.intact()[b] && stretch[b] >= opt_.critical_stretch &&
-          std::find(over.begin(), over.end(), static_cast<mesh::BondIndex>(b)) == over.end()) {
-        over.push_back(static_cast<mesh::BondIndex>(b));
-      }
-    }
+    add_critical(over);
   }
   if (opt_.point_stress) {
     // 004 Eq. (14): σ_xx' = (σ_x + σ_x')/2, the stress of the bond's two points. As a scalar:
@@ -297,9 +293,20 @@ bool LowCycleRun::cycle(const StrainCycle& c, std::vector<double>& dose,
   return true;
 }
 
+void LowCycleRun::add_critical(std::vector<mesh::BondIndex>& list) const {
+  std::vector<double> stretch;
+  model::bond_stretches(strip_.disc, plastic_->displacement(), stretch);
+  for (std::size_t b = 0; b < stretch.size(); ++b) {
+    const auto bond = static_cast<mesh::BondIndex>(b);
+    if (breakable_[b] && solver_.intact()[b] && stretch[b] >= opt_.critical_stretch &&
+        std::find(list.begin(), list.end(), bond) == list.end()) {
+      list.push_back(bond);
+    }
+  }
+}
+
 bool LowCycleRun::break_bonds(const std::vector<mesh::BondIndex>& bonds) {
   std::vector<mesh::BondIndex> group = bonds;
-  std::vector<double> stretch;
   // 004: "statics … repeated for each PD bond failure": the body re-balances at the turning
   // point it is held at, and the bonds that this pulls to s_c break with the group (phase III).
   for (int round = 0; !group.empty(); ++round) {
@@ -326,13 +333,8 @@ bool LowCycleRun::break_bonds(const std::vector<mesh::BondIndex>& bonds) {
       result_.lost_equilibrium = true;
       return false;
     }
-    model::bond_stretches(strip_.disc, plastic_->displacement(), stretch);
     group.clear();
-    for (std::size_t b = 0; b < stretch.size(); ++b) {
-      if (breakable_[b] && solver_.intact()[b] && stretch[b] >= opt_.critical_stretch) {
-        group.push_back(static_cast<mesh::BondIndex>(b));
-      }
-    }
+    add_critical(group);
   }
   ++result_.break_groups;
   return true;

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -80,7 +81,9 @@ struct B5Segment {
   double from, to, upper;
 };
 inline constexpr B5Segment kB5Segments[3] = {
-    {210e6, 250e6, 250e6}, {250e6, 290e6, 290e6}, {290e6, 294e6, 1e300}};
+    {210e6, 250e6, 250e6},
+    {250e6, 290e6, 290e6},
+    {290e6, 294e6, std::numeric_limits<double>::infinity()}};
 /// The Masing loop area (J/m³) of the symmetric cycle with stress amplitude σ on the curve.
 double loop_area_at_stress(const model::PowerLawCurve& curve, double sigma);
 /// U, γ per segment fitted (fatigue::kt_calibrate_segment, R = −1) on NUREG/CR-6909 through the

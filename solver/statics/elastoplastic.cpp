@@ -63,11 +63,23 @@ ElastoplasticSolver::ElastoplasticSolver(const ElastoplasticSolver& other, Stati
       stalled_(other.stalled_),
       substepped_(other.substepped_) {}
 
+double ElastoplasticSolver::bond_force(std::size_t b, double stress) const {
+  const double kappa = law_.stretch_per_strain;
+  return solver_.model().bond_stiffness[b] * solver_.discretization().bond_length[b] * kappa *
+         stress / law_.curve.youngs_modulus;
+}
+
+double ElastoplasticSolver::bond_work(std::size_t b, double work) const {
+  const double xi = solver_.discretization().bond_length[b];
+  const double kappa = law_.stretch_per_strain;
+  return solver_.model().bond_stiffness[b] * xi * xi * kappa * kappa / law_.curve.youngs_modulus *
+         work;
+}
+
 double ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<double>& force,
                                      std::vector<double>& tangent_factor,
                                      std::vector<double>* work) const {
   const mesh::Discretization& disc = solver_.discretization();
-  const model::PdModel& model = solver_.model();
   std::vector<double> stretch;
   model::bond_stretches(disc, u, stretch);
   force.assign(u.size(), 0.0);
@@ -80,12 +92,11 @@ double ElastoplasticSolver::evaluate(const std::vector<double>& u, std::vector<d
     const model::MasingResponse r =
         model::masing_evaluate(skeleton_, state_[b], stretch[b] / kappa);
     // F_b = k_b·ξ·κ·σ(ε)/E: the elastic k_b·ξ·s below yield.
-    const double magnitude = model.bond_stiffness[b] * disc.bond_length[b] * kappa * r.stress / e;
+    const double magnitude = bond_force(b, r.stress);
     tangent_factor[b] = std::clamp(r.tangent / e, 1e-9, 1.0);
     if (work != nullptr) (*work)[b] = r.work;
     // The bond's work along the ramp (J): k_b·ξ²·κ²/E·∫σ dε, whose derivative is its force.
-    energy += model.bond_stiffness[b] * disc.bond_length[b] * disc.bond_length[b] * kappa * kappa /
-              e * r.work;
+    energy += bond_work(b, r.work);
     const auto i = 2 * static_cast<std::size_t>(disc.bond_i[b]);
     const auto j = 2 * static_cast<std::size_t>(disc.bond_j[b]);
     force[i] -= magnitude * disc.bond_cos[b];
@@ -336,14 +347,11 @@ core::Status ElastoplasticSolver::break_bonds(std::span<const mesh::BondIndex> b
 
 std::vector<std::array<double, 3>> ElastoplasticSolver::node_stress() const {
   const mesh::Discretization& disc = solver_.discretization();
-  const model::PdModel& model = solver_.model();
-  const double kappa = law_.stretch_per_strain;
   std::vector<std::array<double, 3>> sigma(static_cast<std::size_t>(disc.num_nodes()),
                                            std::array<double, 3>{0.0, 0.0, 0.0});
   for (std::size_t b = 0; b < state_.size(); ++b) {
     if (!solver_.intact()[b]) continue;
-    const double force = model.bond_stiffness[b] * disc.bond_length[b] * kappa * state_[b].stress /
-                         law_.curve.youngs_modulus;
+    const double force = bond_force(b, state_[b].stress);
     const double c = disc.bond_cos[b];
     const double s = disc.bond_sin[b];
     const double half = 0.5 * force * disc.bond_length[b];
@@ -363,14 +371,10 @@ std::vector<std::array<double, 3>> ElastoplasticSolver::node_stress() const {
 std::vector<double> ElastoplasticSolver::node_loop_area(
     const std::vector<double>& bond_loop) const {
   const mesh::Discretization& disc = solver_.discretization();
-  const model::PdModel& model = solver_.model();
-  const double kappa = law_.stretch_per_strain;
   std::vector<double> area(static_cast<std::size_t>(disc.num_nodes()), 0.0);
   for (std::size_t b = 0; b < bond_loop.size(); ++b) {
     if (!solver_.intact()[b]) continue;
-    // W_b = k_b·ξ²·κ²/E·∮σ dε (J), half to each end.
-    const double w = model.bond_stiffness[b] * disc.bond_length[b] * disc.bond_length[b] * kappa *
-                     kappa / law_.curve.youngs_modulus * bond_loop[b];
+    const double w = bond_work(b, bond_loop[b]);  // half to each end
     area[static_cast<std::size_t>(disc.bond_i[b])] += 0.5 * w;
     area[static_cast<std::size_t>(disc.bond_j[b])] += 0.5 * w;
   }

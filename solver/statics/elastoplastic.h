@@ -91,6 +91,10 @@ class ElastoplasticSolver {
   [[nodiscard]] std::int64_t substepped_points() const { return substepped_; }
 
  private:
+  /// F_b = k_b·ξ·κ·σ/E (N): bond b's force at bond stress σ (the elastic k_b·ξ·s below yield).
+  [[nodiscard]] double bond_force(std::size_t b, double stress) const;
+  /// W_b = k_b·ξ²·κ²/E·w (J): bond b's work for w = ∫σ dε along its strain path.
+  [[nodiscard]] double bond_work(std::size_t b, double work) const;
   /// One Newton solve of the ramp to (p, α); commits on success.
   core::Expected<TurningPoint> ramp(double p, double alpha);
   /// Δu with K_t·Δu = r over the free DOFs (PCG, M = the solver's elastic factor).
