@@ -56,7 +56,9 @@ struct SparseCholesky::Impl {
   std::vector<double> forward_y;  ///< n × columns of tracked_rhs, row-major, permuted
   std::vector<double> delta;      ///< n × 3 workspace of the forward update (zero between calls)
   bool forward_valid = false;
-  int weakest_row = -1;  ///< SparseCholesky::weakest_pivot_row()
+  int weakest_row = -1;             ///< SparseCholesky::weakest_pivot_row()
+  double analysis_flops = 0.0;      ///< CHOLMOD's flop count of the analyzed factorization
+  double update_flops_total = 0.0;  ///< SparseCholesky::update_flops_total()
 
   [[nodiscard]] bool packed_active() const { return packed.x != nullptr; }
   /// The factor is LDLᵀ (after an update): packed, or CHOLMOD's simplicial.
@@ -83,6 +85,14 @@ struct SparseCholesky::Impl {
     std::int64_t nnz = 0;
     for (int j = 0; j < v.n; ++j) nnz += v.lnz[j];
     return nnz;
+  }
+  /// inverse_perm for the factor's ordering (built once per analysis).
+  void ensure_inverse_perm(const ldlt::FactorView& l) {
+    const auto n = static_cast<std::size_t>(l.n);
+    if (inverse_perm.size() == n) return;
+    inverse_perm.assign(n, 0);
+    for (std::size_t k = 0; k < n; ++k)
+      inverse_perm[static_cast<std::size_t>(l.perm[k])] = static_cast<int>(k);
   }
   void ensure_schedule() {
     const std::int64_t nnz = pattern_nnz();

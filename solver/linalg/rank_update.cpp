@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -25,15 +26,72 @@ struct RankScalars {
   double p, beta;
 };
 
+/// The tracked right-hand sides' change at row i of column j: δ_i += l_ij·y_j − l̄_ij·ȳ_j.
+template <int R>
+inline void forward_change(double* delta, int i, double l_old, double l, const double* y_old,
+                           const double* y_new) {
+  if constexpr (R > 0) {
+    double* di = delta + static_cast<std::size_t>(i) * 3;
+    for (int r = 0; r < R; ++r) {
+      di[r] += l_old * y_old[r];
+      di[r] -= l * y_new[r];
+    }
+  }
+}
+
 /// Entries q in [from, to) of column j (rows li[q], values lx[q]: the column's own arrays):
 /// w_i −= p·l_ij, l_ij += β·w_i for each active rank; with R tracked right-hand sides also
 /// δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
-template <int R>
+///
+/// Interleaved (the default, SparseCholesky::set_interleaved_update): each entry's ranks are a
+/// chain of dependent operations (l_ij after rank a feeds rank a + 1), so
+/// one entry at a time runs at the latency of that chain. Four entries go through the ranks side
+/// by side (their rows are distinct, so their W rows are too): four independent chains in flight,
+/// the same operations on every entry in the same order, hence the same bits (issue 37: 3.5 Gflop/s
+/// one entry at a time on the 15k-node B1 factor).
+template <int R, bool Interleaved>
 void apply_column(const int* li, double* lx, double* w, int from, int to, const RankScalars* active,
                   int count, double* delta, const double* y_old, const double* y_new) {
-  for (int q = from; q < to; ++q) {
-    const int i = li[q];
-    double* wi = w + static_cast<std::size_t>(i) * kGroup;
+  int q = from;
+  for (; Interleaved && q + 4 <= to; q += 4) {
+    double* w0 = w + static_cast<std::size_t>(li[q]) * kGroup;
+    double* w1 = w + static_cast<std::size_t>(li[q + 1]) * kGroup;
+    double* w2 = w + static_cast<std::size_t>(li[q + 2]) * kGroup;
+    double* w3 = w + static_cast<std::size_t>(li[q + 3]) * kGroup;
+    const double o0 = lx[q], o1 = lx[q + 1], o2 = lx[q + 2], o3 = lx[q + 3];
+    double l0 = o0, l1 = o1, l2 = o2, l3 = o3;
+    for (int a = 0; a < count; ++a) {
+      const int r = active[a].rank;
+      const double p = active[a].p;
+      const double beta = active[a].beta;
+      double x0 = w0[r];
+      double x1 = w1[r];
+      double x2 = w2[r];
+      double x3 = w3[r];
+      x0 -= p * l0;
+      x1 -= p * l1;
+      x2 -= p * l2;
+      x3 -= p * l3;
+      l0 += beta * x0;
+      l1 += beta * x1;
+      l2 += beta * x2;
+      l3 += beta * x3;
+      w0[r] = x0;
+      w1[r] = x1;
+      w2[r] = x2;
+      w3[r] = x3;
+    }
+    lx[q] = l0;
+    lx[q + 1] = l1;
+    lx[q + 2] = l2;
+    lx[q + 3] = l3;
+    forward_change<R>(delta, li[q], o0, l0, y_old, y_new);
+    forward_change<R>(delta, li[q + 1], o1, l1, y_old, y_new);
+    forward_change<R>(delta, li[q + 2], o2, l2, y_old, y_new);
+    forward_change<R>(delta, li[q + 3], o3, l3, y_old, y_new);
+  }
+  for (; q < to; ++q) {
+    double* wi = w + static_cast<std::size_t>(li[q]) * kGroup;
     const double l_old = lx[q];
     double l = l_old;
     for (int a = 0; a < count; ++a) {
@@ -42,31 +100,42 @@ void apply_column(const int* li, double* lx, double* w, int from, int to, const 
       l += active[a].beta * x;
     }
     lx[q] = l;
-    if constexpr (R > 0) {
-      double* di = delta + static_cast<std::size_t>(i) * 3;
-      for (int r = 0; r < R; ++r) {
-        di[r] += l_old * y_old[r];
-        di[r] -= l * y_new[r];
-      }
-    }
+    forward_change<R>(delta, li[q], l_old, l, y_old, y_new);
   }
 }
 
 inline void apply_column(int tracked, const int* li, double* lx, double* w, int from, int to,
                          const RankScalars* active, int count, double* delta, const double* y_old,
                          const double* y_new) {
+  if (!SparseCholesky::interleaved_update()) {  // the oracle: one entry at a time
+    switch (tracked) {
+      case 0:
+        apply_column<0, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+        break;
+      case 1:
+        apply_column<1, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+        break;
+      case 2:
+        apply_column<2, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+        break;
+      default:
+        apply_column<3, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+        break;
+    }
+    return;
+  }
   switch (tracked) {
     case 0:
-      apply_column<0>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      apply_column<0, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
       break;
     case 1:
-      apply_column<1>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      apply_column<1, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
       break;
     case 2:
-      apply_column<2>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      apply_column<2, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
       break;
     default:
-      apply_column<3>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      apply_column<3, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
       break;
   }
 }
@@ -330,7 +399,37 @@ void sweep_two_threads(const Sweep& s, const std::vector<int>& path, int group, 
   helper.join();
 }
 
+/// 4 flops per entry of L on each column's elimination-tree path from its first row (see
+/// SparseCholesky::update_flops).
+double path_flops(const std::vector<int>& inverse_perm, const std::vector<int>& parent,
+                  const ldlt::FactorView& l, const std::vector<SparseCholesky::Column>& added,
+                  const std::vector<SparseCholesky::Column>& removed) {
+  double entries = 0.0;
+  for (const auto* columns : {&added, &removed}) {
+    for (const auto& c : *columns) {
+      if (c.rows.empty()) continue;
+      int first = l.n;
+      for (int row : c.rows) first = std::min(first, inverse_perm[static_cast<std::size_t>(row)]);
+      for (int j = first; j >= 0; j = parent[static_cast<std::size_t>(j)]) {
+        entries += l.lnz[j] - 1;
+      }
+    }
+  }
+  return 4.0 * entries;
+}
+
 }  // namespace
+
+double SparseCholesky::update_flops(const std::vector<Column>& added,
+                                    const std::vector<Column>& removed) {
+  if (added.empty() && removed.empty()) return 0.0;
+  auto& impl = *impl_;
+  if (!impl.to_ldlt(true).ok()) return std::numeric_limits<double>::infinity();
+  impl.ensure_schedule();
+  const ldlt::FactorView l = impl.view();
+  impl.ensure_inverse_perm(l);
+  return path_flops(impl.inverse_perm, impl.schedule.parent, l, added, removed);
+}
 
 core::Status SparseCholesky::modify_fused(const std::vector<Column>& added,
                                           const std::vector<Column>& removed) {
@@ -342,11 +441,7 @@ core::Status SparseCholesky::modify_fused(const std::vector<Column>& added,
   impl.ensure_schedule();
   const ldlt::FactorView l = impl.view();
   const auto n = static_cast<std::size_t>(l.n);
-  if (impl.inverse_perm.size() != n) {
-    impl.inverse_perm.assign(n, 0);
-    for (std::size_t k = 0; k < n; ++k)
-      impl.inverse_perm[static_cast<std::size_t>(l.perm[k])] = static_cast<int>(k);
-  }
+  impl.ensure_inverse_perm(l);
   std::vector<Rank> ranks;
   const bool fits = impl.schedule.sorted && impl.schedule.nested &&
                     fused_ranks(impl.inverse_perm, l, added, removed, ranks);
@@ -355,6 +450,7 @@ core::Status SparseCholesky::modify_fused(const std::vector<Column>& added,
     if (r.ok()) r = modify(removed, false);
     return r;
   }
+  impl.update_flops_total += path_flops(impl.inverse_perm, impl.schedule.parent, l, added, removed);
   if (impl.w.size() != n * kGroup) impl.w.assign(n * kGroup, 0.0);
   const int tracked = impl.forward_valid ? static_cast<int>(impl.tracked_rhs.cols()) : 0;
   if (impl.delta.size() != n * 3) impl.delta.assign(n * 3, 0.0);

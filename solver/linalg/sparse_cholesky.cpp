@@ -196,6 +196,8 @@ SparseCholesky::SparseCholesky(const SparseCholesky& other) : impl_(std::make_un
   // Everything the updates and solves read, so that the copy continues bit for bit as the
   // original would (the common's settings are the constructor's, never changed afterwards).
   impl_->inverse_perm = o.inverse_perm;
+  impl_->analysis_flops = o.analysis_flops;
+  impl_->update_flops_total = o.update_flops_total;
   impl_->schedule = o.schedule;
   impl_->diagonal = o.diagonal;
   impl_->mark = o.mark;
@@ -215,7 +217,16 @@ void SparseCholesky::set_solve_threads(int threads) { impl_->solve_threads = thr
 
 namespace {
 std::atomic<bool> g_automatic_two_threads{true};
+std::atomic<bool> g_interleaved_update{true};
 }  // namespace
+
+void SparseCholesky::set_interleaved_update(bool interleaved) {
+  g_interleaved_update.store(interleaved, std::memory_order_relaxed);
+}
+
+bool SparseCholesky::interleaved_update() {
+  return g_interleaved_update.load(std::memory_order_relaxed);
+}
 
 void SparseCholesky::allow_automatic_two_threads(bool allow) {
   g_automatic_two_threads.store(allow, std::memory_order_relaxed);
@@ -253,6 +264,16 @@ bool SparseCholesky::has_values() const {
 }
 
 bool SparseCholesky::analyzed() const { return impl_->factor != nullptr; }
+
+double SparseCholesky::factorization_flops() const {
+  return impl_->factor != nullptr ? impl_->analysis_flops : 0.0;
+}
+
+double SparseCholesky::update_flops_total() const { return impl_->update_flops_total; }
+
+bool SparseCholesky::supernodal_analysis() const {
+  return impl_->factor != nullptr && impl_->factor->is_super;
+}
 
 double SparseCholesky::factor_nonzeros() const {
   if (impl_->factor == nullptr) return 0.0;
@@ -339,6 +360,7 @@ core::Status SparseCholesky::analyze(const SparseMatrix& upper,
     return core::failure("cholmod_analyze failed (status " + std::to_string(impl_->common.status) +
                          ")");
   }
+  impl_->analysis_flops = impl_->common.fl;
   return {};
 }
 

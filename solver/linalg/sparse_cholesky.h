@@ -66,6 +66,18 @@ class SparseCholesky {
   /// each column to be in the factor's column of its first row (no fill), else falls back to
   /// modify(added, true) then modify(removed, false). Reports like modify().
   core::Status modify_fused(const std::vector<Column>& added, const std::vector<Column>& removed);
+  /// The floating-point operations modify_fused(added, removed) would do on the ranks: 4 per
+  /// entry of L on each column's elimination-tree path from its first row (w_i −= p·l_ij,
+  /// l_ij += β·w_i), the floor a rank update of the touched columns cannot go below. Converts the
+  /// factor to LDLᵀ like modify_fused() (same values); +inf when that fails. Deterministic: it
+  /// reads only the factor's pattern, so StaticSolver can choose between updating and
+  /// refactorizing by it without making results depend on timing.
+  double update_flops(const std::vector<Column>& added, const std::vector<Column>& removed);
+  /// CHOLMOD's flop count of the analyzed factorization (cholmod_common::fl after the analysis),
+  /// 0 before one.
+  [[nodiscard]] double factorization_flops() const;
+  /// Σ update_flops of every modify_fused() of this factor (since its construction).
+  [[nodiscard]] double update_flops_total() const;
   /// Turns the supernodal LLᵀ factor into LDLᵀ in place, in its own storage (what the first
   /// modify_fused() does, with the same values): 8 B per entry of L, the supernodes' upper
   /// triangles given back. Solves with 1-3 columns then use peritwin's solve instead of
@@ -92,8 +104,17 @@ class SparseCholesky {
   /// details' batches run on. Same arithmetic either way, so no result changes.
   static void allow_automatic_two_threads(bool allow);
   [[nodiscard]] static bool automatic_two_threads();
+  /// Process-wide: whether modify_fused() runs four entries of a column through the ranks side by
+  /// side (default true) or one entry at a time (the slow path it is tested against and benched
+  /// beside). The same operations per entry in the same order either way: the same bits.
+  static void set_interleaved_update(bool interleaved);
+  [[nodiscard]] static bool interleaved_update();
 
   [[nodiscard]] bool analyzed() const;
+  /// The analysis is CHOLMOD's supernodal one (also under the packed LDLᵀ of convert_to_ldlt() and
+  /// modify_fused()), so factorize() refactorizes with it; false before analyze() and after
+  /// modify() turned the factor into CHOLMOD's simplicial one, which must be analyzed again.
+  [[nodiscard]] bool supernodal_analysis() const;
   [[nodiscard]] double factor_nonzeros() const;
   /// Entries of the supernodal storage of the analysis (LLᵀ after factorize(), and what the
   /// packed LDLᵀ was packed from); 0 for CHOLMOD's simplicial factor.

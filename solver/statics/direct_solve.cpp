@@ -177,8 +177,20 @@ core::Status StaticSolver::refactor_resolve() {
   for (mesh::NodeIndex k = 0; k < disc_.num_nodes(); ++k) {
     if (isolated(k)) grounded_[static_cast<std::size_t>(k)] = 1;
   }
-  if (modified_) {  // the factor is simplicial LDLᵀ now: analyze again for a supernodal one
-    cholesky_ = linalg::SparseCholesky();
+  // A piece that came loose makes the factorization fail, and then factorize_pinning asks
+  // ground_loose_debris why: asked first (a flood fill over the bonds, no factorization), a
+  // loose loaded piece is final failure at once and debris is grounded before the first
+  // factorization instead of after a failed one (the phase III cascade at the end of a life
+  // cut the body in its last groups: a refactorization each, issue 37).
+  bool grounded = false;
+  if (auto loose = ground_loose_debris(grounded); !loose.ok()) return loose;
+  if (modified_) {
+    // The packed LDLᵀ of the rank updates lives in the supernodal analysis, which factorize()
+    // reuses: the ordering (dof_ordering) depends only on the bonds not precut and the ties, so a
+    // new analysis would be the same one, at the cost of METIS and CHOLMOD's symbolic
+    // factorization again (issue 37). Only CHOLMOD's simplicial factor (after modify()'s
+    // fallback) needs analyzing again for a supernodal one.
+    if (!cholesky_.supernodal_analysis()) cholesky_ = linalg::SparseCholesky();
     modified_ = false;
   }
   return solve();
@@ -206,9 +218,26 @@ core::Status StaticSolver::update_resolve(
       return f;
     }
   }
+  // A group whose rank updates would cost more than refactorizing — the phase III cascade at the
+  // end of a life, hundreds of bonds a group — is refactorized instead (issue 37). The choice is
+  // by flop counts, which depend only on the factor's pattern and the group, never on timing
+  // (determinism); kRefactorOverUpdate is the ratio of the two paths' measured rates (docs/
+  // solver.md, "Incremental re-solve").
+  const double update_flops = cholesky_.update_flops(added, removed);
+  const double factorization_flops = cholesky_.factorization_flops();
+  if (added.size() + removed.size() >= kRefactorMinimumRanks &&
+      factorization_flops >= refactor_minimum_flops_ &&
+      update_flops > kRefactorOverUpdate * factorization_flops) {
+    ++refactorized_groups_;
+    update_s_ += seconds_since(t0);
+    return refactor_resolve();
+  }
   updated_ = true;
   modified_ = true;
+  update_flops_ += update_flops;
+  const auto sweep_t0 = std::chrono::steady_clock::now();
   core::Status r = cholesky_.modify_fused(added, removed);
+  sweep_s_ += seconds_since(sweep_t0);
   ++updates_;
   if (!r.ok()) {
     // A downdate that leaves a pivot ≤ 0 or min(D)/max(D) < 1e-14 leaves a factor that is no

@@ -155,6 +155,28 @@ class StaticSolver {
   /// Seconds spent in low-rank updates.
   [[nodiscard]] double update_seconds() const { return update_s_; }
   [[nodiscard]] int updates() const { return updates_; }
+  /// Seconds in the rank updates' sweeps alone (SparseCholesky::modify_fused), part of
+  /// update_seconds().
+  [[nodiscard]] double sweep_seconds() const { return sweep_s_; }
+  /// Σ SparseCholesky::update_flops of the sweeps: the rank updates' floating-point operations.
+  [[nodiscard]] double update_flops() const { return update_flops_; }
+  /// Groups of breaks refactorized because their rank updates would have cost more (see
+  /// kRefactorOverUpdate).
+  [[nodiscard]] int refactorized_groups() const { return refactorized_groups_; }
+  /// A group of breaks is refactorized instead of updated when its update's flops
+  /// (SparseCholesky::update_flops) exceed this fraction of the factorization's: the fused sweep
+  /// ran at 5.6 Gflop/s and CHOLMOD's supernodal factorization at 16 Gflop/s on the 15k-node B1
+  /// factor (2 cores, issue 37), so above about 0.35 refactorizing is faster.
+  static constexpr double kRefactorOverUpdate = 0.3;
+  /// ... and the group has at least this many update columns (a few bonds' worth is always
+  /// cheaper to update) ...
+  static constexpr std::size_t kRefactorMinimumRanks = 64;
+  /// ... and a factorization costs at least this many flops (set_refactor_minimum_flops): below
+  /// it (about 0.1 s, a 5,000-node B1 model) a factorization costs too little for the choice to
+  /// matter, and small models keep every group on the update path the tests compare.
+  static constexpr double kRefactorMinimumFlops = 2e9;
+  /// Tests: the factorization flops from which a dear group is refactorized (0: any model).
+  void set_refactor_minimum_flops(double flops) { refactor_minimum_flops_ = flops; }
   /// Seconds spent in the triangular solves of the basis cases (all paths).
   [[nodiscard]] double basis_solve_seconds() const { return basis_solve_s_; }
 
@@ -323,6 +345,10 @@ class StaticSolver {
   std::vector<std::uint8_t> pinned_;  ///< per free DOF, see pinned()
   double update_s_ = 0.0;
   int updates_ = 0;
+  int refactorized_groups_ = 0;
+  double refactor_minimum_flops_ = kRefactorMinimumFlops;
+  double sweep_s_ = 0.0;
+  double update_flops_ = 0.0;
   double basis_solve_s_ = 0.0;
 };
 

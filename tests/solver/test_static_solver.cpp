@@ -440,6 +440,114 @@ TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   EXPECT_LT((x_back - x_fresh).cwiseAbs().maxCoeff(), 1e-10 * x_fresh.cwiseAbs().maxCoeff());
 }
 
+TEST(SparseCholeskyFusedUpdate, FourEntriesSideBySideGiveTheOneAtATimeBits) {
+  // The interleaved sweep (four entries of a column through the ranks side by side, issue 37)
+  // does every entry's operations in the same order as the one-entry-at-a-time oracle: the same
+  // factor and the same tracked forward solve, bit for bit, on one thread and on two.
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                           0.02, 0.01, 0.0005, 1e6);
+  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(solver.solve().ok());
+  const linalg::SparseMatrix& upper = solver.stiffness_upper();
+  const std::vector<linalg::SparseCholesky::Column> added =
+      random_bond_columns(plate, solver, 37, 11);
+  ASSERT_GT(added.size(), 40u);
+  const std::vector<linalg::SparseCholesky::Column> removed(added.begin(),
+                                                            added.begin() + added.size() / 2);
+  const std::vector<linalg::SparseCholesky::Column> first(added.begin(), added.begin() + 3);
+  const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
+  std::vector<Eigen::MatrixXd> solutions;
+  std::vector<double> flops;
+  for (const bool interleaved : {false, true}) {
+    for (const int threads : {1, 2}) {
+      linalg::SparseCholesky::set_interleaved_update(interleaved);
+      linalg::SparseCholesky c;
+      ASSERT_TRUE(c.factorize(upper).ok());
+      c.set_solve_threads(threads);
+      ASSERT_TRUE(c.modify_fused(first, {}).ok());
+      Eigen::MatrixXd x = b;
+      c.solve(x);  // tracked: the next update keeps its forward half
+      const double predicted = c.update_flops(added, removed);
+      ASSERT_TRUE(c.modify_fused(added, removed).ok());
+      x = b;
+      c.solve(x);
+      solutions.push_back(x);
+      // update_flops is what the updates did: the total is the sum of the two predictions.
+      EXPECT_EQ(c.update_flops_total(), c.update_flops(first, {}) + predicted);
+      flops.push_back(predicted);
+    }
+  }
+  linalg::SparseCholesky::set_interleaved_update(true);
+  for (std::size_t k = 1; k < solutions.size(); ++k) {
+    EXPECT_TRUE(solutions[k] == solutions[0]) << k;
+    EXPECT_EQ(flops[k], flops[0]);
+  }
+  // The count is additive over columns, and positive for a column below the root.
+  linalg::SparseCholesky c;
+  ASSERT_TRUE(c.factorize(upper).ok());
+  const std::vector<linalg::SparseCholesky::Column> half(added.begin(),
+                                                         added.begin() + added.size() / 2);
+  const std::vector<linalg::SparseCholesky::Column> rest(added.begin() + added.size() / 2,
+                                                         added.end());
+  EXPECT_EQ(c.update_flops(added, {}), c.update_flops(half, {}) + c.update_flops(rest, {}));
+  EXPECT_EQ(c.update_flops({}, {}), 0.0);
+  EXPECT_GT(c.update_flops(first, {}), 0.0);
+  EXPECT_GT(c.factorization_flops(), 0.0);
+}
+
+TEST(IncrementalResolve, AGroupDearerThanRefactorizingIsRefactorized) {
+  // A group of breaks whose rank updates would cost more flops than kRefactorOverUpdate of a
+  // factorization (the phase III cascade) is refactorized with the kept analysis: the same bits
+  // as the refactorizing path, which analyzes afresh (dof_ordering depends only on the bonds not
+  // precut: the same ordering). A small group is still a rank update.
+  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                           0.02, 0.01, 0.0005, 1e6);
+  std::vector<mesh::BondIndex> small, band;
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    const mesh::Point a = plate.disc.position[plate.disc.bond_i[b]];
+    const mesh::Point c = plate.disc.position[plate.disc.bond_j[b]];
+    if (mesh::segments_cross(a, c, {0.004, -0.001}, {0.004, 0.0004}) && small.size() < 3) {
+      small.push_back(b);
+    }
+    if (mesh::segments_cross(a, c, {0.012, -0.001}, {0.012, 0.008})) band.push_back(b);
+  }
+  ASSERT_EQ(small.size(), 3u);
+  ASSERT_GT(band.size(), statics::StaticSolver::kRefactorMinimumRanks);
+  statics::StaticSolver updated(plate.disc, plate.model, plate.supports, plate.loads);
+  updated.set_incremental(true);
+  updated.set_refactor_minimum_flops(0.0);  // a small plate: the rule as on a large model
+  ASSERT_TRUE(updated.solve().ok());
+  statics::StaticSolver refactored(plate.disc, plate.model, plate.supports, plate.loads);
+  ASSERT_TRUE(refactored.solve().ok());
+  ASSERT_TRUE(updated.break_bonds(small).ok());
+  EXPECT_EQ(updated.updates(), 1);
+  EXPECT_EQ(updated.refactorized_groups(), 0);
+  ASSERT_TRUE(updated.break_bonds(band).ok());
+  EXPECT_EQ(updated.updates(), 1);
+  EXPECT_EQ(updated.refactorized_groups(), 1);
+  EXPECT_EQ(updated.factorizations(), 2);
+  ASSERT_TRUE(refactored.break_bonds(small).ok());
+  ASSERT_TRUE(refactored.break_bonds(band).ok());
+  const auto& u_updated = updated.basis_displacement(statics::basis_constant);
+  const auto& u_refactored = refactored.basis_displacement(statics::basis_constant);
+  EXPECT_TRUE(u_updated == u_refactored);
+  // Updates go on from the new factor: one more small group equals the refactorizing path.
+  std::vector<mesh::BondIndex> after;
+  for (mesh::BondIndex b = 0; b < plate.disc.num_bonds(); ++b) {
+    const mesh::Point a = plate.disc.position[plate.disc.bond_i[b]];
+    const mesh::Point c = plate.disc.position[plate.disc.bond_j[b]];
+    if (mesh::segments_cross(a, c, {0.016, -0.001}, {0.016, 0.0004}) && after.size() < 3) {
+      after.push_back(b);
+    }
+  }
+  ASSERT_TRUE(updated.break_bonds(after).ok());
+  ASSERT_TRUE(refactored.break_bonds(after).ok());
+  EXPECT_EQ(updated.updates(), 2);
+  const auto& u1 = updated.basis_displacement(statics::basis_constant);
+  const auto& u2 = refactored.basis_displacement(statics::basis_constant);
+  for (std::size_t i = 0; i < u1.size(); ++i) EXPECT_NEAR(u1[i], u2[i], 1e-9 * max_abs(u2));
+}
+
 TEST(SparseCholeskyPackedLdlt, HoldsCholmodsSimplicialValuesInTheSupernodalStorage) {
   // modify_fused() turns the supernodal LLᵀ factor into LDLᵀ in place, in the supernodes' own
   // storage (cholesky_impl.h, PackedLdlt), instead of CHOLMOD's simplicial copy. The values must
