@@ -736,12 +736,26 @@ int FatigueEngine::updates() const { return retired_updates_ + solver_->updates(
 double FatigueEngine::basis_solve_seconds() const {
   return retired_basis_solve_s_ + solver_->basis_solve_seconds();
 }
+double FatigueEngine::sweep_seconds() const { return retired_sweep_s_ + solver_->sweep_seconds(); }
+double FatigueEngine::update_flops() const {
+  return retired_update_flops_ + solver_->update_flops();
+}
+int FatigueEngine::refactorized_groups() const {
+  return retired_refactorized_groups_ + solver_->refactorized_groups();
+}
+int FatigueEngine::factorizations() const {
+  return retired_factorizations_ + solver_->factorizations();
+}
 
 core::Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   const auto t0 = std::chrono::steady_clock::now();
   retired_update_s_ += solver_->update_seconds();
   retired_updates_ += solver_->updates();
   retired_basis_solve_s_ += solver_->basis_solve_seconds();
+  retired_sweep_s_ += solver_->sweep_seconds();
+  retired_update_flops_ += solver_->update_flops();
+  retired_refactorized_groups_ += solver_->refactorized_groups();
+  retired_factorizations_ += solver_->factorizations();
   // The old solver (its updated simplicial factor, the largest block of memory) goes before the
   // new one factorizes: the two never coexist (the rebuild's memory peak, issue 18 item 5).
   solver_ =
@@ -780,8 +794,36 @@ bool FatigueEngine::resolve(const std::vector<mesh::BondIndex>& newly_broken) {
                             core::message_of(r);
     return false;
   }
-  update_phases();
+  update_phases_after(newly_broken);
   return true;
+}
+
+void FatigueEngine::update_phases_after(const std::vector<mesh::BondIndex>& newly_broken) {
+  // update_phases() redone only where it can change (issue 37: it was an O(bonds) pass per
+  // re-solve). Breaking bonds changes the damage (000 Eq. 13) of their end nodes only, and a
+  // damage never falls (a broken bond stays broken), so a node at or above φ0 stays there and
+  // the bonds it put in phase II stay in it. Only a node whose damage just changed can newly
+  // reach φ0; it puts every bond of its own and its family members' families in phase II, as
+  // update_phases() does. The same phases and damages (tested against update_phases()).
+  const auto& intact = solver_->intact();
+  auto grow = [&](std::size_t n) {  // node n in phase II: its bonds follow
+    for (auto f = disc_.family_offset[n]; f < disc_.family_offset[n + 1]; ++f) {
+      phase_[static_cast<std::size_t>(disc_.family_bonds[static_cast<std::size_t>(f)])] = 2;
+    }
+  };
+  for (const mesh::BondIndex b : newly_broken) {
+    for (const mesh::NodeIndex node :
+         {disc_.bond_i[static_cast<std::size_t>(b)], disc_.bond_j[static_cast<std::size_t>(b)]}) {
+      const auto k = static_cast<std::size_t>(node);
+      node_damage_[k] = model::node_damage_index(disc_, intact, k);
+      if (node_damage_[k] < settings_.phase_switch_damage) continue;
+      grow(k);
+      for (auto f = disc_.family_offset[k]; f < disc_.family_offset[k + 1]; ++f) {
+        const auto c = disc_.family_bonds[static_cast<std::size_t>(f)];
+        grow(static_cast<std::size_t>(disc_.other_end(c, node)));
+      }
+    }
+  }
 }
 
 void FatigueEngine::update_phases() {
@@ -819,6 +861,10 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       retired_update_s_(other.retired_update_s_),
       retired_updates_(other.retired_updates_),
       retired_basis_solve_s_(other.retired_basis_solve_s_),
+      retired_sweep_s_(other.retired_sweep_s_),
+      retired_update_flops_(other.retired_update_flops_),
+      retired_refactorized_groups_(other.retired_refactorized_groups_),
+      retired_factorizations_(other.retired_factorizations_),
       rebuilds_(other.rebuilds_),
       rebuild_s_(other.rebuild_s_),
       settings_(settings),

@@ -249,6 +249,13 @@ class FatigueEngine {
   [[nodiscard]] double update_seconds() const;
   [[nodiscard]] int updates() const;
   [[nodiscard]] double basis_solve_seconds() const;
+  /// Of all solvers so far, as update_seconds(): the sweeps' seconds and flops
+  /// (StaticSolver::sweep_seconds, update_flops), the groups refactorized instead of updated
+  /// (StaticSolver::refactorized_groups) and the numeric factorizations.
+  [[nodiscard]] double sweep_seconds() const;
+  [[nodiscard]] double update_flops() const;
+  [[nodiscard]] int refactorized_groups() const;
+  [[nodiscard]] int factorizations() const;
   /// Solver rebuilds done (refactor_every_resolves) and the seconds they took.
   [[nodiscard]] int rebuilds() const { return rebuilds_; }
   [[nodiscard]] double rebuild_seconds() const { return rebuild_s_; }
@@ -324,6 +331,9 @@ class FatigueEngine {
   /// refactorization): the same operations whatever the previous solver went through.
   core::Status rebuild_solver(std::vector<std::uint8_t> intact);
   void update_phases();
+  /// update_phases() after `newly_broken` broke (the phases and damages were current before):
+  /// only their end nodes' damage and the bonds it can put in phase II.
+  void update_phases_after(const std::vector<mesh::BondIndex>& newly_broken);
   /// fork(): every member copied (the solver deeply), settings_ replaced.
   FatigueEngine(const FatigueEngine& other, const FatigueSettings& settings);
 
@@ -338,6 +348,10 @@ class FatigueEngine {
   double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
   int retired_updates_ = 0;
   double retired_basis_solve_s_ = 0.0;
+  double retired_sweep_s_ = 0.0;
+  double retired_update_flops_ = 0.0;
+  int retired_refactorized_groups_ = 0;
+  int retired_factorizations_ = 0;
   int rebuilds_ = 0;
   double rebuild_s_ = 0.0;
   FatigueSettings settings_;

@@ -417,6 +417,30 @@ TEST(EngineState, ExportImportResumesBitIdentically) {
   EXPECT_GT(straight.broken_bonds(), 5);
 }
 
+TEST(Phases, UpdatedAfterEachGroupOfBreaksAsIfRecomputedFromScratch) {
+  // resolve() updates the damage and the phases only at the new breaks' end nodes (issue 37);
+  // import_state() recomputes both for every node and bond (update_phases). After every block
+  // of a growing crack the two agree bit for bit, and phase II spreads beyond the notch tip.
+  const auto plate = make_notched_plate(model::ModelKind::state_based);
+  const auto settings = settings_for(plate, fatigue::FatigueLaw::strain_range, 1000.0, 0.1, 150.0);
+  fatigue::FatigueEngine engine(plate.disc, plate.model, plate.supports, plate.loads, settings);
+  ASSERT_TRUE(engine.initialize());
+  const auto count_phase_two = [](const fatigue::FatigueEngine& e) {
+    return std::count(e.bond_phase().begin(), e.bond_phase().end(), std::uint8_t{2});
+  };
+  const auto at_start = count_phase_two(engine);
+  for (int block = 0; block < 20; ++block) {
+    engine.apply({1000.0, 0.1, 0.0, 150});
+    fatigue::FatigueEngine fresh(plate.disc, plate.model, plate.supports, plate.loads, settings);
+    ASSERT_TRUE(fresh.initialize());
+    ASSERT_TRUE(fresh.import_state(engine.export_state()));
+    EXPECT_EQ(engine.bond_phase(), fresh.bond_phase()) << block;
+    EXPECT_EQ(engine.node_damage(), fresh.node_damage()) << block;
+  }
+  EXPECT_GT(engine.broken_bonds(), 300);  // the notch's 102 and the crack's
+  EXPECT_GT(count_phase_two(engine), 2 * at_start);
+}
+
 }  // namespace
 }  // namespace peritwin
 
