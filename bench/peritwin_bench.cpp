@@ -2,6 +2,7 @@
 //   peritwin-bench static --model bb|osb --nodes N   one cold static solve of the B1 specimen
 //                         [--baseline]               ... next to a plain triplets + CHOLMOD one
 //   peritwin-bench fatigue --nodes N                 B1 at 4 kN from a0 to final failure
+//                          [--kernel-groups N]       ... then N groups with each update kernel
 //   peritwin-bench bilinear --nodes N                B1 bond-based with 003's bilinear law
 //   peritwin-bench stream-rainflow [--samples N]     gate + RainflowCounter + CycleBlocks rate
 //                                  [--gate N] [--noise]
@@ -281,8 +282,66 @@ int run_static(const std::string& model_name, double target_nodes, bool baseline
   return 0;
 }
 
+struct KernelComparison {
+  int groups = 0;
+  double flops = 0.0;
+  double one_at_a_time_s = 0.0;
+  double interleaved_s = 0.0;
+  bool identical = false;
+};
+
+/// The first `count` groups of breaks re-solved on a fresh incremental solver of the specimen,
+/// once with the sweeps one entry at a time (the oracle) and once interleaved: sweep seconds of
+/// each, and whether the displacements after the last group are the same bits.
+KernelComparison compare_update_kernels(
+    const peritwin::statics::Specimen& s,
+    const std::vector<std::vector<peritwin::mesh::BondIndex>>& groups, int count) {
+  using namespace peritwin;
+  KernelComparison out;
+  std::vector<double> u[2];
+  for (const bool interleaved : {false, true}) {
+    linalg::SparseCholesky::set_interleaved_update(interleaved);
+    statics::StaticSolver solver(s.disc, s.model, s.supports, s.loads);
+    solver.set_incremental(true);
+    if (!solver.solve().ok()) break;
+    int done = 0;
+    for (const auto& group : groups) {
+      if (done == count) break;
+      if (!solver.break_bonds(group).ok()) break;
+      ++done;
+    }
+    out.groups = done;
+    out.flops = solver.update_flops();
+    (interleaved ? out.interleaved_s : out.one_at_a_time_s) = solver.sweep_seconds();
+    u[interleaved ? 1 : 0] = solver.basis_displacement(statics::basis_constant);
+  }
+  linalg::SparseCholesky::set_interleaved_update(true);
+  out.identical = !u[0].empty() && u[0] == u[1];
+  return out;
+}
+
+/// Read bandwidth of this machine now: the best of three sums over 128 MB (a triangular solve
+/// reads its factor once, so solves × factor bytes / this is its floor).
+double memory_read_gb_s() {
+  std::vector<double> buffer(16u << 20, 1.0);
+  double best = 0.0;
+  volatile double sink = 0.0;
+  for (int pass = 0; pass < 3; ++pass) {
+    const auto t0 = std::chrono::steady_clock::now();
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t i = 0; i + 4 <= buffer.size(); i += 4) {
+      for (int k = 0; k < 4; ++k) sum[k] += buffer[i + static_cast<std::size_t>(k)];
+    }
+    sink = sink + sum[0] + sum[1] + sum[2] + sum[3];
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double bytes = static_cast<double>(buffer.size() * sizeof(double));
+    if (s > 0) best = std::max(best, bytes / s * 1e-9);
+  }
+  return best;
+}
+
 int run_fatigue(const std::string& model_name, double target_nodes, double a2_at_1mm,
-                std::int64_t max_cycles) {
+                std::int64_t max_cycles, int sample_groups) {
   // B1 at 4 kN, R = 0.1, from a0 to final failure with the incremental re-solve; then the same
   // final stiffness refactorized a few times to measure the ratio in this run. Memory: the peak
   // RSS of each phase (PhasePeaks) — the specimen, the first solve (assembly, analysis,
@@ -296,6 +355,7 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   const double dx = compact_tension_spacing(spec, target_nodes);
   core::JsonLine line;
   line["bench"] = "fatigue";
+  const double read_gb_s = memory_read_gb_s();  // before the phases: its buffer is no one's peak
   PhasePeaks peaks;
   const statics::Specimen s = make_compact_tension(spec, options, dx);
   peaks.mark(line, "build");
@@ -308,9 +368,11 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   double per_update = 0.0, update_total = 0.0, basis_total = 0.0, rebuild_total = 0.0, wall = 0.0;
   double supernodal_nnz = 0.0, simplicial_nnz = 0.0, peak_updates = 0.0, peak_rebuilds = 0.0;
   double ldlt_bytes = 0.0;
+  double sweep_total = 0.0, update_flops = 0.0, factorization_flops = 0.0;
   std::int64_t cycles = 0, broken = 0;
-  int solves = 0, rebuilds = 0, updates = 0;
+  int solves = 0, rebuilds = 0, updates = 0, refactorized = 0, factorizations = 0;
   bool failed = false;
+  std::vector<std::vector<mesh::BondIndex>> groups;  // the re-solves' breaks, in order
   {
     fatigue::FatigueEngine engine(s.disc, s.model, s.supports, s.loads, settings);
     if (!engine.initialize()) {
@@ -350,6 +412,20 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
     rebuilds = engine.rebuilds();
     updates = engine.updates();
     failed = engine.failed();
+    sweep_total = engine.sweep_seconds();
+    update_flops = engine.update_flops();
+    refactorized = engine.refactorized_groups();
+    factorizations = engine.factorizations();
+    factorization_flops = engine.solver().factor().factorization_flops();
+    const fatigue::EngineState state = engine.export_state();
+    std::size_t e = 0;
+    for (const std::int64_t size : state.resolve_groups) {
+      std::vector<mesh::BondIndex> group;
+      for (std::int64_t k = 0; k < size && e < state.events.size(); ++k, ++e) {
+        group.push_back(state.events[e].bond);
+      }
+      groups.push_back(std::move(group));
+    }
   }  // the engine's factor goes before the refactorizing solver is built
   line["rss_peak_later_updates_mb"] = core::fixed(peak_updates, 1);
   line["rss_peak_rebuild_blocks_mb"] = core::fixed(peak_rebuilds, 1);
@@ -357,17 +433,25 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
   peaks.note("rebuild_blocks", peak_rebuilds);
   peaks.mark(line, "engine_freed");
   // Refactorizing path on the same model: assemble + numeric factorization + solve.
-  statics::StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
-  if (!refactor.solve().ok()) return 1;
-  const auto t1 = std::chrono::steady_clock::now();
-  const int repeats = 3;
-  for (int i = 0; i < repeats; ++i) {
-    const mesh::BondIndex b = 0;
-    if (!refactor.break_bonds(std::span(&b, 1)).ok()) return 1;
+  double per_refactor = 0.0;
+  {  // freed before the kernel comparison's solvers: one factor at a time
+    statics::StaticSolver refactor(s.disc, s.model, s.supports, s.loads);
+    if (!refactor.solve().ok()) return 1;
+    const auto t1 = std::chrono::steady_clock::now();
+    const int repeats = 3;
+    for (int i = 0; i < repeats; ++i) {
+      const mesh::BondIndex b = 0;
+      if (!refactor.break_bonds(std::span(&b, 1)).ok()) return 1;
+    }
+    per_refactor =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
   }
-  const double per_refactor =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count() / repeats;
   peaks.mark(line, "refactor");
+  // The slow path beside the fast one, in this run: the first re-solves' groups again on a fresh
+  // incremental solver, the sweeps one entry at a time, then four side by side (the default);
+  // the same displacements bit for bit, and each's sweep seconds.
+  const KernelComparison kernels = compare_update_kernels(s, groups, sample_groups);
+  peaks.mark(line, "kernels");
   line["nodes"] = s.disc.num_nodes();
   line["bonds"] = s.disc.num_bonds();
   line["cycles"] = static_cast<long long>(cycles);
@@ -383,6 +467,27 @@ int run_fatigue(const std::string& model_name, double target_nodes, double a2_at
       core::fixed(per_update > 0 ? per_refactor / per_update : 0.0, 1);
   line["rebuilds"] = rebuilds;
   line["rebuild_total_s"] = core::fixed(rebuild_total, 2);
+  // Where a re-solve's time goes (issue 37): the sweeps against their flop count (4 per entry of
+  // L on each update column's elimination-tree path), the basis solves against the factor's
+  // bytes read once per solve at the memory bandwidth measured in this run.
+  line["sweep_total_s"] = core::fixed(sweep_total, 2);
+  line["update_gflop"] = core::fixed(update_flops * 1e-9, 1);
+  line["sweep_gflop_per_s"] =
+      core::fixed(sweep_total > 0 ? update_flops * 1e-9 / sweep_total : 0, 2);
+  line["factorization_gflop"] = core::fixed(factorization_flops * 1e-9, 1);
+  line["refactorized_groups"] = refactorized;
+  line["factorizations"] = factorizations;
+  line["memory_read_gb_per_s"] = core::fixed(read_gb_s, 1);
+  line["basis_solve_floor_s"] =
+      core::fixed(read_gb_s > 0 ? solves * ldlt_bytes / (read_gb_s * 1e9) : 0.0, 2);
+  line["other_s"] = core::fixed(wall - update_total - rebuild_total, 2);
+  line["kernel_sample_groups"] = kernels.groups;
+  line["kernel_sample_gflop"] = core::fixed(kernels.flops * 1e-9, 2);
+  line["kernel_one_at_a_time_s"] = core::fixed(kernels.one_at_a_time_s, 3);
+  line["kernel_interleaved_s"] = core::fixed(kernels.interleaved_s, 3);
+  line["kernel_speedup"] = core::fixed(
+      kernels.interleaved_s > 0 ? kernels.one_at_a_time_s / kernels.interleaved_s : 0.0, 2);
+  line["kernel_identical"] = kernels.identical;
   line["final_failure"] = failed;
   line["factor_nnz_supernodal"] = core::whole(supernodal_nnz);
   line["factor_nnz_simplicial"] = core::whole(simplicial_nnz);  // the LDLᵀ factor's entries
@@ -631,6 +736,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::int64_t{1000}, std::int64_t{10'000'000}));
   fat->add_option("--a2", a2, "A2 calibrated at dx = 1 mm (peritwin-validate --case B1)")
       ->check(peritwin::core::finite_positive());
+  int kernel_groups = 40;
+  fat->add_option(
+         "--kernel-groups", kernel_groups,
+         "re-solve groups replayed with each update kernel (slow path beside fast; 0 none)")
+      ->check(CLI::Range(0, 100000));
   auto* bil =
       app.add_subcommand("bilinear", "B1 bond-based with 003's bilinear law, fast vs oracle");
   double bilinear_nodes = 15000;
@@ -676,7 +786,9 @@ int main(int argc, char** argv) {
     return peritwin::bench::run_dynamics(dynamics_nodes, dynamics_threads, dynamics_steps);
   }
   if (stat->parsed()) return run_static(model, nodes, static_baseline, static_ordering);
-  if (fat->parsed()) return run_fatigue(fatigue_model, fatigue_nodes, a2, fatigue_max_cycles);
+  if (fat->parsed()) {
+    return run_fatigue(fatigue_model, fatigue_nodes, a2, fatigue_max_cycles, kernel_groups);
+  }
   if (stream->parsed()) return run_stream_rainflow(stream_samples, stream_gate, stream_noise);
   if (bil->parsed()) {
     return run_bilinear(bilinear_nodes, bilinear_increments, oracle_increments, bilinear_life,
