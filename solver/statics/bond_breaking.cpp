@@ -55,10 +55,17 @@ void StaticSolver::ground_isolated(const std::vector<mesh::NodeIndex>& nodes,
 core::Status StaticSolver::break_bonds(std::span<const mesh::BondIndex> bonds) {
   const auto t0 = std::chrono::steady_clock::now();
   if (!incremental_ || !cholesky_.analyzed()) {
+    group_nodes_.clear();
     for (mesh::BondIndex b : bonds) {
+      if (intact_[static_cast<std::size_t>(b)]) {
+        group_nodes_.push_back(disc_.bond_i[static_cast<std::size_t>(b)]);
+        group_nodes_.push_back(disc_.bond_j[static_cast<std::size_t>(b)]);
+      }
       intact_[static_cast<std::size_t>(b)] = 0;
       factor_[static_cast<std::size_t>(b)] = 0.0;
     }
+    std::sort(group_nodes_.begin(), group_nodes_.end());
+    group_nodes_.erase(std::unique(group_nodes_.begin(), group_nodes_.end()), group_nodes_.end());
     return refactor_resolve();
   }
   // K_new = K − Σ_b f_b·k_b·g_b·g_bᵀ + Σ_k α_k·(b'_k·b'_kᵀ − b_k·b_kᵀ) (+ ground springs), applied
@@ -118,6 +125,7 @@ core::Status StaticSolver::break_bonds(std::span<const mesh::BondIndex> bonds) {
   }
   std::sort(nodes.begin(), nodes.end());
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  group_nodes_ = nodes;
   std::vector<linalg::SparseCholesky::Column> old_rows;
   if (osb) {
     for (mesh::NodeIndex k : nodes) old_rows.push_back(dilatation_row(k));

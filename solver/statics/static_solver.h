@@ -288,7 +288,12 @@ class StaticSolver {
   /// Pins the mechanisms of the stiffness with `factors` that lie within 2δ of `node` (else, if
   /// `wide`, within 4δ) (mechanisms.cpp); a failure saying why it cannot: a mechanism carries
   /// load, the stiffness is indefinite there, or no mechanism was found.
-  core::Status pin_mechanisms(mesh::NodeIndex node, const std::vector<double>& factors, bool wide);
+  core::Status pin_mechanisms(mesh::NodeIndex node, const std::vector<double>& factors, bool wide,
+                              bool none_is_failure = true);
+  /// After a factorization failed with breaks just made: pin_mechanisms (2δ, finding none is no
+  /// failure) around centres at least δ apart covering group_nodes_, the ends of the group's
+  /// bonds — every mechanism the group made in one round instead of one factorization each.
+  core::Status pin_group_mechanisms(const std::vector<double>& factors);
   /// The node of an unknown: a free DOF's node, or node k for w_k of the mixed form.
   [[nodiscard]] mesh::NodeIndex node_of_unknown(int row) const;
   /// The pieces that no intact bond or tie connects to a support: a failure naming the largest
@@ -346,6 +351,9 @@ class StaticSolver {
   double update_s_ = 0.0;
   int updates_ = 0;
   int refactorized_groups_ = 0;
+  /// The end nodes of the bonds the last break_bonds / set_bond_factors broke, until the next
+  /// factorization (pin_group_mechanisms).
+  std::vector<mesh::NodeIndex> group_nodes_;
   double refactor_minimum_flops_ = kRefactorMinimumFlops;
   double sweep_s_ = 0.0;
   double update_flops_ = 0.0;
