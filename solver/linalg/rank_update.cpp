@@ -104,39 +104,33 @@ void apply_column(const int* li, double* lx, double* w, int from, int to, const 
   }
 }
 
+template <bool Interleaved>
+inline void apply_tracked(int tracked, const int* li, double* lx, double* w, int from, int to,
+                          const RankScalars* active, int count, double* delta, const double* y_old,
+                          const double* y_new) {
+  switch (tracked) {
+    case 0:
+      apply_column<0, Interleaved>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 1:
+      apply_column<1, Interleaved>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    case 2:
+      apply_column<2, Interleaved>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+    default:
+      apply_column<3, Interleaved>(li, lx, w, from, to, active, count, delta, y_old, y_new);
+      break;
+  }
+}
+
 inline void apply_column(int tracked, const int* li, double* lx, double* w, int from, int to,
                          const RankScalars* active, int count, double* delta, const double* y_old,
                          const double* y_new) {
-  if (!SparseCholesky::interleaved_update()) {  // the oracle: one entry at a time
-    switch (tracked) {
-      case 0:
-        apply_column<0, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-        break;
-      case 1:
-        apply_column<1, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-        break;
-      case 2:
-        apply_column<2, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-        break;
-      default:
-        apply_column<3, false>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-        break;
-    }
-    return;
-  }
-  switch (tracked) {
-    case 0:
-      apply_column<0, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-      break;
-    case 1:
-      apply_column<1, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-      break;
-    case 2:
-      apply_column<2, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-      break;
-    default:
-      apply_column<3, true>(li, lx, w, from, to, active, count, delta, y_old, y_new);
-      break;
+  if (SparseCholesky::interleaved_update()) {
+    apply_tracked<true>(tracked, li, lx, w, from, to, active, count, delta, y_old, y_new);
+  } else {  // the oracle: one entry at a time
+    apply_tracked<false>(tracked, li, lx, w, from, to, active, count, delta, y_old, y_new);
   }
 }
 
