@@ -44,11 +44,11 @@ inline void forward_change(double* delta, int i, double l_old, double l, const d
 /// δ_i += l_ij·y_j − l̄_ij·ȳ_j (the forward solve's change).
 ///
 /// Interleaved (the default, SparseCholesky::set_interleaved_update): each entry's ranks are a
-/// chain of dependent operations (l_ij after rank a feeds rank a + 1), so
-/// one entry at a time runs at the latency of that chain. Four entries go through the ranks side
-/// by side (their rows are distinct, so their W rows are too): four independent chains in flight,
-/// the same operations on every entry in the same order, hence the same bits (issue 37: 3.5 Gflop/s
-/// one entry at a time on the 15k-node B1 factor).
+/// chain of dependent operations (l_ij after rank a feeds rank a + 1), so one entry at a time runs
+/// at the latency of that chain. Four entries go through the ranks side by side (their rows are
+/// distinct, so their W rows are too): four independent chains in flight, the same operations on
+/// every entry in the same order, hence the same bits. Issue 37: 1.6x on a 204-bond group of B1 at
+/// 15k nodes; no gain on a growing crack's groups of 5-15 bonds (docs/benchmarks.md).
 template <int R, bool Interleaved>
 void apply_column(const int* li, double* lx, double* w, int from, int to, const RankScalars* active,
                   int count, double* delta, const double* y_old, const double* y_new) {

@@ -172,8 +172,9 @@ class StaticSolver {
   /// cheaper to update) ...
   static constexpr std::size_t kRefactorMinimumRanks = 64;
   /// ... and a factorization costs at least this many flops (set_refactor_minimum_flops): below
-  /// it (about 0.1 s, a 5,000-node B1 model) a factorization costs too little for the choice to
-  /// matter, and small models keep every group on the update path the tests compare.
+  /// it (B1 below about 4,500 nodes: 13 Gflop at 15k, growing as n^1.5) a factorization costs too
+  /// little for the choice to matter, and small models keep every group on the update path the
+  /// tests compare.
   static constexpr double kRefactorMinimumFlops = 2e9;
   /// Tests: the factorization flops from which a dear group is refactorized (0: any model).
   void set_refactor_minimum_flops(double flops) { refactor_minimum_flops_ = flops; }
@@ -351,7 +352,7 @@ class StaticSolver {
   double update_s_ = 0.0;
   int updates_ = 0;
   int refactorized_groups_ = 0;
-  /// The end nodes of the bonds the last break_bonds / set_bond_factors broke, until the next
+  /// The end nodes of the bonds the last break_bonds broke, until the update holds or the next
   /// factorization (pin_group_mechanisms).
   std::vector<mesh::NodeIndex> group_nodes_;
   double refactor_minimum_flops_ = kRefactorMinimumFlops;
