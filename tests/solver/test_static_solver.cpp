@@ -391,24 +391,39 @@ TEST(SparseCholeskyOwnSolve, MatchesCholmodAfterUpdatesOnOneOrTwoThreads) {
   }
 }
 
+/// A state-based tension plate solved once, with random bond columns to update by (pairs in the
+/// pattern: no fill): `added`, `removed` its first half, `first` its first three.
+struct BondColumnsCase {
+  explicit BondColumnsCase(unsigned seed)
+      : plate(testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
+                                          0.02, 0.01, 0.0005, 1e6)),
+        solver(plate.disc, plate.model, plate.supports, plate.loads) {
+    solved = solver.solve().ok();  // solver holds references into plate: never copied
+    added = random_bond_columns(plate, solver, 37, seed);
+    removed.assign(added.begin(), added.begin() + static_cast<std::ptrdiff_t>(added.size() / 2));
+    first.assign(added.begin(), added.begin() + 3);
+  }
+  BondColumnsCase(const BondColumnsCase&) = delete;
+  BondColumnsCase& operator=(const BondColumnsCase&) = delete;
+  testing::TensionPlate plate;
+  statics::StaticSolver solver;
+  bool solved = false;
+  std::vector<linalg::SparseCholesky::Column> added, removed, first;
+};
+
 TEST(SparseCholeskyFusedUpdate, MatchesCholmodUpdownOnOneOrTwoThreads) {
   // modify_fused(added, removed): peritwin's one-sweep multiple-rank update equals CHOLMOD's update
   // then downdate to round-off, and is bit-identical on one or two threads.
-  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
-                                           0.02, 0.01, 0.0005, 1e6);
-  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
-  ASSERT_TRUE(solver.solve().ok());
-  const linalg::SparseMatrix& upper = solver.stiffness_upper();
-  // Bond vectors (pairs in the pattern: no fill).
-  const std::vector<linalg::SparseCholesky::Column> added =
-      random_bond_columns(plate, solver, 37, 5);
+  const BondColumnsCase bonds(5);
+  ASSERT_TRUE(bonds.solved);
+  const linalg::SparseMatrix& upper = bonds.solver.stiffness_upper();
+  const auto& added = bonds.added;
+  const auto& removed = bonds.removed;
+  const auto& first = bonds.first;
   ASSERT_GT(added.size(), 40u);  // more than one sweep of 16 ranks
-  const std::vector<linalg::SparseCholesky::Column> removed(added.begin(),
-                                                            added.begin() + added.size() / 2);
   linalg::SparseCholesky reference, one, two;
   for (linalg::SparseCholesky* c : {&reference, &one, &two}) ASSERT_TRUE(c->factorize(upper).ok());
   // A first small update, then a solve: its forward half is kept up to date by the next update.
-  const std::vector<linalg::SparseCholesky::Column> first(added.begin(), added.begin() + 3);
   const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
   one.set_solve_threads(1);
   two.set_solve_threads(2);
@@ -444,17 +459,13 @@ TEST(SparseCholeskyFusedUpdate, FourEntriesSideBySideGiveTheOneAtATimeBits) {
   // The interleaved sweep (four entries of a column through the ranks side by side, issue 37)
   // does every entry's operations in the same order as the one-entry-at-a-time oracle: the same
   // factor and the same tracked forward solve, bit for bit, on one thread and on two.
-  auto plate = testing::make_tension_plate(aluminium, options_for(model::ModelKind::state_based),
-                                           0.02, 0.01, 0.0005, 1e6);
-  statics::StaticSolver solver(plate.disc, plate.model, plate.supports, plate.loads);
-  ASSERT_TRUE(solver.solve().ok());
-  const linalg::SparseMatrix& upper = solver.stiffness_upper();
-  const std::vector<linalg::SparseCholesky::Column> added =
-      random_bond_columns(plate, solver, 37, 11);
+  const BondColumnsCase bonds(11);
+  ASSERT_TRUE(bonds.solved);
+  const linalg::SparseMatrix& upper = bonds.solver.stiffness_upper();
+  const auto& added = bonds.added;
+  const auto& removed = bonds.removed;
+  const auto& first = bonds.first;
   ASSERT_GT(added.size(), 40u);
-  const std::vector<linalg::SparseCholesky::Column> removed(added.begin(),
-                                                            added.begin() + added.size() / 2);
-  const std::vector<linalg::SparseCholesky::Column> first(added.begin(), added.begin() + 3);
   const Eigen::MatrixXd b = Eigen::MatrixXd::Random(upper.rows(), 2);
   std::vector<Eigen::MatrixXd> solutions;
   std::vector<double> flops;
