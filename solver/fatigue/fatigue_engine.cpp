@@ -730,32 +730,32 @@ bool FatigueEngine::rebuild_due(std::size_t resolves) const {
 }
 
 double FatigueEngine::update_seconds() const {
-  return retired_update_s_ + solver_->update_seconds();
+  return retired_.update_s + solver_->update_seconds();
 }
-int FatigueEngine::updates() const { return retired_updates_ + solver_->updates(); }
+int FatigueEngine::updates() const { return retired_.updates + solver_->updates(); }
 double FatigueEngine::basis_solve_seconds() const {
-  return retired_basis_solve_s_ + solver_->basis_solve_seconds();
+  return retired_.basis_solve_s + solver_->basis_solve_seconds();
 }
-double FatigueEngine::sweep_seconds() const { return retired_sweep_s_ + solver_->sweep_seconds(); }
+double FatigueEngine::sweep_seconds() const { return retired_.sweep_s + solver_->sweep_seconds(); }
 double FatigueEngine::update_flops() const {
-  return retired_update_flops_ + solver_->update_flops();
+  return retired_.update_flops + solver_->update_flops();
 }
 int FatigueEngine::refactorized_groups() const {
-  return retired_refactorized_groups_ + solver_->refactorized_groups();
+  return retired_.refactorized_groups + solver_->refactorized_groups();
 }
 int FatigueEngine::factorizations() const {
-  return retired_factorizations_ + solver_->factorizations();
+  return retired_.factorizations + solver_->factorizations();
 }
 
 core::Status FatigueEngine::rebuild_solver(std::vector<std::uint8_t> intact) {
   const auto t0 = std::chrono::steady_clock::now();
-  retired_update_s_ += solver_->update_seconds();
-  retired_updates_ += solver_->updates();
-  retired_basis_solve_s_ += solver_->basis_solve_seconds();
-  retired_sweep_s_ += solver_->sweep_seconds();
-  retired_update_flops_ += solver_->update_flops();
-  retired_refactorized_groups_ += solver_->refactorized_groups();
-  retired_factorizations_ += solver_->factorizations();
+  retired_.update_s += solver_->update_seconds();
+  retired_.updates += solver_->updates();
+  retired_.basis_solve_s += solver_->basis_solve_seconds();
+  retired_.sweep_s += solver_->sweep_seconds();
+  retired_.update_flops += solver_->update_flops();
+  retired_.refactorized_groups += solver_->refactorized_groups();
+  retired_.factorizations += solver_->factorizations();
   // The old solver (its updated simplicial factor, the largest block of memory) goes before the
   // new one factorizes: the two never coexist (the rebuild's memory peak, issue 18 item 5).
   solver_ =
@@ -858,13 +858,7 @@ FatigueEngine::FatigueEngine(const FatigueEngine& other, const FatigueSettings& 
       ties_(other.ties_),
       prescribed_(other.prescribed_),
       solver_(std::make_unique<statics::StaticSolver>(*other.solver_)),
-      retired_update_s_(other.retired_update_s_),
-      retired_updates_(other.retired_updates_),
-      retired_basis_solve_s_(other.retired_basis_solve_s_),
-      retired_sweep_s_(other.retired_sweep_s_),
-      retired_update_flops_(other.retired_update_flops_),
-      retired_refactorized_groups_(other.retired_refactorized_groups_),
-      retired_factorizations_(other.retired_factorizations_),
+      retired_(other.retired_),
       rebuilds_(other.rebuilds_),
       rebuild_s_(other.rebuild_s_),
       settings_(settings),

@@ -345,13 +345,18 @@ class FatigueEngine {
   std::vector<statics::Tie> ties_;
   std::vector<statics::PrescribedDisplacement> prescribed_;
   std::unique_ptr<statics::StaticSolver> solver_;
-  double retired_update_s_ = 0.0;  ///< counters of the solvers replaced by rebuild_solver
-  int retired_updates_ = 0;
-  double retired_basis_solve_s_ = 0.0;
-  double retired_sweep_s_ = 0.0;
-  double retired_update_flops_ = 0.0;
-  int retired_refactorized_groups_ = 0;
-  int retired_factorizations_ = 0;
+  /// The counters of the solvers replaced by rebuild_solver, summed (update_seconds() etc. add the
+  /// current solver's).
+  struct RetiredCounters {
+    double update_s = 0.0;
+    double basis_solve_s = 0.0;
+    double sweep_s = 0.0;
+    double update_flops = 0.0;
+    int updates = 0;
+    int refactorized_groups = 0;
+    int factorizations = 0;
+  };
+  RetiredCounters retired_;
   int rebuilds_ = 0;
   double rebuild_s_ = 0.0;
   FatigueSettings settings_;
